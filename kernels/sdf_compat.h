@@ -1,0 +1,74 @@
+/* SPDX-License-Identifier: GPL-3.0-or-later */
+/* The vocabulary shared by the C++ core and the OpenCL kernels (Cycles' compat.h idea).
+ * Kernel headers write only these names, so the same source compiles as C++ (the CPU engine,
+ * with GLM vectors) and as OpenCL C 1.2 (the OpenCL engine). Rules for shared code: no
+ * templates, no references, no namespaces inside; wrap declarations in SDF_KERNEL_BEGIN/END. */
+#ifndef SDF_COMPAT_H
+#define SDF_COMPAT_H
+
+#ifdef __OPENCL_VERSION__
+
+#define SDF_KERNEL_BEGIN
+#define SDF_KERNEL_END
+#define SDF_INLINE static inline
+#define SDF_GLOBAL __global
+#define SDF_STATIC_ASSERT(cond, msg)
+typedef int sdf_int32;
+typedef uint sdf_uint32;
+#define make_float3(x, y, z) ((float3)((x), (y), (z)))
+#define sdf_vmin(a, b) fmin((a), (b))
+#define sdf_vmax(a, b) fmax((a), (b))
+#define sdf_min(a, b) fmin((a), (b))
+#define sdf_max(a, b) fmax((a), (b))
+
+#else /* C++ */
+
+#include <cmath>
+#include <cstdint>
+
+#define GLM_FORCE_XYZW_ONLY
+#include <glm/glm.hpp>
+
+#define SDF_KERNEL_BEGIN \
+  namespace sdf {        \
+  namespace kern {
+#define SDF_KERNEL_END \
+  }                    \
+  }
+#define SDF_INLINE inline
+#define SDF_GLOBAL
+#define SDF_STATIC_ASSERT(cond, msg) static_assert(cond, msg)
+
+namespace sdf {
+namespace kern {
+typedef glm::vec3 float3;
+typedef std::int32_t sdf_int32;
+typedef std::uint32_t sdf_uint32;
+inline float3 make_float3(float x, float y, float z) { return float3(x, y, z); }
+inline float3 sdf_vmin(float3 a, float3 b) { return glm::min(a, b); }
+inline float3 sdf_vmax(float3 a, float3 b) { return glm::max(a, b); }
+// Plain compares, not std::fmin: without -ffast-math, fmin is a library call (NaN rules), and
+// the box test runs these a dozen times per node. NaN-free inputs give the same result.
+inline float sdf_min(float a, float b) { return a < b ? a : b; }
+inline float sdf_max(float a, float b) { return a > b ? a : b; }
+using glm::cross;
+using glm::dot;
+using glm::length;
+using glm::normalize;
+using std::acos;
+using std::asin;
+using std::atan2;
+using std::copysign;
+using std::cos;
+using std::fabs;
+using std::floor;
+using std::fmax;
+using std::fmin;
+using std::sin;
+using std::sqrt;
+}  // namespace kern
+}  // namespace sdf
+
+#endif
+
+#endif /* SDF_COMPAT_H */

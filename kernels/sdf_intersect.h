@@ -1,0 +1,76 @@
+/* SPDX-License-Identifier: GPL-3.0-or-later */
+/* Ray-triangle intersection (Moller and Trumbore 1997; paper 4.2) and ray-box slabs. */
+#ifndef SDF_INTERSECT_H
+#define SDF_INTERSECT_H
+
+#include "sdf_layout.h"
+
+SDF_KERNEL_BEGIN
+
+/* The nearest hit found so far along a ray. det < 0 means the ray leaves the solid through the
+ * hit face: det = dot(e1, cross(d, e2)) = -dot(d, cross(e1, e2)), and cross(e1, e2) is the
+ * outward normal of a counter-clockwise triangle. So the exit test is one sign, no normal. */
+typedef struct SdfHit {
+  float t;
+  float det;
+  sdf_int32 id;
+} SdfHit;
+
+SDF_INLINE float3 sdf_tri_v0(SDF_GLOBAL const SdfTriangle* tri) {
+  return make_float3(tri->v0_x, tri->v0_y, tri->v0_z);
+}
+SDF_INLINE float3 sdf_tri_e1(SDF_GLOBAL const SdfTriangle* tri) {
+  return make_float3(tri->e1_x, tri->e1_y, tri->e1_z);
+}
+SDF_INLINE float3 sdf_tri_e2(SDF_GLOBAL const SdfTriangle* tri) {
+  return make_float3(tri->e2_x, tri->e2_y, tri->e2_z);
+}
+
+/* Updates *hit when the ray o + t d meets the triangle at tmin < t < hit->t. Edges count as
+ * inside (u, v >= 0) so a ray through a shared edge cannot slip between two triangles. A
+ * zero-area triangle has det == 0 and is never hit. */
+SDF_INLINE void sdf_intersect_triangle(float3 o, float3 d, float tmin,
+                                       SDF_GLOBAL const SdfTriangle* tri, SdfHit* hit) {
+  float3 e1 = sdf_tri_e1(tri);
+  float3 e2 = sdf_tri_e2(tri);
+  float3 p = cross(d, e2);
+  float det = dot(e1, p);
+  if (det == 0.0f) return;
+  float inv_det = 1.0f / det;
+  float3 s = o - sdf_tri_v0(tri);
+  float u = dot(s, p) * inv_det;
+  if (u < 0.0f || u > 1.0f) return;
+  float3 q = cross(s, e1);
+  float v = dot(d, q) * inv_det;
+  if (v < 0.0f || u + v > 1.0f) return;
+  float t = dot(e2, q) * inv_det;
+  if (t <= tmin || t >= hit->t) return;
+  hit->t = t;
+  hit->det = det;
+  hit->id = tri->id;
+}
+
+/* Entry distance of the ray into a node's box, or INFINITY when it misses the box or enters
+ * beyond tmax. inv_d holds 1/d with zero components replaced by a huge finite value. */
+SDF_INLINE float sdf_box_entry(SDF_GLOBAL const SdfBvhNode* node, float3 o, float3 inv_d,
+                               float tmax) {
+  float tx0 = (node->lo_x - o.x) * inv_d.x, tx1 = (node->hi_x - o.x) * inv_d.x;
+  float ty0 = (node->lo_y - o.y) * inv_d.y, ty1 = (node->hi_y - o.y) * inv_d.y;
+  float tz0 = (node->lo_z - o.z) * inv_d.z, tz1 = (node->hi_z - o.z) * inv_d.z;
+  float t_near = sdf_max(sdf_max(sdf_min(tx0, tx1), sdf_min(ty0, ty1)),
+                         sdf_max(sdf_min(tz0, tz1), 0.0f));
+  float t_far = sdf_min(sdf_min(sdf_max(tx0, tx1), sdf_max(ty0, ty1)),
+                        sdf_min(sdf_max(tz0, tz1), tmax));
+  return t_near <= t_far ? t_near : INFINITY;
+}
+
+SDF_INLINE float3 sdf_safe_inverse(float3 d) {
+  const float big = 1e30f;
+  return make_float3(fabs(d.x) > 1e-30f ? 1.0f / d.x : copysign(big, d.x),
+                     fabs(d.y) > 1e-30f ? 1.0f / d.y : copysign(big, d.y),
+                     fabs(d.z) > 1e-30f ? 1.0f / d.z : copysign(big, d.z));
+}
+
+SDF_KERNEL_END
+
+#endif /* SDF_INTERSECT_H */

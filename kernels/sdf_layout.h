@@ -1,0 +1,42 @@
+/* SPDX-License-Identifier: GPL-3.0-or-later */
+/* Packed data read by the ray caster, the same bytes on the host and in the kernels.
+ * Only scalar members: OpenCL's float3 is 16 bytes and GLM's vec3 is 12, so shared structs
+ * never use vector types. Every size is static_assert-ed on the host. */
+#ifndef SDF_LAYOUT_H
+#define SDF_LAYOUT_H
+
+#include "sdf_compat.h"
+
+SDF_KERNEL_BEGIN
+
+/* A BVH node, 32 bytes. Interior (count == 0): children at first and first + 1.
+ * Leaf (count > 0): triangles [first, first + count) of the packed triangle array. */
+typedef struct SdfBvhNode {
+  float lo_x, lo_y, lo_z;
+  sdf_int32 first;
+  float hi_x, hi_y, hi_z;
+  sdf_int32 count;
+} SdfBvhNode;
+
+/* A triangle prepared for Moller-Trumbore, 48 bytes: v0, e1 = v1 - v0, e2 = v2 - v0, and the
+ * index of the triangle in the user's array (id), so hits report user indices. */
+typedef struct SdfTriangle {
+  float v0_x, v0_y, v0_z;
+  sdf_int32 id;
+  float e1_x, e1_y, e1_z;
+  float pad0;
+  float e2_x, e2_y, e2_z;
+  float pad1;
+} SdfTriangle;
+
+/* How ray directions are chosen (see sdf_rays.h). */
+#define SDF_SAMPLING_FIBONACCI 0
+#define SDF_SAMPLING_RANDOM 1
+#define SDF_SAMPLING_CGAL 2
+
+SDF_STATIC_ASSERT(sizeof(SdfBvhNode) == 32, "SdfBvhNode is 32 bytes in every build");
+SDF_STATIC_ASSERT(sizeof(SdfTriangle) == 48, "SdfTriangle is 48 bytes in every build");
+
+SDF_KERNEL_END
+
+#endif /* SDF_LAYOUT_H */

@@ -1,0 +1,35 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
+// The triangle mesh the engines work on: float vertices centred on their bounding box (so a
+// mesh far from the origin keeps its float precision) and 32-bit triangle indices.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <vector>
+
+#include <glm/glm.hpp>
+
+namespace sdf {
+
+struct Mesh {
+  std::vector<glm::vec3> vertices;    // positions minus `center`
+  std::vector<glm::uvec3> triangles;  // counter-clockwise seen from outside
+  glm::dvec3 center{0.0};             // bounding-box centre of the input, in input units
+  double max_extent = 0.0;            // largest bounding-box side, in input units
+};
+
+// Copies a mesh from row-major arrays: vertices (n, 3) and triangles (m, 3), 0-based.
+// Throws std::invalid_argument naming the problem for an empty mesh, an index out of range or
+// a coordinate that is not finite. Vertices no triangle uses are allowed (they take no part).
+Mesh make_mesh(const double* vertices, std::size_t vertex_count, const std::int64_t* triangles,
+               std::size_t triangle_count);
+
+// Outward face normal scaled by twice the area (cross(v1 - v0, v2 - v0)).
+glm::vec3 face_area_normal(const Mesh& mesh, std::size_t face);
+
+// The shortest ray hit kept, 2e-5 of the largest bounding-box side (paper 4.2): it stops a ray
+// from hitting the surface it starts on, and lets self-intersecting and non-manifold meshes
+// work. In the engines' (centred) units, which equal input units.
+float minimum_closeness(const Mesh& mesh);
+
+}  // namespace sdf

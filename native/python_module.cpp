@@ -1,0 +1,159 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
+// The private compiled module shape_diameter._core. The Python layer (api.py) validates and
+// documents; this file only converts arrays and releases the GIL around native work.
+#include <pybind11/functional.h>
+#include <pybind11/numpy.h>
+#include <pybind11/pybind11.h>
+#include <pybind11/stl.h>
+
+#include <stdexcept>
+#include <string>
+
+#include "../kernels/sdf_reduce.h"
+#include "parallel.h"
+#include "sdf.h"
+
+namespace py = pybind11;
+
+namespace {
+
+using Doubles = py::array_t<double, py::array::c_style | py::array::forcecast>;
+using Int64s = py::array_t<std::int64_t, py::array::c_style | py::array::forcecast>;
+using Floats = py::array_t<float, py::array::c_style | py::array::forcecast>;
+
+sdf::Sampling parse_sampling(const std::string& name) {
+  if (name == "fibonacci") return sdf::Sampling::Fibonacci;
+  if (name == "random") return sdf::Sampling::Random;
+  if (name == "cgal") return sdf::Sampling::Cgal;
+  throw std::invalid_argument("sampling must be 'fibonacci', 'random' or 'cgal', got '" + name +
+                              "'");
+}
+
+sdf::PointKind parse_points(const std::string& name) {
+  if (name == "faces") return sdf::PointKind::Faces;
+  if (name == "vertices") return sdf::PointKind::Vertices;
+  throw std::invalid_argument("points must be 'faces' or 'vertices', got '" + name + "'");
+}
+
+void require_rows_of_3(const py::array& a, const char* what) {
+  if (a.ndim() != 2 || a.shape(1) != 3)
+    throw std::invalid_argument(std::string(what) + " must have shape (n, 3)");
+}
+
+sdf::Mesh to_mesh(const Doubles& vertices, const Int64s& triangles) {
+  require_rows_of_3(vertices, "vertices");
+  require_rows_of_3(triangles, "triangles");
+  return sdf::make_mesh(vertices.data(), static_cast<std::size_t>(vertices.shape(0)),
+                        triangles.data(), static_cast<std::size_t>(triangles.shape(0)));
+}
+
+const char* fill_name(sdf::FillResult r) {
+  switch (r) {
+    case sdf::FillResult::NothingToFill: return "none";
+    case sdf::FillResult::Filled: return "filled";
+    case sdf::FillResult::NoValueAnywhere: return "no-value-anywhere";
+  }
+  return "?";
+}
+
+py::dict compute(const Doubles& vertices, const Int64s& triangles, int rays, double cone_angle,
+                 const std::string& sampling, std::uint32_t seed, const std::string& points,
+                 unsigned threads, const py::object& progress) {
+  sdf::Options options;
+  options.rays = rays;
+  options.cone_angle = cone_angle;
+  options.sampling = parse_sampling(sampling);
+  options.seed = seed;
+  options.points = parse_points(points);
+  options.threads = threads;
+
+  sdf::ProgressFn report;
+  if (!progress.is_none()) {
+    // Runs on the thread that called compute, which holds no GIL while native code runs. An
+    // exception the callback raises travels out through the engine and back to Python.
+    report = [&progress](double fraction) {
+      py::gil_scoped_acquire gil;
+      progress(fraction);
+      return true;
+    };
+  }
+  sdf::Output out;
+  {
+    const sdf::Mesh mesh = to_mesh(vertices, triangles);
+    py::gil_scoped_release release;
+    out = sdf::compute(mesh, options, report);
+  }
+  py::dict result;
+  result["raw"] = py::array_t<float>(out.raw.size(), out.raw.data());
+  result["valid_rays"] = py::array_t<std::int32_t>(out.valid_rays.size(), out.valid_rays.data());
+  py::dict timings;
+  for (const auto& [stage, seconds] : out.timings) timings[py::str(stage)] = seconds;
+  result["timings"] = timings;
+  result["fill"] = fill_name(out.fill);
+  result["threads"] = sdf::resolve_threads(threads);
+  return result;
+}
+
+py::tuple cone_rays(const Floats& axis, int rays, double cone_angle, const std::string& sampling,
+                    std::uint32_t seed, std::uint32_t point) {
+  if (axis.size() != 3) throw std::invalid_argument("normal must have 3 components");
+  glm::vec3 n(axis.data()[0], axis.data()[1], axis.data()[2]);
+  const float len = glm::length(n);
+  if (!(len > 0.0f) || !std::isfinite(len))
+    throw std::invalid_argument("normal must be a finite, non-zero vector");
+  n /= len;
+  const sdf::Cone cone = sdf::make_cone(rays, cone_angle, parse_sampling(sampling), seed);
+  py::array_t<float> directions({rays, 3});
+  py::array_t<float> angles(rays);
+  sdf::cone_rays(cone, n, point, reinterpret_cast<glm::vec3*>(directions.mutable_data()),
+                 angles.mutable_data());
+  return py::make_tuple(directions, angles);
+}
+
+float reduce_lengths(const Floats& lengths, const Floats& angles, const std::string& sampling,
+                     int rays, double cone_angle) {
+  if (lengths.ndim() != 1 || angles.ndim() != 1 || lengths.size() != angles.size())
+    throw std::invalid_argument("lengths and angles must be 1-D arrays of the same length");
+  const int n = static_cast<int>(lengths.size());
+  if (n > sdf::kMaxRays) throw std::invalid_argument("more lengths than the most rays allowed");
+  if (n == 0) return std::nanf("");
+  const sdf::Cone cone = sdf::make_cone(rays > 0 ? rays : n, cone_angle, parse_sampling(sampling), 0);
+  std::vector<float> l(lengths.data(), lengths.data() + n), a(angles.data(), angles.data() + n);
+  return sdf::kern::sdf_reduce(static_cast<int>(cone.sampling), l.data(), a.data(), n,
+                               cone.angle_floor);
+}
+
+py::tuple sample_points(const Doubles& vertices, const Int64s& triangles,
+                        const std::string& points) {
+  const sdf::Mesh mesh = to_mesh(vertices, triangles);
+  const sdf::SamplePoints s = sdf::sample_points(mesh, parse_points(points));
+  const py::ssize_t n = static_cast<py::ssize_t>(s.size());
+  py::array_t<float> origins({n, py::ssize_t(3)}), axes({n, py::ssize_t(3)});
+  float* o = origins.mutable_data();
+  float* a = axes.mutable_data();
+  for (py::ssize_t i = 0; i < n; ++i) {
+    for (int k = 0; k < 3; ++k) {
+      o[3 * i + k] = static_cast<float>(s.origins[i][k] + mesh.center[k]);
+      a[3 * i + k] = s.axes[i][k];
+    }
+  }
+  return py::make_tuple(origins, axes);
+}
+
+}  // namespace
+
+PYBIND11_MODULE(_core, m) {
+  m.doc() = "Shape Diameter native core (private; use the shape_diameter package)";
+  py::register_exception<sdf::Cancelled>(m, "Cancelled");
+  m.def("compute", &compute, py::arg("vertices"), py::arg("triangles"), py::arg("rays"),
+        py::arg("cone_angle"), py::arg("sampling"), py::arg("seed"), py::arg("points"),
+        py::arg("threads"), py::arg("progress"));
+  m.def("cone_rays", &cone_rays, py::arg("normal"), py::arg("rays"), py::arg("cone_angle"),
+        py::arg("sampling"), py::arg("seed"), py::arg("point_index"));
+  m.def("reduce_lengths", &reduce_lengths, py::arg("lengths"), py::arg("angles"),
+        py::arg("sampling"), py::arg("rays"), py::arg("cone_angle"));
+  m.def("sample_points", &sample_points, py::arg("vertices"), py::arg("triangles"),
+        py::arg("points"));
+  m.def("hardware_threads", [] { return sdf::resolve_threads(0); });
+  m.attr("MAX_RAYS") = sdf::kMaxRays;
+}

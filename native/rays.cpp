@@ -1,0 +1,57 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
+#include "rays.h"
+
+#include <cmath>
+#include <stdexcept>
+#include <string>
+
+#include "../kernels/sdf_rays.h"
+
+namespace sdf {
+
+Cone make_cone(int rays, double cone_angle_degrees, Sampling sampling, std::uint32_t seed) {
+  if (rays < 1 || rays > kMaxRays)
+    throw std::invalid_argument("rays must be in [1, " + std::to_string(kMaxRays) + "], got " +
+                                std::to_string(rays));
+  if (!(cone_angle_degrees > 0.0 && cone_angle_degrees < 180.0))
+    throw std::invalid_argument("cone_angle must be in (0, 180) degrees, got " +
+                                std::to_string(cone_angle_degrees));
+  Cone cone;
+  cone.rays = rays;
+  cone.sampling = sampling;
+  cone.seed = seed;
+  const double half = 0.5 * cone_angle_degrees * M_PI / 180.0;
+  cone.cos_half = static_cast<float>(std::cos(half));
+  cone.sin_half = static_cast<float>(std::sin(half));
+  cone.angle_floor = kern::sdf_angle_floor(rays, cone.cos_half);
+  if (sampling != Sampling::Random) {
+    cone.local.resize(rays);
+    cone.local_angle.resize(rays);
+    for (int i = 0; i < rays; ++i) {
+      cone.local[i] = kern::sdf_ray_local(static_cast<int>(sampling), i, rays, cone.cos_half,
+                                          cone.sin_half, seed, 0u);
+      cone.local_angle[i] = kern::sdf_ray_angle(cone.local[i]);
+    }
+  }
+  return cone;
+}
+
+void cone_rays(const Cone& cone, glm::vec3 axis, std::uint32_t point, glm::vec3* directions,
+               float* angles) {
+  glm::vec3 b1, b2;
+  kern::sdf_frame(static_cast<int>(cone.sampling), axis, &b1, &b2);
+  for (int i = 0; i < cone.rays; ++i) {
+    glm::vec3 local;
+    if (cone.sampling == Sampling::Random) {
+      local = kern::sdf_ray_local(SDF_SAMPLING_RANDOM, i, cone.rays, cone.cos_half, cone.sin_half,
+                                  cone.seed, point);
+      angles[i] = kern::sdf_ray_angle(local);
+    } else {
+      local = cone.local[i];
+      angles[i] = cone.local_angle[i];
+    }
+    directions[i] = kern::sdf_to_world(local, b1, b2, axis);
+  }
+}
+
+}  // namespace sdf

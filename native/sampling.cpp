@@ -1,0 +1,51 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
+#include "sampling.h"
+
+#include <cmath>
+
+namespace sdf {
+
+namespace {
+
+// Unit vector, or zero when the direction is undefined (zero, denormal or not finite).
+glm::vec3 unit_or_zero(glm::vec3 v) {
+  const float len = glm::length(v);
+  if (!(len > 1e-30f) || !std::isfinite(len)) return glm::vec3(0.0f);
+  return v / len;
+}
+
+}  // namespace
+
+SamplePoints sample_points(const Mesh& mesh, PointKind kind) {
+  SamplePoints points;
+  if (kind == PointKind::Faces) {
+    const std::size_t n = mesh.triangles.size();
+    points.origins.resize(n);
+    points.axes.resize(n);
+    points.own_face.resize(n);
+    for (std::size_t f = 0; f < n; ++f) {
+      const glm::uvec3 t = mesh.triangles[f];
+      points.origins[f] =
+          (mesh.vertices[t.x] + mesh.vertices[t.y] + mesh.vertices[t.z]) * (1.0f / 3.0f);
+      points.axes[f] = -unit_or_zero(face_area_normal(mesh, f));
+      points.own_face[f] = static_cast<std::int32_t>(f);
+    }
+  } else {
+    const std::size_t n = mesh.vertices.size();
+    std::vector<glm::vec3> normal_sum(n, glm::vec3(0.0f));
+    for (std::size_t f = 0; f < mesh.triangles.size(); ++f) {
+      const glm::vec3 an = face_area_normal(mesh, f);  // length is twice the area: the weight
+      const glm::uvec3 t = mesh.triangles[f];
+      normal_sum[t.x] += an;
+      normal_sum[t.y] += an;
+      normal_sum[t.z] += an;
+    }
+    points.origins = mesh.vertices;
+    points.axes.resize(n);
+    points.own_face.assign(n, -1);
+    for (std::size_t v = 0; v < n; ++v) points.axes[v] = -unit_or_zero(normal_sum[v]);
+  }
+  return points;
+}
+
+}  // namespace sdf

@@ -1,0 +1,27 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
+// Stage 1: the points rays start from, with the cone axis of each (its inward direction).
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include "mesh.h"
+
+namespace sdf {
+
+enum class PointKind { Faces, Vertices };
+
+struct SamplePoints {
+  std::vector<glm::vec3> origins;  // in the mesh's centred units
+  std::vector<glm::vec3> axes;     // unit inward direction; zero where it is undefined
+  std::vector<std::int32_t> own_face;  // face a ray must not hit (its own); -1 for vertices
+  std::size_t size() const { return origins.size(); }
+};
+
+// Faces: the centroid, axis = minus the face normal; zero-area faces get a zero axis.
+// Vertices: the vertex, axis = minus the area-weighted mean of the normals of the faces around
+// it; a vertex with no face, or whose normals cancel, gets a zero axis.
+// Points with a zero axis cast no ray and are filled from their neighbours later.
+SamplePoints sample_points(const Mesh& mesh, PointKind kind);
+
+}  // namespace sdf

@@ -1,0 +1,36 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
+// The whole pipeline on the CPU engine: sample, build, cast and reduce, fill.
+// Each stage is also callable on its own (sampling.h, bvh.h, cpu_engine.h, fill.h).
+#pragma once
+
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "fill.h"
+#include "mesh.h"
+#include "parallel.h"
+#include "rays.h"
+#include "sampling.h"
+
+namespace sdf {
+
+struct Options {
+  int rays = 30;               // per point (Shapira et al. and the paper: 30)
+  double cone_angle = 120.0;   // full apex angle in degrees (paper: 120)
+  Sampling sampling = Sampling::Fibonacci;
+  std::uint32_t seed = 0;      // for Sampling::Random
+  PointKind points = PointKind::Faces;
+  unsigned threads = 0;        // 0: every core
+};
+
+struct Output {
+  std::vector<float> raw;                  // per point, input units, filled
+  std::vector<std::int32_t> valid_rays;    // rays kept per point; 0 = value was filled
+  std::vector<std::pair<std::string, double>> timings;  // stage -> seconds
+  FillResult fill = FillResult::NothingToFill;
+};
+
+Output compute(const Mesh& mesh, const Options& options, const ProgressFn& progress = nullptr);
+
+}  // namespace sdf

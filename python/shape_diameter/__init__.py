@@ -1,0 +1,23 @@
+# SPDX-License-Identifier: GPL-3.0-or-later
+"""Shape Diameter Function (SDF) of triangle meshes.
+
+>>> import shape_diameter
+>>> result = shape_diameter.compute(vertices, triangles)      # (n,3) floats, (m,3) ints
+>>> result.raw          # float32 per face: local diameter in mesh units
+>>> result.normalized   # float32 in [0, 1]
+"""
+
+from ._version import __version__
+from .api import Result, compute, cone_rays, engines, reduce_lengths, sample_points
+from .normalization import normalize_values as normalize
+
+__all__ = [
+    "Result",
+    "compute",
+    "cone_rays",
+    "engines",
+    "normalize",
+    "reduce_lengths",
+    "sample_points",
+    "__version__",
+]

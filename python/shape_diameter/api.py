@@ -1,0 +1,199 @@
+# SPDX-License-Identifier: GPL-3.0-or-later
+"""The numpy API: input checks, the pipeline call, normalisation and the Result."""
+
+from __future__ import annotations
+
+import time
+import warnings
+from dataclasses import dataclass, field
+from typing import Callable, Optional
+
+import numpy as np
+
+from . import _core
+from .normalization import NORMALIZATIONS, normalize_values
+
+SAMPLINGS = ("fibonacci", "random", "cgal")
+POINTS = ("faces", "vertices")
+MAX_RAYS = _core.MAX_RAYS
+
+
+@dataclass
+class Result:
+    """What compute() returns. Arrays have one entry per point (face or vertex)."""
+
+    raw: np.ndarray
+    """float32: the SDF in mesh units, after points with no valid ray were filled."""
+    values: np.ndarray
+    """float32: the field after smoothing (equal to raw: no smoothing is applied yet)."""
+    normalized: np.ndarray
+    """float32 in [0, 1]: values normalised as asked (linear or log)."""
+    valid_rays: np.ndarray
+    """int32: rays kept per point; 0 means the point's value was filled from its neighbours."""
+    timings: dict = field(default_factory=dict)
+    """Seconds per stage: prepare, build, cast (cast and reduce, fused), fill, normalize, total."""
+    engine: str = "cpu"
+    """What ran, e.g. 'cpu (2 threads)'."""
+    points: str = "faces"
+    rays: int = 30
+
+
+def engines() -> list:
+    """The engines that can run here, best first. Each is a dict with at least 'name'."""
+    threads = _core.hardware_threads()
+    return [{"name": "cpu", "type": "CPU", "threads": threads, "description": f"{threads} threads"}]
+
+
+def _check_mesh(vertices, triangles):
+    v = np.asarray(vertices)
+    t = np.asarray(triangles)
+    if v.ndim != 2 or v.shape[1] != 3:
+        raise ValueError(f"vertices must have shape (n, 3), got {v.shape}")
+    if v.dtype.kind not in "fiu":
+        raise ValueError(f"vertices must be real numbers, got dtype {v.dtype}")
+    if t.ndim != 2 or t.shape[1] != 3:
+        raise ValueError(f"triangles must have shape (m, 3), got {t.shape}")
+    if t.dtype.kind not in "iu":
+        raise ValueError(f"triangles must be integers, got dtype {t.dtype}")
+    if v.shape[0] == 0:
+        raise ValueError("the mesh is empty: no vertices")
+    if t.shape[0] == 0:
+        raise ValueError("the mesh is empty: no triangles")
+    v = np.ascontiguousarray(v, dtype=np.float64)
+    bad = ~np.isfinite(v).all(axis=1)
+    if bad.any():
+        raise ValueError(
+            f"vertices must be finite: {int(bad.sum())} have NaN or infinite coordinates "
+            f"(first: vertex {int(np.argmax(bad))})"
+        )
+    lo, hi = int(np.min(t)), int(np.max(t))
+    if lo < 0:
+        raise ValueError(f"triangles contain a negative vertex index ({lo})")
+    if hi >= v.shape[0]:
+        raise ValueError(
+            f"triangles contain vertex index {hi}, but there are only {v.shape[0]} vertices"
+        )
+    return v, np.ascontiguousarray(t, dtype=np.int64)
+
+
+def _check_choice(name, value, choices):
+    if value not in choices:
+        raise ValueError(f"{name} must be one of {choices}, got {value!r}")
+
+
+def _check_options(rays, cone_angle, sampling, points, normalize_method, engine, progress, seed):
+    if isinstance(rays, bool) or not isinstance(rays, (int, np.integer)) or not 1 <= rays <= MAX_RAYS:
+        raise ValueError(f"rays must be an integer in [1, {MAX_RAYS}], got {rays!r}")
+    if not np.isfinite(cone_angle) or not 0.0 < float(cone_angle) < 180.0:
+        raise ValueError(f"cone_angle must be in (0, 180) degrees, got {cone_angle!r}")
+    _check_choice("sampling", sampling, SAMPLINGS)
+    _check_choice("points", points, POINTS)
+    _check_choice("normalize", normalize_method, NORMALIZATIONS)
+    names = [e["name"] for e in engines()]
+    if engine != "auto" and engine not in names:
+        raise ValueError(f"unknown engine {engine!r}; available here: auto, {', '.join(names)}")
+    if progress is not None and not callable(progress):
+        raise ValueError("progress must be a callable taking a fraction in [0, 1], or None")
+    if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or not 0 <= seed < 2**32:
+        raise ValueError(f"seed must be an integer in [0, 2**32), got {seed!r}")
+
+
+def compute(
+    vertices,
+    triangles,
+    *,
+    rays: int = 30,
+    cone_angle: float = 120.0,
+    sampling: str = "fibonacci",
+    seed: int = 0,
+    points: str = "faces",
+    normalize: str = "linear",
+    engine: str = "auto",
+    progress: Optional[Callable[[float], None]] = None,
+    threads: int = 0,
+) -> Result:
+    """Shape Diameter Function of a triangle mesh.
+
+    vertices: (n, 3) real array, any float or integer dtype (converted to float64).
+    triangles: (m, 3) integer array of 0-based vertex indices, counter-clockwise seen from
+        outside (outward normals).
+    rays: rays per point, 1..MAX_RAYS (paper: 30). cone_angle: full apex angle in degrees,
+        (0, 180) (paper: 120).
+    sampling: 'fibonacci' (deterministic spherical Fibonacci in the cone, paper 4.2), 'random'
+        (uniform in the cone, reproducible with `seed`) or 'cgal' (CGAL sdf_values' rules:
+        Vogel disk rays, equal weights, median-absolute-deviation outliers).
+    points: 'faces' (a value per triangle, rays from its centroid) or 'vertices' (a value per
+        vertex, normal = area-weighted mean of the face normals around it).
+    normalize: 'linear' or 'log' for Result.normalized.
+    engine: 'auto' or a name from engines().
+    progress: called with the fraction done in [0, 1] from the calling thread; if it raises,
+        the computation stops and the exception propagates.
+    threads: CPU threads, 0 for every core.
+
+    Points where no ray was kept (zero-area faces, rays escaping an open mesh, ...) take the
+    mean of their neighbours' values (valid_rays == 0 marks them). Raises ValueError for bad
+    input; the GIL is released while native code runs.
+    """
+    start = time.perf_counter()
+    v, t = _check_mesh(vertices, triangles)
+    _check_options(rays, cone_angle, sampling, points, normalize, engine, progress, seed)
+    if isinstance(threads, bool) or not isinstance(threads, (int, np.integer)) or threads < 0:
+        raise ValueError(f"threads must be a non-negative integer, got {threads!r}")
+    out = _core.compute(
+        v, t, int(rays), float(cone_angle), sampling, int(seed), points, int(threads), progress
+    )
+    if out["fill"] == "no-value-anywhere":
+        warnings.warn(
+            "no ray of any point found the other side of the mesh (is it open, flat or inside "
+            "out?); every value is 0 and valid_rays is 0 everywhere",
+            RuntimeWarning,
+            stacklevel=2,
+        )
+    timings = dict(out["timings"])
+    clock = time.perf_counter()
+    normalized = normalize_values(out["raw"], normalize)
+    timings["normalize"] = time.perf_counter() - clock
+    timings["total"] = time.perf_counter() - start
+    raw = out["raw"]
+    return Result(
+        raw=raw,
+        values=raw.copy(),
+        normalized=normalized,
+        valid_rays=out["valid_rays"],
+        timings=timings,
+        engine=f"cpu ({out['threads']} threads)",
+        points=points,
+        rays=int(rays),
+    )
+
+
+def cone_rays(normal, rays=30, cone_angle=120.0, sampling="fibonacci", seed=0, point_index=0):
+    """The directions the engine casts for one point whose inward axis is `normal`.
+
+    Returns (directions float32 (rays, 3), unit; angles float32 (rays,), radians to the axis).
+    """
+    _check_options(rays, cone_angle, sampling, "faces", "linear", "auto", None, seed)
+    n = np.asarray(normal, dtype=np.float32).reshape(-1)
+    return _core.cone_rays(n, int(rays), float(cone_angle), sampling, int(seed), int(point_index))
+
+
+def reduce_lengths(lengths, angles, sampling="fibonacci", rays=None, cone_angle=120.0) -> float:
+    """The engine's per-point reduction of kept ray lengths (with their angles to the axis, in
+    radians) to one value: for 'fibonacci' and 'random', lengths within one standard deviation
+    of the median, averaged with weight 1 / max(angle, floor) where floor is the angle of the
+    innermost Fibonacci ray for `rays` rays (default: len(lengths)) in the cone; for 'cgal',
+    CGAL's rule. NaN for no lengths."""
+    _check_choice("sampling", sampling, SAMPLINGS)
+    lengths = np.asarray(lengths, dtype=np.float32).reshape(-1)
+    angles = np.asarray(angles, dtype=np.float32).reshape(-1)
+    return float(
+        _core.reduce_lengths(lengths, angles, sampling, int(rays or 0), float(cone_angle))
+    )
+
+
+def sample_points(vertices, triangles, points="faces"):
+    """Stage 1 alone: (origins (k, 3) float32, inward unit axes (k, 3) float32, zero where
+    undefined) for points='faces' (centroids) or 'vertices'."""
+    v, t = _check_mesh(vertices, triangles)
+    _check_choice("points", points, POINTS)
+    return _core.sample_points(v, t, points)

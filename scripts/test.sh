@@ -1,0 +1,16 @@
+#!/usr/bin/env bash
+# SPDX-License-Identifier: GPL-3.0-or-later
+# Every test: set-up, C++ tests (ctest) with the CGAL reference built beside them, then pytest.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+bash scripts/setup.sh
+
+echo "test: building C++ tests"
+cmake -S . -B build/cpp -G Ninja -DCMAKE_BUILD_TYPE=Release -DSDF_BUILD_TESTS=ON >/dev/null
+cmake --build build/cpp
+echo "test: ctest"
+ctest --test-dir build/cpp --output-on-failure
+
+echo "test: pytest"
+export SDF_CGAL_REFERENCE="$PWD/build/cpp/tests/reference/cgal_sdf"
+.venv/bin/python -m pytest -q "$@"

@@ -1,0 +1,118 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <random>
+
+#include "../../kernels/sdf_bvh_traverse.h"
+#include "bvh.h"
+#include "test_meshes.h"
+
+namespace sdf {
+namespace {
+
+// Every triangle, in order: the answer the BVH must reproduce.
+kern::SdfHit brute_force(const Bvh& bvh, glm::vec3 o, glm::vec3 d, float tmin, int skip) {
+  kern::SdfHit hit{INFINITY, 0.0f, -1};
+  for (const kern::SdfTriangle& tri : bvh.triangles)
+    if (tri.id != skip) kern::sdf_intersect_triangle(o, d, tmin, &tri, &hit);
+  return hit;
+}
+
+bool box_contains(const kern::SdfBvhNode& outer, glm::vec3 p) {
+  return p.x >= outer.lo_x && p.y >= outer.lo_y && p.z >= outer.lo_z && p.x <= outer.hi_x &&
+         p.y <= outer.hi_y && p.z <= outer.hi_z;
+}
+
+class BvhOnSoup : public ::testing::TestWithParam<int> {};
+
+TEST_P(BvhOnSoup, ClosestHitEqualsBruteForce) {
+  const Mesh mesh = test::soup(GetParam(), 11).mesh();
+  BvhConfig config;
+  config.threads = 2;
+  const Bvh bvh = build_bvh(mesh, config);
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<float> u(-1.2f, 1.2f);
+  int hits = 0;
+  for (int r = 0; r < 3000; ++r) {
+    const glm::vec3 o(u(rng), u(rng), u(rng));
+    const glm::vec3 d = glm::normalize(glm::vec3(u(rng), u(rng), u(rng)));
+    const int skip = r % 7 == 0 ? r % GetParam() : -1;
+    const kern::SdfHit a = kern::sdf_bvh_closest_hit(bvh.nodes.data(), bvh.triangles.data(), o, d,
+                                                     1e-4f, skip);
+    const kern::SdfHit b = brute_force(bvh, o, d, 1e-4f, skip);
+    ASSERT_EQ(a.t, b.t) << "ray " << r;
+    if (std::isfinite(a.t)) {
+      ++hits;
+      EXPECT_EQ(a.det < 0.0f, b.det < 0.0f);
+    }
+  }
+  // The test exercises hits, not only misses (a lone triangle is rarely hit).
+  EXPECT_GT(hits, GetParam() >= 100 ? 200 : 0);
+}
+
+INSTANTIATE_TEST_SUITE_P(Sizes, BvhOnSoup, ::testing::Values(1, 5, 100, 5000, 20000));
+
+TEST(Bvh, EveryTriangleOnceAndBoxesNest) {
+  const Mesh mesh = test::soup(20000, 3).mesh();
+  const Bvh bvh = build_bvh(mesh);
+  std::vector<int> seen(mesh.triangles.size(), 0);
+  for (const auto& t : bvh.triangles) ++seen[t.id];
+  EXPECT_TRUE(std::all_of(seen.begin(), seen.end(), [](int c) { return c == 1; }));
+  for (const auto& node : bvh.nodes) {
+    if (node.count == 0) {
+      for (int c = 0; c < 2; ++c) {
+        const auto& child = bvh.nodes[node.first + c];
+        EXPECT_TRUE(box_contains(node, {child.lo_x, child.lo_y, child.lo_z}));
+        EXPECT_TRUE(box_contains(node, {child.hi_x, child.hi_y, child.hi_z}));
+      }
+    } else {
+      EXPECT_LE(node.count, BvhConfig().max_leaf_size);
+      for (int k = node.first; k < node.first + node.count; ++k) {
+        const auto& t = bvh.triangles[k];
+        EXPECT_TRUE(box_contains(node, {t.v0_x, t.v0_y, t.v0_z}));
+      }
+    }
+  }
+  EXPECT_LT(bvh_depth(bvh), SDF_BVH_STACK_SIZE);
+}
+
+TEST(Bvh, LeavesOutZeroAreaTrianglesAndHandlesAllDegenerate) {
+  test::Arrays a = test::box(1, 1, 1);
+  a.triangles.insert(a.triangles.end(), {0, 0, 0, 0, 1, 1});  // a point and a segment
+  const Bvh bvh = build_bvh(a.mesh());
+  EXPECT_EQ(bvh.triangles.size(), 12u);
+
+  test::Arrays flat;
+  flat.vertices = {0, 0, 0, 1, 0, 0, 2, 0, 0};
+  flat.triangles = {0, 1, 2};
+  EXPECT_TRUE(build_bvh(flat.mesh()).empty());
+}
+
+TEST(Bvh, IdenticalCentroidsStillGiveSmallLeaves) {
+  // 100 copies of one triangle: no SAH split exists; the builder must still bound leaves.
+  test::Arrays a;
+  for (int t = 0; t < 100; ++t) {
+    a.vertices.insert(a.vertices.end(), {0, 0, 0, 1, 0, 0, 0, 1, 0});
+    a.triangles.insert(a.triangles.end(), {3 * t, 3 * t + 1, 3 * t + 2});
+  }
+  const Bvh bvh = build_bvh(a.mesh());
+  for (const auto& node : bvh.nodes) EXPECT_LE(node.count, BvhConfig().max_leaf_size);
+}
+
+TEST(Bvh, ExitTestSeesTheFaceTheRayLeavesThrough) {
+  // From inside a box, every ray leaves through a face whose outward normal it follows.
+  const Bvh bvh = build_bvh(test::box(2, 2, 2).mesh());
+  const kern::SdfHit up = kern::sdf_bvh_closest_hit(bvh.nodes.data(), bvh.triangles.data(),
+                                                    {0.1f, 0.2f, 0}, {0, 0, 1}, 0.0f, -1);
+  EXPECT_FLOAT_EQ(up.t, 1.0f);
+  EXPECT_LT(up.det, 0.0f);
+  // From outside, looking in: the first hit is a front face.
+  const kern::SdfHit in = kern::sdf_bvh_closest_hit(bvh.nodes.data(), bvh.triangles.data(),
+                                                    {0.1f, 0.2f, 3}, {0, 0, -1}, 0.0f, -1);
+  EXPECT_FLOAT_EQ(in.t, 2.0f);
+  EXPECT_GT(in.det, 0.0f);
+}
+
+}  // namespace
+}  // namespace sdf

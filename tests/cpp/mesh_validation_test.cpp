@@ -1,0 +1,51 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
+#include <gtest/gtest.h>
+
+#include <limits>
+#include <stdexcept>
+
+#include "test_meshes.h"
+
+namespace sdf {
+namespace {
+
+TEST(MeshValidation, CentresOnTheBoundingBox) {
+  test::Arrays a = test::box(2.0, 4.0, 6.0);
+  for (std::size_t i = 0; i < a.vertices.size(); i += 3) a.vertices[i] += 1000.0;
+  const Mesh m = a.mesh();
+  EXPECT_DOUBLE_EQ(m.center.x, 1000.0);
+  EXPECT_DOUBLE_EQ(m.max_extent, 6.0);
+  EXPECT_FLOAT_EQ(m.vertices[0].x, -1.0f);  // float precision kept far from the origin
+  EXPECT_FLOAT_EQ(minimum_closeness(m), 6.0f * 2e-5f);
+}
+
+TEST(MeshValidation, RejectsIndexOutOfRangeAnywhere) {
+  test::Arrays a = test::box(1, 1, 1);
+  a.triangles[17] = 8;  // in the middle, equal to the vertex count
+  EXPECT_THROW(a.mesh(), std::invalid_argument);
+  a.triangles[17] = -1;
+  EXPECT_THROW(a.mesh(), std::invalid_argument);
+}
+
+TEST(MeshValidation, RejectsNonFiniteAndEmpty) {
+  test::Arrays a = test::box(1, 1, 1);
+  a.vertices[10] = std::numeric_limits<double>::quiet_NaN();
+  EXPECT_THROW(a.mesh(), std::invalid_argument);
+  a.vertices[10] = std::numeric_limits<double>::infinity();
+  EXPECT_THROW(a.mesh(), std::invalid_argument);
+  EXPECT_THROW(make_mesh(nullptr, 0, nullptr, 0), std::invalid_argument);
+  const double v[3] = {0, 0, 0};
+  EXPECT_THROW(make_mesh(v, 1, nullptr, 0), std::invalid_argument);
+}
+
+TEST(MeshValidation, FaceNormalsPointOutOfTheBox) {
+  const Mesh m = test::box(1, 1, 1).mesh();
+  for (std::size_t f = 0; f < m.triangles.size(); ++f) {
+    const glm::uvec3 t = m.triangles[f];
+    const glm::vec3 centroid = (m.vertices[t.x] + m.vertices[t.y] + m.vertices[t.z]) / 3.0f;
+    EXPECT_GT(glm::dot(face_area_normal(m, f), centroid), 0.0f) << "face " << f;
+  }
+}
+
+}  // namespace
+}  // namespace sdf
