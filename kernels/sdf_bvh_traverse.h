@@ -21,7 +21,10 @@ SDF_INLINE SdfHit sdf_bvh_closest_hit(SDF_GLOBAL const SdfBvhNode* nodes,
   hit.det = 0.0f;
   hit.id = -1;
   float3 inv_d = sdf_safe_inverse(d);
-  sdf_int32 stack[SDF_BVH_STACK_SIZE];
+  /* Far children wait here with their entry distance, so a pop that can no longer hold a
+   * nearer hit is dropped without touching the node again. */
+  sdf_int32 stack_node[SDF_BVH_STACK_SIZE];
+  float stack_entry[SDF_BVH_STACK_SIZE];
   int sp = 0;
   sdf_int32 index = 0;
   if (sdf_box_entry(&nodes[0], o, inv_d, hit.t) == INFINITY) return hit;
@@ -41,10 +44,12 @@ SDF_INLINE SdfHit sdf_bvh_closest_hit(SDF_GLOBAL const SdfBvhNode* nodes,
         } else if (t_right == INFINITY) {
           index = left;
         } else if (t_left <= t_right) {
-          stack[sp++] = left + 1;
+          stack_node[sp] = left + 1;
+          stack_entry[sp++] = t_right;
           index = left;
         } else {
-          stack[sp++] = left;
+          stack_node[sp] = left;
+          stack_entry[sp++] = t_left;
           index = left + 1;
         }
         continue;
@@ -53,9 +58,10 @@ SDF_INLINE SdfHit sdf_bvh_closest_hit(SDF_GLOBAL const SdfBvhNode* nodes,
     /* Pop the next subtree that can still hold a nearer hit. */
     for (;;) {
       if (sp == 0) return hit;
-      index = stack[--sp];
-      if (sdf_box_entry(&nodes[index], o, inv_d, hit.t) != INFINITY) break;
+      --sp;
+      if (stack_entry[sp] < hit.t) break;
     }
+    index = stack_node[sp];
   }
 }
 
