@@ -1,0 +1,313 @@
+# SPDX-License-Identifier: GPL-3.0-or-later
+"""The ``shape-diameter`` command: the SDF of a mesh file, written back as a coloured mesh.
+
+Needs the ``cli`` extra (trimesh to read and write meshes, tqdm for the progress
+bar); both are imported only when the command runs, so ``import shape_diameter``
+never needs them.
+
+``--json`` prints one object on stdout: input, faces, vertices (of the mesh as
+read), points ("faces" or "vertices"), point_count, rays, cone, sampling, seed,
+normalize, engine, seconds (compute()'s stages: Result.timings), Mrays_per_s
+(point_count * rays / seconds["cast"] / 1e6), io_seconds (load, write),
+total_seconds (the whole command) and outputs (mesh, values: paths or null).
+"""
+
+from __future__ import annotations
+
+import argparse
+import contextlib
+import json
+import logging
+import os
+import sys
+import time
+import warnings
+
+import numpy as np
+
+from . import __version__
+from .api import MAX_RAYS, compute
+from .colormap import colormap
+
+PROG = "shape-diameter"
+DEFAULT_SUFFIX = ".sdf.ply"
+# Exit statuses: 2 for anything wrong with what the user gave (options, input
+# file, output path), as argparse does; 1 when this machine is the problem.
+EXIT_USAGE = 2
+EXIT_ENVIRONMENT = 1
+
+
+class CommandError(Exception):
+    """A failure reported as one line on stderr, exiting with `status`."""
+
+    def __init__(self, message: str, status: int = EXIT_USAGE):
+        super().__init__(message)
+        self.status = status
+
+
+class _Parser(argparse.ArgumentParser):
+    """argparse reports errors as a usage block plus a message; we promise one line."""
+
+    def error(self, message):
+        self.exit(EXIT_USAGE, f"{self.prog}: error: {_one_line(message)}\n")
+
+
+def _one_line(text) -> str:
+    return " ".join(str(text).split())
+
+
+def _int_in(low: int, high: int):
+    def parse(text: str) -> int:
+        try:
+            value = int(text)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"not an integer: {text!r}") from None
+        if not low <= value <= high:
+            raise argparse.ArgumentTypeError(f"must be in [{low}, {high}], got {value}")
+        return value
+
+    return parse
+
+
+def _cone_degrees(text: str) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"not a number: {text!r}") from None
+    if not 0.0 < value < 180.0:
+        raise argparse.ArgumentTypeError(f"must be in (0, 180) degrees, got {text}")
+    return value
+
+
+def default_output(input_path: str) -> str:
+    """INPUT with its suffix replaced by .sdf.ply, in the same folder."""
+    return os.path.splitext(input_path)[0] + DEFAULT_SUFFIX
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = _Parser(
+        prog=PROG,
+        description="Compute the Shape Diameter Function (SDF) of a triangle mesh and write "
+        "the mesh coloured by it (viridis: thin parts dark purple, thick parts yellow).",
+        epilog="Reads OBJ, PLY, OFF, STL, glTF and GLB (polygons are triangulated; the "
+        "meshes of a glTF scene are joined). Writes PLY, OBJ, OFF, GLB or STL, chosen by "
+        "the output suffix; STL keeps no colour. Exit status: 0 done, 2 bad option, input "
+        "or output path, 1 missing dependency or failed write.",
+    )
+    parser.add_argument("input", metavar="INPUT", help="mesh file to read")
+    parser.add_argument(
+        "-o",
+        "--output",
+        metavar="OUTPUT",
+        help=f"coloured mesh to write (default: INPUT with its suffix replaced by "
+        f"'{DEFAULT_SUFFIX}', next to INPUT; e.g. cow.obj -> cow{DEFAULT_SUFFIX})",
+    )
+    parser.add_argument(
+        "--rays",
+        type=_int_in(1, MAX_RAYS),
+        default=30,
+        metavar="N",
+        help="rays cast per point (default: 30)",
+    )
+    parser.add_argument(
+        "--cone",
+        type=_cone_degrees,
+        default=120.0,
+        metavar="DEG",
+        help="full apex angle of the ray cone in degrees (default: 120)",
+    )
+    parser.add_argument(
+        "--points",
+        choices=("faces", "vertices"),
+        default="faces",
+        help="one value per face (coloured per face) or per vertex (default: faces)",
+    )
+    parser.add_argument(
+        "--sampling",
+        choices=("fibonacci", "random", "cgal"),
+        default="fibonacci",
+        help="ray directions and reduction rules (default: fibonacci)",
+    )
+    parser.add_argument(
+        "--seed",
+        type=_int_in(0, 2**32 - 1),
+        default=0,
+        metavar="S",
+        help="seed of --sampling random (default: 0)",
+    )
+    parser.add_argument(
+        "--normalize",
+        choices=("linear", "log"),
+        default="linear",
+        help="how values map to colours (default: linear)",
+    )
+    parser.add_argument(
+        "--values",
+        metavar="FILE.npy",
+        help="also save the raw SDF (float32, mesh units) as a .npy array: one value per "
+        "face or vertex, in the order they were read from INPUT",
+    )
+    parser.add_argument(
+        "--json",
+        action="store_true",
+        help="print one JSON object with sizes, options, engine, timings and outputs",
+    )
+    parser.add_argument("--version", action="version", version=f"%(prog)s {__version__}")
+    return parser
+
+
+def main(argv=None) -> int:
+    """Run the command; returns the exit status (the console script exits with it)."""
+    try:
+        args = build_parser().parse_args(argv)
+    except SystemExit as done:  # --help, --version, or an option error already printed
+        return done.code if isinstance(done.code, int) else 0
+    try:
+        return _run(args)
+    except CommandError as exc:
+        return _fail(exc, exc.status)
+    except ValueError as exc:
+        # load_mesh, compute and save_colored report bad input this way.
+        return _fail(exc, EXIT_USAGE)
+    except OSError as exc:  # e.g. the output could not be written
+        return _fail(exc, EXIT_ENVIRONMENT)
+    except KeyboardInterrupt:
+        return _fail("interrupted", 130)
+
+
+def _fail(message, status: int) -> int:
+    print(f"{PROG}: error: {_one_line(message)}", file=sys.stderr)
+    return status
+
+
+def _run(args) -> int:
+    try:
+        from . import mesh_io
+    except ImportError as exc:
+        raise CommandError(
+            f"the command line needs trimesh: pip install 'shape_diameter[cli]' ({exc})",
+            EXIT_ENVIRONMENT,
+        ) from exc
+    # trimesh logs what it skips in odd files; this command reports errors itself.
+    logging.getLogger("trimesh").setLevel(logging.CRITICAL + 1)
+
+    output = args.output or default_output(args.input)
+    _check_writable_path(output, mesh_io.WRITE_SUFFIXES)
+    if args.values:
+        _check_writable_path(args.values, None)
+
+    started = time.perf_counter()
+    with warnings.catch_warnings():
+        # A parser warns before it fails on a broken file; the error line says it all.
+        warnings.simplefilter("ignore")
+        vertices, triangles = mesh_io.load_mesh(args.input)
+    loaded = time.perf_counter()
+
+    with _progress_bar() as progress, warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        result = compute(
+            vertices,
+            triangles,
+            rays=args.rays,
+            cone_angle=args.cone,
+            sampling=args.sampling,
+            seed=args.seed,
+            points=args.points,
+            normalize=args.normalize,
+            progress=progress,
+        )
+    computed = time.perf_counter()
+    for warning in caught:  # one line each, like the errors
+        print(f"{PROG}: warning: {_one_line(warning.message)}", file=sys.stderr)
+
+    mesh_io.save_colored(output, vertices, triangles, colormap(result.normalized), args.points)
+    if args.values:
+        with open(args.values, "wb") as stream:  # np.save(path) would append ".npy"
+            np.save(stream, np.asarray(result.raw, dtype=np.float32))
+    finished = time.perf_counter()
+
+    # The CLI's own stages, apart from compute()'s: reading and writing files.
+    io_seconds = {"load": loaded - started, "write": finished - computed}
+    report = _report(args, vertices, triangles, result, output, io_seconds, finished - started)
+    if args.json:
+        print(json.dumps(report))
+    else:
+        print(
+            f"{args.input}: {report['point_count']} {args.points}, {args.rays} rays, "
+            f"{report['total_seconds']:.2f} s on {result.engine} -> {output}"
+        )
+    return 0
+
+
+def _check_writable_path(path: str, suffixes) -> None:
+    """Fail before the long computation, not after it."""
+    if suffixes is not None and os.path.splitext(path)[1].lower() not in suffixes:
+        raise CommandError(f"{path}: output must end in one of {', '.join(suffixes)}")
+    if os.path.isdir(path):
+        raise CommandError(f"{path}: is a folder")
+    folder = os.path.dirname(os.path.abspath(path))
+    if not os.path.isdir(folder):
+        raise CommandError(f"{path}: folder {folder} does not exist")
+
+
+def _report(args, vertices, triangles, result, output, io_seconds, total_seconds) -> dict:
+    """The --json object (documented in the README's command line section)."""
+    point_count = len(result.raw)
+    timings = {stage: float(seconds) for stage, seconds in result.timings.items()}
+    cast = timings.get("cast", timings.get("total", 0.0))
+    return {
+        "input": args.input,
+        "faces": len(triangles),
+        "vertices": len(vertices),
+        "points": args.points,
+        "point_count": point_count,
+        "rays": int(result.rays),
+        "cone": float(args.cone),
+        "sampling": args.sampling,
+        "seed": int(args.seed),
+        "normalize": args.normalize,
+        "engine": result.engine,
+        "seconds": timings,
+        # Rays cast per second over the casting stage alone (or the whole
+        # computation where the engine does not time casting separately).
+        "Mrays_per_s": point_count * int(result.rays) / cast / 1e6 if cast > 0 else None,
+        "io_seconds": io_seconds,
+        "total_seconds": total_seconds,
+        "outputs": {"mesh": output, "values": args.values},
+    }
+
+
+@contextlib.contextmanager
+def _progress_bar():
+    """A progress callback for compute(): a tqdm bar on stderr, or None.
+
+    Only on a terminal (a bar in a log file is noise) and only after half a
+    second, so quick runs print nothing. stdout is never touched.
+    """
+    if not sys.stderr.isatty():
+        yield None
+        return
+    try:
+        from tqdm import tqdm
+    except ImportError:  # the bar is a nicety; run without it
+        yield None
+        return
+    with tqdm(
+        total=100,
+        delay=0.5,
+        file=sys.stderr,
+        leave=False,
+        bar_format="{l_bar}{bar}| {elapsed}<{remaining}",
+        desc=PROG,
+    ) as bar:
+
+        def update(fraction: float) -> None:
+            percent = 100.0 * min(max(float(fraction), 0.0), 1.0)
+            if percent > bar.n:
+                bar.update(percent - bar.n)
+
+        yield update
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,220 @@
+# SPDX-License-Identifier: GPL-3.0-or-later
+"""Mesh files in and out for the command line, through trimesh.
+
+This module imports trimesh, an optional dependency (the ``cli`` extra), so the
+package's ``__init__`` must never import it.
+
+Reading keeps the file's own numbering wherever the format has one, because the
+values written with ``--values`` are indexed by it:
+
+* OBJ: vertices in file order (none split or merged), faces in file order with
+  each polygon fanned in place. trimesh on its own splits vertices at UV and
+  normal seams and moves the second half of every quad to the end, so the file is
+  first reduced to its ``v`` and ``f`` records (see ``_plain_obj``).
+* PLY, OFF: vertices and triangles as stored. Polygons are triangulated by
+  trimesh, which groups the pieces by polygon size rather than keeping them in
+  place.
+* STL: a triangle soup by design, so corners at the same position are merged
+  (in order of first use) to give the mesh back its connectivity; triangle order
+  is kept.
+* glTF/GLB: every mesh node of the scene, with its transform applied, in the
+  order of the scene graph; vertices as stored in each primitive.
+"""
+
+from __future__ import annotations
+
+import io
+import os
+
+import numpy as np
+import trimesh
+
+# Formats ``save_colored`` writes. OFF goes through our own writer because
+# trimesh's OFF exporter drops colours; STL has no colour at all.
+WRITE_SUFFIXES = (".ply", ".obj", ".off", ".glb", ".stl")
+
+
+def load_mesh(path) -> tuple[np.ndarray, np.ndarray]:
+    """Read a mesh file as (vertices float64 (n,3), triangles int64 (m,3)).
+
+    Raises ValueError naming the file for a missing, unreadable or empty file,
+    and for one that holds no triangles (a point cloud, a set of lines).
+    """
+    path = os.fspath(path)
+    if not os.path.exists(path):
+        raise ValueError(f"{path}: no such file")
+    if not os.path.isfile(path):
+        raise ValueError(f"{path}: not a file")
+    suffix = os.path.splitext(path)[1].lower()
+    try:
+        if suffix == ".obj":
+            scene = trimesh.load(
+                io.BytesIO(_plain_obj(path)),
+                file_type="obj",
+                process=False,
+                force="scene",
+                maintain_order=True,
+                skip_materials=True,
+            )
+        else:
+            # skip_materials: textures are irrelevant here, and decoding them
+            # needs Pillow, which the ``cli`` extra does not pull in.
+            scene = trimesh.load(path, process=False, force="scene", skip_materials=True)
+    except Exception as exc:  # a parser fed a broken file fails in many ways
+        reason = str(exc) or type(exc).__name__
+        raise ValueError(f"{path}: cannot read mesh ({reason})") from exc
+
+    vertices, triangles, other_kinds = _flatten(scene)
+    if len(triangles) == 0:
+        found = f" (it holds {', '.join(sorted(other_kinds))})" if other_kinds else ""
+        raise ValueError(f"{path}: no triangles found{found}")
+    if suffix == ".stl":
+        vertices, triangles = _merge_identical(vertices, triangles)
+    if not np.all(np.isfinite(vertices)):
+        raise ValueError(f"{path}: vertex coordinates are not all finite")
+    if triangles.min() < 0 or triangles.max() >= len(vertices):
+        raise ValueError(f"{path}: a face refers to a vertex that does not exist")
+    return vertices, triangles
+
+
+def _plain_obj(path: str) -> bytes:
+    """The OBJ file reduced to ``v`` lines and triangular ``f`` lines, in order.
+
+    Dropping the texture and normal references keeps trimesh from splitting
+    vertices at seams; fanning polygons here keeps each polygon's triangles at
+    its place in the file; relative (negative) indices are made absolute because
+    they count back from the current line, which trimesh cannot know once the
+    file is reduced. Materials, groups and objects are irrelevant to the SDF.
+    """
+    with open(path, "rb") as stream:
+        # Numbers are ASCII; a stray byte can only sit in a name or comment.
+        text = stream.read().decode("utf-8", errors="replace")
+    text = text.replace("\\\r\n", " ").replace("\\\n", " ")  # continuation lines
+    out = []
+    vertex_count = 0
+    for line in text.splitlines():
+        fields = line.split()
+        if not fields:
+            continue
+        if fields[0] == "v":
+            out.append(line.strip())
+            vertex_count += 1
+        elif fields[0] == "f":
+            try:
+                refs = [int(token.split("/", 1)[0]) for token in fields[1:]]
+            except ValueError:
+                raise ValueError(f"malformed face {line.strip()[:60]!r}") from None
+            if 0 in refs:
+                raise ValueError(f"face {line.strip()[:60]!r} uses index 0 (OBJ counts from 1)")
+            refs = [index if index > 0 else vertex_count + 1 + index for index in refs]
+            # Fewer than three corners is not a face; trimesh skips these too.
+            for k in range(1, len(refs) - 1):
+                out.append(f"f {refs[0]} {refs[k]} {refs[k + 1]}")
+    return ("\n".join(out) + "\n").encode("ascii")
+
+
+# How non-mesh geometry is named in the "no triangles" message.
+_KIND_NAMES = {"PointCloud": "a point cloud", "Path2D": "2D paths", "Path3D": "lines"}
+
+
+def _flatten(scene: trimesh.Scene) -> tuple[np.ndarray, np.ndarray, set]:
+    """Concatenate the scene's triangle meshes, each placed by its node transform.
+
+    Done here rather than with ``force="mesh"`` because trimesh's own
+    concatenation copies each mesh's colours and textures, which needs SciPy or
+    Pillow for some files; only positions and faces matter for the SDF.
+    Returns the names of the other kinds of geometry found, for error messages.
+    """
+    vertex_parts, triangle_parts, other_kinds = [], [], set()
+    offset = 0
+    for node in scene.graph.nodes_geometry:
+        transform, name = scene.graph[node]
+        geometry = scene.geometry[name]
+        if not isinstance(geometry, trimesh.Trimesh):
+            other_kinds.add(_KIND_NAMES.get(type(geometry).__name__, type(geometry).__name__))
+            continue
+        if len(geometry.faces) == 0:
+            continue
+        vertices = np.asarray(geometry.vertices, dtype=np.float64)
+        triangles = np.asarray(geometry.faces, dtype=np.int64)
+        transform = np.asarray(transform, dtype=np.float64)
+        if not np.array_equal(transform, np.eye(4)):
+            vertices = vertices @ transform[:3, :3].T + transform[:3, 3]
+            # A mirroring transform turns the surface inside out; reversing the
+            # winding keeps the normals pointing outward (the SDF shoots inward).
+            if np.linalg.det(transform[:3, :3]) < 0:
+                triangles = triangles[:, ::-1]
+        vertex_parts.append(vertices)
+        triangle_parts.append(triangles + offset)
+        offset += len(vertices)
+    if not triangle_parts:
+        return np.zeros((0, 3)), np.zeros((0, 3), dtype=np.int64), other_kinds
+    return (
+        np.ascontiguousarray(np.concatenate(vertex_parts)),
+        np.ascontiguousarray(np.concatenate(triangle_parts)),
+        other_kinds,
+    )
+
+
+def _merge_identical(vertices: np.ndarray, triangles: np.ndarray):
+    """Merge vertices with exactly equal coordinates, numbered by first use."""
+    unique, first, inverse = np.unique(vertices, axis=0, return_index=True, return_inverse=True)
+    order = np.argsort(first, kind="stable")
+    rank = np.empty_like(order)
+    rank[order] = np.arange(len(order))
+    return unique[order], rank[inverse.reshape(-1)][triangles]
+
+
+def save_colored(path, vertices, triangles, colors, per: str = "faces") -> None:
+    """Write the mesh coloured per face or per vertex; the format follows the suffix.
+
+    colors: (m,4) uint8 RGBA for per="faces", (n,4) for per="vertices".
+    PLY is written binary and keeps either kind; OFF keeps either (written here);
+    OBJ and GLB store only vertex colours, so per-face colours give every
+    triangle its own three vertices (exact flat colours, 3m vertices); STL keeps
+    no colour. Raises ValueError for an unknown suffix or mismatched arrays.
+    """
+    path = os.fspath(path)
+    suffix = os.path.splitext(path)[1].lower()
+    if suffix not in WRITE_SUFFIXES:
+        raise ValueError(
+            f"{path}: cannot write '{suffix}' files (use one of {', '.join(WRITE_SUFFIXES)})"
+        )
+    vertices = np.asarray(vertices, dtype=np.float64).reshape(-1, 3)
+    triangles = np.asarray(triangles, dtype=np.int64).reshape(-1, 3)
+    colors = np.asarray(colors)
+    if per not in ("faces", "vertices"):
+        raise ValueError(f"per must be 'faces' or 'vertices', not {per!r}")
+    expected = len(triangles) if per == "faces" else len(vertices)
+    if colors.dtype != np.uint8 or colors.shape != (expected, 4):
+        raise ValueError(
+            f"colors must be uint8 of shape ({expected}, 4) for per={per!r}, "
+            f"got {colors.dtype} {colors.shape}"
+        )
+
+    if suffix == ".off":
+        _write_off(path, vertices, triangles, colors, per)
+        return
+    if per == "faces" and suffix in (".obj", ".glb"):
+        vertices = vertices[triangles].reshape(-1, 3)
+        triangles = np.arange(len(vertices), dtype=np.int64).reshape(-1, 3)
+        colors = np.repeat(colors, 3, axis=0)
+        per = "vertices"
+    key = "face_colors" if per == "faces" else "vertex_colors"
+    mesh = trimesh.Trimesh(vertices, triangles, process=False, **{key: colors})
+    mesh.export(path, file_type=suffix[1:])
+
+
+def _write_off(path, vertices, triangles, colors, per) -> None:
+    """OFF with colours: COFF puts RGBA after each vertex, OFF after each face."""
+    corners = np.column_stack([np.full(len(triangles), 3), triangles])
+    with open(path, "w", encoding="ascii") as out:
+        out.write(f"{'COFF' if per == 'vertices' else 'OFF'}\n")
+        out.write(f"{len(vertices)} {len(triangles)} 0\n")
+        # %.17g gives back every float64 exactly.
+        if per == "vertices":
+            np.savetxt(out, np.column_stack([vertices, colors]), fmt=["%.17g"] * 3 + ["%d"] * 4)
+            np.savetxt(out, corners, fmt="%d")
+        else:
+            np.savetxt(out, vertices, fmt="%.17g")
+            np.savetxt(out, np.column_stack([corners, colors]), fmt="%d")

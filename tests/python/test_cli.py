@@ -1,0 +1,315 @@
+# SPDX-License-Identifier: GPL-3.0-or-later
+"""The shape-diameter command: every input format, its outputs, --json, and one-line errors."""
+
+import io
+import json
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+trimesh = pytest.importorskip("trimesh")
+
+import shape_diameter
+from shape_diameter import cli
+from shape_diameter.colormap import colormap
+from shape_diameter.mesh_io import load_mesh
+
+DATA = Path(__file__).resolve().parents[1] / "data"
+RAYS = 12  # enough rays to be a real run, few enough to keep the file fast
+JSON_KEYS = {
+    "input", "faces", "vertices", "points", "point_count", "rays", "cone", "sampling",
+    "seed", "normalize", "engine", "seconds", "Mrays_per_s", "io_seconds", "total_seconds",
+    "outputs",
+}  # fmt: skip
+
+
+@pytest.fixture(scope="module")
+def spot():
+    return load_mesh(DATA / "spot.obj")
+
+
+@pytest.fixture(scope="module")
+def inputs(tmp_path_factory, spot):
+    """spot.obj as it is, and converted by trimesh to each other input format."""
+    folder = tmp_path_factory.mktemp("inputs")
+    shutil.copy(DATA / "spot.obj", folder / "spot.obj")
+    for suffix in (".ply", ".off", ".stl", ".glb"):
+        trimesh.Trimesh(*spot, process=False).export(folder / f"spot{suffix}")
+    return folder
+
+
+def _run_process(*args, cwd=None):
+    """The command as users run it: a separate Python process."""
+    return subprocess.run(
+        [sys.executable, "-m", "shape_diameter.cli", *map(str, args)],
+        check=False,
+        capture_output=True,
+        text=True,
+        cwd=cwd,
+        timeout=120,
+    )
+
+
+def _assert_one_line_error(stderr, stdout=""):
+    assert stderr.endswith("\n") and stderr.count("\n") == 1, stderr
+    assert stderr.startswith("shape-diameter: error: "), stderr
+    assert "Traceback" not in stderr
+    assert stdout == ""
+
+
+# --- every input format -------------------------------------------------------
+
+
+@pytest.mark.parametrize("suffix", [".obj", ".ply", ".off", ".stl", ".glb"])
+def test_each_input_format_gives_the_sdf_of_the_same_mesh(tmp_path, inputs, spot, suffix):
+    source = inputs / f"spot{suffix}"
+    output, values = tmp_path / "out.ply", tmp_path / "values.npy"
+    status = cli.main(
+        [str(source), "-o", str(output), "--values", str(values), "--rays", str(RAYS)]
+    )
+    assert status == 0
+
+    saved = np.load(values)
+    assert saved.dtype == np.float32 and saved.shape == (len(spot[1]),)
+    # Exactly what compute() gives for the mesh as read from that file...
+    expected = shape_diameter.compute(*load_mesh(source), rays=RAYS)
+    np.testing.assert_array_equal(saved, expected.raw)
+    # ...which is spot's SDF, up to the float32 coordinates of PLY, STL and GLB.
+    reference = shape_diameter.compute(*spot, rays=RAYS).raw
+    np.testing.assert_allclose(saved, reference, rtol=0, atol=1e-4 * reference.max())
+
+    # The output is the same mesh, coloured per face by the normalised SDF.
+    _, out_triangles = load_mesh(output)
+    assert out_triangles.shape == spot[1].shape
+    faces = next(iter(trimesh.load(output, process=False, force="scene").geometry.values()))
+    np.testing.assert_array_equal(faces.visual.face_colors, colormap(expected.normalized))
+
+
+def test_per_vertex_values_and_colours(tmp_path, spot):
+    output, values = tmp_path / "out.ply", tmp_path / "values.npy"
+    argv = [str(DATA / "spot.obj"), "-o", str(output), "--values", str(values)]
+    assert cli.main([*argv, "--points", "vertices", "--rays", str(RAYS)]) == 0
+    expected = shape_diameter.compute(*spot, rays=RAYS, points="vertices")
+    np.testing.assert_array_equal(np.load(values), expected.raw)
+    assert np.load(values).shape == (len(spot[0]),)
+    mesh = next(iter(trimesh.load(output, process=False, force="scene").geometry.values()))
+    assert mesh.visual.kind == "vertex"
+    np.testing.assert_array_equal(mesh.visual.vertex_colors, colormap(expected.normalized))
+
+
+def test_options_reach_compute(tmp_path, spot):
+    values = tmp_path / "values.npy"
+    argv = [str(DATA / "spot.obj"), "-o", str(tmp_path / "out.obj"), "--values", str(values)]
+    options = ["--rays", "7", "--cone", "90", "--sampling", "random", "--seed", "5"]
+    assert cli.main([*argv, *options, "--normalize", "log"]) == 0
+    expected = shape_diameter.compute(
+        *spot, rays=7, cone_angle=90.0, sampling="random", seed=5, normalize="log"
+    )
+    np.testing.assert_array_equal(np.load(values), expected.raw)
+
+
+def test_default_output_is_next_to_the_input(tmp_path, capsys):
+    source = tmp_path / "cow.obj"
+    shutil.copy(DATA / "cow.obj", source)
+    assert cli.main([str(source), "--rays", "4"]) == 0
+    assert load_mesh(tmp_path / "cow.sdf.ply")[1].shape == (5804, 3)
+    out = capsys.readouterr().out
+    assert out.count("\n") == 1 and "cow.sdf.ply" in out
+
+
+# --- --json -------------------------------------------------------------------
+
+
+def test_json_is_one_object_with_the_documented_keys(tmp_path):
+    output, values = tmp_path / "spot.glb", tmp_path / "v.npy"
+    done = _run_process(
+        DATA / "spot.obj", "-o", output, "--values", values, "--rays", RAYS, "--json"
+    )
+    assert done.returncode == 0, done.stderr
+    assert done.stdout.endswith("\n") and done.stdout.count("\n") == 1
+    report = json.loads(done.stdout)
+    assert set(report) == JSON_KEYS
+    assert (report["faces"], report["vertices"]) == (5856, 2930)
+    assert (report["points"], report["point_count"], report["rays"]) == ("faces", 5856, RAYS)
+    assert (report["cone"], report["sampling"], report["seed"]) == (120.0, "fibonacci", 0)
+    assert report["input"] == str(DATA / "spot.obj")
+    assert report["engine"].startswith("cpu")
+    assert report["seconds"]["cast"] > 0
+    assert report["Mrays_per_s"] == pytest.approx(5856 * RAYS / report["seconds"]["cast"] / 1e6)
+    assert set(report["io_seconds"]) == {"load", "write"}
+    assert report["total_seconds"] >= report["seconds"]["total"]
+    assert report["outputs"] == {"mesh": str(output), "values": str(values)}
+    assert output.is_file() and values.is_file()
+    assert "Traceback" not in done.stderr
+
+
+def test_console_script_runs():
+    script = Path(sys.executable).with_name("shape-diameter")
+    if not script.exists():
+        pytest.skip("package not installed with its console script in this environment")
+    done = subprocess.run(
+        [str(script), "--version"], check=False, capture_output=True, text=True, timeout=60
+    )
+    assert done.returncode == 0
+    assert done.stdout.strip() == f"shape-diameter {shape_diameter.__version__}"
+
+
+# --- one-line errors, status 2 ---------------------------------------------------
+
+
+def _garbage_obj(folder):
+    path = folder / "garbage.obj"
+    path.write_text("this is not\na mesh\nf 1 2 x\n")
+    return path
+
+
+def _truncated_ply(folder):
+    whole, path = folder / "whole.ply", folder / "truncated.ply"
+    save = trimesh.Trimesh(*load_mesh(DATA / "suzanne.obj"), process=False)
+    save.export(whole, encoding="binary")
+    path.write_bytes(whole.read_bytes()[:-700])
+    return path
+
+
+def _point_cloud(folder):
+    path = folder / "cloud.ply"
+    trimesh.PointCloud(np.random.default_rng(0).random((30, 3))).export(path)
+    return path
+
+
+PROCESS_FAILURES = {
+    "missing file": lambda folder: [folder / "missing.obj"],
+    "garbage obj": lambda folder: [_garbage_obj(folder)],
+    "truncated ply": lambda folder: [_truncated_ply(folder)],
+    "negative rays": lambda folder: [DATA / "spot.obj", "--rays", "-5"],
+    "unknown points": lambda folder: [DATA / "spot.obj", "--points", "edges"],
+}
+
+
+@pytest.mark.parametrize("case", sorted(PROCESS_FAILURES))
+def test_failures_print_one_line_and_exit_2(tmp_path, case):
+    done = _run_process(*PROCESS_FAILURES[case](tmp_path), "--json", cwd=tmp_path)
+    assert done.returncode == 2
+    _assert_one_line_error(done.stderr, done.stdout)
+    assert not list(tmp_path.glob("*.sdf.ply"))
+
+
+IN_PROCESS_FAILURES = {
+    "no input": lambda folder: [],
+    "point cloud": lambda folder: [_point_cloud(folder)],
+    "not a number of rays": lambda folder: [DATA / "spot.obj", "--rays", "many"],
+    "too many rays": lambda folder: [DATA / "spot.obj", "--rays", "100000"],
+    "cone too wide": lambda folder: [DATA / "spot.obj", "--cone", "180"],
+    "unknown sampling": lambda folder: [DATA / "spot.obj", "--sampling", "grid"],
+    "unknown option": lambda folder: [DATA / "spot.obj", "--fast"],
+    "unknown output format": lambda folder: [DATA / "spot.obj", "-o", folder / "out.fbx"],
+    "output folder missing": lambda folder: [DATA / "spot.obj", "-o", folder / "no/out.ply"],
+    "values folder missing": lambda folder: [
+        DATA / "spot.obj", "-o", folder / "out.ply", "--values", folder / "no/v.npy"
+    ],
+}  # fmt: skip
+
+
+@pytest.mark.parametrize("case", sorted(IN_PROCESS_FAILURES))
+def test_bad_input_and_options_in_process(tmp_path, capsys, case):
+    argv = [str(arg) for arg in IN_PROCESS_FAILURES[case](tmp_path)]
+    assert cli.main(argv) == 2
+    captured = capsys.readouterr()
+    _assert_one_line_error(captured.err, captured.out)
+    assert not (tmp_path / "out.ply").exists()
+
+
+def test_a_value_error_from_compute_is_one_line_and_status_2(tmp_path, capsys, monkeypatch):
+    # Options are checked before compute(), so force a real compute() refusal.
+    real_compute = shape_diameter.compute
+
+    def compute_with_bad_cone(*args, **kwargs):
+        return real_compute(*args, **{**kwargs, "cone_angle": 500.0})
+
+    monkeypatch.setattr(cli, "compute", compute_with_bad_cone)
+    assert cli.main([str(DATA / "suzanne.obj"), "-o", str(tmp_path / "out.ply")]) == 2
+    captured = capsys.readouterr()
+    _assert_one_line_error(captured.err, captured.out)
+    assert "cone_angle" in captured.err
+
+
+def test_compute_warnings_are_one_line(tmp_path, capsys):
+    # A lone triangle: every ray escapes, compute() warns and fills zeros.
+    source = tmp_path / "flat.obj"
+    source.write_text("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n")
+    assert cli.main([str(source), "--json"]) == 0
+    captured = capsys.readouterr()
+    assert captured.err.count("\n") == 1 and captured.err.startswith("shape-diameter: warning: ")
+    assert json.loads(captured.out)["faces"] == 1
+
+
+def test_version(capsys):
+    assert cli.main(["--version"]) == 0
+    assert capsys.readouterr().out.strip() == f"shape-diameter {shape_diameter.__version__}"
+
+
+def test_help_documents_the_default_output(capsys):
+    assert cli.main(["--help"]) == 0
+    assert ".sdf.ply" in capsys.readouterr().out
+
+
+# --- optional dependencies and the progress bar -------------------------------------
+
+
+def test_package_imports_without_the_cli_extra(tmp_path):
+    # None in sys.modules makes an import fail as if the package were absent.
+    code = (
+        "import sys; sys.modules['trimesh'] = None; sys.modules['tqdm'] = None\n"
+        "import shape_diameter, shape_diameter.colormap\n"
+        "from shape_diameter.cli import main\n"
+        f"sys.exit(main([{str(DATA / 'spot.obj')!r}]))\n"
+    )
+    done = subprocess.run(
+        [sys.executable, "-c", code],
+        check=False,
+        capture_output=True,
+        text=True,
+        timeout=60,
+        cwd=tmp_path,
+    )
+    assert done.returncode == 1
+    _assert_one_line_error(done.stderr, done.stdout)
+    assert "shape_diameter[cli]" in done.stderr
+
+
+class _Terminal(io.StringIO):
+    def isatty(self):
+        return True
+
+
+def test_progress_bar_only_on_a_terminal(monkeypatch):
+    monkeypatch.setattr(sys, "stderr", io.StringIO())
+    with cli._progress_bar() as progress:
+        assert progress is None
+    terminal = _Terminal()
+    monkeypatch.setattr(sys, "stderr", terminal)
+    with cli._progress_bar() as progress:
+        for fraction in (0.0, 0.5, 0.25, 1.0, 2.0):  # repeated or odd values are harmless
+            progress(fraction)
+    # Quick runs stay quiet: the bar shows only after half a second.
+    assert terminal.getvalue() == ""
+
+
+def test_progress_reaches_compute_and_json_stays_clean(tmp_path, capsys, monkeypatch):
+    seen = []
+    real_compute = shape_diameter.compute
+
+    def recording_compute(*args, **kwargs):
+        seen.append(kwargs["progress"])
+        return real_compute(*args, **kwargs)
+
+    monkeypatch.setattr(cli, "compute", recording_compute)
+    monkeypatch.setattr(sys, "stderr", _Terminal())
+    argv = [str(DATA / "suzanne.obj"), "-o", str(tmp_path / "out.ply"), "--json"]
+    assert cli.main(argv) == 0
+    assert len(seen) == 1 and callable(seen[0])
+    assert json.loads(capsys.readouterr().out)["faces"] == 968

@@ -1,0 +1,275 @@
+# SPDX-License-Identifier: GPL-3.0-or-later
+"""Mesh files through trimesh: the file's numbering is kept, bad files are refused clearly."""
+
+import re
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+trimesh = pytest.importorskip("trimesh")
+
+from shape_diameter.mesh_io import WRITE_SUFFIXES, load_mesh, save_colored
+
+DATA = Path(__file__).resolve().parents[1] / "data"
+
+
+def _read_obj_by_hand(path):
+    """Positions and polygons straight from the text, each polygon fanned in place."""
+    vertices, triangles = [], []
+    for line in Path(path).read_text(errors="replace").splitlines():
+        fields = line.split()
+        if fields and fields[0] == "v":
+            vertices.append([float(x) for x in fields[1:4]])
+        elif fields and fields[0] == "f":
+            refs = [int(token.split("/")[0]) for token in fields[1:]]
+            refs = [r - 1 if r > 0 else len(vertices) + r for r in refs]
+            triangles += [[refs[0], refs[k], refs[k + 1]] for k in range(1, len(refs) - 1)]
+    return np.array(vertices), np.array(triangles)
+
+
+def _read_off_by_hand(path):
+    words = Path(path).read_text().split()
+    assert words[0] == "OFF"
+    n, m = int(words[1]), int(words[2])
+    numbers = words[4:]
+    vertices = np.array(numbers[: 3 * n], dtype=float).reshape(n, 3)
+    faces = np.array(numbers[3 * n : 3 * n + 4 * m], dtype=np.int64).reshape(m, 4)
+    assert np.all(faces[:, 0] == 3)
+    return vertices, faces[:, 1:]
+
+
+def _signed_volume(vertices, triangles):
+    a, b, c = (vertices[triangles[:, k]] for k in range(3))
+    return float(np.einsum("ij,ij->i", a, np.cross(b, c)).sum() / 6.0)
+
+
+@pytest.fixture(scope="module")
+def spot():
+    return load_mesh(DATA / "spot.obj")
+
+
+# --- reading ----------------------------------------------------------------
+
+
+@pytest.mark.parametrize("name", ["spot.obj", "suzanne.obj", "cow.obj", "teapot.obj"])
+def test_obj_keeps_the_files_vertices_and_faces_in_order(name):
+    # spot has UV seams and suzanne has normals and quads: trimesh alone would
+    # split vertices at the seams and move quad halves to the end.
+    vertices, triangles = load_mesh(DATA / name)
+    expected_vertices, expected_triangles = _read_obj_by_hand(DATA / name)
+    assert vertices.dtype == np.float64 and vertices.shape == expected_vertices.shape
+    assert triangles.dtype == np.int64 and triangles.shape == expected_triangles.shape
+    np.testing.assert_array_equal(vertices, expected_vertices)
+    np.testing.assert_array_equal(triangles, expected_triangles)
+
+
+def test_suzanne_quads_become_two_triangles_each():
+    lines = (DATA / "suzanne.obj").read_text().splitlines()
+    corners = [len(line.split()) - 1 for line in lines if line.startswith("f ")]
+    assert sorted(set(corners)) == [3, 4]  # the test needs a mixed file
+    _, triangles = load_mesh(DATA / "suzanne.obj")
+    assert len(triangles) == sum(c - 2 for c in corners)
+
+
+def test_off_keeps_the_files_order():
+    vertices, triangles = load_mesh(DATA / "ChineseDragon-10kv.off")
+    expected_vertices, expected_triangles = _read_off_by_hand(DATA / "ChineseDragon-10kv.off")
+    np.testing.assert_array_equal(vertices, expected_vertices)
+    np.testing.assert_array_equal(triangles, expected_triangles)
+
+
+def test_obj_relative_indices_polygons_and_continuations(tmp_path):
+    path = tmp_path / "odd.obj"
+    path.write_text(
+        "mtllib nowhere.mtl\no thing\n"
+        "v 0 0 0\nv 1 0 0\nv 1 1 0\n"
+        "f -3 -2 -1\n"  # relative to the vertices read so far
+        "v 0 1 0\nv 0.5 1.5 0\n"
+        "usemtl red\nf 1/1/1 2/2/2 \\\n 3/3/3 4/4/4 5/5/5\n"  # a pentagon over two lines
+    )
+    vertices, triangles = load_mesh(path)
+    assert vertices.shape == (5, 3)
+    np.testing.assert_array_equal(triangles, [[0, 1, 2], [0, 1, 2], [0, 2, 3], [0, 3, 4]])
+
+
+@pytest.mark.parametrize("suffix", [".ply", ".off", ".glb", ".obj"])
+def test_other_formats_give_back_the_same_mesh(tmp_path, spot, suffix):
+    vertices, triangles = spot
+    path = tmp_path / f"spot{suffix}"
+    trimesh.Trimesh(vertices, triangles, process=False).export(path)
+    loaded_vertices, loaded_triangles = load_mesh(path)
+    np.testing.assert_array_equal(loaded_triangles, triangles)
+    # PLY and GLB store float32 coordinates.
+    np.testing.assert_allclose(loaded_vertices, vertices, rtol=0, atol=1e-6)
+
+
+def test_stl_corners_are_merged_back_into_a_connected_mesh(tmp_path, spot):
+    vertices, triangles = spot
+    path = tmp_path / "spot.stl"
+    trimesh.Trimesh(vertices, triangles, process=False).export(path)
+    loaded_vertices, loaded_triangles = load_mesh(path)
+    # STL repeats every corner; merging gives back spot's vertex count, the
+    # triangles keep their order and each corner its (float32) position.
+    assert loaded_vertices.shape == vertices.shape
+    assert loaded_triangles.shape == triangles.shape
+    np.testing.assert_allclose(
+        loaded_vertices[loaded_triangles], vertices[triangles], rtol=0, atol=1e-6
+    )
+    # Numbered by first use: the first triangle is 0, 1, 2.
+    np.testing.assert_array_equal(loaded_triangles[0], [0, 1, 2])
+
+
+@pytest.mark.parametrize("suffix", [".glb", ".gltf"])
+def test_gltf_scene_meshes_are_joined_with_their_transforms(tmp_path, suffix):
+    box = trimesh.creation.box()  # unit cube, outward normals
+    ball = trimesh.creation.icosphere(subdivisions=1)
+    mirror = np.diag([-1.0, 1.0, 1.0, 1.0])
+    mirror[0, 3] = 5.0  # mirrored in x, then moved 5 along x
+    scene = trimesh.Scene()
+    scene.add_geometry(box, node_name="box", geom_name="box")
+    scene.add_geometry(box, node_name="mirrored box", geom_name="box", transform=mirror)
+    scene.add_geometry(ball, node_name="ball", geom_name="ball")
+    path = tmp_path / f"scene{suffix}"
+    scene.export(path)
+
+    vertices, triangles = load_mesh(path)
+    assert len(triangles) == 2 * len(box.faces) + len(ball.faces)
+    assert len(vertices) == 2 * len(box.vertices) + len(ball.vertices)
+    assert vertices[:, 0].max() == pytest.approx(5.5, abs=1e-6)
+    # Every part stays outward facing, the mirrored one included: volumes add up.
+    expected = 2 * box.volume + _signed_volume(ball.vertices, ball.faces)
+    assert _signed_volume(vertices, triangles) == pytest.approx(expected, rel=1e-5)
+
+
+def _truncated_ply(tmp_path, spot):
+    whole = tmp_path / "whole.ply"
+    trimesh.Trimesh(*spot, process=False).export(whole, encoding="binary")
+    data = whole.read_bytes()
+    path = tmp_path / "truncated.ply"
+    path.write_bytes(data[: len(data) // 2])
+    return path
+
+
+BAD_FILES = {
+    "missing.obj": None,
+    "garbage.obj": "this is not a mesh\n\x00\x01 at all\n",
+    "bad face.obj": "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 x\n",
+    "index zero.obj": "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 0 1 2\n",
+    "out of range.obj": "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 4\n",
+    "points only.obj": "v 0 0 0\nv 1 0 0\nv 0 1 0\n",
+    "nan.obj": "v 0 0 nan\nv 1 0 0\nv 0 1 0\nf 1 2 3\n",
+    "empty.off": "",
+    "garbage.ply": b"\x00\x01\x02 not a ply" * 20,
+    "unknown.xyz2": "1 2 3\n",
+}
+
+
+@pytest.mark.parametrize("name", sorted(BAD_FILES))
+def test_bad_files_raise_a_value_error_naming_the_file(tmp_path, name):
+    path = tmp_path / name
+    if BAD_FILES[name] is not None:
+        content = BAD_FILES[name]
+        path.write_bytes(content if isinstance(content, bytes) else content.encode())
+    with pytest.raises(ValueError, match=re.escape(str(path))):
+        load_mesh(path)
+
+
+def test_truncated_binary_ply_is_refused(tmp_path, spot):
+    path = _truncated_ply(tmp_path, spot)
+    with pytest.raises(ValueError, match=re.escape(str(path))):
+        load_mesh(path)
+
+
+def test_point_cloud_is_refused_as_such(tmp_path):
+    path = tmp_path / "cloud.ply"
+    trimesh.PointCloud(np.random.default_rng(0).random((20, 3))).export(path)
+    with pytest.raises(ValueError, match="no triangles.*point cloud"):
+        load_mesh(path)
+
+
+def test_a_folder_is_not_a_mesh(tmp_path):
+    folder = tmp_path / "folder.obj"
+    folder.mkdir()
+    with pytest.raises(ValueError, match="not a file"):
+        load_mesh(folder)
+
+
+# --- writing ----------------------------------------------------------------
+
+
+def _colours(count, seed):
+    rgba = np.random.default_rng(seed).integers(0, 256, (count, 4), dtype=np.uint8)
+    rgba[:, 3] = 255
+    return rgba
+
+
+def _single_geometry(path):
+    # force="scene" reads colours as stored, without trimesh's mesh
+    # concatenation (which converts colours and needs SciPy).
+    scene = trimesh.load(path, process=False, force="scene")
+    assert len(scene.geometry) == 1
+    return next(iter(scene.geometry.values()))
+
+
+def _read_off_colours(path):
+    lines = [line.split() for line in Path(path).read_text().splitlines()]
+    n, m = int(lines[1][0]), int(lines[1][1])
+    if lines[0] == ["COFF"]:
+        return np.array([row[3:7] for row in lines[2 : 2 + n]], dtype=np.uint8)
+    return np.array([row[4:8] for row in lines[2 + n : 2 + n + m]], dtype=np.uint8)
+
+
+@pytest.mark.parametrize("per", ["faces", "vertices"])
+@pytest.mark.parametrize("suffix", WRITE_SUFFIXES)
+def test_save_colored_writes_mesh_and_colours(tmp_path, per, suffix):
+    vertices, triangles = load_mesh(DATA / "cow.obj")
+    colours = _colours(len(triangles) if per == "faces" else len(vertices), seed=1)
+    path = tmp_path / f"cow{suffix}"
+    save_colored(path, vertices, triangles, colours, per=per)
+
+    loaded_vertices, loaded_triangles = load_mesh(path)
+    assert loaded_triangles.shape == triangles.shape
+    np.testing.assert_allclose(
+        loaded_vertices[loaded_triangles], vertices[triangles], rtol=0, atol=1e-5
+    )
+    if suffix == ".stl":
+        return  # STL has no colour
+    if suffix == ".off":
+        np.testing.assert_array_equal(_read_off_colours(path), colours)
+        np.testing.assert_array_equal(loaded_vertices, vertices)  # %.17g is exact
+        return
+    visual = _single_geometry(path).visual
+    if suffix == ".ply" or per == "vertices":
+        np.testing.assert_array_equal(loaded_triangles, triangles)
+        stored = visual.face_colors if per == "faces" else visual.vertex_colors
+        assert visual.kind == ("face" if per == "faces" else "vertex")
+        np.testing.assert_array_equal(stored, colours)
+    else:
+        # OBJ and GLB hold vertex colours only: each triangle gets its own corners.
+        assert visual.kind == "vertex"
+        assert len(loaded_vertices) == 3 * len(triangles)
+        np.testing.assert_array_equal(visual.vertex_colors, np.repeat(colours, 3, axis=0))
+
+
+def test_ply_output_is_binary(tmp_path):
+    vertices, triangles = load_mesh(DATA / "suzanne.obj")
+    path = tmp_path / "out.ply"
+    save_colored(path, vertices, triangles, _colours(len(triangles), 2))
+    header = path.read_bytes()[:400]
+    assert header.startswith(b"ply\n") and b"format binary_little_endian 1.0" in header
+
+
+def test_save_colored_refuses_bad_arguments(tmp_path):
+    vertices, triangles = load_mesh(DATA / "suzanne.obj")
+    good = _colours(len(triangles), 3)
+    with pytest.raises(ValueError, match="cannot write '.fbx'"):
+        save_colored(tmp_path / "out.fbx", vertices, triangles, good)
+    with pytest.raises(ValueError, match="shape"):
+        save_colored(tmp_path / "out.ply", vertices, triangles, good[:-1])
+    with pytest.raises(ValueError, match="uint8"):
+        save_colored(tmp_path / "out.ply", vertices, triangles, good.astype(np.float32))
+    with pytest.raises(ValueError, match="per"):
+        save_colored(tmp_path / "out.ply", vertices, triangles, good, per="edges")
+    with pytest.raises(ValueError, match=r"\(507, 4\)"):
+        save_colored(tmp_path / "out.ply", vertices, triangles, good, per="vertices")
