@@ -6,6 +6,7 @@
 
 #include "../../kernels/sdf_bvh_traverse.h"
 #include "bvh.h"
+#include "bvh4_traverse.h"
 #include "test_meshes.h"
 
 namespace sdf {
@@ -31,6 +32,7 @@ TEST_P(BvhOnSoup, ClosestHitEqualsBruteForce) {
   BvhConfig config;
   config.threads = 2;
   const Bvh bvh = build_bvh(mesh, config);
+  const Bvh4 wide = collapse_to_bvh4(bvh);
   std::mt19937 rng(5);
   std::uniform_real_distribution<float> u(-1.2f, 1.2f);
   int hits = 0;
@@ -42,6 +44,8 @@ TEST_P(BvhOnSoup, ClosestHitEqualsBruteForce) {
                                                      1e-4f, skip);
     const kern::SdfHit b = brute_force(bvh, o, d, 1e-4f, skip);
     ASSERT_EQ(a.t, b.t) << "ray " << r;
+    const kern::SdfHit w = bvh4_closest_hit(wide, o, d, 1e-4f, skip);
+    ASSERT_EQ(w.t, b.t) << "4-wide, ray " << r;
     if (std::isfinite(a.t)) {
       ++hits;
       EXPECT_EQ(a.det < 0.0f, b.det < 0.0f);
