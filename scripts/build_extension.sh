@@ -1,0 +1,108 @@
+#!/usr/bin/env bash
+# SPDX-License-Identifier: GPL-3.0-or-later
+# Builds the Blender extension: dist/shape_diameter-<version>-linux_x64.zip.
+#
+#  1. one wheel of the package per CPython that Blender ships: cp311 (Blender 4.2 LTS to 5.0)
+#     and cp313 (Blender 5.1 and later), built by the pyenv Pythons in build venvs
+#     (build/ext-venv-cpXY) without build isolation, into cached CMake build directories
+#     (build/ext-<wheel tag>), so a second run recompiles only what changed;
+#  2. the extension tree in build/extension: addon/*, blender_manifest.toml, wheels/;
+#  3. the zip, built and validated by Blender's own extension logic (blender_ext.py, the code
+#     behind `blender --command extension build --split-platforms` and `... validate`), run by
+#     a plain Python from the bpy package in .venv-bpy45 (made here when missing).
+#
+# Environment: PY311, PY313 (interpreters), BPY45_VENV (default .venv-bpy45).
+set -euo pipefail
+cd "$(dirname "$0")/.."
+ROOT=$PWD
+
+PY311=${PY311:-$HOME/.pyenv/versions/3.11.7/bin/python3.11}
+PY313=${PY313:-$HOME/.pyenv/versions/3.13.0/bin/python3.13}
+BPY45_VENV=${BPY45_VENV:-.venv-bpy45}
+log() { echo "build_extension: $*"; }
+
+# Debian packages the C++ core needs (the same ones scripts/setup.sh installs), plus the X11
+# client libraries that bpy links (used by test_blender.sh; bpy is installed here for the build
+# logic, and importing bpy is how its version is read).
+APT_PACKAGES=(build-essential cmake ninja-build libglm-dev
+              libsm6 libxrender1 libxi6 libxkbcommon0 libgl1 libegl1 libxxf86vm1 libxfixes3)
+missing=()
+for p in "${APT_PACKAGES[@]}"; do
+  dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
+done
+if [ ${#missing[@]} -gt 0 ]; then
+  log "installing Debian packages: ${missing[*]}"
+  export DEBIAN_FRONTEND=noninteractive
+  apt-get update -qq
+  apt-get install -y -qq --no-install-recommends "${missing[@]}"
+fi
+
+VERSION=$("$PY311" -c 'import tomllib; print(tomllib.load(open("pyproject.toml", "rb"))["project"]["version"])')
+MANIFEST_VERSION=$("$PY311" -c 'import tomllib; print(tomllib.load(open("blender_manifest.toml", "rb"))["version"])')
+if [ "$VERSION" != "$MANIFEST_VERSION" ]; then
+  log "error: pyproject.toml says version $VERSION, blender_manifest.toml says $MANIFEST_VERSION" >&2
+  exit 1
+fi
+
+# 1. Wheels.
+WHEEL_DIR=build/ext-wheels
+rm -rf "$WHEEL_DIR"
+mkdir -p "$WHEEL_DIR"
+for PY in "$PY311" "$PY313"; do
+  TAG=$("$PY" -c 'import sys; print(f"cp{sys.version_info[0]}{sys.version_info[1]}")')
+  VENV=build/ext-venv-$TAG
+  if [ ! -x "$VENV/bin/python" ]; then
+    log "creating build venv $VENV ($("$PY" --version))"
+    "$PY" -m venv "$VENV"
+    "$VENV/bin/python" -m pip install -q --upgrade pip
+  fi
+  "$VENV/bin/python" -m pip install -q "scikit-build-core>=0.10" "pybind11>=2.12"
+  log "building the $TAG wheel"
+  "$VENV/bin/python" -m pip wheel . --no-deps --no-build-isolation -q -w "$WHEEL_DIR" \
+    -C build-dir="build/ext-{wheel_tag}"
+done
+ls "$WHEEL_DIR"
+
+# 2. The extension tree. The manifest names the wheels; check they are the ones just built.
+STAGE=build/extension
+rm -rf "$STAGE"
+mkdir -p "$STAGE/wheels"
+cp -r addon/. "$STAGE/"
+find "$STAGE" -name __pycache__ -type d -prune -exec rm -rf {} +
+cp blender_manifest.toml "$STAGE/"
+cp "$WHEEL_DIR"/*.whl "$STAGE/wheels/"
+"$PY311" - "$STAGE" <<'EOF'
+import os, sys, tomllib
+stage = sys.argv[1]
+manifest = tomllib.load(open(os.path.join(stage, "blender_manifest.toml"), "rb"))
+listed = sorted(os.path.normpath(w) for w in manifest.get("wheels", []))
+built = sorted(os.path.join("wheels", f) for f in os.listdir(os.path.join(stage, "wheels")))
+if listed != built:
+    sys.exit(f"build_extension: blender_manifest.toml lists wheels {listed}, but the build made {built}")
+EOF
+
+# 3. Blender's build and validate logic, from the bpy package.
+if [ ! -x "$BPY45_VENV/bin/python" ] || ! "$BPY45_VENV/bin/python" -c "import bpy" 2>/dev/null; then
+  log "creating $BPY45_VENV (bpy 4.5 LTS, Python 3.11, numpy < 2)"
+  "$PY311" -m venv "$BPY45_VENV"
+  "$BPY45_VENV/bin/python" -m pip install -q "bpy>=4.5,<4.6" "numpy<2" "pytest>=7"
+fi
+BPY_SCRIPTS=$("$BPY45_VENV/bin/python" - <<'EOF'
+import glob, os, importlib.util
+root = os.path.dirname(importlib.util.find_spec("bpy").origin)
+# bpy/<major.minor>/scripts, found without importing bpy (which starts Blender).
+print(sorted(glob.glob(os.path.join(root, "[0-9]*.[0-9]*", "scripts")))[-1])
+EOF
+)
+BLENDER_EXT=$BPY_SCRIPTS/addons_core/bl_pkg/cli/blender_ext.py
+VALID_TAGS=$BPY_SCRIPTS/modules/_bpy_internal/extensions/tags.py
+mkdir -p dist
+rm -f dist/shape_diameter-"$VERSION"-*.zip
+log "building the extension with $BLENDER_EXT"
+"$BPY45_VENV/bin/python" "$BLENDER_EXT" build --source-dir "$STAGE" --output-dir dist \
+  --split-platforms --valid-tags "$VALID_TAGS"
+ZIP=dist/shape_diameter-$VERSION-linux_x64.zip
+[ -f "$ZIP" ] || { log "error: $ZIP was not made" >&2; ls dist >&2; exit 1; }
+log "validating $ZIP"
+"$BPY45_VENV/bin/python" "$BLENDER_EXT" validate "$ZIP" --valid-tags "$VALID_TAGS"
+log "made $ZIP ($(du -h "$ZIP" | cut -f1))"
