@@ -1,0 +1,94 @@
+# SPDX-License-Identifier: GPL-3.0-or-later
+"""The Shape Diameter for scripts running inside Blender (including `blender -b`).
+
+The add-on's modules live under `bl_ext.<repository>.shape_diameter`; installed from a file
+(drag and drop, or `blender --command extension install-file -r user_default`), that is:
+
+    from bl_ext.user_default.shape_diameter import api
+
+    result = api.compute_object(bpy.data.objects["Suzanne"], rays=64, points="faces")
+    result.values        # float32 per polygon (or vertex): the SDF, in world units
+    result.attributes    # the attributes written: ["sdf", "sdf_normalized", "sdf_color"]
+
+It does what the operator object.shape_diameter does, synchronously, and raises instead of
+reporting: ValueError (process.UserError, a subclass) for anything the user can fix, with the
+message the operator would report; nothing is written then. The native package itself is
+`import shape_diameter` (numpy in, numpy out).
+"""
+
+from dataclasses import dataclass, field
+
+import bpy
+import numpy as np
+
+from . import core, operators, process
+
+UserError = process.UserError
+CoreUnavailable = core.CoreUnavailable
+
+
+@dataclass
+class ObjectResult:
+    """What one object got. Arrays have one entry per polygon (domain 'FACE') or per vertex
+    (domain 'POINT'), except valid_rays: per triangle (or vertex)."""
+
+    object_name: str
+    domain: str
+    values: np.ndarray
+    normalized: np.ndarray
+    valid_rays: np.ndarray
+    colors: np.ndarray
+    engine: str
+    timings: dict
+    attributes: list
+    shared_by: list = field(default_factory=list)
+
+
+def engines():
+    """The engines the core offers here: shape_diameter.engines()."""
+    return core.engines()
+
+
+def compute_objects(objects, *, depsgraph=None, write=True, **options):
+    """Computes every mesh object in `objects` together and writes their attributes (all or
+    none). Options, with the operator's names: rays=30, cone_angle=120.0 (degrees),
+    sampling='fibonacci', seed=0, points='faces', normalize='linear', engine=None (the
+    preferences' default engine; or 'auto', or a name from engines()), attribute_name='sdf',
+    normalized_name='sdf_normalized', color_name='sdf_color' (empty: not written),
+    use_modifiers=False, apply_scale=True; and any further keyword that
+    shape_diameter.compute() accepts. write=False computes without writing."""
+    context = bpy.context
+    if options.get("engine") in (None, "DEFAULT"):
+        options["engine"] = operators.resolve_engine(context, "DEFAULT")
+    opts = process.Options.from_keywords(**options)
+    if depsgraph is None:
+        depsgraph = context.evaluated_depsgraph_get()
+    tasks, _warnings = process.prepare(depsgraph, objects, opts)
+    process.compute(tasks, opts)
+    if write:
+        process.write(bpy.data, tasks, opts)
+    domain = "POINT" if opts.points == "vertices" else "FACE"
+    written = [name for name, _, _ in opts.outputs()] if write else []
+    return [
+        ObjectResult(
+            object_name=t.object_name,
+            domain=domain,
+            values=t.values,
+            normalized=t.normalized,
+            valid_rays=t.valid_rays,
+            colors=t.colors,
+            engine=t.engine,
+            timings=t.timings,
+            attributes=written,
+            shared_by=list(t.shared_by),
+        )
+        for t in tasks
+    ]
+
+
+def compute_object(obj, *, depsgraph=None, write=True, **options):
+    """compute_objects() on one mesh object; returns its ObjectResult."""
+    if obj is None or obj.type != "MESH":
+        what = "None" if obj is None else f"{obj.name} ({obj.type.lower()})"
+        raise UserError(f"Not a mesh: {what}")
+    return compute_objects([obj], depsgraph=depsgraph, write=write, **options)[0]

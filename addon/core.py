@@ -1,0 +1,84 @@
+# SPDX-License-Identifier: GPL-3.0-or-later
+"""The one module of the add-on that talks to the `shape_diameter` package (the native core).
+
+The package is imported lazily, on first use, never at register(): a core that cannot load
+(a missing system library, a wheel for another Python) must not stop the add-on from
+registering, nor take Blender down. The load error is kept and shown in the panel and the
+preferences, and every operator run reports it.
+
+Nothing here touches bpy, so the functions below are safe on the worker thread.
+"""
+
+import inspect
+
+_module = None
+_load_error = None
+_engines = None
+
+
+class CoreUnavailable(RuntimeError):
+    """The native package could not be imported."""
+
+
+def load():
+    """The `shape_diameter` package, imported on first use; raises CoreUnavailable."""
+    global _module, _load_error
+    if _module is not None:
+        return _module
+    try:
+        import shape_diameter
+        import shape_diameter.colormap  # noqa: F401  (the add-on colours with it)
+    except Exception as ex:  # ImportError, OSError from the dynamic loader, anything
+        _load_error = f"{type(ex).__name__}: {ex}"
+        raise CoreUnavailable(f"The Shape Diameter core could not be loaded: {_load_error}") from ex
+    _module = shape_diameter
+    _load_error = None
+    return _module
+
+
+def status():
+    """(loaded, text) for the UI: the package version, or why it could not be loaded."""
+    try:
+        sd = load()
+    except CoreUnavailable:
+        return False, _load_error
+    return True, f"shape_diameter {getattr(sd, '__version__', '?')}"
+
+
+def engines(refresh=False):
+    """The engines the core offers here (dicts with at least 'name'), best first; [] when the
+    core cannot load. Cached: the core may probe devices, and enum callbacks run on redraw."""
+    global _engines
+    if _engines is None or refresh:
+        try:
+            _engines = list(load().engines())
+        except CoreUnavailable:
+            return []
+    return _engines
+
+
+def supports(option):
+    """Whether shape_diameter.compute() accepts the keyword `option` (features such as
+    smoothing or accel appear in the UI only once the core has them)."""
+    try:
+        return option in inspect.signature(load().compute).parameters
+    except CoreUnavailable:
+        return False
+
+
+def compute(vertices, triangles, options, progress=None):
+    """shape_diameter.compute on one triangle mesh. `options` holds compute()'s keywords
+    (rays, cone_angle, sampling, seed, points, normalize, engine, ...); `progress` is called
+    with the fraction done and may raise to cancel."""
+    return load().compute(vertices, triangles, progress=progress, **options)
+
+
+def normalize(values, method):
+    """The core's normalisation ('linear' or 'log') of a field to [0, 1]."""
+    return load().normalize(values, method)
+
+
+def colors(normalized):
+    """(k, 4) float32 sRGB colours in [0, 1] from the core's perceptual colour map."""
+    rgba = load().colormap.colormap(normalized)
+    return rgba.astype("float32") / 255.0

@@ -1,0 +1,117 @@
+# SPDX-License-Identifier: GPL-3.0-or-later
+"""Moves data between bpy meshes and numpy arrays: foreach_get/foreach_set into typed
+buffers, never a Python loop over elements (docs.blender.org/api/current/bpy.types.Mesh.html).
+
+Called on the main thread only.
+"""
+
+from dataclasses import dataclass
+
+import numpy as np
+
+# bpy attribute data types -> (the property foreach_get/set reads, its width, numpy dtype).
+# Byte colours go through `color_srgb`, the stored bytes / 255, so that they round-trip exactly
+# (`color` would convert to scene-linear). Types not listed (Blender adds some, e.g. in 5.2)
+# read as None: the add-on never writes them.
+_ATTRIBUTE_FIELDS = {
+    "FLOAT": ("value", 1, np.float32),
+    "INT": ("value", 1, np.int32),
+    "INT8": ("value", 1, np.int8),
+    "BOOLEAN": ("value", 1, bool),
+    "FLOAT2": ("vector", 2, np.float32),
+    "INT32_2D": ("value", 2, np.int32),
+    "FLOAT_VECTOR": ("vector", 3, np.float32),
+    "FLOAT_COLOR": ("color", 4, np.float32),
+    "BYTE_COLOR": ("color_srgb", 4, np.float32),
+    "QUATERNION": ("value", 4, np.float32),
+    "FLOAT4X4": ("value", 16, np.float32),
+    "STRING": (None, 0, None),
+}
+
+
+@dataclass
+class Topology:
+    """What identifies a mesh's topology: equal Topology means per-polygon, per-vertex and
+    per-corner arrays of one mesh fit the other."""
+
+    vertex_count: int
+    polygon_count: int
+    corner_vertices: np.ndarray  # int32 per loop (corner): its vertex
+    loop_totals: np.ndarray  # int32 per polygon: its corner count
+
+    def matches(self, other):
+        return (
+            self.vertex_count == other.vertex_count
+            and self.polygon_count == other.polygon_count
+            and np.array_equal(self.corner_vertices, other.corner_vertices)
+            and np.array_equal(self.loop_totals, other.loop_totals)
+        )
+
+
+@dataclass
+class Triangulation:
+    """A mesh as the core wants it: float64 (n, 3) vertices, int32 (m, 3) triangles, plus
+    which polygon each triangle came from (Blender's loop triangles)."""
+
+    vertices: np.ndarray
+    triangles: np.ndarray
+    triangle_polygons: np.ndarray  # int32 per triangle
+
+
+def topology(me):
+    n_loops = len(me.loops)
+    corner_vertices = np.empty(n_loops, dtype=np.int32)
+    me.loops.foreach_get("vertex_index", corner_vertices)
+    loop_totals = np.empty(len(me.polygons), dtype=np.int32)
+    me.polygons.foreach_get("loop_total", loop_totals)
+    return Topology(len(me.vertices), len(me.polygons), corner_vertices, loop_totals)
+
+
+def triangulation(me, matrix=None):
+    """The mesh's loop triangles (quads and n-gons split as Blender splits them), with the
+    vertex positions transformed by the 3x3 part of `matrix` when given (object scale and
+    rotation; translation does not change the SDF). A transform that mirrors (negative
+    determinant) turns faces inside out, so the triangles' winding is reversed with it."""
+    n = len(me.vertices)
+    co = np.empty(n * 3, dtype=np.float32)
+    me.vertices.foreach_get("co", co)
+    vertices = co.reshape(n, 3).astype(np.float64)
+    me.calc_loop_triangles()
+    m = len(me.loop_triangles)
+    tris = np.empty(m * 3, dtype=np.int32)
+    me.loop_triangles.foreach_get("vertices", tris)
+    tris = tris.reshape(m, 3)
+    tri_polys = np.empty(m, dtype=np.int32)
+    me.loop_triangle_polygons.foreach_get("value", tri_polys)
+    if matrix is not None:
+        linear = np.array(matrix.to_3x3(), dtype=np.float64)
+        vertices = vertices @ linear.T
+        if np.linalg.det(linear) < 0.0:
+            tris = tris[:, ::-1]
+    return Triangulation(vertices, np.ascontiguousarray(tris), tri_polys)
+
+
+def attribute_signature(me):
+    """[(name, data_type, domain)] of every attribute, in order."""
+    return [(a.name, a.data_type, a.domain) for a in me.attributes]
+
+
+def read_attribute(attribute):
+    """A copy of an attribute's data as a flat numpy array (None for strings)."""
+    field, width, dtype = _ATTRIBUTE_FIELDS.get(attribute.data_type, (None, 0, None))
+    if field is None:
+        return None
+    out = np.empty(len(attribute.data) * width, dtype=dtype)
+    attribute.data.foreach_get(field, out)
+    return out
+
+
+def write_attribute(attribute, data):
+    field, _, dtype = _ATTRIBUTE_FIELDS[attribute.data_type]
+    attribute.data.foreach_set(field, np.ascontiguousarray(data, dtype=dtype).reshape(-1))
+
+
+def polygon_loop_expand(values, loop_totals):
+    """Per-polygon rows repeated for each of the polygon's corners (loops are stored polygon
+    by polygon, in order)."""
+    return np.repeat(values, loop_totals, axis=0)

@@ -1,0 +1,220 @@
+# SPDX-License-Identifier: GPL-3.0-or-later
+"""The operators: Compute Shape Diameter (object.shape_diameter), thin over process.py, and
+Show SDF Colors (view3d.shape_diameter_show).
+
+In the interactive UI the core runs on a worker thread (the GIL is released in native code)
+while a modal timer shows progress and Esc cancels; bpy is touched on the main thread only
+(docs.blender.org/api/current/info_gotchas_crashes.html). Under `blender -b` timers and modal
+handlers do not run, so invoke() runs the same work synchronously there.
+"""
+
+import time
+
+import bpy
+
+from . import core, process, props
+
+# The job of the modal run in progress, if any (one at a time), and the last run's summary
+# for the panel.
+running = None
+last_run = {}
+
+
+def _preferences(context):
+    addon = context.preferences.addons.get(__package__)
+    return addon.preferences if addon else None
+
+
+def resolve_engine(context, engine):
+    """'DEFAULT' means the engine chosen in the preferences."""
+    if engine != "DEFAULT":
+        return engine
+    prefs = _preferences(context)
+    return prefs.default_engine if prefs else "auto"
+
+
+def _summary(tasks, seconds):
+    triangles = sum(len(t.mesh.triangles) for t in tasks)
+    engine = tasks[0].engine if tasks else ""
+    names = ", ".join(t.object_name for t in tasks)
+    return f"Shape Diameter: {names}; {triangles} triangles, {engine}, {seconds:.2f} s"
+
+
+def _redraw(context):
+    screen = getattr(context, "screen", None)
+    for area in screen.areas if screen else ():
+        if area.type == "VIEW_3D":
+            area.tag_redraw()
+
+
+@props.with_options
+class OBJECT_OT_shape_diameter(bpy.types.Operator):
+    """Compute the Shape Diameter Function (local thickness) of the selected meshes into
+    attributes and a color attribute"""
+
+    bl_idname = "object.shape_diameter"
+    bl_label = "Compute Shape Diameter"
+    bl_options = {"REGISTER", "UNDO"}
+
+    @classmethod
+    def poll(cls, context):
+        if running is not None:
+            cls.poll_message_set("A Shape Diameter computation is running (Esc cancels it)")
+            return False
+        return True
+
+    def _options(self, context):
+        values = props.option_values(self)
+        values["engine"] = resolve_engine(context, values["engine"])
+        return process.Options.from_keywords(**values)
+
+    def _prepare(self, context):
+        options = self._options(context)
+        tasks, warnings = process.prepare(
+            context.evaluated_depsgraph_get(), context.selected_objects, options
+        )
+        for warning in warnings:
+            self.report({"WARNING"}, warning)
+        return options, tasks
+
+    def _finish(self, context, options, tasks, started):
+        process.write(bpy.data, tasks, options)
+        text = _summary(tasks, time.perf_counter() - started)
+        last_run.clear()
+        last_run.update(text=text, options=options, objects=[t.object_name for t in tasks])
+        self.report({"INFO"}, text)
+
+    def _report_error(self, ex):
+        if isinstance(ex, (process.UserError, core.CoreUnavailable)):
+            self.report({"ERROR"}, str(ex))
+        else:  # an engine error, or a bug: say what it was, keep Blender running
+            self.report({"ERROR"}, f"Shape Diameter failed: {type(ex).__name__}: {ex}")
+
+    def execute(self, context):
+        started = time.perf_counter()
+        wm = context.window_manager
+        try:
+            options, tasks = self._prepare(context)
+            wm.progress_begin(0, 1000)
+            try:
+                process.compute(tasks, options, lambda f: wm.progress_update(int(1000 * f)))
+            finally:
+                wm.progress_end()
+            self._finish(context, options, tasks, started)
+        except Exception as ex:
+            self._report_error(ex)
+            return {"CANCELLED"}
+        return {"FINISHED"}
+
+    def invoke(self, context, event):
+        global running
+        if bpy.app.background or context.window is None:
+            return self.execute(context)
+        self._started = time.perf_counter()
+        try:
+            self._options_used, tasks = self._prepare(context)
+        except Exception as ex:
+            self._report_error(ex)
+            return {"CANCELLED"}
+        running = process.Job(tasks, self._options_used).start()
+        wm = context.window_manager
+        self._timer = wm.event_timer_add(0.1, window=context.window)
+        wm.progress_begin(0, 1000)
+        wm.modal_handler_add(self)
+        return {"RUNNING_MODAL"}
+
+    def _stop(self, context):
+        global running
+        wm = context.window_manager
+        wm.event_timer_remove(self._timer)
+        wm.progress_end()
+        if context.workspace:
+            context.workspace.status_text_set(None)
+        job, running = running, None
+        _redraw(context)
+        return job
+
+    def modal(self, context, event):
+        job = running
+        if event.type == "ESC" and event.value == "PRESS":
+            job.cancel()
+            job.wait()
+            self._stop(context)
+            self.report({"WARNING"}, "Shape Diameter cancelled: nothing was changed")
+            return {"CANCELLED"}
+        if event.type != "TIMER":
+            return {"PASS_THROUGH"}
+        if not job.done:
+            context.window_manager.progress_update(int(1000 * job.progress))
+            if context.workspace:
+                context.workspace.status_text_set(
+                    f"Shape Diameter: {100 * job.progress:.0f}%   Esc: cancel"
+                )
+            _redraw(context)
+            return {"PASS_THROUGH"}
+        self._stop(context)
+        if job.error is not None:
+            self._report_error(job.error)
+            return {"CANCELLED"}
+        try:
+            self._finish(context, self._options_used, job.tasks, self._started)
+        except Exception as ex:
+            self._report_error(ex)
+            return {"CANCELLED"}
+        return {"FINISHED"}
+
+    def cancel(self, context):
+        # Blender ends the modal operator (the window closes, a file is loaded).
+        if running is not None:
+            running.cancel()
+            running.wait()
+            self._stop(context)
+
+    def draw(self, context):
+        layout = self.layout
+        layout.use_property_split = True
+        layout.use_property_decorate = False
+        for name in ("rays", "cone_angle", "sampling"):
+            layout.prop(self, name)
+        if self.sampling == "random":
+            layout.prop(self, "seed")
+        for name in ("points", "normalize", "engine", "attribute_name", "normalized_name",
+                     "color_name", "use_modifiers", "apply_scale"):
+            layout.prop(self, name)
+
+
+class VIEW3D_OT_shape_diameter_show(bpy.types.Operator):
+    """Show the active color attribute in this 3D view (Solid shading, color "Attribute")"""
+
+    bl_idname = "view3d.shape_diameter_show"
+    bl_label = "Show SDF Colors"
+    bl_options = {"REGISTER"}
+
+    @classmethod
+    def poll(cls, context):
+        space = context.space_data
+        if space is None or space.type != "VIEW_3D":
+            cls.poll_message_set("Needs a 3D view")
+            return False
+        return True
+
+    def execute(self, context):
+        shading = context.space_data.shading
+        shading.type = "SOLID"
+        shading.color_type = "VERTEX"
+        return {"FINISHED"}
+
+
+classes = (OBJECT_OT_shape_diameter, VIEW3D_OT_shape_diameter_show)
+
+
+def register():
+    for cls in classes:
+        bpy.utils.register_class(cls)
+
+
+def unregister():
+    if running is not None:
+        running.cancel()
+    for cls in reversed(classes):
+        bpy.utils.unregister_class(cls)

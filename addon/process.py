@@ -1,0 +1,366 @@
+# SPDX-License-Identifier: GPL-3.0-or-later
+"""One run of the Shape Diameter on Blender objects, in three steps shared by the operator and
+the scripting API:
+
+  prepare()  main thread: checks every object and option, reads each mesh into numpy
+             (mesh_data); raises UserError and changes nothing when anything is wrong.
+  compute()  any thread, no bpy: the core on each mesh's triangles, folded back to Blender's
+             polygons. Job runs it on a worker thread for the interactive UI.
+  write()    main thread: all attributes of all meshes, written together or not at all
+             (a failure half-way restores what was written).
+"""
+
+import threading
+from dataclasses import dataclass, field, fields
+
+import numpy as np
+
+from . import core, mesh_data
+
+# Attribute names: Blender 4.x refuses names over 67 bytes (its layer name buffer is 68
+# bytes); names starting with "." are Blender's internal attributes.
+MAX_NAME_BYTES = 63
+
+
+class UserError(ValueError):
+    """Something the user can fix; its message is reported as is."""
+
+
+class Cancelled(Exception):
+    """Raised in the progress callback when the user cancels."""
+
+
+@dataclass
+class Options:
+    """What a run computes and writes. The first seven are shape_diameter.compute()'s
+    keywords; `extra` carries further compute() keywords (e.g. smoothing, once the core has
+    it) and is checked against compute()'s signature."""
+
+    rays: int = 30
+    cone_angle: float = 120.0
+    sampling: str = "fibonacci"
+    seed: int = 0
+    points: str = "faces"
+    normalize: str = "linear"
+    engine: str = "auto"
+    attribute_name: str = "sdf"
+    normalized_name: str = "sdf_normalized"
+    color_name: str = "sdf_color"
+    use_modifiers: bool = False
+    apply_scale: bool = True
+    extra: dict = field(default_factory=dict)
+
+    COMPUTE_KEYS = ("rays", "cone_angle", "sampling", "seed", "points", "normalize", "engine")
+
+    @classmethod
+    def from_keywords(cls, **keywords):
+        """Options from keyword arguments (the operator's property names); keywords that are
+        not fields must be compute() keywords the core accepts."""
+        known = {f.name for f in fields(cls)} - {"extra"}
+        options = cls(**{k: v for k, v in keywords.items() if k in known})
+        for key, value in keywords.items():
+            if key not in known:
+                if not core.supports(key):
+                    raise TypeError(
+                        f"unknown option {key!r}; options: {', '.join(sorted(known))}"
+                    )
+                options.extra[key] = value
+        return options
+
+    def compute_options(self):
+        options = {key: getattr(self, key) for key in self.COMPUTE_KEYS}
+        options.update(self.extra)
+        return options
+
+    def outputs(self):
+        """[(name, data_type, domain)] written by a run; empty names are not written."""
+        on_vertices = self.points == "vertices"
+        domain = "POINT" if on_vertices else "FACE"
+        out = [(self.attribute_name, "FLOAT", domain)]
+        if self.normalized_name:
+            out.append((self.normalized_name, "FLOAT", domain))
+        if self.color_name:
+            out.append((self.color_name, "BYTE_COLOR", "POINT" if on_vertices else "CORNER"))
+        return out
+
+    def check(self):
+        if self.points not in ("faces", "vertices"):
+            raise UserError(f"points must be 'faces' or 'vertices', got {self.points!r}")
+        if not self.attribute_name:
+            raise UserError("The attribute name is empty")
+        names = [name for name, _, _ in self.outputs()]
+        for name in names:
+            if name.startswith("."):
+                raise UserError(f"Attribute names starting with '.' are Blender's own: {name!r}")
+            if len(name.encode("utf-8")) > MAX_NAME_BYTES:
+                raise UserError(f"Attribute name longer than {MAX_NAME_BYTES} bytes: {name!r}")
+        if len(set(names)) != len(names):
+            raise UserError(f"The output attribute names must differ: {', '.join(names)}")
+
+
+@dataclass
+class Task:
+    """One mesh to compute: found again by session uid when writing (the user may delete or
+    edit objects while a job runs in the UI)."""
+
+    object_name: str
+    object_uid: int
+    mesh_uid: int
+    topology: mesh_data.Topology
+    mesh: mesh_data.Triangulation
+    shared_by: list = field(default_factory=list)  # other objects using the same mesh
+    # Filled by compute():
+    values: np.ndarray = None  # float32 per polygon (or vertex): the SDF
+    normalized: np.ndarray = None  # float32 per polygon (or vertex), in [0, 1]
+    valid_rays: np.ndarray = None  # int32 per triangle (or vertex): rays kept
+    colors: np.ndarray = None  # float32 (k, 4) sRGB, per polygon (or vertex)
+    engine: str = ""
+    timings: dict = None
+
+
+def _editable_problem(ob):
+    me = ob.data
+    for thing, what in ((ob, "object"), (me, "mesh")):
+        if thing.library is not None:
+            return (
+                f"{ob.name}: its {what} {thing.name!r} is linked from {thing.library.filepath!r} "
+                "and cannot be changed (make it local first)"
+            )
+        if not getattr(thing, "is_editable", True):
+            return f"{ob.name}: its {what} {thing.name!r} is not editable (a linked override?)"
+    return None
+
+
+def _mode_problem(ob):
+    if ob.mode == "EDIT" or ob.data.is_editmode:
+        return f"{ob.name} is in Edit Mode: switch to Object Mode first"
+    if ob.mode == "SCULPT" and getattr(ob, "use_dynamic_topology_sculpting", False):
+        return f"{ob.name} uses Dynamic Topology in Sculpt Mode: switch to Object Mode first"
+    return None
+
+
+def _attribute_problem(ob, options):
+    for name, data_type, domain in options.outputs():
+        existing = ob.data.attributes.get(name)
+        if existing is not None and (existing.data_type, existing.domain) != (data_type, domain):
+            return (
+                f"{ob.name}: attribute {name!r} exists as {existing.data_type} on {existing.domain};"
+                f" the result is {data_type} on {domain}: rename it or choose another name"
+            )
+    return None
+
+
+def prepare(depsgraph, objects, options):
+    """Tasks for the mesh objects among `objects`, plus warnings (skipped objects). Raises
+    UserError, having changed nothing, when the run cannot go ahead."""
+    options.check()
+    objects = list(objects)
+    if not objects:
+        raise UserError("Nothing selected: select one or more mesh objects")
+    meshes = [ob for ob in objects if ob.type == "MESH"]
+    warnings = []
+    others = [f"{ob.name} ({ob.type.lower()})" for ob in objects if ob.type != "MESH"]
+    if not meshes:
+        raise UserError(f"Not a mesh: {', '.join(others)}")
+    if others:
+        warnings.append(f"Skipped what is not a mesh: {', '.join(others)}")
+
+    tasks = {}
+    for ob in meshes:
+        problem = _mode_problem(ob) or _editable_problem(ob) or _attribute_problem(ob, options)
+        if problem:
+            raise UserError(problem)
+        me = ob.data
+        if len(me.polygons) == 0:
+            raise UserError(f"{ob.name} has no faces")
+        uid = me.session_uid
+        if uid in tasks:
+            tasks[uid].shared_by.append(ob.name)
+            continue
+        matrix = ob.matrix_world if options.apply_scale else None
+        original = mesh_data.topology(me)
+        if options.use_modifiers:
+            evaluated = ob.evaluated_get(depsgraph)
+            temp = evaluated.to_mesh()
+            try:
+                if not mesh_data.topology(temp).matches(original):
+                    raise UserError(
+                        f"The modifiers of {ob.name} change its topology ({len(me.vertices)} "
+                        f"vertices, {len(me.polygons)} faces become {len(temp.vertices)}, "
+                        f"{len(temp.polygons)}): the result could not be written back. Turn off "
+                        "Use Modifiers, or apply or disable the modifiers that add or remove "
+                        "geometry"
+                    )
+                triangles = mesh_data.triangulation(temp, matrix)
+            finally:
+                evaluated.to_mesh_clear()
+        else:
+            triangles = mesh_data.triangulation(me, matrix)
+        tasks[uid] = Task(ob.name, ob.session_uid, uid, original, triangles)
+    for task in tasks.values():
+        if task.shared_by:
+            warnings.append(
+                f"{task.object_name} shares its mesh with {', '.join(task.shared_by)}: "
+                f"computed once, from {task.object_name}"
+            )
+    return list(tasks.values()), warnings
+
+
+def polygon_means(triangle_values, mesh):
+    """Each polygon's area-weighted mean of its triangles' values (the plain mean where all
+    of a polygon's triangles have zero area)."""
+    v = mesh.vertices
+    t = mesh.triangles
+    area = 0.5 * np.linalg.norm(np.cross(v[t[:, 1]] - v[t[:, 0]], v[t[:, 2]] - v[t[:, 0]]), axis=1)
+    polys = mesh.triangle_polygons
+    n = int(polys.max()) + 1 if len(polys) else 0
+    values = np.asarray(triangle_values, dtype=np.float64)
+    weight = np.bincount(polys, weights=area, minlength=n)
+    weighted = np.bincount(polys, weights=area * values, minlength=n)
+    count = np.bincount(polys, minlength=n)
+    plain = np.bincount(polys, weights=values, minlength=n) / np.maximum(count, 1)
+    safe = np.where(weight > 0.0, weight, 1.0)
+    return np.where(weight > 0.0, weighted / safe, plain).astype(np.float32)
+
+
+def compute(tasks, options, progress=None, cancelled=None):
+    """Runs the core on every task (no bpy: safe on a worker thread). `progress(fraction)` is
+    called now and then; when `cancelled()` turns true, Cancelled is raised."""
+    total = float(sum(len(t.mesh.triangles) for t in tasks)) or 1.0
+    done = 0.0
+    compute_options = options.compute_options()
+    for task in tasks:
+        share = len(task.mesh.triangles) / total
+
+        def step(fraction, done=done, share=share):
+            if cancelled is not None and cancelled():
+                raise Cancelled()
+            if progress is not None:
+                progress(done + share * fraction)
+
+        step(0.0)
+        result = core.compute(task.mesh.vertices, task.mesh.triangles, compute_options, step)
+        if options.points == "faces":
+            task.values = polygon_means(result.values, task.mesh)
+            task.normalized = core.normalize(task.values, options.normalize)
+        else:
+            task.values = np.asarray(result.values, dtype=np.float32)
+            task.normalized = np.asarray(result.normalized, dtype=np.float32)
+        task.valid_rays = result.valid_rays
+        task.colors = core.colors(task.normalized) if options.color_name else None
+        task.engine = result.engine
+        task.timings = dict(result.timings)
+        done += share
+    if progress is not None:
+        progress(1.0)
+    return tasks
+
+
+def _find_object(bpy_data, uid):
+    for ob in bpy_data.objects:
+        if ob.session_uid == uid:
+            return ob
+    return None
+
+
+def write(bpy_data, tasks, options):
+    """Writes every task's attributes, all or none. Returns the objects written."""
+    targets = []
+    for task in tasks:
+        ob = _find_object(bpy_data, task.object_uid)
+        if ob is None or ob.type != "MESH":
+            raise UserError(f"{task.object_name} was deleted while computing; nothing was written")
+        if ob.data.session_uid != task.mesh_uid or not mesh_data.topology(ob.data).matches(
+            task.topology
+        ):
+            raise UserError(f"{ob.name}'s mesh changed while computing; nothing was written")
+        problem = _mode_problem(ob) or _editable_problem(ob) or _attribute_problem(ob, options)
+        if problem:
+            raise UserError(problem + "; nothing was written")
+        targets.append((ob, task))
+
+    undo = []  # how to take back each change, most recent last
+    try:
+        for ob, task in targets:
+            me = ob.data
+            if options.points == "faces":
+                colors = (
+                    mesh_data.polygon_loop_expand(task.colors, task.topology.loop_totals)
+                    if task.colors is not None
+                    else None
+                )
+            else:
+                colors = task.colors
+            data = {options.attribute_name: task.values}
+            if options.normalized_name:
+                data[options.normalized_name] = task.normalized
+            if options.color_name:
+                data[options.color_name] = colors
+            for name, data_type, domain in options.outputs():
+                attribute = me.attributes.get(name)
+                if attribute is None:
+                    attribute = me.attributes.new(name, data_type, domain)
+                    if attribute is None or attribute.name != name:
+                        if attribute is not None:
+                            me.attributes.remove(attribute)
+                        raise RuntimeError(f"Blender could not create attribute {name!r}")
+                    undo.append((me, name, None))
+                else:
+                    undo.append((me, name, mesh_data.read_attribute(attribute)))
+                mesh_data.write_attribute(attribute, data[name])
+            if options.color_name:
+                undo.append((me, None, me.color_attributes.active_color_name))
+                me.color_attributes.active_color = me.color_attributes[options.color_name]
+            me.update()
+    except BaseException:
+        for me, name, before in reversed(undo):
+            if name is None:
+                if before:
+                    me.color_attributes.active_color = me.color_attributes[before]
+            elif before is None:
+                me.attributes.remove(me.attributes[name])
+            else:
+                mesh_data.write_attribute(me.attributes[name], before)
+            me.update()
+        raise
+    return [ob for ob, _ in targets]
+
+
+class Job:
+    """compute() on a worker thread, for a modal operator to poll from the main thread."""
+
+    def __init__(self, tasks, options):
+        self.tasks = tasks
+        self.options = options
+        self.progress = 0.0
+        self.error = None
+        self._cancel = threading.Event()
+        self._done = threading.Event()
+        self._thread = threading.Thread(target=self._run, name="shape_diameter", daemon=True)
+
+    def start(self):
+        self._thread.start()
+        return self
+
+    def _run(self):
+        try:
+            compute(self.tasks, self.options, self._set_progress, self._cancel.is_set)
+        except BaseException as ex:  # reported on the main thread
+            self.error = ex
+        finally:
+            self._done.set()
+
+    def _set_progress(self, fraction):
+        self.progress = fraction
+
+    @property
+    def done(self):
+        return self._done.is_set()
+
+    def cancel(self):
+        self._cancel.set()
+
+    def wait(self, timeout=None):
+        """Waits for the thread to end; True when it has."""
+        self._thread.join(timeout)
+        return self.done

@@ -1,0 +1,190 @@
+# SPDX-License-Identifier: GPL-3.0-or-later
+"""The run options as Blender properties, defined once and used by the operator and by the
+panel's per-scene settings (which the panel's button copies into the operator).
+
+Options the core does not have yet (accel, smoothing) are added to OPTIONS when it gains them;
+until then the add-on does not show them (see core.supports).
+"""
+
+import inspect
+import math
+
+import bpy
+from bpy.props import BoolProperty, EnumProperty, FloatProperty, IntProperty, StringProperty
+
+from . import core
+
+# Blender keeps only pointers to the strings of dynamic enum items: the lists must stay alive
+# (docs.blender.org/api/current/bpy.props.html#bpy.props.EnumProperty, "items" warning).
+_engine_items = {}
+
+
+def engine_items(with_default):
+    """Enum items for the engines shape_diameter.engines() lists here, after 'auto' (and
+    'DEFAULT', the preferences' choice, on the operator and the panel)."""
+    items = []
+    if with_default:
+        items.append(("DEFAULT", "Default", "The engine chosen in the add-on's preferences"))
+    items.append(("auto", "Automatic", "The best engine available here"))
+    for engine in core.engines():
+        name = str(engine["name"])
+        label = str(engine.get("label") or (name.upper() if len(name) <= 4 else name))
+        description = str(engine.get("description") or engine.get("type") or name)
+        items.append((name, label, description))
+    key = (with_default, tuple(items))
+    return _engine_items.setdefault(key, items)
+
+
+def _operator_engine_items(self, context):
+    return engine_items(True)
+
+
+def _plain_engine_items(self, context):
+    return engine_items(False)
+
+
+SAMPLING_ITEMS = (
+    ("fibonacci", "Fibonacci", "Spherical Fibonacci directions in the cone, the same set at "
+     "every point (paper 4.2); deterministic"),
+    ("random", "Random", "Uniform in the cone, different at each point; reproducible with Seed"),
+    ("cgal", "CGAL", "CGAL sdf_values' rules: Vogel disk, equal weights, median absolute "
+     "deviation outliers"),
+)
+POINTS_ITEMS = (
+    ("faces", "Faces", "One value per face (quads and n-gons: the area-weighted mean of their "
+     "triangles); FACE attributes and a CORNER color attribute"),
+    ("vertices", "Vertices", "One value per vertex; POINT attributes"),
+)
+NORMALIZE_ITEMS = (
+    ("linear", "Linear", "(x - min) / (max - min)"),
+    ("log", "Logarithmic", "log(4x + 1) / log 5 of the linear value (Shapira et al.), spreads "
+     "the thin end"),
+)
+
+
+def options():
+    """Fresh property definitions of every run option, by name (the scripting names)."""
+    return {
+        "rays": IntProperty(
+            name="Rays", description="Rays cast per point (paper: 30)",
+            default=30, min=1, max=1024, soft_max=256,
+        ),
+        "cone_angle": FloatProperty(
+            name="Cone Angle", description="Full apex angle of the cone of rays (paper: 120°)",
+            default=math.radians(120.0), min=math.radians(1.0), max=math.radians(179.0),
+            subtype="ANGLE",
+        ),
+        "sampling": EnumProperty(
+            name="Sampling", description="How the rays are spread in the cone",
+            items=SAMPLING_ITEMS, default="fibonacci",
+        ),
+        "seed": IntProperty(
+            name="Seed", description="Seed of the random sampling", default=0, min=0,
+        ),
+        "points": EnumProperty(
+            name="Points", description="Where values are computed", items=POINTS_ITEMS,
+            default="faces",
+        ),
+        "normalize": EnumProperty(
+            name="Normalize", description="How the normalised attribute and the colours map "
+            "values to [0, 1]", items=NORMALIZE_ITEMS, default="linear",
+        ),
+        "attribute_name": StringProperty(
+            name="Attribute", description="FLOAT attribute for the values, in mesh (or world) "
+            "units", default="sdf",
+        ),
+        "normalized_name": StringProperty(
+            name="Normalized", description="FLOAT attribute for the normalised values in [0, 1] "
+            "(empty: not written)", default="sdf_normalized",
+        ),
+        "color_name": StringProperty(
+            name="Color", description="Color attribute from a perceptual colour map of the "
+            "normalised values, made active (empty: not written)", default="sdf_color",
+        ),
+        "use_modifiers": BoolProperty(
+            name="Use Modifiers", description="Compute on the mesh as the modifiers and shape "
+            "keys leave it; written back only when they keep its topology (deforming modifiers)",
+            default=False,
+        ),
+        "apply_scale": BoolProperty(
+            name="Apply Object Scale", description="Values in world units: the object's scale "
+            "and rotation are applied before computing", default=True,
+        ),
+    }
+
+
+def engine_property():
+    return EnumProperty(
+        name="Engine", description="What casts the rays", items=_operator_engine_items,
+    )
+
+
+def stored_engine_property(store, with_default, description):
+    """An engine enum kept by name in the string property `store`: a dynamic enum saves an
+    index, which would point at another engine on a machine with other devices. An engine
+    that is not available here reads as the first item."""
+
+    def items(self, context):
+        return engine_items(with_default)
+
+    def get(self):
+        names = [item[0] for item in engine_items(with_default)]
+        name = getattr(self, store)
+        return names.index(name) if name in names else 0
+
+    def set(self, value):
+        setattr(self, store, engine_items(with_default)[value][0])
+
+    return EnumProperty(name="Engine", description=description, items=items, get=get, set=set)
+
+
+def with_options(cls, engine=None):
+    """Class decorator: adds every option (and the engine) to the class's annotations."""
+    annotations = dict(inspect.get_annotations(cls))
+    annotations.update(options())
+    annotations["engine"] = engine or engine_property()
+    cls.__annotations__ = annotations
+    return cls
+
+
+def copy_options(source, target):
+    """Copies every option from one property holder to another (the panel's settings into
+    the operator it runs)."""
+    for name in (*options(), "engine"):
+        setattr(target, name, getattr(source, name))
+
+
+def option_values(holder):
+    """{name: value} of the options on a property holder; the cone angle in degrees, as
+    shape_diameter.compute wants it."""
+    values = {name: getattr(holder, name) for name in options()}
+    values["cone_angle"] = math.degrees(values["cone_angle"])
+    values["engine"] = holder.engine
+    return values
+
+
+class ShapeDiameterSettings(bpy.types.PropertyGroup):
+    """The panel's settings, per scene (saved with the .blend)."""
+
+    engine_name: StringProperty(default="DEFAULT", options={"HIDDEN"})
+
+
+with_options(
+    ShapeDiameterSettings,
+    engine=stored_engine_property("engine_name", True, "What casts the rays"),
+)
+
+
+classes = (ShapeDiameterSettings,)
+
+
+def register():
+    for cls in classes:
+        bpy.utils.register_class(cls)
+    bpy.types.Scene.shape_diameter = bpy.props.PointerProperty(type=ShapeDiameterSettings)
+
+
+def unregister():
+    del bpy.types.Scene.shape_diameter
+    for cls in reversed(classes):
+        bpy.utils.unregister_class(cls)
