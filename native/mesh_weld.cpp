@@ -1,0 +1,190 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
+#include "mesh_weld.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <limits>
+
+namespace sdf {
+
+namespace {
+
+struct CellKey {
+  std::int64_t x, y, z;
+  bool operator==(const CellKey& o) const { return x == o.x && y == o.y && z == o.z; }
+};
+
+std::uint64_t hash_key(const CellKey& k) {
+  // Large odd multipliers spread neighbouring cells over the table (Teschner et al. 2003 use
+  // primes the same way); the final mix folds the high bits down.
+  std::uint64_t h = static_cast<std::uint64_t>(k.x) * 0x9E3779B97F4A7C15ull ^
+                    static_cast<std::uint64_t>(k.y) * 0xC2B2AE3D27D4EB4Full ^
+                    static_cast<std::uint64_t>(k.z) * 0x165667B19E3779F9ull;
+  return h ^ (h >> 29);
+}
+
+// Open addressing: cell -> the first kept vertex in it (more follow through `next`).
+class CellTable {
+ public:
+  explicit CellTable(std::size_t items) {
+    std::size_t capacity = 16;
+    while (capacity < 2 * items) capacity *= 2;
+    keys_.resize(capacity);
+    heads_.assign(capacity, kEmpty);
+    mask_ = capacity - 1;
+  }
+  // Head of the cell's list, or kEmpty.
+  std::uint32_t find(const CellKey& key) const {
+    for (std::size_t i = hash_key(key) & mask_;; i = (i + 1) & mask_) {
+      if (heads_[i] == kEmpty) return kEmpty;
+      if (keys_[i] == key) return heads_[i];
+    }
+  }
+  // Slot of the cell, created empty if missing.
+  std::uint32_t& slot(const CellKey& key) {
+    for (std::size_t i = hash_key(key) & mask_;; i = (i + 1) & mask_) {
+      if (heads_[i] == kEmpty) {
+        keys_[i] = key;
+        return heads_[i];
+      }
+      if (keys_[i] == key) return heads_[i];
+    }
+  }
+  static constexpr std::uint32_t kEmpty = std::numeric_limits<std::uint32_t>::max();
+
+ private:
+  std::vector<CellKey> keys_;
+  std::vector<std::uint32_t> heads_;
+  std::size_t mask_ = 0;
+};
+
+std::int64_t float_bits(float f) {
+  if (f == 0.0f) f = 0.0f;  // -0 and +0 are the same position
+  std::int32_t bits;
+  std::memcpy(&bits, &f, sizeof bits);
+  return bits;
+}
+
+}  // namespace
+
+Weld weld_vertices(const glm::vec3* positions, std::size_t count, float tolerance) {
+  Weld weld;
+  weld.merged.resize(count);
+  if (count == 0) return weld;
+
+  // Cells twice the tolerance wide: the ball of radius `tolerance` around a point then meets at
+  // most 2 cells per axis, 8 in all. Coordinates too large for the grid fall back to exact
+  // merging (a tolerance below float resolution merges only equal positions anyway).
+  const double cell = 2.0 * static_cast<double>(tolerance);
+  bool exact = !(tolerance > 0.0f);
+  if (!exact) {
+    float largest = 0.0f;
+    for (std::size_t i = 0; i < count; ++i)
+      largest = std::max(largest, std::max(std::fabs(positions[i].x),
+                                           std::max(std::fabs(positions[i].y),
+                                                    std::fabs(positions[i].z))));
+    exact = !(largest / cell < 1e15) || !std::isfinite(cell);
+  }
+  const float tolerance2 = tolerance * tolerance;
+
+  CellTable table(count);
+  std::vector<std::uint32_t> next;  // per kept vertex: the next kept vertex in its cell
+  std::vector<std::uint32_t> kept;  // merged id -> input vertex
+  for (std::size_t i = 0; i < count; ++i) {
+    const glm::vec3 p = positions[i];
+    std::uint32_t found = CellTable::kEmpty;
+    CellKey home;
+    if (exact) {
+      home = {float_bits(p.x), float_bits(p.y), float_bits(p.z)};
+      found = table.find(home);  // every position in a cell is equal to p
+    } else {
+      double c[3], lo[3];
+      std::int64_t k[3], step[3];
+      for (int a = 0; a < 3; ++a) {
+        c[a] = p[a] / cell;
+        lo[a] = std::floor(c[a]);
+        k[a] = static_cast<std::int64_t>(lo[a]);
+        step[a] = c[a] - lo[a] < 0.5 ? -1 : 1;
+      }
+      home = {k[0], k[1], k[2]};
+      for (int corner = 0; corner < 8; ++corner) {
+        const CellKey key = {k[0] + ((corner & 1) ? step[0] : 0),
+                             k[1] + ((corner & 2) ? step[1] : 0),
+                             k[2] + ((corner & 4) ? step[2] : 0)};
+        for (std::uint32_t m = table.find(key); m != CellTable::kEmpty; m = next[m]) {
+          const glm::vec3 d = positions[kept[m]] - p;
+          // The lowest merged id wins, whatever order the cells were searched in.
+          if (glm::dot(d, d) <= tolerance2 && m < found) found = m;
+        }
+      }
+    }
+    if (found != CellTable::kEmpty) {
+      weld.merged[i] = found;
+      continue;
+    }
+    const std::uint32_t id = static_cast<std::uint32_t>(kept.size());
+    kept.push_back(static_cast<std::uint32_t>(i));
+    std::uint32_t& head = table.slot(home);
+    next.push_back(head);
+    head = id;
+    weld.merged[i] = id;
+  }
+  weld.count = static_cast<std::uint32_t>(kept.size());
+  return weld;
+}
+
+float weld_tolerance(const Mesh& mesh, double relative) {
+  return static_cast<float>(relative * mesh.max_extent);
+}
+
+std::vector<glm::uvec3> welded_triangles(const Mesh& mesh, const Weld& weld) {
+  std::vector<glm::uvec3> out(mesh.triangles.size());
+  for (std::size_t f = 0; f < out.size(); ++f) {
+    const glm::uvec3 t = mesh.triangles[f];
+    out[f] = glm::uvec3(weld.merged[t.x], weld.merged[t.y], weld.merged[t.z]);
+  }
+  return out;
+}
+
+Adjacency faces_of_vertices(const std::vector<glm::uvec3>& triangles, std::uint32_t vertex_count) {
+  Adjacency a;
+  a.offsets.assign(static_cast<std::size_t>(vertex_count) + 1, 0);
+  auto distinct = [](const glm::uvec3& t, int k) {
+    return (k == 0) || (k == 1 && t.y != t.x) || (k == 2 && t.z != t.x && t.z != t.y);
+  };
+  for (const glm::uvec3& t : triangles)
+    for (int k = 0; k < 3; ++k)
+      if (distinct(t, k)) ++a.offsets[t[k] + 1];
+  for (std::size_t v = 0; v < vertex_count; ++v) a.offsets[v + 1] += a.offsets[v];
+  a.items.resize(a.offsets.back());
+  std::vector<std::uint32_t> cursor(a.offsets.begin(), a.offsets.end() - 1);
+  for (std::size_t f = 0; f < triangles.size(); ++f)
+    for (int k = 0; k < 3; ++k)
+      if (distinct(triangles[f], k)) a.items[cursor[triangles[f][k]]++] = static_cast<std::uint32_t>(f);
+  return a;
+}
+
+Adjacency vertex_neighbours(const std::vector<glm::uvec3>& triangles,
+                            const Adjacency& faces_of_vertices) {
+  const std::size_t n = faces_of_vertices.size();
+  Adjacency a;
+  a.offsets.assign(n + 1, 0);
+  a.items.reserve(faces_of_vertices.items.size() * 2);
+  std::vector<std::uint32_t> ring;
+  for (std::size_t v = 0; v < n; ++v) {
+    ring.clear();
+    for (std::uint32_t i = faces_of_vertices.offsets[v]; i < faces_of_vertices.offsets[v + 1]; ++i) {
+      const glm::uvec3 t = triangles[faces_of_vertices.items[i]];
+      for (int k = 0; k < 3; ++k)
+        if (t[k] != v) ring.push_back(t[k]);
+    }
+    std::sort(ring.begin(), ring.end());
+    ring.erase(std::unique(ring.begin(), ring.end()), ring.end());
+    a.items.insert(a.items.end(), ring.begin(), ring.end());
+    a.offsets[v + 1] = static_cast<std::uint32_t>(a.items.size());
+  }
+  return a;
+}
+
+}  // namespace sdf
