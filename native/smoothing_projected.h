@@ -1,0 +1,67 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
+// Smoothing on projected points (paper 4.4, second method). Each point (face centroid or
+// vertex) moves inward along its axis by half its SDF, which puts it near the medial axis;
+// an octree over these points keeps the count and mean value of the points in each node; each
+// point then becomes the weighted mean of the nodes within a sphere of radius equal to its own
+// SDF around its projected position. A node that lies wholly inside the sphere is taken whole
+// (weight = its count); a leaf that the sphere cuts weighs count x the approximate fraction of
+// its cube inside the sphere. No radius to choose: the SDF gives it.
+//
+// Values must be lengths in mesh units (the SDF): they set both the projection and the radius.
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include "mesh.h"
+#include "parallel.h"
+#include "sampling.h"
+
+namespace sdf {
+
+struct ProjectedOptions {
+  int iterations = 1;  // repeats on the smoothed field, points re-projected each time (paper:
+                       // "stronger smoothing can be obtained by iteratively running the method")
+  // Paper 4.4 discussion: "8 was satisfying in most cases" (Table 2 times depths 2..14).
+  int max_depth = 8;
+  // A node branches only if it holds more than this fraction of all points (paper: "about
+  // 0.2%"): fewer, larger leaves, and the query cost stops growing with the point count.
+  double min_points = 0.002;
+  // ... and only if its points' mean value is at most this times its side (paper: "compare
+  // the average value of the points against the octree dimensions and if it is bigger, then
+  // we do not branch"): a node already small next to the spheres that will query it gains
+  // nothing from finer children. Smaller ratios give finer leaves and slower queries.
+  double node_size_ratio = 1.0;
+  unsigned threads = 0;  // 0: every core
+};
+
+// One octree node, 32 bytes (a kernel reads the array as it is). Children of a branching node
+// are stored next to each other (empty octants have none) from first_child on.
+struct PointOctreeNode {
+  float center[3];
+  float half;                // half the side of the node's cube
+  float mean;                // mean value of the points inside
+  std::uint32_t count;       // points inside (> 0)
+  std::int32_t first_child;  // -1 for a leaf
+  std::uint32_t child_count;
+};
+static_assert(sizeof(PointOctreeNode) == 32, "PointOctreeNode is 32 bytes");
+
+// Octree over points with values; nodes[0] is the root. Throws std::invalid_argument for bad
+// options (max_depth outside [0, 20], min_points outside [0, 1], node_size_ratio < 0).
+std::vector<PointOctreeNode> build_point_octree(const glm::vec3* points, const float* values,
+                                                std::size_t count, const ProjectedOptions& options);
+
+// The weighted mean of the nodes that a sphere (centre, radius) gathers, as described above.
+// Returns false (and leaves *mean alone) when it gathers nothing.
+bool gather_sphere(const PointOctreeNode* nodes, glm::vec3 center, float radius, float* mean);
+
+// values: one per face (kind Faces) or vertex (kind Vertices), >= 0. Returns the smoothed
+// values, clamped to the input's [min, max]. A point that gathers nothing keeps its value.
+// Throws std::invalid_argument for negative or non-finite values or bad options.
+std::vector<float> smooth_projected(const Mesh& mesh, PointKind kind, const float* values,
+                                    const ProjectedOptions& options,
+                                    const ProgressFn& progress = nullptr,
+                                    double progress_from = 0.0, double progress_to = 1.0);
+
+}  // namespace sdf

@@ -1,0 +1,69 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
+// Smoothing in texture space (paper 4.4, third method): the values are drawn into the mesh's
+// UV layout, the image is blurred, and the values are read back.
+//
+// 1. Islands: faces that share a corner (same merged vertex, same UV) belong to one UV island.
+// 2. Rasterise: every texel whose centre lies in a face's UV triangle takes the face's value
+//    (face values) or the value interpolated from its corners (vertex values), and the face's
+//    island. A face too small to cover any texel centre writes the texel under its UV centroid
+//    if that one is still empty. Where UV triangles overlap, the later face wins.
+// 3. Dilate: `margin` rings of empty texels around the islands take the mean of their
+//    neighbours of one island (a bake margin, and room for bilinear reads at island borders).
+// 4. Blur: a Gaussian of deviation radius / 2, cut at `radius` texels, run as two 1-D passes.
+//    Only texels of the centre texel's island count, empty texels never do, and the weights
+//    are renormalised over what counts: nothing crosses from one island to another, however
+//    close they are, and borders do not darken. Optional bilateral weights exp(-1/2 (dv /
+//    range)^2) on the value difference, per pass (the separable bilateral approximation of
+//    Pham and van Vliet 2005).
+// 5. Read back: a face takes the mean of the blurred texels it covers (of its own island); a
+//    vertex takes the mean over its corners of a bilinear read at the corner's UV (taps of the
+//    corner's island only).
+//
+// Texel (x, y) covers u in [x / width, (x + 1) / width), v in [y / height, (y + 1) / height):
+// row 0 is at v = 0, the bottom of the image, as in Blender's Image.pixels. UVs outside [0, 1]
+// are clipped; a face with no texel inside the image keeps its value.
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include "mesh.h"
+#include "parallel.h"
+#include "sampling.h"
+
+namespace sdf {
+
+struct TextureOptions {
+  int width = 1024;  // texels (issue 4: 1024 by default)
+  int height = 1024;
+  // Blur reach in texels; < 0: 2 * max(width, height) / 256 (paper 4.4: "we set the radius to
+  // 2 for a 256x256 texture and multiply as necessary"), 8 at 1024. 0: no blur.
+  double radius = -1.0;
+  bool bilateral = false;
+  double range_sigma = 0.1;  // bilateral: deviation of the value weight, times (max - min)
+  int margin = 2;            // texels of dilation around each island
+  double weld_tolerance = 1e-6;  // relative to the largest bounding-box side; < 0: no merging
+  unsigned threads = 0;          // 0: every core
+};
+
+struct TextureSmoothing {
+  std::vector<float> values;  // per face or vertex, like the input, within its [min, max]
+  // The blurred image, width x height, row-major from row 0 (v = 0), 0 where empty; and
+  // per texel 1 where it holds a value (a face or the dilated margin), else 0.
+  std::vector<float> image;
+  std::vector<std::uint8_t> mask;
+  int width = 0, height = 0;
+};
+
+// uvs: per face corner, (u, v) for corners 0, 1, 2 of face 0, then face 1, ... (6 floats a
+// face), finite. keep_image: fill image and mask (else they stay empty). Throws
+// std::invalid_argument for bad options, non-finite values or UVs.
+TextureSmoothing smooth_texture(const Mesh& mesh, PointKind kind, const float* values,
+                                const float* uvs, const TextureOptions& options, bool keep_image,
+                                const ProgressFn& progress = nullptr, double progress_from = 0.0,
+                                double progress_to = 1.0);
+
+// UV islands (step 1): one id per face, 0, 1, 2, ... in order of each island's first face.
+std::vector<std::int32_t> uv_islands(const Mesh& mesh, const float* uvs, double weld_tolerance);
+
+}  // namespace sdf
