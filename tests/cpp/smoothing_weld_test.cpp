@@ -1,0 +1,76 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
+#include <gtest/gtest.h>
+
+#include <set>
+#include <vector>
+
+#include "mesh_weld.h"
+#include "smoothing_test_meshes.h"
+
+namespace sdf {
+namespace {
+
+TEST(WeldVertices, MergesTheSplitSidesOfACube) {
+  const int n = 4;
+  const Mesh mesh = test::split_cube(n).mesh();
+  const Weld weld = weld_vertices(mesh.vertices.data(), mesh.vertices.size(), weld_tolerance(mesh));
+  EXPECT_EQ(weld.count, 6u * n * n + 2u);  // a closed cube grid: V = F / 2 + 2
+  EXPECT_EQ(weld.merged[0], 0u);
+  // Merged vertices sit at one position, and are numbered by first appearance.
+  std::uint32_t highest = 0;
+  for (std::size_t v = 0; v < mesh.vertices.size(); ++v) {
+    EXPECT_LE(weld.merged[v], highest + 1);
+    if (weld.merged[v] > highest) highest = weld.merged[v];
+  }
+  std::vector<glm::vec3> first(weld.count, glm::vec3(NAN));
+  for (std::size_t v = 0; v < mesh.vertices.size(); ++v) {
+    if (std::isnan(first[weld.merged[v]].x)) first[weld.merged[v]] = mesh.vertices[v];
+    EXPECT_EQ(first[weld.merged[v]], mesh.vertices[v]);
+  }
+  // Every edge of the welded cube has exactly two faces.
+  const auto tris = welded_triangles(mesh, weld);
+  const Adjacency vf = faces_of_vertices(tris, weld.count);
+  const Adjacency vv = vertex_neighbours(tris, vf);
+  std::size_t edges = 0;
+  for (std::size_t v = 0; v < vv.size(); ++v) edges += vv.offsets[v + 1] - vv.offsets[v];
+  EXPECT_EQ(edges / 2, 3 * tris.size() / 2);
+}
+
+TEST(WeldVertices, ToleranceDecides) {
+  const std::vector<glm::vec3> p = {{0, 0, 0}, {1e-4f, 0, 0}, {0, 3e-4f, 0}, {-0.0f, 0, 0}};
+  Weld exact = weld_vertices(p.data(), p.size(), 0.0f);
+  EXPECT_EQ(exact.count, 3u);
+  EXPECT_EQ(exact.merged, (std::vector<std::uint32_t>{0, 1, 2, 0}));  // -0 == +0
+  Weld near = weld_vertices(p.data(), p.size(), 2e-4f);
+  EXPECT_EQ(near.merged, (std::vector<std::uint32_t>{0, 0, 1, 0}));  // 3e-4 is too far from 0
+  Weld wide = weld_vertices(p.data(), p.size(), 1.0f);
+  EXPECT_EQ(wide.count, 1u);
+}
+
+TEST(WeldVertices, FindsNeighboursAcrossCellBorders) {
+  // Pairs 1e-6 apart straddling many grid cell borders (cells are 2e-6 wide).
+  std::vector<glm::vec3> p;
+  for (int i = 0; i < 1000; ++i) {
+    const float x = i * 2e-6f + 1e-6f;
+    p.push_back({x - 4e-7f, 0.5f, -0.25f});
+    p.push_back({x + 4e-7f, 0.5f, -0.25f});
+  }
+  const Weld weld = weld_vertices(p.data(), p.size(), 1e-6f);
+  for (int i = 0; i < 1000; ++i) EXPECT_EQ(weld.merged[2 * i], weld.merged[2 * i + 1]);
+}
+
+TEST(Adjacency, FacesAndNeighboursOfAGrid) {
+  const Mesh mesh = test::grid(2, 1).mesh();  // 6 vertices, 4 triangles
+  const Weld weld = weld_vertices(mesh.vertices.data(), mesh.vertices.size(), 0.0f);
+  const auto tris = welded_triangles(mesh, weld);
+  const Adjacency vf = faces_of_vertices(tris, weld.count);
+  const Adjacency vv = vertex_neighbours(tris, vf);
+  // Vertex 1 (bottom middle): faces 0, 2, 3; neighbours 0, 2, 4 and the diagonal 5.
+  std::vector<std::uint32_t> f1(vf.items.begin() + vf.offsets[1], vf.items.begin() + vf.offsets[2]);
+  EXPECT_EQ(f1, (std::vector<std::uint32_t>{0, 2, 3}));
+  std::vector<std::uint32_t> n1(vv.items.begin() + vv.offsets[1], vv.items.begin() + vv.offsets[2]);
+  EXPECT_EQ(n1, (std::vector<std::uint32_t>{0, 2, 4, 5}));
+}
+
+}  // namespace
+}  // namespace sdf
