@@ -55,11 +55,12 @@ SDF_INLINE SdfHit sdf_bvh_closest_hit(SDF_GLOBAL const SdfBvhNode* nodes,
         continue;
       }
     }
-    /* Pop the next subtree that can still hold a nearer hit. */
+    /* Pop the next subtree that can still hold a nearer hit (or an equally near one: ties
+     * are decided by triangle id, see sdf_intersect_triangle). */
     for (;;) {
       if (sp == 0) return hit;
       --sp;
-      if (stack_entry[sp] < hit.t) break;
+      if (stack_entry[sp] <= hit.t) break;
     }
     index = stack_node[sp];
   }

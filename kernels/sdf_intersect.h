@@ -26,9 +26,12 @@ SDF_INLINE float3 sdf_tri_e2(SDF_GLOBAL const SdfTriangle* tri) {
   return make_float3(tri->e2_x, tri->e2_y, tri->e2_z);
 }
 
-/* Updates *hit when the ray o + t d meets the triangle at tmin < t < hit->t. Edges count as
- * inside (u, v >= 0) so a ray through a shared edge cannot slip between two triangles. A
- * zero-area triangle has det == 0 and is never hit. */
+/* Updates *hit when the ray o + t d meets the triangle at tmin < t < hit->t, or at t equal to
+ * hit->t with a smaller triangle id: ties (a ray through a shared edge, a triangle doubled
+ * with opposite winding) then go to the same triangle whatever order a structure visits them
+ * in, so every engine and acceleration structure agrees. Edges count as inside (u, v >= 0)
+ * so a ray through a shared edge cannot slip between two triangles. A zero-area triangle has
+ * det == 0 and is never hit. */
 SDF_INLINE void sdf_intersect_triangle(float3 o, float3 d, float tmin,
                                        SDF_GLOBAL const SdfTriangle* tri, SdfHit* hit) {
   float3 e1 = sdf_tri_e1(tri);
@@ -44,7 +47,7 @@ SDF_INLINE void sdf_intersect_triangle(float3 o, float3 d, float tmin,
   float v = dot(d, q) * inv_det;
   if (v < 0.0f || u + v > 1.0f) return;
   float t = dot(e2, q) * inv_det;
-  if (t <= tmin || t >= hit->t) return;
+  if (t <= tmin || t > hit->t || (t == hit->t && tri->id >= hit->id)) return;
   hit->t = t;
   hit->det = det;
   hit->id = tri->id;

@@ -29,6 +29,19 @@ typedef struct SdfTriangle {
   float pad1;
 } SdfTriangle;
 
+/* Per-launch parameters of the cast kernels, passed by value. */
+typedef struct SdfCastParams {
+  sdf_int32 rays;
+  sdf_int32 sampling;
+  float cos_half;
+  float sin_half;
+  float angle_floor;
+  sdf_uint32 seed;
+  float tmin;
+  sdf_uint32 first; /* this launch covers order[first .. first + count) */
+  sdf_uint32 count;
+} SdfCastParams;
+
 /* How ray directions are chosen (see sdf_rays.h). */
 #define SDF_SAMPLING_FIBONACCI 0
 #define SDF_SAMPLING_RANDOM 1
@@ -36,6 +49,7 @@ typedef struct SdfTriangle {
 
 SDF_STATIC_ASSERT(sizeof(SdfBvhNode) == 32, "SdfBvhNode is 32 bytes in every build");
 SDF_STATIC_ASSERT(sizeof(SdfTriangle) == 48, "SdfTriangle is 48 bytes in every build");
+SDF_STATIC_ASSERT(sizeof(SdfCastParams) == 36, "SdfCastParams is 36 bytes in every build");
 
 SDF_KERNEL_END
 

@@ -58,8 +58,8 @@ SDF_INLINE float3 sdf_ray_local(int sampling, int i, int n, float cos_half, floa
 
 /* Angle between a local direction and the cone axis; atan2 stays accurate near the axis,
  * where acos(z) does not. */
-SDF_INLINE float sdf_ray_angle(float3 local) {
-  return atan2(sqrt(local.x * local.x + local.y * local.y), local.z);
+SDF_INLINE float sdf_ray_angle(float3 dir_local) {
+  return atan2(sqrt(dir_local.x * dir_local.x + dir_local.y * dir_local.y), dir_local.z);
 }
 
 /* The smallest angle a ray's weight uses (weight = 1 / angle, paper section 3): the angle of the
@@ -111,8 +111,8 @@ SDF_INLINE void sdf_frame(int sampling, float3 n, float3* b1, float3* b2) {
   }
 }
 
-SDF_INLINE float3 sdf_to_world(float3 local, float3 b1, float3 b2, float3 n) {
-  return local.x * b1 + local.y * b2 + local.z * n;
+SDF_INLINE float3 sdf_to_world(float3 dir_local, float3 b1, float3 b2, float3 n) {
+  return dir_local.x * b1 + dir_local.y * b2 + dir_local.z * n;
 }
 
 SDF_KERNEL_END

@@ -39,10 +39,13 @@ SDF_INLINE float sdf_reduce_paper(float* lengths, float* angles, int n, float an
   mean /= (float)n;
   float variance = 0.0f;
   for (int i = 0; i < n; ++i) variance += (lengths[i] - mean) * (lengths[i] - mean);
-  float deviation = sqrt(variance / (float)n);
+  /* The bound is inclusive and given a relative hair of slack: with two lengths both lie
+   * exactly one deviation from the median, and rounding (which differs between devices) must
+   * not decide which one survives. */
+  float bound = sqrt(variance / (float)n) * (1.0f + 1e-5f);
   float sum_w = 0.0f, sum_wl = 0.0f;
   for (int i = 0; i < n; ++i) {
-    if (fabs(lengths[i] - median) <= deviation) {
+    if (fabs(lengths[i] - median) <= bound) {
       float w = 1.0f / fmax(angles[i], angle_floor);
       sum_w += w;
       sum_wl += w * lengths[i];

@@ -35,7 +35,7 @@ inline kern::SdfHit bvh4_closest_hit(const Bvh4& bvh, glm::vec3 o, glm::vec3 d, 
   stack[sp++] = Entry{0, 0, 0.0f};
   while (sp > 0) {
     const Entry e = stack[--sp];
-    if (e.t >= hit.t) continue;
+    if (e.t > hit.t) continue;  // equal may still hold a tie won by a smaller id
     if (e.child < 0) {
       const std::int32_t first = ~e.child;
       for (std::int32_t k = first; k < first + e.count; ++k)

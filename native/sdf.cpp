@@ -2,9 +2,14 @@
 #include "sdf.h"
 
 #include <chrono>
+#include <stdexcept>
 
 #include "bvh.h"
+#include "bvh4.h"
 #include "cpu_engine.h"
+#ifdef SDF_HAVE_OPENCL
+#include "opencl/opencl_engine.h"
+#endif
 
 namespace sdf {
 
@@ -27,28 +32,106 @@ void report(const ProgressFn& progress, double fraction) {
   if (progress && !progress(fraction)) throw Cancelled();
 }
 
+const char* accel_name(Accel a) { return a == Accel::Bvh ? "bvh" : "octree"; }
+
+// Casting and reducing are fused per point: the lengths never leave the cache (CPU) or the
+// registers (OpenCL).
+void cast_on_cpu(const Mesh& mesh, const Options& options, const SamplePoints& points,
+                 const std::vector<std::uint32_t>& order, const Cone& cone, Output& out,
+                 Stopwatch& clock, const ProgressFn& progress) {
+  CpuScene scene;
+  Bvh bvh;
+  Bvh4 wide;
+  Octree tree;
+  if (options.accel == Accel::Bvh) {
+    BvhConfig config;
+    config.threads = options.threads;
+    bvh = build_bvh(mesh, config);
+    wide = collapse_to_bvh4(bvh);
+    scene.bvh4 = &wide;
+  } else {
+    tree = build_octree(mesh, options.octree);
+    scene.octree = &tree;
+  }
+  out.timings.emplace_back("build", clock.lap());
+  report(progress, 0.05);
+  cast_cpu(scene, points, order, cone, minimum_closeness(mesh), options.threads, out.raw.data(),
+           out.valid_rays.data(), progress, 0.05, 0.99);
+  out.timings.emplace_back("cast", clock.lap());
+  out.engine = "cpu (" + std::to_string(resolve_threads(options.threads)) + " threads, " +
+               accel_name(options.accel) + ")";
+}
+
+#ifdef SDF_HAVE_OPENCL
+void cast_on_opencl(const Mesh& mesh, const Options& options, const SamplePoints& points,
+                    const std::vector<std::uint32_t>& order, const Cone& cone, Output& out,
+                    Stopwatch& clock, const ProgressFn& progress) {
+  const std::vector<const cl::Device*> devices = cl::select_devices(options.engine);
+  cl::Scene scene;
+  Bvh bvh;
+  Octree tree;
+  if (options.accel == Accel::Bvh) {
+    BvhConfig config;
+    config.threads = options.threads;
+    bvh = build_bvh(mesh, config);
+    scene.bvh = &bvh;
+  } else {
+    tree = build_octree(mesh, options.octree);
+    scene.octree = &tree;
+  }
+  out.timings.emplace_back("build", clock.lap());
+  report(progress, 0.05);
+  const cl::CastTimings t =
+      cl::cast_opencl(devices, scene, points, order, cone, minimum_closeness(mesh),
+                      out.raw.data(), out.valid_rays.data(), progress, 0.05, 0.99);
+  const double total = clock.lap();
+  // Compile (or cache load) and set-up are what the three device stages leave of the total.
+  out.timings.emplace_back("setup", std::max(0.0, total - t.upload - t.cast - t.download));
+  out.timings.emplace_back("upload", t.upload);
+  out.timings.emplace_back("cast", t.cast);
+  out.timings.emplace_back("download", t.download);
+  out.engine.clear();
+  for (const cl::Device* d : devices)
+    out.engine += (out.engine.empty() ? "" : " + ") + std::string("opencl:") +
+                  std::to_string(d->index) + " " + d->name;
+  out.engine += std::string(" (") + accel_name(options.accel) + ")";
+}
+#endif
+
 }  // namespace
+
+bool opencl_built() {
+#ifdef SDF_HAVE_OPENCL
+  return true;
+#else
+  return false;
+#endif
+}
 
 Output compute(const Mesh& mesh, const Options& options, const ProgressFn& progress) {
   const Cone cone = make_cone(options.rays, options.cone_angle, options.sampling, options.seed);
+  const bool cpu = options.engine == "cpu";
+  if (!cpu && options.engine.compare(0, 6, "opencl") != 0)
+    throw std::invalid_argument("unknown engine '" + options.engine + "'");
+#ifndef SDF_HAVE_OPENCL
+  if (!cpu) throw std::invalid_argument("this build of shape_diameter has no OpenCL engine");
+#endif
   Output out;
   Stopwatch clock;
   report(progress, 0.0);
   const SamplePoints points = sample_points(mesh, options.points);
-  out.timings.emplace_back("prepare", clock.lap());
-
-  BvhConfig config;
-  config.threads = options.threads;
-  const Bvh bvh = build_bvh(mesh, config);
-  out.timings.emplace_back("build", clock.lap());
-  report(progress, 0.05);
-
+  const std::vector<std::uint32_t> order = spatial_order(points);
   out.raw.resize(points.size());
   out.valid_rays.resize(points.size());
-  // Casting and reducing are fused per point on the CPU: the lengths never leave the cache.
-  cast_cpu(bvh, points, cone, minimum_closeness(mesh), options.threads, out.raw.data(),
-           out.valid_rays.data(), progress, 0.05, 0.99);
-  out.timings.emplace_back("cast", clock.lap());
+  out.timings.emplace_back("prepare", clock.lap());
+
+  if (cpu) {
+    cast_on_cpu(mesh, options, points, order, cone, out, clock, progress);
+  } else {
+#ifdef SDF_HAVE_OPENCL
+    cast_on_opencl(mesh, options, points, order, cone, out, clock, progress);
+#endif
+  }
 
   out.fill = fill_missing(mesh, options.points, out.raw.data(), out.valid_rays.data());
   out.timings.emplace_back("fill", clock.lap());

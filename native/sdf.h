@@ -1,6 +1,6 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
-// The whole pipeline on the CPU engine: sample, build, cast and reduce, fill.
-// Each stage is also callable on its own (sampling.h, bvh.h, cpu_engine.h, fill.h).
+// The whole pipeline: sample, build, cast and reduce (CPU threads or OpenCL), fill.
+// Each stage is also callable on its own (sampling.h, bvh.h, octree.h, cpu_engine.h, fill.h).
 #pragma once
 
 #include <string>
@@ -9,11 +9,14 @@
 
 #include "fill.h"
 #include "mesh.h"
+#include "octree.h"
 #include "parallel.h"
 #include "rays.h"
 #include "sampling.h"
 
 namespace sdf {
+
+enum class Accel { Bvh, Octree };
 
 struct Options {
   int rays = 30;               // per point (Shapira et al. and the paper: 30)
@@ -21,7 +24,11 @@ struct Options {
   Sampling sampling = Sampling::Fibonacci;
   std::uint32_t seed = 0;      // for Sampling::Random
   PointKind points = PointKind::Faces;
-  unsigned threads = 0;        // 0: every core
+  unsigned threads = 0;        // CPU engine threads; 0: every core
+  // "cpu", or an OpenCL selection: "opencl", "opencl:N", "opencl:all", "opencl:<name part>".
+  std::string engine = "cpu";
+  Accel accel = Accel::Bvh;
+  OctreeConfig octree;
 };
 
 struct Output {
@@ -29,8 +36,12 @@ struct Output {
   std::vector<std::int32_t> valid_rays;    // rays kept per point; 0 = value was filled
   std::vector<std::pair<std::string, double>> timings;  // stage -> seconds
   FillResult fill = FillResult::NothingToFill;
+  std::string engine;                      // what ran, e.g. "cpu (2 threads, bvh)"
 };
 
 Output compute(const Mesh& mesh, const Options& options, const ProgressFn& progress = nullptr);
+
+// Whether this build has the OpenCL engine (it still needs a driver at run time).
+bool opencl_built();
 
 }  // namespace sdf

@@ -9,6 +9,8 @@ cd "$(dirname "$0")/.."
 APT_PACKAGES=(
   build-essential cmake ninja-build git       # C++ toolchain
   libglm-dev                                  # vector math of the core
+  opencl-c-headers                            # OpenCL engine (libOpenCL itself is loaded at run time)
+  ocl-icd-libopencl1 pocl-opencl-icd clinfo   # an OpenCL driver on the CPU (PoCL) for the tests
   libgtest-dev                                # C++ tests
   libcgal-dev                                 # reference implementation, tests/benchmarks only
   python3 python3-venv python3-dev            # the Python package

@@ -39,9 +39,30 @@ class Result:
 
 
 def engines() -> list:
-    """The engines that can run here, best first. Each is a dict with at least 'name'."""
+    """The engines that can run here. Each is a dict with 'name' (what `engine=` takes),
+    'type' ('CPU' or 'GPU') and 'description'; OpenCL devices add 'device', 'platform',
+    'driver', 'memory' (bytes) and 'compute_units'. "cpu" is always there; OpenCL devices are
+    listed when an OpenCL driver is installed (none is needed otherwise)."""
     threads = _core.hardware_threads()
-    return [{"name": "cpu", "type": "CPU", "threads": threads, "description": f"{threads} threads"}]
+    found = [
+        {"name": "cpu", "type": "CPU", "threads": threads, "description": f"{threads} threads"}
+    ]
+    for d in _core.opencl_devices():
+        entry = dict(d)
+        entry["name"] = f"opencl:{d['index']}"
+        entry["description"] = f"{d['device']} ({d['platform']}, {d['memory'] >> 20} MiB)"
+        found.append(entry)
+    return found
+
+
+def _resolve_engine(engine: str) -> str:
+    """'auto' is the best OpenCL GPU when there is one, else the CPU engine (on a CPU, the
+    native engine outruns OpenCL on PoCL)."""
+    if engine != "auto":
+        return engine
+    if any(d["type"] == "GPU" for d in _core.opencl_devices()):
+        return "opencl"
+    return "cpu"
 
 
 def _check_mesh(vertices, triangles):
@@ -81,6 +102,9 @@ def _check_choice(name, value, choices):
         raise ValueError(f"{name} must be one of {choices}, got {value!r}")
 
 
+ACCELERATIONS = ("bvh", "octree")
+
+
 def _check_options(rays, cone_angle, sampling, points, normalize_method, engine, progress, seed):
     if isinstance(rays, bool) or not isinstance(rays, (int, np.integer)) or not 1 <= rays <= MAX_RAYS:
         raise ValueError(f"rays must be an integer in [1, {MAX_RAYS}], got {rays!r}")
@@ -89,9 +113,14 @@ def _check_options(rays, cone_angle, sampling, points, normalize_method, engine,
     _check_choice("sampling", sampling, SAMPLINGS)
     _check_choice("points", points, POINTS)
     _check_choice("normalize", normalize_method, NORMALIZATIONS)
-    names = [e["name"] for e in engines()]
-    if engine != "auto" and engine not in names:
-        raise ValueError(f"unknown engine {engine!r}; available here: auto, {', '.join(names)}")
+    if not isinstance(engine, str) or not (
+        engine in ("auto", "cpu") or engine == "opencl" or engine.startswith("opencl:")
+    ):
+        names = ", ".join(["auto"] + [e["name"] for e in engines()])
+        raise ValueError(
+            f"unknown engine {engine!r}; available here: {names} (also 'opencl' for the best "
+            "OpenCL device, 'opencl:all' for every GPU, 'opencl:<part of a device name>')"
+        )
     if progress is not None and not callable(progress):
         raise ValueError("progress must be a callable taking a fraction in [0, 1], or None")
     if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or not 0 <= seed < 2**32:
@@ -111,6 +140,9 @@ def compute(
     engine: str = "auto",
     progress: Optional[Callable[[float], None]] = None,
     threads: int = 0,
+    accel: str = "bvh",
+    octree_depth: int = 10,
+    octree_leaf_size: int = 8,
 ) -> Result:
     """Shape Diameter Function of a triangle mesh.
 
@@ -125,7 +157,13 @@ def compute(
     points: 'faces' (a value per triangle, rays from its centroid) or 'vertices' (a value per
         vertex, normal = area-weighted mean of the face normals around it).
     normalize: 'linear' or 'log' for Result.normalized.
-    engine: 'auto' or a name from engines().
+    engine: 'auto' (the best OpenCL GPU if there is one, else 'cpu'), 'cpu', 'opencl' (the
+        best OpenCL device), 'opencl:N' (the N-th OpenCL device of engines()), 'opencl:all'
+        (every GPU, sharing the points; same results as one) or 'opencl:<part of a device
+        name>'. With 'auto', an OpenCL failure falls back to the CPU engine and
+        Result.engine says why.
+    accel: 'bvh' (binned-SAH bounding volume hierarchy) or 'octree' (the paper's, section 4.2,
+        with octree_depth levels at most and octree_leaf_size triangles per unsplit cell).
     progress: called with the fraction done in [0, 1] from the calling thread; if it raises,
         the computation stops and the exception propagates.
     threads: CPU threads, 0 for every core.
@@ -139,9 +177,27 @@ def compute(
     _check_options(rays, cone_angle, sampling, points, normalize, engine, progress, seed)
     if isinstance(threads, bool) or not isinstance(threads, (int, np.integer)) or threads < 0:
         raise ValueError(f"threads must be a non-negative integer, got {threads!r}")
-    out = _core.compute(
-        v, t, int(rays), float(cone_angle), sampling, int(seed), points, int(threads), progress
-    )
+    _check_choice("accel", accel, ACCELERATIONS)
+    for name, value, lo, hi in (("octree_depth", octree_depth, 0, 16),
+                                ("octree_leaf_size", octree_leaf_size, 1, 2**31 - 1)):
+        if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or not lo <= value <= hi:
+            raise ValueError(f"{name} must be an integer in [{lo}, {hi}], got {value!r}")
+    chosen = _resolve_engine(engine)
+
+    def run(engine_name):
+        return _core.compute(
+            v, t, int(rays), float(cone_angle), sampling, int(seed), points, int(threads),
+            progress, engine_name, accel, int(octree_depth), int(octree_leaf_size),
+        )
+
+    fallback = None
+    try:
+        out = run(chosen)
+    except RuntimeError as error:
+        if engine != "auto" or chosen == "cpu":
+            raise
+        fallback = f"{chosen} failed: {error}".splitlines()[0]
+        out = run("cpu")
     if out["fill"] == "no-value-anywhere":
         warnings.warn(
             "no ray of any point found the other side of the mesh (is it open, flat or inside "
@@ -161,7 +217,7 @@ def compute(
         normalized=normalized,
         valid_rays=out["valid_rays"],
         timings=timings,
-        engine=f"cpu ({out['threads']} threads)",
+        engine=out["engine"] + (f" [fell back: {fallback}]" if fallback else ""),
         points=points,
         rays=int(rays),
     )

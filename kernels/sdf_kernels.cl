@@ -1,0 +1,86 @@
+/* SPDX-License-Identifier: GPL-3.0-or-later */
+/* The OpenCL engine's kernels. Everything they compute lives in the shared headers, which the
+ * CPU engine compiles as C++: these entry points only fetch a point, loop over its rays and
+ * store the result.
+ *
+ * One work item per point, casting all its rays and reducing them in private memory (the
+ * paper uses one work item per ray and a second kernel per point). Fused, no ray length ever
+ * reaches global memory (the paper stores rays x points floats), there is one launch instead
+ * of two, and neighbouring work items (points in Morton order) still trace neighbouring rays
+ * in lock step. SDF_MAX_RAYS is set by the host to the run's ray count. Results are written
+ * in launch order (raw[first + gid]), so each launch reads back one contiguous range. */
+#include "sdf_bvh_traverse.h"
+#include "sdf_octree.h"
+#include "sdf_reduce.h"
+
+#ifndef SDF_MAX_RAYS
+#define SDF_MAX_RAYS 32
+#endif
+
+#define SDF_CAST_BODY(CLOSEST_HIT)                                                    \
+  uint gid = get_global_id(0);                                                        \
+  if (gid >= params.count) return;                                                    \
+  uint p = order[params.first + gid];                                                 \
+  float3 axis = vload3(p, axes);                                                      \
+  uint out = params.first + gid;                                                      \
+  if (axis.x == 0.0f && axis.y == 0.0f && axis.z == 0.0f) {                           \
+    raw[out] = -1.0f;                                                                 \
+    valid_rays[out] = 0;                                                              \
+    return;                                                                           \
+  }                                                                                   \
+  float3 origin = vload3(p, origins);                                                 \
+  int own = own_face[p];                                                              \
+  float3 b1, b2;                                                                      \
+  sdf_frame(params.sampling, axis, &b1, &b2);                                         \
+  float lengths[SDF_MAX_RAYS];                                                        \
+  float angles[SDF_MAX_RAYS];                                                         \
+  int kept = 0;                                                                       \
+  for (int r = 0; r < params.rays; ++r) {                                             \
+    float3 dir_local = sdf_ray_local(params.sampling, r, params.rays, params.cos_half,\
+                                 params.sin_half, params.seed, p);                    \
+    float3 d = sdf_to_world(dir_local, b1, b2, axis);                                 \
+    SdfHit hit = CLOSEST_HIT;                                                         \
+    if (hit.det < 0.0f && hit.t < INFINITY) {                                         \
+      lengths[kept] = hit.t;                                                          \
+      angles[kept] = sdf_ray_angle(dir_local);                                        \
+      ++kept;                                                                         \
+    }                                                                                 \
+  }                                                                                   \
+  raw[out] = sdf_reduce(params.sampling, lengths, angles, kept, params.angle_floor);  \
+  valid_rays[out] = kept;
+
+__kernel void sdf_cast_bvh(__global const SdfBvhNode* nodes, __global const SdfTriangle* tris,
+                           __global const float* origins, __global const float* axes,
+                           __global const int* own_face, __global const uint* order,
+                           SdfCastParams params, __global float* raw,
+                           __global int* valid_rays) {
+  SDF_CAST_BODY(sdf_bvh_closest_hit(nodes, tris, origin, d, params.tmin, own))
+}
+
+__kernel void sdf_cast_octree(__global const uint* nodes, __global const uint* leaves,
+                              __global const SdfTriangle* tris, SdfOctreeRoot root,
+                              __global const float* origins, __global const float* axes,
+                              __global const int* own_face, __global const uint* order,
+                              SdfCastParams params, __global float* raw,
+                              __global int* valid_rays) {
+  SDF_CAST_BODY(sdf_octree_closest_hit(nodes, leaves, tris, root, origin, d, params.tmin, own))
+}
+
+/* Writes the size and member offsets of every struct shared with the host, so a test can
+ * compare them with the host's own (tinybvh keeps layouts in sync by comments; we check). */
+#define SDF_OFFSET(type, member) ((uint)(size_t)&(((type*)0)->member))
+__kernel void sdf_layout_probe(__global uint* out) {
+  out[0] = sizeof(SdfBvhNode);
+  out[1] = SDF_OFFSET(SdfBvhNode, first);
+  out[2] = SDF_OFFSET(SdfBvhNode, hi_x);
+  out[3] = SDF_OFFSET(SdfBvhNode, count);
+  out[4] = sizeof(SdfTriangle);
+  out[5] = SDF_OFFSET(SdfTriangle, id);
+  out[6] = SDF_OFFSET(SdfTriangle, e1_x);
+  out[7] = SDF_OFFSET(SdfTriangle, e2_x);
+  out[8] = sizeof(SdfOctreeRoot);
+  out[9] = SDF_OFFSET(SdfOctreeRoot, size);
+  out[10] = sizeof(SdfCastParams);
+  out[11] = SDF_OFFSET(SdfCastParams, tmin);
+  out[12] = SDF_OFFSET(SdfCastParams, count);
+}

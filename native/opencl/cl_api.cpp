@@ -1,0 +1,132 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
+#include "cl_api.h"
+
+#include <dlfcn.h>
+
+#include <cstdlib>
+#include <mutex>
+
+namespace sdf::cl {
+
+namespace {
+
+struct Loaded {
+  Api api;
+  bool ok = false;
+  std::string why;
+};
+
+Loaded load() {
+  Loaded loaded;
+  // Tests set SDF_OPENCL_LIBRARY to a path that does not exist to act out "no OpenCL".
+  const char* forced = std::getenv("SDF_OPENCL_LIBRARY");
+  const char* candidates[] = {forced, "libOpenCL.so.1", "libOpenCL.so"};
+  void* handle = nullptr;
+  for (const char* name : candidates) {
+    if (!name) continue;
+    handle = dlopen(name, RTLD_NOW | RTLD_LOCAL);
+    if (handle || forced) break;
+  }
+  if (!handle) {
+    const char* err = dlerror();
+    loaded.why = std::string("no OpenCL library could be loaded (") + (err ? err : "unknown") + ")";
+    return loaded;
+  }
+#define SDF_CL_RESOLVE(name)                                                        \
+  loaded.api.name = reinterpret_cast<decltype(&::name)>(dlsym(handle, #name));      \
+  if (!loaded.api.name) {                                                           \
+    loaded.why = "the OpenCL library lacks " #name;                                 \
+    return loaded;                                                                  \
+  }
+  SDF_CL_FUNCTIONS(SDF_CL_RESOLVE)
+#undef SDF_CL_RESOLVE
+  loaded.ok = true;
+  return loaded;
+}
+
+}  // namespace
+
+const Api* api(std::string* why) {
+  static const Loaded loaded = load();
+  if (why) *why = loaded.why;
+  return loaded.ok ? &loaded.api : nullptr;
+}
+
+std::string error_name(cl_int code) {
+  switch (code) {
+#define SDF_CL_CASE(c) \
+  case c:              \
+    return #c;
+    SDF_CL_CASE(CL_SUCCESS)
+    SDF_CL_CASE(CL_DEVICE_NOT_FOUND)
+    SDF_CL_CASE(CL_DEVICE_NOT_AVAILABLE)
+    SDF_CL_CASE(CL_COMPILER_NOT_AVAILABLE)
+    SDF_CL_CASE(CL_MEM_OBJECT_ALLOCATION_FAILURE)
+    SDF_CL_CASE(CL_OUT_OF_RESOURCES)
+    SDF_CL_CASE(CL_OUT_OF_HOST_MEMORY)
+    SDF_CL_CASE(CL_PROFILING_INFO_NOT_AVAILABLE)
+    SDF_CL_CASE(CL_MEM_COPY_OVERLAP)
+    SDF_CL_CASE(CL_IMAGE_FORMAT_MISMATCH)
+    SDF_CL_CASE(CL_IMAGE_FORMAT_NOT_SUPPORTED)
+    SDF_CL_CASE(CL_BUILD_PROGRAM_FAILURE)
+    SDF_CL_CASE(CL_MAP_FAILURE)
+    SDF_CL_CASE(CL_MISALIGNED_SUB_BUFFER_OFFSET)
+    SDF_CL_CASE(CL_EXEC_STATUS_ERROR_FOR_EVENTS_IN_WAIT_LIST)
+    SDF_CL_CASE(CL_COMPILE_PROGRAM_FAILURE)
+    SDF_CL_CASE(CL_LINKER_NOT_AVAILABLE)
+    SDF_CL_CASE(CL_LINK_PROGRAM_FAILURE)
+    SDF_CL_CASE(CL_DEVICE_PARTITION_FAILED)
+    SDF_CL_CASE(CL_KERNEL_ARG_INFO_NOT_AVAILABLE)
+    SDF_CL_CASE(CL_INVALID_VALUE)
+    SDF_CL_CASE(CL_INVALID_DEVICE_TYPE)
+    SDF_CL_CASE(CL_INVALID_PLATFORM)
+    SDF_CL_CASE(CL_INVALID_DEVICE)
+    SDF_CL_CASE(CL_INVALID_CONTEXT)
+    SDF_CL_CASE(CL_INVALID_QUEUE_PROPERTIES)
+    SDF_CL_CASE(CL_INVALID_COMMAND_QUEUE)
+    SDF_CL_CASE(CL_INVALID_HOST_PTR)
+    SDF_CL_CASE(CL_INVALID_MEM_OBJECT)
+    SDF_CL_CASE(CL_INVALID_IMAGE_FORMAT_DESCRIPTOR)
+    SDF_CL_CASE(CL_INVALID_IMAGE_SIZE)
+    SDF_CL_CASE(CL_INVALID_SAMPLER)
+    SDF_CL_CASE(CL_INVALID_BINARY)
+    SDF_CL_CASE(CL_INVALID_BUILD_OPTIONS)
+    SDF_CL_CASE(CL_INVALID_PROGRAM)
+    SDF_CL_CASE(CL_INVALID_PROGRAM_EXECUTABLE)
+    SDF_CL_CASE(CL_INVALID_KERNEL_NAME)
+    SDF_CL_CASE(CL_INVALID_KERNEL_DEFINITION)
+    SDF_CL_CASE(CL_INVALID_KERNEL)
+    SDF_CL_CASE(CL_INVALID_ARG_INDEX)
+    SDF_CL_CASE(CL_INVALID_ARG_VALUE)
+    SDF_CL_CASE(CL_INVALID_ARG_SIZE)
+    SDF_CL_CASE(CL_INVALID_KERNEL_ARGS)
+    SDF_CL_CASE(CL_INVALID_WORK_DIMENSION)
+    SDF_CL_CASE(CL_INVALID_WORK_GROUP_SIZE)
+    SDF_CL_CASE(CL_INVALID_WORK_ITEM_SIZE)
+    SDF_CL_CASE(CL_INVALID_GLOBAL_OFFSET)
+    SDF_CL_CASE(CL_INVALID_EVENT_WAIT_LIST)
+    SDF_CL_CASE(CL_INVALID_EVENT)
+    SDF_CL_CASE(CL_INVALID_OPERATION)
+    SDF_CL_CASE(CL_INVALID_GL_OBJECT)
+    SDF_CL_CASE(CL_INVALID_BUFFER_SIZE)
+    SDF_CL_CASE(CL_INVALID_MIP_LEVEL)
+    SDF_CL_CASE(CL_INVALID_GLOBAL_WORK_SIZE)
+    SDF_CL_CASE(CL_INVALID_PROPERTY)
+    SDF_CL_CASE(CL_INVALID_IMAGE_DESCRIPTOR)
+    SDF_CL_CASE(CL_INVALID_COMPILER_OPTIONS)
+    SDF_CL_CASE(CL_INVALID_LINKER_OPTIONS)
+    SDF_CL_CASE(CL_INVALID_DEVICE_PARTITION_COUNT)
+#undef SDF_CL_CASE
+    case -1001:
+      return "CL_PLATFORM_NOT_FOUND_KHR";
+    default:
+      return "CL error " + std::to_string(code);
+  }
+}
+
+void check(cl_int code, const char* call) {
+  if (code != CL_SUCCESS)
+    throw Error(std::string("OpenCL ") + call + " failed: " + error_name(code), code);
+}
+
+}  // namespace sdf::cl

@@ -1,0 +1,45 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
+// Stages 3-4 on OpenCL devices: upload the acceleration structure and the points, cast and
+// reduce in launches short enough for display watchdogs, read the values back.
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "../bvh.h"
+#include "../octree.h"
+#include "../parallel.h"
+#include "../rays.h"
+#include "../sampling.h"
+#include "devices.h"
+
+namespace sdf::cl {
+
+// Exactly one of bvh and octree is set.
+struct Scene {
+  const Bvh* bvh = nullptr;
+  const Octree* octree = nullptr;
+};
+
+struct CastTimings {
+  double upload = 0.0, cast = 0.0, download = 0.0;
+};
+
+// Casts every point on `devices` (several: points are shared out dynamically; results are
+// identical to one device). Writes raw[i] (-1 when no ray was kept) and valid_rays[i].
+// Throws Error for OpenCL failures (naming the call and code) and std::runtime_error when
+// the scene does not fit a device's memory. Progress covers [progress_from, progress_to].
+CastTimings cast_opencl(const std::vector<const Device*>& devices, const Scene& scene,
+                        const SamplePoints& points, const std::vector<std::uint32_t>& order,
+                        const Cone& cone, float min_closeness, float* raw,
+                        std::int32_t* valid_rays, const ProgressFn& progress,
+                        double progress_from, double progress_to);
+
+// Test hooks: build `source` for device `index` (the build log comes back in the Error), and
+// run the layout probe kernel, returning what it wrote.
+void build_source_for_test(int index, const std::string& source);
+std::vector<std::uint32_t> probe_layout(int index);
+
+}  // namespace sdf::cl

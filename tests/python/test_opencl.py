@@ -1,0 +1,232 @@
+# SPDX-License-Identifier: GPL-3.0-or-later
+"""The OpenCL engine on PoCL (CPU OpenCL): same answers as the CPU engine, its device
+selection, its errors, its program cache, and life without any OpenCL at all."""
+
+import json
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import shape_diameter as sd
+from shape_diameter import _core
+from shape_diameter.mesh_io import load_mesh
+
+DATA = Path(__file__).resolve().parents[1] / "data"
+MESHES = sorted(p.name for p in DATA.iterdir() if p.suffix in (".obj", ".off", ".ply"))
+OPENCL = [e["name"] for e in sd.engines() if e["name"].startswith("opencl")]
+
+if not OPENCL:  # CI installs PoCL (scripts/setup.sh): no device there is a failure, not a skip
+    pytest.fail(
+        f"no OpenCL device found ({_core.opencl_unavailable_reason()}); install pocl-opencl-icd",
+        pytrace=False,
+    )
+
+
+def run_python(code, **env):
+    """Runs code in a fresh interpreter (a fresh process: no loaded library, no cached state)
+    and returns its stdout parsed as JSON."""
+    full_env = {**os.environ, **{k: str(v) for k, v in env.items()}}
+    done = subprocess.run(
+        [sys.executable, "-c", code], env=full_env, capture_output=True, text=True, timeout=300
+    )
+    assert done.returncode == 0, done.stderr
+    return json.loads(done.stdout.strip().splitlines()[-1])
+
+
+def agreement(a, b):
+    """Points whose raw values differ by more than 1e-4 relative or whose valid-ray counts
+    differ, and the worst of them (index, values, counts)."""
+    rel = np.abs(a.raw - b.raw) / np.maximum(np.abs(b.raw), 1e-30)
+    bad = (rel > 1e-4) | (a.valid_rays != b.valid_rays)
+    worst = np.argsort(-rel)[:5]
+    return bad, [(int(i), float(a.raw[i]), float(b.raw[i]), int(a.valid_rays[i]),
+                  int(b.valid_rays[i])) for i in worst if bad[i]]
+
+
+@pytest.fixture(scope="module", params=MESHES)
+def mesh_and_cpu(request):
+    vertices, triangles = load_mesh(DATA / request.param)
+    return request.param, vertices, triangles, sd.compute(vertices, triangles, engine="cpu")
+
+
+@pytest.mark.parametrize("accel", ["bvh", "octree"])
+def test_opencl_matches_cpu_engine(mesh_and_cpu, accel):
+    name, vertices, triangles, cpu = mesh_and_cpu
+    cl = sd.compute(vertices, triangles, engine=OPENCL[0], accel=accel)
+    assert cl.engine.startswith(OPENCL[0]) and f"({accel})" in cl.engine
+    bad, worst = agreement(cl, cpu)
+    # A ray grazing an edge may flip between two triangles on float rounding differences
+    # (device sin/cos, fused multiply-adds): at most 0.1% of points may differ.
+    assert bad.mean() <= 1e-3, f"{name}: {bad.sum()} of {bad.size} points differ; worst {worst}"
+    assert np.isfinite(cl.raw).all()
+
+
+def test_octree_matches_bvh_on_the_cpu_engine(mesh_and_cpu):
+    name, vertices, triangles, cpu = mesh_and_cpu
+    octree = sd.compute(vertices, triangles, engine="cpu", accel="octree", octree_depth=8)
+    bad, worst = agreement(octree, cpu)
+    assert bad.mean() <= 1e-3, f"{name}: worst {worst}"
+
+
+@pytest.mark.parametrize("sampling", ["random", "cgal"])
+@pytest.mark.parametrize("points", ["faces", "vertices"])
+def test_opencl_matches_cpu_for_every_sampling_and_point_kind(sampling, points):
+    vertices, triangles = load_mesh(DATA / "spot.obj")
+    options = dict(sampling=sampling, points=points, seed=3, rays=17, cone_angle=90.0)
+    cpu = sd.compute(vertices, triangles, engine="cpu", **options)
+    cl = sd.compute(vertices, triangles, engine=OPENCL[0], **options)
+    bad, worst = agreement(cl, cpu)
+    assert bad.mean() <= 1e-3, worst
+
+
+def test_shared_struct_layouts_match_the_kernels():
+    assert _core.opencl_layout(0) == _core.host_layout()
+
+
+def test_engines_lists_opencl_devices_with_their_details():
+    device = next(e for e in sd.engines() if e["name"] == "opencl:0")
+    assert device["type"] in ("CPU", "GPU")
+    assert device["memory"] > 0 and device["compute_units"] > 0
+    assert device["platform"] and device["device"]
+
+
+def test_device_selection_by_number_name_and_best():
+    vertices, triangles = load_mesh(DATA / "cow.obj")
+    name_part = sd.engines()[1]["device"].split()[0][:6]
+    by_name = sd.compute(vertices, triangles, engine=f"opencl:{name_part}")
+    best = sd.compute(vertices, triangles, engine="opencl")
+    assert by_name.engine.startswith("opencl:") and best.engine.startswith("opencl:")
+    np.testing.assert_array_equal(by_name.raw, best.raw)
+
+
+@pytest.mark.parametrize("engine", ["opencl:99", "opencl:no-such-device", "opencl:", "vulkan"])
+def test_a_bad_device_gives_a_clear_error(engine):
+    vertices, triangles = load_mesh(DATA / "cow.obj")
+    with pytest.raises(ValueError, match="device|engine") as error:
+        sd.compute(vertices, triangles, engine=engine)
+    assert "opencl:0" in str(error.value) or "auto" in str(error.value)
+
+
+def test_a_kernel_that_does_not_compile_reports_its_build_log():
+    broken = "__kernel void broken(__global float* x) { x[0] = undefined_name + ; }"
+    with pytest.raises(RuntimeError) as error:
+        _core.opencl_build_source(0, broken)
+    message = str(error.value)
+    assert "clBuildProgram" in message and "CL_BUILD_PROGRAM_FAILURE" in message
+    assert "undefined_name" in message or "expected expression" in message  # the log itself
+
+
+def test_a_mesh_too_large_for_the_device_is_refused_before_allocating():
+    code = (
+        "import json, shape_diameter as sd\n"
+        "from shape_diameter.mesh_io import load_mesh\n"
+        f"v, t = load_mesh({str(DATA / 'bunny00.off')!r})\n"
+        "try:\n"
+        "    sd.compute(v, t, engine='opencl:0')\n"
+        "    print(json.dumps('no error'))\n"
+        "except RuntimeError as e:\n"
+        "    print(json.dumps(str(e)))\n"
+    )
+    message = run_python(code, SDF_OPENCL_MAX_MEMORY=1 << 20)
+    assert "does not fit" in message and "MiB" in message and "engine='cpu'" in message
+
+
+def test_program_cache_skips_the_compiler_and_rebuilds_a_corrupt_entry(tmp_path):
+    code = (
+        "import json, shape_diameter as sd\n"
+        "from shape_diameter import _core\n"
+        "from shape_diameter.mesh_io import load_mesh\n"
+        f"v, t = load_mesh({str(DATA / 'cow.obj')!r})\n"
+        "r = sd.compute(v, t, engine='opencl:0')\n"
+        "print(json.dumps(_core.opencl_program_stats()))\n"
+    )
+    cache = tmp_path / "cache"
+    first = run_python(code, SDF_CACHE_DIR=cache)
+    assert first == {"compiled": 1, "from_cache": 0}
+    files = list((cache / "opencl").glob("*.bin"))
+    assert len(files) == 1
+    second = run_python(code, SDF_CACHE_DIR=cache)
+    assert second == {"compiled": 0, "from_cache": 1}
+    # Corrupt the binary's body: the checksum catches it and the program is built again.
+    data = bytearray(files[0].read_bytes())
+    data[len(data) // 2] ^= 0xFF
+    files[0].write_bytes(bytes(data))
+    third = run_python(code, SDF_CACHE_DIR=cache)
+    assert third == {"compiled": 1, "from_cache": 0}
+    # Truncated, too: rebuilt, and the rewritten file is good again.
+    files[0].write_bytes(files[0].read_bytes()[:20])
+    assert run_python(code, SDF_CACHE_DIR=cache) == {"compiled": 1, "from_cache": 0}
+    assert run_python(code, SDF_CACHE_DIR=cache) == {"compiled": 0, "from_cache": 1}
+
+
+def test_works_without_any_opencl_library():
+    code = (
+        "import json, numpy as np, shape_diameter as sd\n"
+        "from shape_diameter.mesh_io import load_mesh\n"
+        f"v, t = load_mesh({str(DATA / 'cow.obj')!r})\n"
+        "r = sd.compute(v, t)\n"
+        "try:\n"
+        "    sd.compute(v, t, engine='opencl')\n"
+        "    err = None\n"
+        "except ValueError as e:\n"
+        "    err = str(e)\n"
+        "print(json.dumps({'engines': [e['name'] for e in sd.engines()], 'engine': r.engine,\n"
+        "                  'finite': bool(np.isfinite(r.raw).all()), 'error': err}))\n"
+    )
+    out = run_python(code, SDF_OPENCL_LIBRARY="/nonexistent/libOpenCL.so.1")
+    assert out["engines"] == ["cpu"]
+    assert out["engine"].startswith("cpu") and out["finite"]
+    assert "OpenCL is not available" in out["error"] and "no OpenCL library" in out["error"]
+
+
+def test_the_module_does_not_link_libopencl():
+    done = subprocess.run(["ldd", _core.__file__], capture_output=True, text=True, check=True)
+    assert "libOpenCL" not in done.stdout
+
+
+def test_opencl_all_shares_points_over_devices_with_identical_results():
+    # POCL_DEVICES makes PoCL offer two CPU devices: the points are shared out between them.
+    code = (
+        "import json, numpy as np, shape_diameter as sd\n"
+        "from shape_diameter.mesh_io import load_mesh\n"
+        f"v, t = load_mesh({str(DATA / 'fandisk.obj')!r})\n"
+        "one = sd.compute(v, t, engine='opencl:0')\n"
+        "both = sd.compute(v, t, engine='opencl:all')\n"
+        "print(json.dumps({'engine': both.engine, 'same': bool(np.array_equal(one.raw, both.raw)"
+        " and np.array_equal(one.valid_rays, both.valid_rays)),"
+        " 'devices': len(sd.engines()) - 1}))\n"
+    )
+    out = run_python(code, POCL_DEVICES="pthread pthread")
+    assert out["devices"] == 2
+    assert out["engine"].count("opencl:") == 2
+    assert out["same"]
+
+
+def test_progress_and_cancellation_on_opencl():
+    vertices, triangles = load_mesh(DATA / "fandisk.obj")
+    seen = []
+    sd.compute(vertices, triangles, engine=OPENCL[0], progress=seen.append)
+    assert seen[-1] == 1.0 and all(b >= a for a, b in zip(seen, seen[1:]))
+
+    class Stop(Exception):
+        pass
+
+    def stop(fraction):
+        if fraction > 0.1:
+            raise Stop()
+
+    with pytest.raises(Stop):
+        sd.compute(vertices, triangles, engine=OPENCL[0], progress=stop)
+    again = sd.compute(vertices, triangles, engine=OPENCL[0])  # the device still works
+    assert np.isfinite(again.raw).all()
+
+
+def test_auto_picks_a_gpu_or_the_cpu_engine():
+    vertices, triangles = load_mesh(DATA / "cow.obj")
+    result = sd.compute(vertices, triangles)
+    has_gpu = any(e["type"] == "GPU" for e in sd.engines())
+    assert result.engine.startswith("opencl" if has_gpu else "cpu")
