@@ -63,7 +63,7 @@ def compute_objects(objects, *, depsgraph=None, write=True, **options):
     opts = process.Options.from_keywords(**options)
     if depsgraph is None:
         depsgraph = context.evaluated_depsgraph_get()
-    tasks, _warnings = process.prepare(depsgraph, objects, opts)
+    tasks, _warnings = process.prepare(depsgraph, objects, opts, for_writing=write)
     process.compute(tasks, opts)
     if write:
         process.write(bpy.data, tasks, opts)

@@ -27,7 +27,7 @@ def load():
         return _module
     try:
         import shape_diameter
-        import shape_diameter.colormap  # noqa: F401  (the add-on colours with it)
+        import shape_diameter.colormap
     except Exception as ex:  # ImportError, OSError from the dynamic loader, anything
         _load_error = f"{type(ex).__name__}: {ex}"
         raise CoreUnavailable(f"The Shape Diameter core could not be loaded: {_load_error}") from ex

@@ -178,8 +178,16 @@ class OBJECT_OT_shape_diameter(bpy.types.Operator):
             layout.prop(self, name)
         if self.sampling == "random":
             layout.prop(self, "seed")
-        for name in ("points", "normalize", "engine", "attribute_name", "normalized_name",
-                     "color_name", "use_modifiers", "apply_scale"):
+        for name in (
+            "points",
+            "normalize",
+            "engine",
+            "attribute_name",
+            "normalized_name",
+            "color_name",
+            "use_modifiers",
+            "apply_scale",
+        ):
             layout.prop(self, name)
 
 

@@ -61,9 +61,7 @@ class Options:
         for key, value in keywords.items():
             if key not in known:
                 if not core.supports(key):
-                    raise TypeError(
-                        f"unknown option {key!r}; options: {', '.join(sorted(known))}"
-                    )
+                    raise TypeError(f"unknown option {key!r}; options: {', '.join(sorted(known))}")
                 options.extra[key] = value
         return options
 
@@ -144,16 +142,19 @@ def _attribute_problem(ob, options):
         existing = ob.data.attributes.get(name)
         if existing is not None and (existing.data_type, existing.domain) != (data_type, domain):
             return (
-                f"{ob.name}: attribute {name!r} exists as {existing.data_type} on {existing.domain};"
-                f" the result is {data_type} on {domain}: rename it or choose another name"
+                f"{ob.name}: attribute {name!r} exists as {existing.data_type} on "
+                f"{existing.domain}; the result is {data_type} on {domain}: rename or remove "
+                "it, or choose another name"
             )
     return None
 
 
-def prepare(depsgraph, objects, options):
+def prepare(depsgraph, objects, options, for_writing=True):
     """Tasks for the mesh objects among `objects`, plus warnings (skipped objects). Raises
-    UserError, having changed nothing, when the run cannot go ahead."""
-    options.check()
+    UserError, having changed nothing, when the run cannot go ahead. for_writing=False (a
+    dry run of the scripting API) skips the checks of the attributes to be written."""
+    if for_writing:
+        options.check()
     objects = list(objects)
     if not objects:
         raise UserError("Nothing selected: select one or more mesh objects")
@@ -167,7 +168,9 @@ def prepare(depsgraph, objects, options):
 
     tasks = {}
     for ob in meshes:
-        problem = _mode_problem(ob) or _editable_problem(ob) or _attribute_problem(ob, options)
+        problem = _mode_problem(ob)
+        if for_writing:
+            problem = problem or _editable_problem(ob) or _attribute_problem(ob, options)
         if problem:
             raise UserError(problem)
         me = ob.data

@@ -44,21 +44,39 @@ def _plain_engine_items(self, context):
 
 
 SAMPLING_ITEMS = (
-    ("fibonacci", "Fibonacci", "Spherical Fibonacci directions in the cone, the same set at "
-     "every point (paper 4.2); deterministic"),
+    (
+        "fibonacci",
+        "Fibonacci",
+        (
+            "Spherical Fibonacci directions in the cone, the same set at "
+            "every point (paper 4.2); deterministic"
+        ),
+    ),
     ("random", "Random", "Uniform in the cone, different at each point; reproducible with Seed"),
-    ("cgal", "CGAL", "CGAL sdf_values' rules: Vogel disk, equal weights, median absolute "
-     "deviation outliers"),
+    (
+        "cgal",
+        "CGAL",
+        "CGAL sdf_values' rules: Vogel disk, equal weights, median absolute deviation outliers",
+    ),
 )
 POINTS_ITEMS = (
-    ("faces", "Faces", "One value per face (quads and n-gons: the area-weighted mean of their "
-     "triangles); FACE attributes and a CORNER color attribute"),
+    (
+        "faces",
+        "Faces",
+        (
+            "One value per face (quads and n-gons: the area-weighted mean of their "
+            "triangles); FACE attributes and a CORNER color attribute"
+        ),
+    ),
     ("vertices", "Vertices", "One value per vertex; POINT attributes"),
 )
 NORMALIZE_ITEMS = (
     ("linear", "Linear", "(x - min) / (max - min)"),
-    ("log", "Logarithmic", "log(4x + 1) / log 5 of the linear value (Shapira et al.), spreads "
-     "the thin end"),
+    (
+        "log",
+        "Logarithmic",
+        "log(4x + 1) / log 5 of the linear value (Shapira et al.), spreads the thin end",
+    ),
 )
 
 
@@ -66,56 +84,81 @@ def options():
     """Fresh property definitions of every run option, by name (the scripting names)."""
     return {
         "rays": IntProperty(
-            name="Rays", description="Rays cast per point (paper: 30)",
-            default=30, min=1, max=1024, soft_max=256,
+            name="Rays",
+            description="Rays cast per point (paper: 30)",
+            default=30,
+            min=1,
+            max=1024,
+            soft_max=256,
         ),
         "cone_angle": FloatProperty(
-            name="Cone Angle", description="Full apex angle of the cone of rays (paper: 120°)",
-            default=math.radians(120.0), min=math.radians(1.0), max=math.radians(179.0),
+            name="Cone Angle",
+            description="Full apex angle of the cone of rays (paper: 120°)",
+            default=math.radians(120.0),
+            min=math.radians(1.0),
+            max=math.radians(179.0),
             subtype="ANGLE",
         ),
         "sampling": EnumProperty(
-            name="Sampling", description="How the rays are spread in the cone",
-            items=SAMPLING_ITEMS, default="fibonacci",
+            name="Sampling",
+            description="How the rays are spread in the cone",
+            items=SAMPLING_ITEMS,
+            default="fibonacci",
         ),
         "seed": IntProperty(
-            name="Seed", description="Seed of the random sampling", default=0, min=0,
+            name="Seed",
+            description="Seed of the random sampling",
+            default=0,
+            min=0,
         ),
         "points": EnumProperty(
-            name="Points", description="Where values are computed", items=POINTS_ITEMS,
+            name="Points",
+            description="Where values are computed",
+            items=POINTS_ITEMS,
             default="faces",
         ),
         "normalize": EnumProperty(
-            name="Normalize", description="How the normalised attribute and the colours map "
-            "values to [0, 1]", items=NORMALIZE_ITEMS, default="linear",
+            name="Normalize",
+            description="How the normalised attribute and the colours map values to [0, 1]",
+            items=NORMALIZE_ITEMS,
+            default="linear",
         ),
         "attribute_name": StringProperty(
-            name="Attribute", description="FLOAT attribute for the values, in mesh (or world) "
-            "units", default="sdf",
+            name="Attribute",
+            description="FLOAT attribute for the values, in mesh (or world) units",
+            default="sdf",
         ),
         "normalized_name": StringProperty(
-            name="Normalized", description="FLOAT attribute for the normalised values in [0, 1] "
-            "(empty: not written)", default="sdf_normalized",
+            name="Normalized",
+            description="FLOAT attribute for the normalised values in [0, 1] (empty: not written)",
+            default="sdf_normalized",
         ),
         "color_name": StringProperty(
-            name="Color", description="Color attribute from a perceptual colour map of the "
-            "normalised values, made active (empty: not written)", default="sdf_color",
+            name="Color",
+            description="Color attribute from a perceptual colour map of the "
+            "normalised values, made active (empty: not written)",
+            default="sdf_color",
         ),
         "use_modifiers": BoolProperty(
-            name="Use Modifiers", description="Compute on the mesh as the modifiers and shape "
+            name="Use Modifiers",
+            description="Compute on the mesh as the modifiers and shape "
             "keys leave it; written back only when they keep its topology (deforming modifiers)",
             default=False,
         ),
         "apply_scale": BoolProperty(
-            name="Apply Object Scale", description="Values in world units: the object's scale "
-            "and rotation are applied before computing", default=True,
+            name="Apply Object Scale",
+            description="Values in world units: the object's scale "
+            "and rotation are applied before computing",
+            default=True,
         ),
     }
 
 
 def engine_property():
     return EnumProperty(
-        name="Engine", description="What casts the rays", items=_operator_engine_items,
+        name="Engine",
+        description="What casts the rays",
+        items=_operator_engine_items,
     )
 
 

@@ -49,7 +49,7 @@ class VIEW3D_PT_shape_diameter(ShapeDiameterPanel, bpy.types.Panel):
         props.copy_options(settings, op)
         if not meshes:
             layout.label(text="Select one or more meshes", icon="INFO")
-        loaded, text = core.status()
+        loaded, _text = core.status()
         if not loaded:
             draw_status(layout)
 

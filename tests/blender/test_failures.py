@@ -1,0 +1,223 @@
+# SPDX-License-Identifier: GPL-3.0-or-later
+"""Every failure is reported (bpy.ops turns an ERROR report into RuntimeError) and leaves
+every mesh in the file byte-identical: attribute names, types, domains and data, the active
+and default color attributes."""
+
+import os
+import tempfile
+
+import bpy
+import pytest
+from helpers import addon_module, import_obj, run, select_only, snapshot_all
+
+
+def sphere():
+    bpy.ops.mesh.primitive_uv_sphere_add(segments=16, ring_count=8)
+    return bpy.context.active_object
+
+
+def suzanne_and_sphere():
+    """Two good meshes, one with results of an earlier run that a failure must keep."""
+    good = sphere()
+    select_only(good)
+    assert run(rays=4) == {"FINISHED"}
+    return good, import_obj("suzanne.obj")
+
+
+def nothing_selected():
+    suzanne_and_sphere()
+    select_only()
+    return {}
+
+
+def not_a_mesh():
+    suzanne_and_sphere()
+    empty = bpy.data.objects.new("empty", None)
+    curve = bpy.data.objects.new("curve", bpy.data.curves.new("curve", "CURVE"))
+    for ob in (empty, curve):
+        bpy.context.scene.collection.objects.link(ob)
+    select_only(empty, curve)
+    return {}
+
+
+def empty_mesh():
+    good, _suzanne = suzanne_and_sphere()
+    ob = bpy.data.objects.new("nothing", bpy.data.meshes.new("nothing"))
+    bpy.context.scene.collection.objects.link(ob)
+    select_only(good, ob)
+    return {}
+
+
+def only_vertices():
+    good, _ = suzanne_and_sphere()
+    me = bpy.data.meshes.new("points")
+    me.from_pydata([(0, 0, 0), (1, 0, 0), (0, 1, 0)], [], [])
+    ob = bpy.data.objects.new("points", me)
+    bpy.context.scene.collection.objects.link(ob)
+    select_only(good, ob)
+    return {}
+
+
+def edit_mode():
+    good, suzanne = suzanne_and_sphere()
+    select_only(suzanne, good)
+    bpy.context.view_layer.objects.active = suzanne
+    bpy.ops.object.mode_set(mode="EDIT")
+    return {}
+
+
+def linked_mesh():
+    good, _ = suzanne_and_sphere()
+    path = os.path.join(tempfile.mkdtemp(), "library.blend")
+    me = bpy.data.meshes.new("library_mesh")
+    me.from_pydata(
+        [(0, 0, 0), (1, 0, 0), (0, 1, 0), (0, 0, 1)],
+        [],
+        [(0, 2, 1), (0, 1, 3), (1, 2, 3), (0, 3, 2)],
+    )
+    bpy.data.libraries.write(path, {me})
+    bpy.data.meshes.remove(me)
+    with bpy.data.libraries.load(path, link=True) as (_source, target):
+        target.meshes = ["library_mesh"]
+    ob = bpy.data.objects.new("linked", target.meshes[0])
+    bpy.context.scene.collection.objects.link(ob)
+    assert ob.data.library is not None
+    select_only(good, ob)
+    return {}
+
+
+def attribute_of_another_type():
+    good, suzanne = suzanne_and_sphere()
+    suzanne.data.attributes.new("sdf", "INT", "FACE")
+    select_only(good, suzanne)
+    return {}
+
+
+def attribute_on_another_domain():
+    good, suzanne = suzanne_and_sphere()
+    suzanne.data.attributes.new("sdf_normalized", "FLOAT", "POINT")
+    select_only(good, suzanne)
+    return {}
+
+
+def color_of_another_type():
+    good, suzanne = suzanne_and_sphere()
+    suzanne.data.color_attributes.new("sdf_color", "FLOAT_COLOR", "POINT")
+    select_only(good, suzanne)
+    return {}
+
+
+def vertices_after_faces():
+    good, _ = suzanne_and_sphere()
+    select_only(good)  # has FACE results; POINT results under the same names cannot replace them
+    return {"points": "vertices"}
+
+
+def bad_coordinates():
+    good, suzanne = suzanne_and_sphere()
+    suzanne.data.vertices[10].co = (float("nan"), 0.0, 0.0)
+    select_only(good, suzanne)
+    return {}
+
+
+def modifiers_change_topology():
+    good, suzanne = suzanne_and_sphere()
+    suzanne.modifiers.new("subdivide", "SUBSURF")
+    select_only(good, suzanne)
+    return {"use_modifiers": True}
+
+
+def same_names():
+    suzanne_and_sphere()
+    return {"normalized_name": "sdf"}
+
+
+def empty_name():
+    suzanne_and_sphere()
+    return {"attribute_name": ""}
+
+
+def internal_name():
+    suzanne_and_sphere()
+    return {"color_name": ".sdf"}
+
+
+CASES = [
+    (nothing_selected, "Nothing selected"),
+    (not_a_mesh, "Not a mesh: empty \\(empty\\), curve \\(curve\\)"),
+    (empty_mesh, "nothing has no faces"),
+    (only_vertices, "points has no faces"),
+    (edit_mode, "(suzanne|Sphere) is in Edit Mode"),
+    (linked_mesh, "linked: its mesh 'library_mesh' is linked from"),
+    (attribute_of_another_type, "attribute 'sdf' exists as INT on FACE"),
+    (attribute_on_another_domain, "attribute 'sdf_normalized' exists as FLOAT on POINT"),
+    (color_of_another_type, "attribute 'sdf_color' exists as FLOAT_COLOR on POINT"),
+    (vertices_after_faces, "attribute 'sdf' exists as FLOAT on FACE; the result is FLOAT on POINT"),
+    (bad_coordinates, "vertices must be finite"),
+    (modifiers_change_topology, "The modifiers of suzanne change its topology"),
+    (same_names, "names must differ"),
+    (empty_name, "attribute name is empty"),
+    (internal_name, "starting with '.'"),
+]
+
+
+@pytest.mark.parametrize("setup, message", CASES, ids=[c[0].__name__ for c in CASES])
+def test_failure_is_reported_and_changes_nothing(setup, message):
+    options = setup()
+    before = snapshot_all()
+    with pytest.raises(RuntimeError, match=message):
+        run(**options)
+    assert snapshot_all() == before
+
+
+def test_engine_failure_changes_nothing(monkeypatch):
+    core = addon_module("core")
+    suzanne_and_sphere()
+    select_only(*[ob for ob in bpy.data.objects])
+
+    def broken(*args, **kwargs):
+        raise RuntimeError("device lost")
+
+    monkeypatch.setattr(core, "compute", broken)
+    before = snapshot_all()
+    with pytest.raises(RuntimeError, match="Shape Diameter failed: RuntimeError: device lost"):
+        run()
+    assert snapshot_all() == before
+
+
+def test_a_write_failing_half_way_is_rolled_back(monkeypatch):
+    """The all-or-nothing write: the first mesh is fully written (replacing its earlier
+    results) before writing the second fails; everything is put back."""
+    mesh_data = addon_module("mesh_data")
+    good, suzanne = suzanne_and_sphere()
+    select_only(good, suzanne)
+    original = mesh_data.write_attribute
+    calls = []
+
+    def failing(attribute, data):
+        calls.append(attribute.name)
+        if len(calls) == 5:
+            raise MemoryError("out of memory while writing")
+        original(attribute, data)
+
+    monkeypatch.setattr(mesh_data, "write_attribute", failing)
+    before = snapshot_all()
+    with pytest.raises(RuntimeError, match="MemoryError"):
+        run(rays=12)
+    assert len(calls) > 5  # the rollback wrote the replaced values back
+    assert snapshot_all() == before
+
+
+def test_core_that_cannot_load_is_reported(monkeypatch):
+    core = addon_module("core")
+    good, suzanne = suzanne_and_sphere()
+    select_only(good, suzanne)
+
+    def cannot_load():
+        raise core.CoreUnavailable("The Shape Diameter core could not be loaded: test")
+
+    monkeypatch.setattr(core, "load", cannot_load)
+    before = snapshot_all()
+    with pytest.raises(RuntimeError, match="core could not be loaded"):
+        run()
+    assert snapshot_all() == before

@@ -1,0 +1,217 @@
+# SPDX-License-Identifier: GPL-3.0-or-later
+"""object.shape_diameter on real meshes: what it writes, against the Python package on the
+same triangles and against the analytic sphere."""
+
+import bpy
+import numpy as np
+import pytest
+import shape_diameter
+from helpers import (
+    addon_module,
+    attribute_array,
+    import_obj,
+    loop_totals,
+    reference_face_values,
+    run,
+    select_only,
+    snapshot,
+    suzanne_with_ngons,
+    world_triangles,
+)
+
+
+def uv_sphere(radius=1.0, segments=64, rings=32):
+    bpy.ops.mesh.primitive_uv_sphere_add(segments=segments, ring_count=rings, radius=radius)
+    ob = bpy.context.active_object
+    select_only(ob)
+    return ob
+
+
+def analytic_sphere_sdf(radius, rays=30, cone_angle=120.0):
+    """The exact SDF of a sphere: a ray at angle a to the inward normal crosses a chord of
+    length 2 r cos(a); reduced by the core's own rule over the directions it casts."""
+    _, angles = shape_diameter.cone_rays([0.0, 0.0, 1.0], rays, cone_angle)
+    return shape_diameter.reduce_lengths(2.0 * radius * np.cos(angles), angles)
+
+
+def test_uv_sphere_matches_the_api_and_the_analytic_sphere():
+    ob = uv_sphere(radius=1.0)
+    assert run() == {"FINISHED"}
+    values = attribute_array(ob.data, "sdf")
+    np.testing.assert_allclose(values, reference_face_values(ob), rtol=1e-5)
+    relative = values / analytic_sphere_sdf(1.0) - 1.0
+    # A 64 x 32 UV sphere: faces lie inside the sphere, thin triangles at the poles.
+    assert abs(np.median(relative)) < 0.01, np.median(relative)
+    assert np.abs(relative).max() < 0.03, np.abs(relative).max()
+
+
+def test_uv_sphere_vertices_match_the_analytic_sphere():
+    ob = uv_sphere(radius=0.5)
+    assert run(points="vertices") == {"FINISHED"}
+    values = attribute_array(ob.data, "sdf")
+    assert len(values) == len(ob.data.vertices)
+    relative = values / analytic_sphere_sdf(0.5) - 1.0
+    assert abs(np.median(relative)) < 0.01
+    assert np.abs(relative).max() < 0.03
+
+
+@pytest.mark.parametrize(
+    "scale, apply_scale, factor",
+    [((2.0, 2.0, 2.0), True, 2.0), ((2.0, 2.0, 2.0), False, 1.0), ((-1.0, 1.0, 1.0), True, 1.0)],
+    ids=["world-units", "mesh-units", "mirrored"],
+)
+def test_object_scale(scale, apply_scale, factor):
+    ob = uv_sphere(radius=1.0, segments=32, rings=16)
+    assert run() == {"FINISHED"}
+    plain = attribute_array(ob.data, "sdf")
+    ob.scale = scale
+    bpy.context.view_layer.update()
+    assert run(apply_scale=apply_scale) == {"FINISHED"}
+    scaled = attribute_array(ob.data, "sdf")
+    np.testing.assert_allclose(scaled, reference_face_values(ob, apply_scale), rtol=1e-5)
+    if scale[0] > 0:
+        np.testing.assert_allclose(scaled, factor * plain, rtol=2e-3)
+    else:
+        # A mirroring scale turns the faces inside out; the add-on reverses the winding with
+        # it. The cone's rays are not mirrored with the mesh, so values move a little.
+        ratio = scaled / plain
+        assert abs(np.median(ratio) - 1.0) < 0.005 and np.abs(ratio - 1.0).max() < 0.04
+
+
+def test_suzanne_with_quads_and_ngons():
+    ob = suzanne_with_ngons()
+    me = ob.data
+    sizes = loop_totals(me)
+    assert (sizes == 3).any() and (sizes == 4).any() and (sizes > 4).any()
+    assert run() == {"FINISHED"}
+
+    kinds = {a.name: (a.data_type, a.domain, len(a.data)) for a in me.attributes}
+    assert kinds["sdf"] == ("FLOAT", "FACE", len(me.polygons))
+    assert kinds["sdf_normalized"] == ("FLOAT", "FACE", len(me.polygons))
+    assert kinds["sdf_color"] == ("BYTE_COLOR", "CORNER", len(me.loops))
+    assert me.color_attributes.active_color_name == "sdf_color"
+
+    values = attribute_array(me, "sdf")
+    np.testing.assert_allclose(values, reference_face_values(ob), rtol=1e-5)
+    normalized = attribute_array(me, "sdf_normalized")
+    np.testing.assert_allclose(normalized, shape_diameter.normalize(values, "linear"), atol=1e-6)
+    assert normalized.min() == 0.0 and normalized.max() == 1.0
+    # Each corner carries its polygon's colour: the package's colour map, byte for byte.
+    expected = np.repeat(shape_diameter.colormap.colormap(normalized), sizes, axis=0)
+    colors = np.rint(attribute_array(me, "sdf_color") * 255).astype(np.uint8)
+    np.testing.assert_array_equal(colors, expected)
+
+
+def test_suzanne_vertices():
+    ob = import_obj("suzanne.obj")
+    me = ob.data
+    assert run(points="vertices", normalize="log", rays=16) == {"FINISHED"}
+    for name, data_type in (
+        ("sdf", "FLOAT"),
+        ("sdf_normalized", "FLOAT"),
+        ("sdf_color", "BYTE_COLOR"),
+    ):
+        a = me.attributes[name]
+        assert (a.data_type, a.domain, len(a.data)) == (data_type, "POINT", len(me.vertices))
+    v, t, _ = world_triangles(ob)
+    ref = shape_diameter.compute(v, t, points="vertices", normalize="log", rays=16)
+    np.testing.assert_allclose(attribute_array(me, "sdf"), ref.values, rtol=1e-6)
+    np.testing.assert_allclose(attribute_array(me, "sdf_normalized"), ref.normalized, atol=1e-6)
+    assert me.color_attributes.active_color_name == "sdf_color"
+
+
+def test_undo_restores_the_mesh():
+    ob = suzanne_with_ngons()
+    name = ob.data.name
+    before = snapshot(ob.data)
+    bpy.ops.ed.undo_push(message="before Shape Diameter")
+    assert run() == {"FINISHED"}
+    assert "sdf" in bpy.data.meshes[name].attributes
+    assert bpy.ops.ed.undo() == {"FINISHED"}
+    assert snapshot(bpy.data.meshes[name]) == before
+    assert bpy.ops.ed.redo() == {"FINISHED"}
+    assert "sdf" in bpy.data.meshes[name].attributes
+
+
+def test_a_second_run_replaces_the_values():
+    ob = import_obj("suzanne.obj")
+    assert run(rays=8) == {"FINISHED"}
+    names = [a.name for a in ob.data.attributes]
+    assert run(rays=40) == {"FINISHED"}
+    assert [a.name for a in ob.data.attributes] == names
+    np.testing.assert_allclose(
+        attribute_array(ob.data, "sdf"), reference_face_values(ob, rays=40), rtol=1e-5
+    )
+
+
+def test_custom_names_and_optional_outputs():
+    ob = import_obj("suzanne.obj")
+    assert run(attribute_name="thickness", normalized_name="", color_name="") == {"FINISHED"}
+    names = {a.name for a in ob.data.attributes}
+    assert "thickness" in names and not names & {"sdf", "sdf_normalized", "sdf_color"}
+    assert len(ob.data.color_attributes) == 0
+
+
+def test_use_modifiers_computes_on_the_deformed_mesh():
+    ob = import_obj("suzanne.obj")
+    modifier = ob.modifiers.new("deform", "SIMPLE_DEFORM")
+    modifier.deform_method = "TAPER"
+    modifier.factor = 1.5
+    assert run(use_modifiers=False) == {"FINISHED"}
+    plain = attribute_array(ob.data, "sdf")
+    assert run(use_modifiers=True) == {"FINISHED"}
+    deformed = attribute_array(ob.data, "sdf")
+    assert not np.allclose(plain, deformed, rtol=0.05)
+
+    evaluated = ob.evaluated_get(bpy.context.evaluated_depsgraph_get())
+    temp = bpy.data.meshes.new_from_object(evaluated)
+    try:
+        proxy = bpy.data.objects.new("proxy", temp)
+        proxy.matrix_world = ob.matrix_world
+        np.testing.assert_allclose(deformed, reference_face_values(proxy), rtol=1e-5)
+    finally:
+        bpy.data.objects.remove(proxy)
+        bpy.data.meshes.remove(temp)
+
+
+def test_every_selected_mesh_and_a_shared_mesh():
+    sphere = uv_sphere(segments=32, rings=16)
+    suzanne = import_obj("suzanne.obj")
+    twin = bpy.data.objects.new("twin", suzanne.data)  # a linked duplicate: same mesh
+    bpy.context.scene.collection.objects.link(twin)
+    camera = bpy.data.objects.new("camera", bpy.data.cameras.new("camera"))
+    bpy.context.scene.collection.objects.link(camera)
+    select_only(sphere, suzanne, twin, camera)
+    assert run() == {"FINISHED"}  # the camera is skipped with a warning
+    np.testing.assert_allclose(
+        attribute_array(sphere.data, "sdf"), reference_face_values(sphere), rtol=1e-5
+    )
+    np.testing.assert_allclose(
+        attribute_array(suzanne.data, "sdf"), reference_face_values(suzanne), rtol=1e-5
+    )
+
+
+def test_scripting_api():
+    api = addon_module("api")
+    ob = import_obj("suzanne.obj")
+    result = api.compute_object(ob, rays=12, cone_angle=90.0)
+    assert result.domain == "FACE" and result.attributes == ["sdf", "sdf_normalized", "sdf_color"]
+    assert result.engine.startswith("cpu")
+    np.testing.assert_array_equal(attribute_array(ob.data, "sdf"), result.values)
+    np.testing.assert_allclose(
+        result.values, reference_face_values(ob, rays=12, cone_angle=90.0), rtol=1e-5
+    )
+
+    before = snapshot(ob.data)
+    dry = api.compute_object(ob, write=False, points="vertices", attribute_name="other")
+    assert dry.domain == "POINT" and len(dry.values) == len(ob.data.vertices)
+    assert snapshot(ob.data) == before
+
+    with pytest.raises(TypeError, match="unknown option 'no_such_option'"):
+        api.compute_object(ob, no_such_option=1)
+    with pytest.raises(ValueError, match="rays"):
+        api.compute_object(ob, rays=0)
+    with pytest.raises(api.UserError, match="Not a mesh"):
+        api.compute_object(bpy.data.objects.new("empty", None))
+    assert snapshot(ob.data) == before
+    assert [e["name"] for e in api.engines()][0] == shape_diameter.engines()[0]["name"]
