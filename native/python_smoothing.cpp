@@ -1,0 +1,196 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
+// The smoothing functions of shape_diameter._core. The Python layer (smoothing.py) validates
+// and documents; this file converts arrays and releases the GIL around native work.
+#include <pybind11/numpy.h>
+#include <pybind11/pybind11.h>
+
+#include <stdexcept>
+#include <string>
+
+#include "mesh_weld.h"
+#include "parallel.h"
+#include "smoothing_kring.h"
+#include "smoothing_projected.h"
+#include "smoothing_texture.h"
+
+namespace py = pybind11;
+
+namespace {
+
+using Doubles = py::array_t<double, py::array::c_style | py::array::forcecast>;
+using Int64s = py::array_t<std::int64_t, py::array::c_style | py::array::forcecast>;
+using Floats = py::array_t<float, py::array::c_style | py::array::forcecast>;
+
+sdf::Mesh mesh_from(const Doubles& vertices, const Int64s& triangles) {
+  if (vertices.ndim() != 2 || vertices.shape(1) != 3)
+    throw std::invalid_argument("vertices must have shape (n, 3)");
+  if (triangles.ndim() != 2 || triangles.shape(1) != 3)
+    throw std::invalid_argument("triangles must have shape (m, 3)");
+  return sdf::make_mesh(vertices.data(), static_cast<std::size_t>(vertices.shape(0)),
+                        triangles.data(), static_cast<std::size_t>(triangles.shape(0)));
+}
+
+sdf::PointKind kind_from(const std::string& points) {
+  if (points == "faces") return sdf::PointKind::Faces;
+  if (points == "vertices") return sdf::PointKind::Vertices;
+  throw std::invalid_argument("points must be 'faces' or 'vertices', got '" + points + "'");
+}
+
+// values must hold one float per point of the kind.
+const float* point_values(const sdf::Mesh& mesh, sdf::PointKind kind, const Floats& values) {
+  const std::size_t n = kind == sdf::PointKind::Faces ? mesh.triangles.size() : mesh.vertices.size();
+  if (values.ndim() != 1 || static_cast<std::size_t>(values.shape(0)) != n)
+    throw std::invalid_argument("values must have one entry per point (" + std::to_string(n) + ")");
+  return values.data();
+}
+
+// A callback run on the calling thread (which holds no GIL while native code runs); an
+// exception it raises travels out through the native code and back to Python.
+sdf::ProgressFn progress_from(const py::object& progress) {
+  if (progress.is_none()) return nullptr;
+  return [&progress](double fraction) {
+    py::gil_scoped_acquire gil;
+    progress(fraction);
+    return true;
+  };
+}
+
+py::array_t<float> to_array(const std::vector<float>& v) {
+  return py::array_t<float>(static_cast<py::ssize_t>(v.size()), v.data());
+}
+
+py::array_t<float> smooth_kring(const Doubles& vertices, const Int64s& triangles,
+                                const Floats& values, const std::string& points, int k,
+                                double sigma, double corner_angle, double weld_tolerance,
+                                unsigned threads, const py::object& progress) {
+  const sdf::Mesh mesh = mesh_from(vertices, triangles);
+  const sdf::PointKind kind = kind_from(points);
+  const float* v = point_values(mesh, kind, values);
+  sdf::KringOptions options;
+  options.k = k;
+  options.sigma = sigma;
+  options.corner_angle = corner_angle;
+  options.weld_tolerance = weld_tolerance;
+  options.threads = threads;
+  const sdf::ProgressFn report = progress_from(progress);
+  std::vector<float> out;
+  {
+    py::gil_scoped_release release;
+    out = sdf::smooth_kring(mesh, kind, v, options, report);
+  }
+  return to_array(out);
+}
+
+py::array_t<float> smooth_projected(const Doubles& vertices, const Int64s& triangles,
+                                    const Floats& values, const std::string& points,
+                                    int iterations, int max_depth, double min_points,
+                                    double node_size_ratio, unsigned threads,
+                                    const py::object& progress) {
+  const sdf::Mesh mesh = mesh_from(vertices, triangles);
+  const sdf::PointKind kind = kind_from(points);
+  const float* v = point_values(mesh, kind, values);
+  sdf::ProjectedOptions options;
+  options.iterations = iterations;
+  options.max_depth = max_depth;
+  options.min_points = min_points;
+  options.node_size_ratio = node_size_ratio;
+  options.threads = threads;
+  const sdf::ProgressFn report = progress_from(progress);
+  std::vector<float> out;
+  {
+    py::gil_scoped_release release;
+    out = sdf::smooth_projected(mesh, kind, v, options, report);
+  }
+  return to_array(out);
+}
+
+py::dict smooth_texture(const Doubles& vertices, const Int64s& triangles, const Floats& values,
+                        const std::string& points, const Floats& uvs, int width, int height,
+                        double radius, bool bilateral, double range_sigma, int margin,
+                        double weld_tolerance, bool return_image, unsigned threads,
+                        const py::object& progress) {
+  const sdf::Mesh mesh = mesh_from(vertices, triangles);
+  const sdf::PointKind kind = kind_from(points);
+  const float* v = point_values(mesh, kind, values);
+  if (uvs.ndim() != 3 || static_cast<std::size_t>(uvs.shape(0)) != mesh.triangles.size() ||
+      uvs.shape(1) != 3 || uvs.shape(2) != 2)
+    throw std::invalid_argument("uvs must have shape (m, 3, 2)");
+  sdf::TextureOptions options;
+  options.width = width;
+  options.height = height;
+  options.radius = radius;
+  options.bilateral = bilateral;
+  options.range_sigma = range_sigma;
+  options.margin = margin;
+  options.weld_tolerance = weld_tolerance;
+  options.threads = threads;
+  const sdf::ProgressFn report = progress_from(progress);
+  sdf::TextureSmoothing out;
+  {
+    py::gil_scoped_release release;
+    out = sdf::smooth_texture(mesh, kind, v, uvs.data(), options, return_image, report);
+  }
+  py::dict result;
+  result["values"] = to_array(out.values);
+  if (return_image) {
+    py::array_t<float> image({py::ssize_t(out.height), py::ssize_t(out.width)});
+    py::array_t<bool> mask({py::ssize_t(out.height), py::ssize_t(out.width)});
+    std::copy(out.image.begin(), out.image.end(), image.mutable_data());
+    bool* m = mask.mutable_data();
+    for (std::size_t t = 0; t < out.mask.size(); ++t) m[t] = out.mask[t] != 0;
+    result["image"] = image;
+    result["mask"] = mask;
+  }
+  return result;
+}
+
+py::tuple weld_vertices(const Doubles& vertices, const Int64s& triangles, double tolerance) {
+  const sdf::Mesh mesh = mesh_from(vertices, triangles);
+  sdf::Weld weld;
+  {
+    py::gil_scoped_release release;
+    weld = sdf::weld_vertices(mesh.vertices.data(), mesh.vertices.size(),
+                              sdf::weld_tolerance(mesh, tolerance));
+  }
+  py::array_t<std::int64_t> merged(static_cast<py::ssize_t>(weld.merged.size()));
+  std::copy(weld.merged.begin(), weld.merged.end(), merged.mutable_data());
+  return py::make_tuple(merged, weld.count);
+}
+
+py::array_t<std::int32_t> uv_islands(const Doubles& vertices, const Int64s& triangles,
+                                     const Floats& uvs, double weld_tolerance) {
+  const sdf::Mesh mesh = mesh_from(vertices, triangles);
+  if (uvs.ndim() != 3 || static_cast<std::size_t>(uvs.shape(0)) != mesh.triangles.size() ||
+      uvs.shape(1) != 3 || uvs.shape(2) != 2)
+    throw std::invalid_argument("uvs must have shape (m, 3, 2)");
+  std::vector<std::int32_t> islands;
+  {
+    py::gil_scoped_release release;
+    islands = sdf::uv_islands(mesh, uvs.data(), weld_tolerance);
+  }
+  return py::array_t<std::int32_t>(static_cast<py::ssize_t>(islands.size()), islands.data());
+}
+
+}  // namespace
+
+void bind_smoothing(py::module_& m) {
+  m.def("smooth_kring", &smooth_kring, py::arg("vertices"), py::arg("triangles"),
+        py::arg("values"), py::arg("points"), py::arg("k"), py::arg("sigma"),
+        py::arg("corner_angle"), py::arg("weld_tolerance"), py::arg("threads"),
+        py::arg("progress"));
+  m.def("smooth_projected", &smooth_projected, py::arg("vertices"), py::arg("triangles"),
+        py::arg("values"), py::arg("points"), py::arg("iterations"), py::arg("max_depth"),
+        py::arg("min_points"), py::arg("node_size_ratio"), py::arg("threads"),
+        py::arg("progress"));
+  m.def("smooth_texture", &smooth_texture, py::arg("vertices"), py::arg("triangles"),
+        py::arg("values"), py::arg("points"), py::arg("uvs"), py::arg("width"),
+        py::arg("height"), py::arg("radius"), py::arg("bilateral"), py::arg("range_sigma"),
+        py::arg("margin"), py::arg("weld_tolerance"), py::arg("return_image"),
+        py::arg("threads"), py::arg("progress"));
+  m.def("default_kring_k", [](std::size_t faces) { return sdf::default_kring_k(faces); },
+        py::arg("faces"));
+  m.def("weld_vertices", &weld_vertices, py::arg("vertices"), py::arg("triangles"),
+        py::arg("tolerance"));
+  m.def("uv_islands", &uv_islands, py::arg("vertices"), py::arg("triangles"), py::arg("uvs"),
+        py::arg("weld_tolerance"));
+}
