@@ -23,6 +23,8 @@
 
 namespace py = pybind11;
 
+void bind_smoothing(py::module_& m);  // python_smoothing.cpp
+
 namespace {
 
 using Doubles = py::array_t<double, py::array::c_style | py::array::forcecast>;
@@ -241,4 +243,5 @@ PYBIND11_MODULE(_core, m) {
         py::arg("points"));
   m.def("hardware_threads", [] { return sdf::resolve_threads(0); });
   m.attr("MAX_RAYS") = sdf::kMaxRays;
+  bind_smoothing(m);
 }
