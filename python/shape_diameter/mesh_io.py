@@ -77,6 +77,90 @@ def load_mesh(path) -> tuple[np.ndarray, np.ndarray]:
     return vertices, triangles
 
 
+def load_mesh_with_uvs(path) -> tuple[np.ndarray, np.ndarray, "np.ndarray | None"]:
+    """load_mesh, plus the texture coordinates of every face corner.
+
+    Returns (vertices, triangles, uvs): uvs float32 (m, 3, 2), corner k of triangle i at
+    uvs[i, k], with v = 0 at the bottom of the image (OBJ and Blender's convention; glTF's
+    top-down v is flipped by trimesh), or None when the file has no UVs for every face. Read
+    from OBJ ``vt`` (through the ``f v/vt`` references, polygons fanned as load_mesh fans
+    them), glTF/GLB ``TEXCOORD_0`` (of primitives that have a material: trimesh reads UVs only
+    with one) and PLY texture coordinates (texture_u/texture_v, u/v, s/t or a per-face
+    texcoord list). OFF and STL have none.
+    """
+    vertices, triangles = load_mesh(path)
+    path = os.fspath(path)
+    suffix = os.path.splitext(path)[1].lower()
+    uvs = None
+    if suffix == ".obj":
+        uvs = _obj_corner_uvs(path)
+    elif suffix in (".ply", ".gltf", ".glb"):
+        try:
+            # Materials are loaded this time: trimesh keeps glTF UVs only with them.
+            scene = trimesh.load(path, process=False, force="scene")
+        except Exception:  # e.g. a texture image that cannot be decoded: read without
+            scene = trimesh.load(path, process=False, force="scene", skip_materials=True)
+        uvs = _scene_corner_uvs(scene)
+    if uvs is not None and (uvs.shape != (len(triangles), 3, 2) or not np.isfinite(uvs).all()):
+        uvs = None
+    return vertices, triangles, uvs
+
+
+def _obj_corner_uvs(path: str):
+    """Corner UVs of an OBJ in the order _plain_obj writes its triangles, or None when a face
+    has no ``vt`` reference."""
+    with open(path, "rb") as stream:
+        text = stream.read().decode("utf-8", errors="replace")
+    text = text.replace("\\\r\n", " ").replace("\\\n", " ")
+    texcoords, corners = [], []
+    for line in text.splitlines():
+        fields = line.split()
+        if not fields:
+            continue
+        if fields[0] == "vt":
+            try:
+                texcoords.append((float(fields[1]), float(fields[2]) if len(fields) > 2 else 0.0))
+            except (ValueError, IndexError):
+                return None
+        elif fields[0] == "f":
+            refs = []
+            for token in fields[1:]:
+                parts = token.split("/")
+                if len(parts) < 2 or not parts[1]:
+                    return None
+                index = int(parts[1])
+                refs.append(index - 1 if index > 0 else len(texcoords) + index)
+            if any(not 0 <= r < len(texcoords) for r in refs):
+                return None
+            for k in range(1, len(refs) - 1):
+                corners.append((refs[0], refs[k], refs[k + 1]))
+    if not corners:
+        return None
+    return np.asarray(texcoords, dtype=np.float32)[np.asarray(corners, dtype=np.int64)]
+
+
+def _scene_corner_uvs(scene: trimesh.Scene):
+    """Corner UVs of the triangles _flatten gathers (same meshes, order and winding), or None
+    when one of those meshes has no per-vertex UVs."""
+    parts = []
+    for node in scene.graph.nodes_geometry:
+        transform, name = scene.graph[node]
+        geometry = scene.geometry[name]
+        if not isinstance(geometry, trimesh.Trimesh) or len(geometry.faces) == 0:
+            continue
+        uv = getattr(geometry.visual, "uv", None)
+        if uv is None or np.shape(uv) != (len(geometry.vertices), 2):
+            return None
+        corners = np.asarray(uv, dtype=np.float32)[np.asarray(geometry.faces, dtype=np.int64)]
+        transform = np.asarray(transform, dtype=np.float64)
+        if np.linalg.det(transform[:3, :3]) < 0:  # _flatten reverses these triangles
+            corners = corners[:, ::-1]
+        parts.append(corners)
+    if not parts:
+        return None
+    return np.ascontiguousarray(np.concatenate(parts))
+
+
 def _plain_obj(path: str) -> bytes:
     """The OBJ file reduced to ``v`` lines and triangular ``f`` lines, in order.
 
