@@ -82,10 +82,16 @@ if listed != built:
 EOF
 
 # 3. Blender's build and validate logic, from the bpy package.
-if [ ! -x "$BPY45_VENV/bin/python" ] || ! "$BPY45_VENV/bin/python" -c "import bpy" 2>/dev/null; then
+# The same requirements (and marker file) as scripts/test_blender.sh, which tests in this venv.
+BPY45_REQUIREMENTS=("bpy>=4.5,<4.6" "numpy<2" "pytest>=7")
+if [ ! -x "$BPY45_VENV/bin/python" ] ||
+   [ "$(cat "$BPY45_VENV/.requirements" 2>/dev/null)" != "${BPY45_REQUIREMENTS[*]}" ]; then
   log "creating $BPY45_VENV (bpy 4.5 LTS, Python 3.11, numpy < 2)"
+  rm -rf "$BPY45_VENV"
   "$PY311" -m venv "$BPY45_VENV"
-  "$BPY45_VENV/bin/python" -m pip install -q "bpy>=4.5,<4.6" "numpy<2" "pytest>=7"
+  "$BPY45_VENV/bin/python" -m pip install -q --upgrade pip
+  "$BPY45_VENV/bin/python" -m pip install -q "${BPY45_REQUIREMENTS[@]}"
+  echo "${BPY45_REQUIREMENTS[*]}" > "$BPY45_VENV/.requirements"
 fi
 BPY_SCRIPTS=$("$BPY45_VENV/bin/python" - <<'EOF'
 import glob, os, importlib.util
