@@ -29,9 +29,13 @@ SDF_INLINE float3 sdf_tri_e2(SDF_GLOBAL const SdfTriangle* tri) {
 /* Updates *hit when the ray o + t d meets the triangle at tmin < t < hit->t, or at t equal to
  * hit->t with a smaller triangle id: ties (a ray through a shared edge, a triangle doubled
  * with opposite winding) then go to the same triangle whatever order a structure visits them
- * in, so every engine and acceleration structure agrees. Edges count as inside (u, v >= 0)
- * so a ray through a shared edge cannot slip between two triangles. A zero-area triangle has
- * det == 0 and is never hit. */
+ * in, so every engine and acceleration structure agrees. A zero-area triangle has det == 0
+ * and is never hit.
+ * Triangles are grown by SDF_BARYCENTRIC_SLACK in barycentric terms: float32 Moller-Trumbore
+ * is not watertight, and a ray through a shared edge was measured to miss both triangles
+ * (u + v = 1 + 2.4e-6 on one, v = -1.7e-7 on the other), losing the ray. 1e-5 of a triangle's
+ * size is far below any thickness the SDF resolves. */
+#define SDF_BARYCENTRIC_SLACK 1e-5f
 SDF_INLINE void sdf_intersect_triangle(float3 o, float3 d, float tmin,
                                        SDF_GLOBAL const SdfTriangle* tri, SdfHit* hit) {
   float3 e1 = sdf_tri_e1(tri);
@@ -42,10 +46,10 @@ SDF_INLINE void sdf_intersect_triangle(float3 o, float3 d, float tmin,
   float inv_det = 1.0f / det;
   float3 s = o - sdf_tri_v0(tri);
   float u = dot(s, p) * inv_det;
-  if (u < 0.0f || u > 1.0f) return;
+  if (u < -SDF_BARYCENTRIC_SLACK || u > 1.0f + SDF_BARYCENTRIC_SLACK) return;
   float3 q = cross(s, e1);
   float v = dot(d, q) * inv_det;
-  if (v < 0.0f || u + v > 1.0f) return;
+  if (v < -SDF_BARYCENTRIC_SLACK || u + v > 1.0f + SDF_BARYCENTRIC_SLACK) return;
   float t = dot(e2, q) * inv_det;
   if (t <= tmin || t > hit->t || (t == hit->t && tri->id >= hit->id)) return;
   hit->t = t;

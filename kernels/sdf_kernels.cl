@@ -31,12 +31,12 @@
   float3 origin = vload3(p, origins);                                                 \
   int own = own_face[p];                                                              \
   float3 b1, b2;                                                                      \
-  sdf_frame(params.sampling, axis, &b1, &b2);                                         \
+  sdf_frame(params.sampling, axis, vload3(p, tangents), &b1, &b2);                    \
   float lengths[SDF_MAX_RAYS];                                                        \
   float angles[SDF_MAX_RAYS];                                                         \
   int kept = 0;                                                                       \
   for (int r = 0; r < params.rays; ++r) {                                             \
-    float3 dir_local = sdf_ray_local(params.sampling, r, params.rays, params.cos_half,\
+    float3 dir_local = sdf_ray_local(params.sampling, r, params.rays, params.one_minus_cos_half,\
                                  params.sin_half, params.seed, p);                    \
     float3 d = sdf_to_world(dir_local, b1, b2, axis);                                 \
     SdfHit hit = CLOSEST_HIT;                                                         \
@@ -51,7 +51,7 @@
 
 __kernel void sdf_cast_bvh(__global const SdfBvhNode* nodes, __global const SdfTriangle* tris,
                            __global const float* origins, __global const float* axes,
-                           __global const int* own_face, __global const uint* order,
+                           __global const float* tangents, __global const int* own_face, __global const uint* order,
                            SdfCastParams params, __global float* raw,
                            __global int* valid_rays) {
   SDF_CAST_BODY(sdf_bvh_closest_hit(nodes, tris, origin, d, params.tmin, own))
@@ -60,7 +60,7 @@ __kernel void sdf_cast_bvh(__global const SdfBvhNode* nodes, __global const SdfT
 __kernel void sdf_cast_octree(__global const uint* nodes, __global const uint* leaves,
                               __global const SdfTriangle* tris, SdfOctreeRoot root,
                               __global const float* origins, __global const float* axes,
-                              __global const int* own_face, __global const uint* order,
+                              __global const float* tangents, __global const int* own_face, __global const uint* order,
                               SdfCastParams params, __global float* raw,
                               __global int* valid_rays) {
   SDF_CAST_BODY(sdf_octree_closest_hit(nodes, leaves, tris, root, origin, d, params.tmin, own))

@@ -33,7 +33,7 @@ typedef struct SdfTriangle {
 typedef struct SdfCastParams {
   sdf_int32 rays;
   sdf_int32 sampling;
-  float cos_half;
+  float one_minus_cos_half;
   float sin_half;
   float angle_floor;
   sdf_uint32 seed;

@@ -27,8 +27,9 @@ SDF_INLINE float sdf_uniform(sdf_uint32 seed, sdf_uint32 point, sdf_uint32 ray, 
   return (float)(h >> 8) * (1.0f / 16777216.0f);
 }
 
-/* Direction i of n in the local frame (z = cone axis) for a cone of half-angle with the given
- * cosine and sine.
+/* Direction i of n in the local frame (z = cone axis) for a cone whose half-angle has the
+ * given 1 - cos (passed instead of the cosine: for a narrow cone, cos rounds to 1 in float and
+ * every ray would collapse onto the axis) and sine.
  * - Fibonacci: spherical Fibonacci points restricted to the cone's cap (paper 4.2, Keinert et
  *   al.): equal-area bands in z, golden-angle steps in azimuth. Deterministic, the same set for
  *   every point, no ray exactly on the axis.
@@ -36,24 +37,25 @@ SDF_INLINE float sdf_uniform(sdf_uint32 seed, sdf_uint32 point, sdf_uint32 ray, 
  * - CGAL: CGAL's Vogel disk sampler (Disk_samplers.h, not uniform: radius i/n, biased to the
  *   centre, sample 0 on the axis) mapped as cos(half) * axis + sin(half) * disk point
  *   (SDF_calculation.h), then normalised. */
-SDF_INLINE float3 sdf_ray_local(int sampling, int i, int n, float cos_half, float sin_half,
-                                sdf_uint32 seed, sdf_uint32 point) {
+SDF_INLINE float3 sdf_ray_local(int sampling, int i, int n, float one_minus_cos_half,
+                                float sin_half, sdf_uint32 seed, sdf_uint32 point) {
   if (sampling == SDF_SAMPLING_CGAL) {
     float radius = (float)i / (float)n;
     float q = (float)i * SDF_GOLDEN_ANGLE;
-    float3 v = make_float3(sin_half * radius * cos(q), sin_half * radius * sin(q), cos_half);
+    float3 v = make_float3(sin_half * radius * cos(q), sin_half * radius * sin(q),
+                           1.0f - one_minus_cos_half);
     return normalize(v);
   }
-  float z, phi;
+  float one_minus_z, phi;
   if (sampling == SDF_SAMPLING_RANDOM) {
-    z = 1.0f - sdf_uniform(seed, point, (sdf_uint32)i, 0u) * (1.0f - cos_half);
+    one_minus_z = sdf_uniform(seed, point, (sdf_uint32)i, 0u) * one_minus_cos_half;
     phi = SDF_TWO_PI * sdf_uniform(seed, point, (sdf_uint32)i, 1u);
   } else {
-    z = 1.0f - ((float)i + 0.5f) / (float)n * (1.0f - cos_half);
+    one_minus_z = ((float)i + 0.5f) / (float)n * one_minus_cos_half;
     phi = (float)i * SDF_GOLDEN_ANGLE;
   }
-  float r = sqrt(fmax(0.0f, (1.0f - z) * (1.0f + z)));
-  return make_float3(r * cos(phi), r * sin(phi), z);
+  float r = sqrt(fmax(0.0f, one_minus_z * (2.0f - one_minus_z)));
+  return make_float3(r * cos(phi), r * sin(phi), 1.0f - one_minus_z);
 }
 
 /* Angle between a local direction and the cone axis; atan2 stays accurate near the axis,
@@ -62,23 +64,11 @@ SDF_INLINE float sdf_ray_angle(float3 dir_local) {
   return atan2(sqrt(dir_local.x * dir_local.x + dir_local.y * dir_local.y), dir_local.z);
 }
 
-/* The smallest angle a ray's weight uses (weight = 1 / angle, paper section 3): the angle of the
- * innermost Fibonacci ray, acos(1 - (1 - cos_half) / (2n)). Fibonacci rays never go below it;
- * a random ray nearer the axis (or CGAL's on-axis sample) weighs as that innermost ray instead
- * of infinitely. Written as 2 asin(sqrt(x / 2)) with x = 1 - cos, accurate for tiny angles. */
-SDF_INLINE float sdf_angle_floor(int n, float cos_half) {
-  float x = 0.5f * (1.0f - cos_half) / (float)n;
-  return 2.0f * asin(sqrt(0.5f * x));
-}
-
-/* Orthonormal tangent frame (b1, b2) for a unit axis n: Duff et al., "Building an Orthonormal
- * Basis, Revisited" (JCGT 2017). Branch-free apart from the sign, continuous except at n.z = -1. */
-SDF_INLINE void sdf_frame_duff(float3 n, float3* b1, float3* b2) {
-  float sign = copysign(1.0f, n.z);
-  float a = -1.0f / (sign + n.z);
-  float b = n.x * n.y * a;
-  *b1 = make_float3(1.0f + sign * n.x * n.x * a, sign * b, -sign * n.x);
-  *b2 = make_float3(b, sign + n.y * n.y * a, -n.y);
+/* The tangent frame for points that carry their own tangent (from their mesh edge, so the ray
+ * set turns with the mesh: rotating a mesh rotates its rays, and the values stay put). */
+SDF_INLINE void sdf_frame_from_tangent(float3 n, float3 tangent, float3* b1, float3* b2) {
+  *b1 = tangent;
+  *b2 = cross(n, tangent);
 }
 
 /* CGAL's frame: Plane_3(center, n).base1() and base2() = cross(n, base1), both normalised
@@ -103,11 +93,12 @@ SDF_INLINE void sdf_frame_cgal(float3 n, float3* b1, float3* b2) {
   *b2 = normalize(cross(n, base1));
 }
 
-SDF_INLINE void sdf_frame(int sampling, float3 n, float3* b1, float3* b2) {
+/* CGAL sampling reproduces CGAL's frame; the others turn with the mesh. */
+SDF_INLINE void sdf_frame(int sampling, float3 n, float3 tangent, float3* b1, float3* b2) {
   if (sampling == SDF_SAMPLING_CGAL) {
     sdf_frame_cgal(n, b1, b2);
   } else {
-    sdf_frame_duff(n, b1, b2);
+    sdf_frame_from_tangent(n, tangent, b1, b2);
   }
 }
 

@@ -33,7 +33,7 @@ void cast_points(const SamplePoints& points, const std::vector<std::uint32_t>& o
             valid_rays[p] = 0;
             continue;
           }
-          cone_rays(cone, axis, p, directions.data(), angles.data());
+          cone_rays(cone, axis, points.tangents[p], p, directions.data(), angles.data());
           int kept = 0;
           for (int r = 0; r < cone.rays; ++r) {
             const kern::SdfHit hit = closest_hit(points.origins[p], directions[r], points.own_face[p]);

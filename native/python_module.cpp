@@ -157,18 +157,30 @@ std::vector<std::uint32_t> host_layout() {
           offsetof(SdfCastParams, count)};
 }
 
-py::tuple cone_rays(const Floats& axis, int rays, double cone_angle, const std::string& sampling,
-                    std::uint32_t seed, std::uint32_t point) {
-  if (axis.size() != 3) throw std::invalid_argument("normal must have 3 components");
-  glm::vec3 n(axis.data()[0], axis.data()[1], axis.data()[2]);
+glm::vec3 unit_vector(const Floats& v, const char* what) {
+  if (v.size() != 3) throw std::invalid_argument(std::string(what) + " must have 3 components");
+  glm::vec3 n(v.data()[0], v.data()[1], v.data()[2]);
   const float len = glm::length(n);
   if (!(len > 0.0f) || !std::isfinite(len))
-    throw std::invalid_argument("normal must be a finite, non-zero vector");
-  n /= len;
+    throw std::invalid_argument(std::string(what) + " must be a finite, non-zero vector");
+  return n / len;
+}
+
+py::tuple cone_rays(const Floats& axis, int rays, double cone_angle, const std::string& sampling,
+                    std::uint32_t seed, std::uint32_t point, const py::object& tangent) {
+  const glm::vec3 n = unit_vector(axis, "normal");
+  glm::vec3 t = sdf::fallback_tangent(n);
+  if (!tangent.is_none()) {
+    const glm::vec3 given = unit_vector(tangent.cast<Floats>(), "tangent");
+    const glm::vec3 perpendicular = given - glm::dot(given, n) * n;
+    if (!(glm::length(perpendicular) > 1e-6f))
+      throw std::invalid_argument("tangent must not be parallel to the normal");
+    t = glm::normalize(perpendicular);
+  }
   const sdf::Cone cone = sdf::make_cone(rays, cone_angle, parse_sampling(sampling), seed);
   py::array_t<float> directions({rays, 3});
   py::array_t<float> angles(rays);
-  sdf::cone_rays(cone, n, point, reinterpret_cast<glm::vec3*>(directions.mutable_data()),
+  sdf::cone_rays(cone, n, t, point, reinterpret_cast<glm::vec3*>(directions.mutable_data()),
                  angles.mutable_data());
   return py::make_tuple(directions, angles);
 }
@@ -191,16 +203,19 @@ py::tuple sample_points(const Doubles& vertices, const Int64s& triangles,
   const sdf::Mesh mesh = to_mesh(vertices, triangles);
   const sdf::SamplePoints s = sdf::sample_points(mesh, parse_points(points));
   const py::ssize_t n = static_cast<py::ssize_t>(s.size());
-  py::array_t<float> origins({n, py::ssize_t(3)}), axes({n, py::ssize_t(3)});
+  py::array_t<float> origins({n, py::ssize_t(3)}), axes({n, py::ssize_t(3)}),
+      tangents({n, py::ssize_t(3)});
   float* o = origins.mutable_data();
   float* a = axes.mutable_data();
+  float* t = tangents.mutable_data();
   for (py::ssize_t i = 0; i < n; ++i) {
     for (int k = 0; k < 3; ++k) {
       o[3 * i + k] = static_cast<float>(s.origins[i][k] + mesh.center[k]);
       a[3 * i + k] = s.axes[i][k];
+      t[3 * i + k] = s.tangents[i][k];
     }
   }
-  return py::make_tuple(origins, axes);
+  return py::make_tuple(origins, axes, tangents);
 }
 
 }  // namespace
@@ -236,7 +251,8 @@ PYBIND11_MODULE(_core, m) {
   py::register_exception<sdf::cl::Error>(m, "OpenCLError", PyExc_RuntimeError);
 #endif
   m.def("cone_rays", &cone_rays, py::arg("normal"), py::arg("rays"), py::arg("cone_angle"),
-        py::arg("sampling"), py::arg("seed"), py::arg("point_index"));
+        py::arg("sampling"), py::arg("seed"), py::arg("point_index"),
+        py::arg("tangent") = py::none());
   m.def("reduce_lengths", &reduce_lengths, py::arg("lengths"), py::arg("angles"),
         py::arg("sampling"), py::arg("rays"), py::arg("cone_angle"));
   m.def("sample_points", &sample_points, py::arg("vertices"), py::arg("triangles"),

@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
 #include "rays.h"
 
+#include <algorithm>
 #include <cmath>
 #include <stdexcept>
 #include <string>
@@ -21,30 +22,34 @@ Cone make_cone(int rays, double cone_angle_degrees, Sampling sampling, std::uint
   cone.sampling = sampling;
   cone.seed = seed;
   const double half = 0.5 * cone_angle_degrees * M_PI / 180.0;
-  cone.cos_half = static_cast<float>(std::cos(half));
+  // 1 - cos(h) = 2 sin^2(h / 2): no cancellation for narrow cones.
+  const double one_minus_cos = 2.0 * std::sin(0.5 * half) * std::sin(0.5 * half);
+  cone.one_minus_cos_half = static_cast<float>(one_minus_cos);
   cone.sin_half = static_cast<float>(std::sin(half));
-  cone.angle_floor = kern::sdf_angle_floor(rays, cone.cos_half);
+  // acos(1 - x) = 2 asin(sqrt(x / 2)), accurate for tiny x; floored so a weight stays finite.
+  const double x = one_minus_cos / (2.0 * rays);
+  cone.angle_floor = static_cast<float>(std::max(2.0 * std::asin(std::sqrt(0.5 * x)), 1e-30));
   if (sampling != Sampling::Random) {
     cone.local.resize(rays);
     cone.local_angle.resize(rays);
     for (int i = 0; i < rays; ++i) {
-      cone.local[i] = kern::sdf_ray_local(static_cast<int>(sampling), i, rays, cone.cos_half,
-                                          cone.sin_half, seed, 0u);
+      cone.local[i] = kern::sdf_ray_local(static_cast<int>(sampling), i, rays,
+                                          cone.one_minus_cos_half, cone.sin_half, seed, 0u);
       cone.local_angle[i] = kern::sdf_ray_angle(cone.local[i]);
     }
   }
   return cone;
 }
 
-void cone_rays(const Cone& cone, glm::vec3 axis, std::uint32_t point, glm::vec3* directions,
-               float* angles) {
+void cone_rays(const Cone& cone, glm::vec3 axis, glm::vec3 tangent, std::uint32_t point,
+               glm::vec3* directions, float* angles) {
   glm::vec3 b1, b2;
-  kern::sdf_frame(static_cast<int>(cone.sampling), axis, &b1, &b2);
+  kern::sdf_frame(static_cast<int>(cone.sampling), axis, tangent, &b1, &b2);
   for (int i = 0; i < cone.rays; ++i) {
     glm::vec3 local;
     if (cone.sampling == Sampling::Random) {
-      local = kern::sdf_ray_local(SDF_SAMPLING_RANDOM, i, cone.rays, cone.cos_half, cone.sin_half,
-                                  cone.seed, point);
+      local = kern::sdf_ray_local(SDF_SAMPLING_RANDOM, i, cone.rays, cone.one_minus_cos_half,
+                                  cone.sin_half, cone.seed, point);
       angles[i] = kern::sdf_ray_angle(local);
     } else {
       local = cone.local[i];
@@ -52,6 +57,15 @@ void cone_rays(const Cone& cone, glm::vec3 axis, std::uint32_t point, glm::vec3*
     }
     directions[i] = kern::sdf_to_world(local, b1, b2, axis);
   }
+}
+
+glm::vec3 fallback_tangent(glm::vec3 axis) {
+  // g = (1, 2, 3) / sqrt(14). Only an axis within ~1e-3 rad of +-g switches to a second
+  // direction (a cap no real normal hits by accident).
+  const glm::vec3 g(0.26726124f, 0.53452248f, 0.80178373f);
+  const glm::vec3 c = glm::cross(axis, g);
+  if (glm::dot(c, c) > 1e-6f) return glm::normalize(c);
+  return glm::normalize(glm::cross(axis, glm::vec3(-0.80178373f, 0.26726124f, 0.53452248f)));
 }
 
 }  // namespace sdf

@@ -1,6 +1,8 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
 #include "sampling.h"
 
+#include "rays.h"
+
 #include <algorithm>
 #include <cmath>
 #include <utility>
@@ -16,6 +18,16 @@ glm::vec3 unit_or_zero(glm::vec3 v) {
   return v / len;
 }
 
+// The part of `edge` perpendicular to unit `axis`, normalised; fallback_tangent() when that
+// part vanishes (or the axis is zero).
+glm::vec3 tangent_from_edge(glm::vec3 axis, glm::vec3 edge) {
+  if (axis.x == 0.0f && axis.y == 0.0f && axis.z == 0.0f) return glm::vec3(0.0f);
+  const glm::vec3 t = edge - glm::dot(edge, axis) * axis;
+  const float len = glm::length(t);
+  if (len > 1e-6f * glm::length(edge) && std::isfinite(len)) return t / len;
+  return fallback_tangent(axis);
+}
+
 }  // namespace
 
 SamplePoints sample_points(const Mesh& mesh, PointKind kind) {
@@ -25,27 +37,40 @@ SamplePoints sample_points(const Mesh& mesh, PointKind kind) {
     points.origins.resize(n);
     points.axes.resize(n);
     points.own_face.resize(n);
+    points.tangents.resize(n);
     for (std::size_t f = 0; f < n; ++f) {
       const glm::uvec3 t = mesh.triangles[f];
       points.origins[f] =
           (mesh.vertices[t.x] + mesh.vertices[t.y] + mesh.vertices[t.z]) * (1.0f / 3.0f);
       points.axes[f] = -unit_or_zero(face_area_normal(mesh, f));
       points.own_face[f] = static_cast<std::int32_t>(f);
+      points.tangents[f] =
+          tangent_from_edge(points.axes[f], mesh.vertices[t.y] - mesh.vertices[t.x]);
     }
   } else {
     const std::size_t n = mesh.vertices.size();
     std::vector<glm::vec3> normal_sum(n, glm::vec3(0.0f));
+    // For each vertex, the next corner of the first triangle that uses it: its tangent edge.
+    constexpr std::uint32_t kNone = 0xffffffffu;
+    std::vector<std::uint32_t> next_corner(n, kNone);
     for (std::size_t f = 0; f < mesh.triangles.size(); ++f) {
       const glm::vec3 an = face_area_normal(mesh, f);  // length is twice the area: the weight
       const glm::uvec3 t = mesh.triangles[f];
-      normal_sum[t.x] += an;
-      normal_sum[t.y] += an;
-      normal_sum[t.z] += an;
+      for (int k = 0; k < 3; ++k) {
+        normal_sum[t[k]] += an;
+        if (next_corner[t[k]] == kNone && t[(k + 1) % 3] != t[k]) next_corner[t[k]] = t[(k + 1) % 3];
+      }
     }
     points.origins = mesh.vertices;
     points.axes.resize(n);
+    points.tangents.resize(n);
     points.own_face.assign(n, -1);
-    for (std::size_t v = 0; v < n; ++v) points.axes[v] = -unit_or_zero(normal_sum[v]);
+    for (std::size_t v = 0; v < n; ++v) {
+      points.axes[v] = -unit_or_zero(normal_sum[v]);
+      const glm::vec3 edge =
+          next_corner[v] == kNone ? glm::vec3(0.0f) : mesh.vertices[next_corner[v]] - mesh.vertices[v];
+      points.tangents[v] = tangent_from_edge(points.axes[v], edge);
+    }
   }
   return points;
 }

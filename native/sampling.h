@@ -14,6 +14,11 @@ enum class PointKind { Faces, Vertices };
 struct SamplePoints {
   std::vector<glm::vec3> origins;  // in the mesh's centred units
   std::vector<glm::vec3> axes;     // unit inward direction; zero where it is undefined
+  // Unit, perpendicular to the axis: where a point's ray set starts in azimuth. Taken from the
+  // mesh (a face's first edge; for a vertex, the edge to the next corner of the first face that
+  // uses it) so that rotating the mesh rotates the rays with it; fallback_tangent() where the
+  // mesh gives none.
+  std::vector<glm::vec3> tangents;
   std::vector<std::int32_t> own_face;  // face a ray must not hit (its own); -1 for vertices
   std::size_t size() const { return origins.size(); }
 };

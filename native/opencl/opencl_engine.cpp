@@ -148,9 +148,11 @@ void run_device(const Device& device, const Scene& scene, const SamplePoints& po
   const std::string options =
       "-cl-std=CL1.2 -DSDF_MAX_RAYS=" + std::to_string(std::max(cone.rays, 1));
 
-  std::vector<std::size_t> sizes = {3 * n * sizeof(float), 3 * n * sizeof(float),
-                                    n * sizeof(std::int32_t), n * sizeof(std::uint32_t),
-                                    n * sizeof(float), n * sizeof(std::int32_t)};
+  std::vector<std::size_t> sizes = {3 * n * sizeof(float),        3 * n * sizeof(float),
+                                    n * sizeof(std::int32_t),       n * sizeof(std::uint32_t),
+                                    n * sizeof(float),              n * sizeof(std::int32_t),
+                                    3 * n * sizeof(float)};
+  const std::size_t first_accel = sizes.size();
   if (scene.bvh) {
     sizes.push_back(bytes_of(scene.bvh->nodes));
     sizes.push_back(bytes_of(scene.bvh->triangles));
@@ -169,27 +171,28 @@ void run_device(const Device& device, const Scene& scene, const SamplePoints& po
   Buffer order_buffer(s, sizes[3], order.data());
   Buffer raw(s, sizes[4], nullptr);
   Buffer valid(s, sizes[5], nullptr);
+  Buffer tangents(s, sizes[6], points.tangents.data());
   std::unique_ptr<Buffer> accel0, accel1, accel2;
   std::unique_ptr<Kernel> kernel;
   kern::SdfCastParams params{};
   params.rays = cone.rays;
   params.sampling = static_cast<int>(cone.sampling);
-  params.cos_half = cone.cos_half;
+  params.one_minus_cos_half = cone.one_minus_cos_half;
   params.sin_half = cone.sin_half;
   params.angle_floor = cone.angle_floor;
   params.seed = cone.seed;
   params.tmin = min_closeness;
   cl_uint a = 0;
   if (scene.bvh) {
-    accel0 = std::make_unique<Buffer>(s, sizes[6], scene.bvh->nodes.data());
-    accel1 = std::make_unique<Buffer>(s, sizes[7], scene.bvh->triangles.data());
+    accel0 = std::make_unique<Buffer>(s, sizes[first_accel], scene.bvh->nodes.data());
+    accel1 = std::make_unique<Buffer>(s, sizes[first_accel + 1], scene.bvh->triangles.data());
     kernel = std::make_unique<Kernel>(program, "sdf_cast_bvh");
     kernel->arg(a++, accel0->get());
     kernel->arg(a++, accel1->get());
   } else {
-    accel0 = std::make_unique<Buffer>(s, sizes[6], scene.octree->nodes.data());
-    accel1 = std::make_unique<Buffer>(s, sizes[7], scene.octree->leaves.data());
-    accel2 = std::make_unique<Buffer>(s, sizes[8], scene.octree->triangles.data());
+    accel0 = std::make_unique<Buffer>(s, sizes[first_accel], scene.octree->nodes.data());
+    accel1 = std::make_unique<Buffer>(s, sizes[first_accel + 1], scene.octree->leaves.data());
+    accel2 = std::make_unique<Buffer>(s, sizes[first_accel + 2], scene.octree->triangles.data());
     kernel = std::make_unique<Kernel>(program, "sdf_cast_octree");
     kernel->arg(a++, accel0->get());
     kernel->arg(a++, accel1->get());
@@ -198,6 +201,7 @@ void run_device(const Device& device, const Scene& scene, const SamplePoints& po
   }
   kernel->arg(a++, origins.get());
   kernel->arg(a++, axes.get());
+  kernel->arg(a++, tangents.get());
   kernel->arg(a++, own_face.get());
   kernel->arg(a++, order_buffer.get());
   const cl_uint params_index = a++;

@@ -97,6 +97,11 @@ def _check_mesh(vertices, triangles):
     return v, np.ascontiguousarray(t, dtype=np.int64)
 
 
+def _check_integer(name, value, lo, hi):
+    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or not lo <= value <= hi:
+        raise ValueError(f"{name} must be an integer in [{lo}, {hi}], got {value!r}")
+
+
 def _check_choice(name, value, choices):
     if value not in choices:
         raise ValueError(f"{name} must be one of {choices}, got {value!r}")
@@ -106,10 +111,13 @@ ACCELERATIONS = ("bvh", "octree")
 
 
 def _check_options(rays, cone_angle, sampling, points, normalize_method, engine, progress, seed):
-    if isinstance(rays, bool) or not isinstance(rays, (int, np.integer)) or not 1 <= rays <= MAX_RAYS:
-        raise ValueError(f"rays must be an integer in [1, {MAX_RAYS}], got {rays!r}")
-    if not np.isfinite(cone_angle) or not 0.0 < float(cone_angle) < 180.0:
-        raise ValueError(f"cone_angle must be in (0, 180) degrees, got {cone_angle!r}")
+    _check_integer("rays", rays, 1, MAX_RAYS)
+    if (
+        isinstance(cone_angle, bool)
+        or not isinstance(cone_angle, (int, float, np.integer, np.floating))
+        or not 0.0 < float(cone_angle) < 180.0
+    ):
+        raise ValueError(f"cone_angle must be a number in (0, 180) degrees, got {cone_angle!r}")
     _check_choice("sampling", sampling, SAMPLINGS)
     _check_choice("points", points, POINTS)
     _check_choice("normalize", normalize_method, NORMALIZATIONS)
@@ -123,8 +131,7 @@ def _check_options(rays, cone_angle, sampling, points, normalize_method, engine,
         )
     if progress is not None and not callable(progress):
         raise ValueError("progress must be a callable taking a fraction in [0, 1], or None")
-    if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or not 0 <= seed < 2**32:
-        raise ValueError(f"seed must be an integer in [0, 2**32), got {seed!r}")
+    _check_integer("seed", seed, 0, 2**32 - 1)
 
 
 def compute(
@@ -175,13 +182,10 @@ def compute(
     start = time.perf_counter()
     v, t = _check_mesh(vertices, triangles)
     _check_options(rays, cone_angle, sampling, points, normalize, engine, progress, seed)
-    if isinstance(threads, bool) or not isinstance(threads, (int, np.integer)) or threads < 0:
-        raise ValueError(f"threads must be a non-negative integer, got {threads!r}")
+    _check_integer("threads", threads, 0, 4096)
     _check_choice("accel", accel, ACCELERATIONS)
-    for name, value, lo, hi in (("octree_depth", octree_depth, 0, 16),
-                                ("octree_leaf_size", octree_leaf_size, 1, 2**31 - 1)):
-        if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or not lo <= value <= hi:
-            raise ValueError(f"{name} must be an integer in [{lo}, {hi}], got {value!r}")
+    _check_integer("octree_depth", octree_depth, 0, 16)
+    _check_integer("octree_leaf_size", octree_leaf_size, 1, 2**31 - 1)
     chosen = _resolve_engine(engine)
 
     def run(engine_name):
@@ -223,14 +227,23 @@ def compute(
     )
 
 
-def cone_rays(normal, rays=30, cone_angle=120.0, sampling="fibonacci", seed=0, point_index=0):
-    """The directions the engine casts for one point whose inward axis is `normal`.
+def cone_rays(
+    normal, rays=30, cone_angle=120.0, sampling="fibonacci", seed=0, point_index=0, tangent=None
+):
+    """The directions the engine casts for one point whose inward axis is `normal` and whose
+    tangent (where the ray set starts in azimuth) is `tangent`; give the point's tangent from
+    sample_points() to get exactly the engine's rays. Without a tangent, a fixed fallback
+    frame is used. 'cgal' sampling uses CGAL's own frame and ignores the tangent.
 
     Returns (directions float32 (rays, 3), unit; angles float32 (rays,), radians to the axis).
     """
     _check_options(rays, cone_angle, sampling, "faces", "linear", "auto", None, seed)
+    _check_integer("point_index", point_index, 0, 2**32 - 1)
     n = np.asarray(normal, dtype=np.float32).reshape(-1)
-    return _core.cone_rays(n, int(rays), float(cone_angle), sampling, int(seed), int(point_index))
+    t = None if tangent is None else np.asarray(tangent, dtype=np.float32).reshape(-1)
+    return _core.cone_rays(
+        n, int(rays), float(cone_angle), sampling, int(seed), int(point_index), t
+    )
 
 
 def reduce_lengths(lengths, angles, sampling="fibonacci", rays=None, cone_angle=120.0) -> float:
@@ -240,6 +253,10 @@ def reduce_lengths(lengths, angles, sampling="fibonacci", rays=None, cone_angle=
     innermost Fibonacci ray for `rays` rays (default: len(lengths)) in the cone; for 'cgal',
     CGAL's rule. NaN for no lengths."""
     _check_choice("sampling", sampling, SAMPLINGS)
+    if rays is not None:
+        _check_integer("rays", rays, 1, MAX_RAYS)
+    if isinstance(cone_angle, bool) or not 0.0 < float(cone_angle) < 180.0:
+        raise ValueError(f"cone_angle must be in (0, 180) degrees, got {cone_angle!r}")
     lengths = np.asarray(lengths, dtype=np.float32).reshape(-1)
     angles = np.asarray(angles, dtype=np.float32).reshape(-1)
     return float(
@@ -248,8 +265,10 @@ def reduce_lengths(lengths, angles, sampling="fibonacci", rays=None, cone_angle=
 
 
 def sample_points(vertices, triangles, points="faces"):
-    """Stage 1 alone: (origins (k, 3) float32, inward unit axes (k, 3) float32, zero where
-    undefined) for points='faces' (centroids) or 'vertices'."""
+    """Stage 1 alone, for points='faces' (centroids) or 'vertices': (origins (k, 3) float32,
+    inward unit axes (k, 3) float32 (zero where undefined: such points cast no ray), tangents
+    (k, 3) float32 (unit, perpendicular to the axis: where each point's ray set starts, taken
+    from a mesh edge so the rays turn with the mesh))."""
     v, t = _check_mesh(vertices, triangles)
     _check_choice("points", points, POINTS)
     return _core.sample_points(v, t, points)
