@@ -84,7 +84,8 @@ py::array_t<float> smooth_kring(const Doubles& vertices, const Int64s& triangles
 py::array_t<float> smooth_projected(const Doubles& vertices, const Int64s& triangles,
                                     const Floats& values, const std::string& points,
                                     int iterations, int max_depth, double min_points,
-                                    double node_size_ratio, unsigned threads,
+                                    double node_size_ratio, const std::string& branch_on,
+                                    unsigned threads,
                                     const py::object& progress) {
   const sdf::Mesh mesh = mesh_from(vertices, triangles);
   const sdf::PointKind kind = kind_from(points);
@@ -94,6 +95,9 @@ py::array_t<float> smooth_projected(const Doubles& vertices, const Int64s& trian
   options.max_depth = max_depth;
   options.min_points = min_points;
   options.node_size_ratio = node_size_ratio;
+  if (branch_on == "mean") options.branch_on = sdf::ProjectedOptions::Branch::Mean;
+  else if (branch_on == "min") options.branch_on = sdf::ProjectedOptions::Branch::Min;
+  else throw std::invalid_argument("branch_on must be 'mean' or 'min', got '" + branch_on + "'");
   options.threads = threads;
   const sdf::ProgressFn report = progress_from(progress);
   std::vector<float> out;
@@ -180,7 +184,7 @@ void bind_smoothing(py::module_& m) {
         py::arg("progress"));
   m.def("smooth_projected", &smooth_projected, py::arg("vertices"), py::arg("triangles"),
         py::arg("values"), py::arg("points"), py::arg("iterations"), py::arg("max_depth"),
-        py::arg("min_points"), py::arg("node_size_ratio"), py::arg("threads"),
+        py::arg("min_points"), py::arg("node_size_ratio"), py::arg("branch_on"), py::arg("threads"),
         py::arg("progress"));
   m.def("smooth_texture", &smooth_texture, py::arg("vertices"), py::arg("triangles"),
         py::arg("values"), py::arg("points"), py::arg("uvs"), py::arg("width"),

@@ -274,6 +274,7 @@ std::vector<float> smooth_kring(const Mesh& mesh, PointKind kind, const float* v
   }
   if (lo == hi) return out;  // constant: exactly unchanged
 
+  if (progress && !progress(progress_from)) throw Cancelled();
   // Merged mesh and its adjacency.
   Weld weld;
   if (options.weld_tolerance >= 0.0) {
@@ -362,6 +363,7 @@ std::vector<float> smooth_kring(const Mesh& mesh, PointKind kind, const float* v
         pool.release(std::move(s));
       },
       progress, progress_from, progress_to);
+  if (progress && !progress(progress_to)) throw Cancelled();
 
   if (faces) return smoothed;
   for (std::size_t v = 0; v < n; ++v) out[v] = smoothed[weld.merged[v]];

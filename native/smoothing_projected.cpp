@@ -99,6 +99,14 @@ std::vector<PointOctreeNode> build_point_octree(const glm::vec3* points, const f
   std::vector<double> prefix(count + 1, 0.0);  // sums of values in Morton order
   for (std::size_t i = 0; i < count; ++i) prefix[i + 1] = prefix[i] + values[order[i]];
 
+  // Branching on the minimum: taken over the node's run when it is tested (points x depth).
+  const bool by_min = options.branch_on == ProjectedOptions::Branch::Min;
+  std::vector<float> sorted_values;
+  if (by_min) {
+    sorted_values.resize(count);
+    for (std::size_t i = 0; i < count; ++i) sorted_values[i] = values[order[i]];
+  }
+
   auto make_node = [&](glm::vec3 c, float half, std::uint32_t begin, std::uint32_t end) {
     PointOctreeNode node;
     node.center[0] = c.x;
@@ -124,8 +132,11 @@ std::vector<PointOctreeNode> build_point_octree(const glm::vec3* points, const f
     const Task t = stack.back();
     stack.pop_back();
     const PointOctreeNode node = nodes[t.node];
-    const bool branch = t.level < depth && static_cast<double>(node.count) > branch_above &&
-                        node.mean <= options.node_size_ratio * 2.0 * node.half;
+    if (t.level >= depth || !(static_cast<double>(node.count) > branch_above)) continue;
+    float test_value = node.mean;
+    if (by_min)
+      test_value = *std::min_element(sorted_values.begin() + t.begin, sorted_values.begin() + t.end);
+    const bool branch = test_value <= options.node_size_ratio * 2.0 * node.half;
     if (!branch) continue;
     const int shift = 3 * (depth - t.level - 1);
     const std::uint32_t first = static_cast<std::uint32_t>(nodes.size());
@@ -152,6 +163,19 @@ std::vector<PointOctreeNode> build_point_octree(const glm::vec3* points, const f
 }
 
 // ---- Per-point work: plain loops over flat arrays (kernel style). ----
+float cube_fraction_in_sphere(float side, float distance, float radius) {
+  const float rho = kBallOfUnitCube * side;
+  const float r = radius, d = distance;
+  if (!(r > 0.0f) || d >= r + rho) return 0.0f;
+  const float ball = rho * rho * rho;  // volumes below without the common 4 pi / 3
+  if (d <= std::fabs(r - rho)) return r >= rho ? 1.0f : std::min(1.0f, (r * r * r) / ball);
+  // Lens of two balls (radii r, rho, centres d apart): pi (r + rho - d)^2 (d^2 + 2 d (r + rho)
+  // - 3 (r - rho)^2) / (12 d); over (4 pi / 3) rho^3 that is the expression below.
+  const float s = r + rho - d;
+  const float lens = s * s * (d * d + 2.0f * d * (r + rho) - 3.0f * (r - rho) * (r - rho)) / (16.0f * d);
+  return std::min(1.0f, std::max(0.0f, lens / ball));
+}
+
 bool gather_sphere(const PointOctreeNode* nodes, glm::vec3 center, float radius, float* mean) {
   std::uint32_t stack[kStackSize];
   int top = 0;
@@ -173,11 +197,7 @@ bool gather_sphere(const PointOctreeNode* nodes, glm::vec3 center, float radius,
         stack[top++] = static_cast<std::uint32_t>(node.first_child) + i;
       continue;
     } else {
-      // A leaf the sphere cuts: the cube as the ball of equal volume (radius rho), and the
-      // fraction inside taken linear in the centre distance, from 1 when that ball is inside
-      // (d <= radius - rho) to 0 when it is outside (d >= radius + rho).
-      const float rho = kBallOfUnitCube * 2.0f * node.half;
-      fraction = std::min(1.0f, std::max(0.0f, (radius + rho - d) / (2.0f * rho)));
+      fraction = cube_fraction_in_sphere(2.0f * node.half, d, radius);
       if (!(fraction > 0.0f)) continue;
     }
     const double w = static_cast<double>(node.count) * fraction;
@@ -218,6 +238,7 @@ std::vector<float> smooth_projected(const Mesh& mesh, PointKind kind, const floa
     if (sp.axes[i] != glm::vec3(0.0f)) members.push_back(i);
   if (members.empty()) return current;
 
+  if (progress && !progress(progress_from)) throw Cancelled();
   std::vector<glm::vec3> projected(n), tree_points(members.size());
   std::vector<float> tree_values(members.size()), next(n);
   for (int it = 0; it < options.iterations; ++it) {
@@ -242,6 +263,7 @@ std::vector<float> smooth_projected(const Mesh& mesh, PointKind kind, const floa
         progress, progress_from + it * span, progress_from + (it + 1) * span);
     current.swap(next);
   }
+  if (progress && !progress(progress_to)) throw Cancelled();
   return current;
 }
 

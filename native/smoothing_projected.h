@@ -27,11 +27,18 @@ struct ProjectedOptions {
   // A node branches only if it holds more than this fraction of all points (paper: "about
   // 0.2%"): fewer, larger leaves, and the query cost stops growing with the point count.
   double min_points = 0.002;
-  // ... and only if its points' mean value is at most this times its side (paper: "compare
-  // the average value of the points against the octree dimensions and if it is bigger, then
-  // we do not branch"): a node already small next to the spheres that will query it gains
-  // nothing from finer children. Smaller ratios give finer leaves and slower queries.
+  // ... and only if its points' value is at most this times its side (paper: "compare the
+  // average value of the points against the octree dimensions and if it is bigger, then we do
+  // not branch"): a node already small next to the spheres that will query it gains nothing
+  // from finer children. Larger ratios give finer leaves and slower queries.
   double node_size_ratio = 1.0;
+  // Which value of the node's points that test uses. Mean: the paper's rule. Min: a node
+  // holding any point thinner than itself still splits, so thin parts next to thick ones get
+  // leaves of their own size instead of sharing a leaf whose mean the thick points set (the
+  // paper's rule loses thin features there: on spot.obj the ears and horns take the head's
+  // value). Costs more nodes near thin parts.
+  enum class Branch { Mean, Min };
+  Branch branch_on = Branch::Mean;
   unsigned threads = 0;  // 0: every core
 };
 
@@ -46,6 +53,13 @@ struct PointOctreeNode {
   std::uint32_t child_count;
 };
 static_assert(sizeof(PointOctreeNode) == 32, "PointOctreeNode is 32 bytes");
+
+// Approximate fraction of a cube of side `side` whose centre is `distance` from the centre of
+// a sphere of radius `radius` that lies inside the sphere: the cube is taken as the ball of
+// equal volume (radius 0.6204 side) and the fraction is the volume of the two balls' lens
+// over that ball's volume. Exact when one ball holds the other; never above
+// sphere volume / cube volume.
+float cube_fraction_in_sphere(float side, float distance, float radius);
 
 // Octree over points with values; nodes[0] is the root. Throws std::invalid_argument for bad
 // options (max_depth outside [0, 20], min_points outside [0, 1], node_size_ratio < 0).

@@ -266,6 +266,7 @@ TextureSmoothing smooth_texture(const Mesh& mesh, PointKind kind, const float* v
       throw Cancelled();
   };
 
+  report(0.0);
   const std::vector<std::int32_t> face_island = uv_islands(mesh, uvs, options.weld_tolerance);
   const std::size_t texels = static_cast<std::size_t>(width) * height;
   std::vector<std::int32_t> island(texels, -1);

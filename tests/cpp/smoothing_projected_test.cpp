@@ -87,6 +87,45 @@ TEST(PointOctree, DepthZeroIsOneNode) {
   EXPECT_EQ(build_point_octree(p.data(), v.data(), p.size(), o).size(), 1u);
 }
 
+TEST(PointOctree, BranchingOnTheMinimumSplitsMixedNodes) {
+  // Thin points (value 0.01) among thick ones (value 1) in a unit cube: by the mean (about 1)
+  // no node below side 1 splits; by the minimum, nodes split down to the thin points' size.
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<float> u(0.0f, 1.0f);
+  std::vector<glm::vec3> p;
+  std::vector<float> v;
+  for (int i = 0; i < 4000; ++i) {
+    p.push_back({u(rng), u(rng), u(rng)});
+    v.push_back(i % 50 == 0 ? 0.01f : 1.0f);
+  }
+  ProjectedOptions mean, min;
+  min.branch_on = ProjectedOptions::Branch::Min;
+  const auto by_mean = build_point_octree(p.data(), v.data(), p.size(), mean);
+  const auto by_min = build_point_octree(p.data(), v.data(), p.size(), min);
+  EXPECT_LT(by_mean.size(), 10u);
+  EXPECT_GT(by_min.size(), 100u);
+}
+
+TEST(CubeFraction, LimitsAndShape) {
+  const float side = 1.0f, rho = 0.62035049f;
+  EXPECT_EQ(cube_fraction_in_sphere(side, 5.0f, 1.0f), 0.0f);        // far apart
+  EXPECT_EQ(cube_fraction_in_sphere(side, 0.1f, 3.0f), 1.0f);        // the sphere holds it
+  EXPECT_NEAR(cube_fraction_in_sphere(side, 0.0f, 0.1f), std::pow(0.1f / rho, 3.0f), 1e-6);
+  EXPECT_EQ(cube_fraction_in_sphere(side, 0.0f, 0.0f), 0.0f);
+  // Falls from 1 to 0 as the centres move apart, continuously at both ends of the lens.
+  float previous = 1.0f;
+  for (float d = 0.0f; d < 2.0f; d += 0.01f) {
+    const float f = cube_fraction_in_sphere(side, d, 0.8f);
+    ASSERT_LE(f, previous + 1e-6f);
+    ASSERT_GE(f, 0.0f);
+    previous = f;
+  }
+  EXPECT_NEAR(cube_fraction_in_sphere(side, 0.8f - rho + 1e-4f, 0.8f), 1.0f, 1e-3);
+  EXPECT_NEAR(cube_fraction_in_sphere(side, 0.8f + rho - 1e-4f, 0.8f), 0.0f, 1e-3);
+  // Half-way (centre on the sphere, ball much smaller): about half inside.
+  EXPECT_NEAR(cube_fraction_in_sphere(0.01f, 10.0f, 10.0f), 0.5f, 0.01f);
+}
+
 TEST(GatherSphere, WholeTreeAndNothing) {
   std::vector<glm::vec3> p;
   std::vector<float> v;
