@@ -1,0 +1,350 @@
+# SPDX-License-Identifier: GPL-3.0-or-later
+"""Smoothing of a per-face or per-vertex field on a mesh: the paper's three methods (4.4).
+
+``smooth(vertices, triangles, values, method, *, uvs=None, **options)`` works on any field
+(the SDF or anything else; 'projected' needs lengths >= 0, like the SDF); ``compute(...,
+smoothing=...)`` runs it on the SDF it has just cast.
+
+Every method: never NaN, a constant field stays exactly constant, and every value stays
+within the input's [min, max] (a weighted mean cannot leave it; a final clamp removes float
+rounding). Options are checked before any work and a wrong one raises ValueError naming it.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Callable, NamedTuple, Optional
+
+import numpy as np
+
+from . import _core
+
+METHODS = ("none", "kring", "projected", "texture")
+
+# Every option of every method with its default. None means "chosen from the input" (k-ring:
+# k from the face count; texture: radius from the texture size), see smooth().
+OPTIONS = {
+    "none": {},
+    "kring": {"k": None, "sigma": None, "corner_angle": None, "weld_tolerance": 1e-6},
+    "projected": {
+        "iterations": 1,
+        "max_depth": 8,
+        "min_points": 0.002,
+        "node_size_ratio": 1.0,
+        "branch_on": "mean",
+    },
+    "texture": {
+        "texture_size": 1024,
+        "radius": None,
+        "bilateral": False,
+        "range_sigma": 0.1,
+        "margin": 2,
+        "weld_tolerance": 1e-6,
+        "return_image": False,
+    },
+}
+
+
+class TextureResult(NamedTuple):
+    """smooth(..., method='texture', return_image=True) returns this (it unpacks as a tuple)."""
+
+    values: np.ndarray
+    """float32 per face or vertex: the smoothed field."""
+    image: np.ndarray
+    """float32 (height, width): the blurred field in UV space, 0 where no island is. Row 0 is
+    v = 0 (the bottom), column 0 is u = 0, as in Blender's Image.pixels; np.flipud gives the
+    top-first order of image files."""
+    mask: np.ndarray
+    """bool (height, width): True where a texel holds a value (a face covers it, or it is in
+    the dilated margin around an island)."""
+
+
+def default_k(face_count: int) -> int:
+    """The k-ring default for a mesh of face_count triangles: the paper's two data points
+    (4.4: k = 2 near 20k faces, 5 and more from 500k) joined by a line in log(faces):
+    round(2 + 3 ln(m / 20000) / ln 25), clamped to [1, 16]. About 1 below 6k faces, 6 at 1M."""
+    return int(_core.default_kring_k(int(face_count)))
+
+
+def default_radius(texture_size) -> float:
+    """The texture default radius in texels: 2 per 256 texels of the larger side (paper 4.4:
+    "we set the radius to 2 for a 256x256 texture and multiply as necessary"): 8 at 1024."""
+    width, height = _texture_size(texture_size)
+    return 2.0 * max(width, height) / 256.0
+
+
+def smooth(
+    vertices,
+    triangles,
+    values,
+    method: str,
+    *,
+    uvs=None,
+    points: Optional[str] = None,
+    threads: int = 0,
+    progress: Optional[Callable[[float], None]] = None,
+    **options,
+):
+    """Smooth a per-face or per-vertex field on a triangle mesh.
+
+    vertices: (n, 3) real array. triangles: (m, 3) integer array, 0-based, counter-clockwise
+        seen from outside (projected points move inward, against the face normals).
+    values: (m,) for a value per face or (n,) for a value per vertex; finite reals.
+    method: 'none' (a float32 copy), 'kring', 'projected' or 'texture'.
+    uvs: per-corner texture coordinates, (m, 3, 2) (Blender's per-loop UVs, glTF/OBJ corner
+        UVs), or per-vertex (n, 2). Needed by 'texture'; the other methods ignore them.
+    points: 'faces' or 'vertices'; by default taken from len(values), and required when the
+        mesh has as many vertices as faces.
+    threads: CPU threads, 0 for every core. progress: called with the fraction done in [0, 1]
+        from the calling thread; if it raises, the work stops and the exception propagates.
+
+    Options of 'kring' (Gaussian over ring index on the mesh, duplicate positions merged):
+        k: rings, int >= 0 (0 returns the values); default default_k(m).
+        sigma: deviation of the Gaussian over the ring index, > 0; default k / 2 (CGAL).
+        corner_angle: degrees > 0 to keep values from crossing creases: a step between rings
+            across a dihedral angle a weighs exp(-1/2 (a / corner_angle)^2); default off.
+        weld_tolerance: merge distance relative to the largest bounding-box side (default
+            1e-6); None merges nothing.
+    Options of 'projected' (octree over points moved inward by half their value; values are
+        lengths >= 0 in mesh units, the sphere radius is each point's own value):
+        iterations: int >= 0 (default 1); max_depth: 0..20 (default 8, paper);
+        min_points: a node branches only if it holds more than this fraction of the points
+            (default 0.002, paper); node_size_ratio: ... and only if its points' value is at
+            most this times its side (default 1, paper); branch_on: which value that is,
+            'mean' (default, paper) or 'min' (keeps thin parts next to thick ones: with
+            'mean' they share a leaf whose mean the thick points set).
+    Options of 'texture' (blur in the UV layout, islands kept apart):
+        texture_size: int or (width, height), default 1024.
+        radius: blur reach in texels (Gaussian deviation radius / 2); default
+            default_radius(texture_size); 0 for none.
+        bilateral: also weigh by value difference (default False), with deviation range_sigma
+            times (max - min) of the values (default 0.1).
+        margin: texels of dilation around each island (default 2; use more for baking).
+        weld_tolerance: as for 'kring' (joins UV islands and averages vertex corners).
+        return_image: also return the blurred image (see TextureResult).
+
+    Returns float32 values of the same length as `values` (or a TextureResult for
+    return_image=True). Raises ValueError for bad input or options; the GIL is released while
+    native code runs.
+    """
+    v, t = _check_mesh(vertices, triangles)
+    values, points = _check_values(values, points, len(v), len(t))
+    resolved = check_smoothing(method, options, uvs=uvs, face_count=len(t), vertex_count=len(v))
+    threads = _check_threads(threads)
+    if progress is not None and not callable(progress):
+        raise ValueError("progress must be a callable taking a fraction in [0, 1], or None")
+    if method == "projected" and values.size and float(values.min()) < 0.0:
+        raise ValueError(
+            "smoothing 'projected' needs lengths >= 0 (the SDF): "
+            f"{int((values < 0).sum())} values are negative"
+        )
+    return _run(v, t, values, points, method, resolved, uvs, threads, progress)
+
+
+def check_smoothing(method, options, *, uvs=None, face_count=None, vertex_count=None) -> dict:
+    """Checks a method name and its options (and that 'texture' has UVs of the right shape);
+    returns the options with every default filled in. Raises ValueError."""
+    if not isinstance(method, str) or method not in METHODS:
+        raise ValueError(f"smoothing method must be one of {METHODS}, got {method!r}")
+    if options is None:
+        options = {}
+    if not isinstance(options, dict):
+        raise ValueError(f"smoothing options must be a dict, got {type(options).__name__}")
+    known = OPTIONS[method]
+    unknown = sorted(set(options) - set(known))
+    if unknown:
+        allowed = ", ".join(known) if known else "none"
+        raise ValueError(
+            f"unknown option{'s' if len(unknown) > 1 else ''} for smoothing {method!r}: "
+            f"{', '.join(unknown)} (allowed: {allowed})"
+        )
+    o = dict(known)
+    o.update(options)
+    if method == "kring":
+        if o["k"] is not None:
+            o["k"] = _integer("k", o["k"], 0, 255)
+        if o["sigma"] is not None:
+            o["sigma"] = _positive("sigma", o["sigma"])
+        if o["corner_angle"] is not None:
+            o["corner_angle"] = _positive("corner_angle", o["corner_angle"])
+        o["weld_tolerance"] = _weld("weld_tolerance", o["weld_tolerance"])
+    elif method == "projected":
+        o["iterations"] = _integer("iterations", o["iterations"], 0, 1000)
+        o["max_depth"] = _integer("max_depth", o["max_depth"], 0, 20)
+        o["min_points"] = _real("min_points", o["min_points"], 0.0, 1.0)
+        o["node_size_ratio"] = _real("node_size_ratio", o["node_size_ratio"], 0.0, math.inf)
+        if o["branch_on"] not in ("mean", "min"):
+            raise ValueError(f"branch_on must be 'mean' or 'min', got {o['branch_on']!r}")
+    elif method == "texture":
+        o["texture_size"] = _texture_size(o["texture_size"])
+        if o["radius"] is None:
+            o["radius"] = default_radius(o["texture_size"])
+        o["radius"] = _real("radius", o["radius"], 0.0, 16384.0)
+        o["bilateral"] = _boolean("bilateral", o["bilateral"])
+        o["range_sigma"] = _positive("range_sigma", o["range_sigma"])
+        o["margin"] = _integer("margin", o["margin"], 0, 16384)
+        o["weld_tolerance"] = _weld("weld_tolerance", o["weld_tolerance"])
+        o["return_image"] = _boolean("return_image", o["return_image"])
+        if uvs is None:
+            raise ValueError(
+                "smoothing 'texture' needs UVs: pass uvs, per-corner (m, 3, 2) or per-vertex "
+                "(n, 2) texture coordinates (the mesh file had none, or they were not read)"
+            )
+        if face_count is not None:
+            _check_uvs(uvs, face_count, vertex_count)
+    return o
+
+
+def _run(v, t, values, points, method, o, uvs, threads, progress):
+    if method == "none":
+        return values.copy()
+    if method == "kring":
+        return _core.smooth_kring(
+            v, t, values, points,
+            -1 if o["k"] is None else o["k"],
+            0.0 if o["sigma"] is None else o["sigma"],
+            0.0 if o["corner_angle"] is None else o["corner_angle"],
+            -1.0 if o["weld_tolerance"] is None else o["weld_tolerance"],
+            threads, progress,
+        )
+    if method == "projected":
+        return _core.smooth_projected(
+            v, t, values, points, o["iterations"], o["max_depth"], o["min_points"],
+            o["node_size_ratio"], o["branch_on"], threads, progress,
+        )
+    corners = _check_uvs(uvs, len(t), len(v), t)
+    width, height = o["texture_size"]
+    out = _core.smooth_texture(
+        v, t, values, points, corners, width, height, o["radius"], o["bilateral"],
+        o["range_sigma"], o["margin"],
+        -1.0 if o["weld_tolerance"] is None else o["weld_tolerance"],
+        o["return_image"], threads, progress,
+    )
+    if o["return_image"]:
+        return TextureResult(out["values"], out["image"], out["mask"])
+    return out["values"]
+
+
+# ---- Checks ----
+
+
+def _check_mesh(vertices, triangles):
+    # The same rules and messages as compute() (imported late: api imports this module).
+    from .api import _check_mesh as check
+
+    return check(vertices, triangles)
+
+
+def _check_values(values, points, n, m):
+    a = np.asarray(values)
+    if a.ndim != 1:
+        raise ValueError(f"values must be a 1-D array (one per face or vertex), got shape {a.shape}")
+    if a.dtype.kind not in "fiu":
+        raise ValueError(f"values must be real numbers, got dtype {a.dtype}")
+    if points is None:
+        if n == m and len(a) == n:
+            raise ValueError(
+                f"the mesh has {n} vertices and {m} faces: say which values are given with "
+                "points='faces' or points='vertices'"
+            )
+        if len(a) == m:
+            points = "faces"
+        elif len(a) == n:
+            points = "vertices"
+        else:
+            raise ValueError(
+                f"values has {len(a)} entries; the mesh has {m} faces and {n} vertices"
+            )
+    elif points not in ("faces", "vertices"):
+        raise ValueError(f"points must be 'faces' or 'vertices', got {points!r}")
+    expected = m if points == "faces" else n
+    if len(a) != expected:
+        raise ValueError(
+            f"values has {len(a)} entries, but points={points!r} needs {expected} (one per "
+            f"{'face' if points == 'faces' else 'vertex'})"
+        )
+    a = np.ascontiguousarray(a, dtype=np.float32)
+    bad = ~np.isfinite(a)
+    if bad.any():
+        raise ValueError(
+            f"values must be finite: {int(bad.sum())} are NaN or infinite, or too large for "
+            f"float32 (first: index {int(np.argmax(bad))})"
+        )
+    return a, points
+
+
+def _check_uvs(uvs, m, n, triangles=None):
+    """Per-corner float32 (m, 3, 2). Per-vertex (n, 2) is expanded when triangles are given."""
+    a = np.asarray(uvs)
+    if a.dtype.kind not in "fiu":
+        raise ValueError(f"uvs must be real numbers, got dtype {a.dtype}")
+    if a.ndim == 3 and a.shape == (m, 3, 2):
+        corners = a
+    elif n is not None and a.ndim == 2 and a.shape == (n, 2):
+        corners = a if triangles is None else a[triangles]
+    else:
+        raise ValueError(
+            f"uvs must have shape ({m}, 3, 2) (per face corner) or ({n}, 2) (per vertex), got "
+            f"{a.shape}"
+        )
+    corners = np.ascontiguousarray(corners, dtype=np.float32)
+    if not np.isfinite(corners).all():
+        raise ValueError("uvs must be finite: some are NaN or infinite")
+    return corners
+
+
+def _check_threads(threads):
+    if isinstance(threads, bool) or not isinstance(threads, (int, np.integer)) or threads < 0:
+        raise ValueError(f"threads must be a non-negative integer, got {threads!r}")
+    return int(threads)
+
+
+def _integer(name, value, lo, hi):
+    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or not lo <= value <= hi:
+        raise ValueError(f"{name} must be an integer in [{lo}, {hi}], got {value!r}")
+    return int(value)
+
+
+def _real(name, value, lo, hi):
+    if isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating)):
+        raise ValueError(f"{name} must be a number in [{lo}, {hi}], got {value!r}")
+    if not (lo <= float(value) <= hi) or math.isnan(float(value)) or math.isinf(float(value)):
+        raise ValueError(f"{name} must be a finite number in [{lo}, {hi}], got {value!r}")
+    return float(value)
+
+
+def _positive(name, value):
+    if (
+        isinstance(value, bool)
+        or not isinstance(value, (int, float, np.integer, np.floating))
+        or not math.isfinite(float(value))
+        or not float(value) > 0.0
+    ):
+        raise ValueError(f"{name} must be a finite number > 0, got {value!r}")
+    return float(value)
+
+
+def _boolean(name, value):
+    if not isinstance(value, (bool, np.bool_)):
+        raise ValueError(f"{name} must be True or False, got {value!r}")
+    return bool(value)
+
+
+def _weld(name, value):
+    if value is None:
+        return None
+    return _real(name, value, 0.0, 1.0)
+
+
+def _texture_size(size):
+    if isinstance(size, (tuple, list)) and len(size) == 2:
+        width, height = size
+    else:
+        width = height = size
+    for side in (width, height):
+        if isinstance(side, bool) or not isinstance(side, (int, np.integer)) or not 1 <= side <= 16384:
+            raise ValueError(
+                f"texture_size must be an integer or a (width, height) pair of integers in "
+                f"[1, 16384], got {size!r}"
+            )
+    return int(width), int(height)
