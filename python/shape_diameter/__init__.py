@@ -10,6 +10,7 @@
 from ._version import __version__
 from .api import Result, compute, cone_rays, engines, reduce_lengths, sample_points
 from .normalization import normalize_values as normalize
+from .smoothing import smooth
 
 __all__ = [
     "Result",
@@ -19,5 +20,6 @@ __all__ = [
     "normalize",
     "reduce_lengths",
     "sample_points",
+    "smooth",
     "__version__",
 ]
