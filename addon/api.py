@@ -42,6 +42,7 @@ class ObjectResult:
     timings: dict
     attributes: list
     shared_by: list = field(default_factory=list)
+    warnings: list = field(default_factory=list)
 
 
 def engines():
@@ -81,6 +82,7 @@ def compute_objects(objects, *, depsgraph=None, write=True, **options):
             timings=t.timings,
             attributes=written,
             shared_by=list(t.shared_by),
+            warnings=list(t.warnings),
         )
         for t in tasks
     ]

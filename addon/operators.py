@@ -79,6 +79,9 @@ class OBJECT_OT_shape_diameter(bpy.types.Operator):
 
     def _finish(self, context, options, tasks, started):
         process.write(bpy.data, tasks, options)
+        for task in tasks:
+            for warning in task.warnings:
+                self.report({"WARNING"}, warning)
         text = _summary(tasks, time.perf_counter() - started)
         last_run.clear()
         last_run.update(text=text, options=options, objects=[t.object_name for t in tasks])

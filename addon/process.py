@@ -114,6 +114,7 @@ class Task:
     colors: np.ndarray = None  # float32 (k, 4) sRGB, per polygon (or vertex)
     engine: str = ""
     timings: dict = None
+    warnings: list = field(default_factory=list)
 
 
 def _editable_problem(ob):
@@ -250,6 +251,11 @@ def compute(tasks, options, progress=None, cancelled=None):
             task.values = np.asarray(result.values, dtype=np.float32)
             task.normalized = np.asarray(result.normalized, dtype=np.float32)
         task.valid_rays = result.valid_rays
+        if len(result.valid_rays) and not np.any(result.valid_rays):
+            task.warnings.append(
+                f"{task.object_name}: no ray found the other side of the mesh (is it open, "
+                "flat or inside out?); every value is 0"
+            )
         task.colors = core.colors(task.normalized) if options.color_name else None
         task.engine = result.engine
         task.timings = dict(result.timings)
