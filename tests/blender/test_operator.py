@@ -215,3 +215,13 @@ def test_scripting_api():
         api.compute_object(bpy.data.objects.new("empty", None))
     assert snapshot(ob.data) == before
     assert [e["name"] for e in api.engines()][0] == shape_diameter.engines()[0]["name"]
+
+
+def test_an_open_sheet_gives_zeros_and_a_warning():
+    api = addon_module("api")
+    bpy.ops.mesh.primitive_plane_add()
+    ob = bpy.context.active_object
+    with pytest.warns(RuntimeWarning, match="no ray of any point"):
+        result = api.compute_object(ob)
+    assert result.warnings and "no ray found the other side" in result.warnings[0]
+    assert (attribute_array(ob.data, "sdf") == 0).all()
