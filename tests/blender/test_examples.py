@@ -1,0 +1,75 @@
+# SPDX-License-Identifier: GPL-3.0-or-later
+"""The README's headless examples, each in a new Blender process (bpy from PyPI runs a
+script as `blender -b --python script.py -- args` would)."""
+
+import shutil
+import subprocess
+import sys
+
+import bpy
+import numpy as np
+from helpers import DATA, ROOT
+
+EXAMPLES = ROOT / "examples" / "blender"
+
+
+def blender(script, *args):
+    return subprocess.run(
+        [sys.executable, str(EXAMPLES / script), "--", *map(str, args)],
+        capture_output=True,
+        text=True,
+        timeout=600,
+        cwd=ROOT,
+        check=False,
+    )
+
+
+def test_batch_example_processes_a_folder(tmp_path):
+    meshes = tmp_path / "meshes"
+    meshes.mkdir()
+    for name in ("suzanne.obj", "spot.obj"):
+        shutil.copy(DATA / name, meshes / name)
+    out = tmp_path / "out"
+    run = blender("batch_sdf.py", meshes, out, "--rays", "16")
+    assert run.returncode == 0, run.stdout[-2000:] + run.stderr[-2000:]
+    assert "done: 2 meshes" in run.stdout
+    counts = {"suzanne": 500, "spot": 5856}
+    for stem, polygons in counts.items():
+        values = np.load(out / f"{stem}.sdf.npz")
+        (array,) = values.values()
+        assert array.shape == (polygons,) and array.dtype == np.float32 and (array > 0).all()
+        with bpy.data.libraries.load(str(out / f"{stem}.blend")) as (source, target):
+            target.meshes = [name for name in source.meshes if name.startswith(stem)]
+        me = target.meshes[0]
+        assert me.attributes["sdf"].domain == "FACE" and len(me.attributes["sdf"].data) == polygons
+        assert me.color_attributes.active_color_name == "sdf_color"
+
+
+def test_batch_example_fails_loudly(tmp_path):
+    meshes = tmp_path / "meshes"
+    meshes.mkdir()
+    shutil.copy(DATA / "suzanne.obj", meshes / "suzanne.obj")
+    (meshes / "broken.obj").write_text("v 0 0 0\nv 1 0 0\nv 0 1 0\n")  # no faces
+    run = blender("batch_sdf.py", meshes, tmp_path / "out")
+    assert run.returncode != 0
+    assert "failed: broken.obj" in run.stderr
+    assert (tmp_path / "out" / "suzanne.sdf.npz").exists()
+
+
+def test_render_example_shows_a_coloured_mesh(tmp_path):
+    png = tmp_path / "spot.png"
+    run = blender("render_sdf.py", DATA / "spot.obj", png, "--size", "160", "--rays", "8")
+    assert run.returncode == 0, run.stdout[-2000:] + run.stderr[-2000:]
+    image = bpy.data.images.load(str(png))
+    try:
+        assert tuple(image.size) == (160, 120)
+        pixels = np.empty(160 * 120 * 4, dtype=np.float32)
+        image.pixels.foreach_get(pixels)
+        rgb = pixels.reshape(-1, 4)[:, :3]
+    finally:
+        bpy.data.images.remove(image)
+    saturation = rgb.max(axis=1) - rgb.min(axis=1)
+    coloured = rgb[saturation > 0.2]
+    assert len(coloured) > 0.1 * len(rgb)  # the mesh, not just a white background
+    # Both ends of the colour map: purple-blue (thin) and green-yellow (thick) pixels.
+    assert (coloured[:, 2] > coloured[:, 1]).any() and (coloured[:, 1] > coloured[:, 2]).any()
