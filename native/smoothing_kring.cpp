@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <functional>
 #include <limits>
 #include <memory>
 #include <mutex>
@@ -15,98 +16,228 @@ namespace sdf {
 
 namespace {
 
-// ---- Per-point work: plain loops over flat arrays (kernel style: no STL, no references). ----
+// ---- Plain rings, 64 points at a time (bit-parallel breadth-first search). ----
+// A batch of up to 64 nearby points walks its rings together: every item of the region the
+// batch can reach holds a 64-bit mask, bit b set when point b of the batch has reached it.
+// One pass over the region per ring ORs each item's neighbours' masks into its own; the bits
+// that are new at ring r are the batch points whose ring r holds the item. Every (point,
+// item) pair is still visited once, but the walk itself costs one mask OR per region edge
+// and ring for all 64 points, with no per-point visited marks or queues: 3 to 6 times faster
+// than one walk per point, and the pairs are summed in a tight loop over set bits.
+//
+// Vertex rings: D_0 = the batch's vertices; D_{r+1}(v) = D_r(v) | OR of D_r over v's edge
+// neighbours; ring r of point b = {v : bit b in D_r(v) and not in D_{r-1}(v)}.
+// Face rings (faces sharing a vertex): with D_d over vertices started from the batch faces'
+// corners, face g is within ring d + 1 of point b when a corner of g has bit b in D_d (the
+// identity in the header); F_0 = the batch faces themselves.
+
+constexpr int kBatch = 64;
+
+struct BatchScratch {
+  std::vector<std::uint32_t> vertex_stamp, vertex_local, face_stamp, face_local;
+  std::vector<std::uint32_t> region_vertices, region_faces;  // global ids, walk order
+  std::vector<std::uint32_t> local_offsets, local_items;     // region vertex adjacency, local
+  std::vector<std::int32_t> face_corners;                    // 3 local vertex ids per face, -1 outside
+  std::vector<std::uint64_t> reach, next, seen;
+  std::uint32_t epoch = 0;
+  std::uint32_t next_epoch() {
+    if (++epoch == 0) {
+      std::fill(vertex_stamp.begin(), vertex_stamp.end(), 0u);
+      std::fill(face_stamp.begin(), face_stamp.end(), 0u);
+      epoch = 1;
+    }
+    return epoch;
+  }
+};
+
+// Adds the vertices within `depth` edges of the region's first vertices (already in it) to the
+// region, and builds the region's adjacency in local ids.
+void grow_region(BatchScratch& s, int depth, const Adjacency& vv, std::uint32_t epoch) {
+  std::size_t begin = 0;
+  for (int d = 0; d < depth; ++d) {
+    const std::size_t end = s.region_vertices.size();
+    for (std::size_t i = begin; i < end; ++i) {
+      const std::uint32_t v = s.region_vertices[i];
+      for (std::uint32_t j = vv.offsets[v]; j < vv.offsets[v + 1]; ++j) {
+        const std::uint32_t u = vv.items[j];
+        if (s.vertex_stamp[u] == epoch) continue;
+        s.vertex_stamp[u] = epoch;
+        s.vertex_local[u] = static_cast<std::uint32_t>(s.region_vertices.size());
+        s.region_vertices.push_back(u);
+      }
+    }
+    begin = end;
+    if (begin == s.region_vertices.size()) break;
+  }
+  s.local_offsets.assign(1, 0u);
+  s.local_items.clear();
+  for (std::uint32_t v : s.region_vertices) {
+    for (std::uint32_t j = vv.offsets[v]; j < vv.offsets[v + 1]; ++j) {
+      const std::uint32_t u = vv.items[j];
+      if (s.vertex_stamp[u] == epoch) s.local_items.push_back(s.vertex_local[u]);
+    }
+    s.local_offsets.push_back(static_cast<std::uint32_t>(s.local_items.size()));
+  }
+}
+
+// D_{r+1} from D_r over the region (s.reach -> s.next, then swapped).
+void spread(BatchScratch& s) {
+  const std::size_t count = s.region_vertices.size();
+  for (std::size_t v = 0; v < count; ++v) {
+    std::uint64_t m = s.reach[v];
+    for (std::uint32_t j = s.local_offsets[v]; j < s.local_offsets[v + 1]; ++j)
+      m |= s.reach[s.local_items[j]];
+    s.next[v] = m;
+  }
+  s.reach.swap(s.next);
+}
+
+// sum[b] += w * x and weight[b] += w for every bit b of `bits`.
+inline void add_bits(std::uint64_t bits, double w, float x, double* sum, double* weight) {
+  const double wx = w * static_cast<double>(x);
+  while (bits) {
+    const int b = __builtin_ctzll(bits);
+    sum[b] += wx;
+    weight[b] += w;
+    bits &= bits - 1;
+  }
+}
+
+// Vertex rings for the batch points[0 .. count).
+void kring_vertex_batch(const std::uint32_t* points, int count, int k, const float* ring_weight,
+                        const Adjacency& vv, const float* values, BatchScratch& s,
+                        double* sum, double* weight) {
+  const std::uint32_t epoch = s.next_epoch();
+  s.region_vertices.clear();
+  for (int b = 0; b < count; ++b) {
+    const std::uint32_t v = points[b];
+    s.vertex_stamp[v] = epoch;
+    s.vertex_local[v] = static_cast<std::uint32_t>(b);
+    s.region_vertices.push_back(v);
+  }
+  grow_region(s, k, vv, epoch);
+  const std::size_t region = s.region_vertices.size();
+  s.reach.assign(region, 0u);
+  s.next.resize(region);
+  s.seen.resize(region);
+  for (int b = 0; b < count; ++b) {
+    s.reach[b] = std::uint64_t(1) << b;
+    sum[b] = ring_weight[0] * static_cast<double>(values[points[b]]);
+    weight[b] = ring_weight[0];
+  }
+  for (int r = 1; r <= k; ++r) {
+    std::copy(s.reach.begin(), s.reach.end(), s.seen.begin());
+    spread(s);
+    const double w = ring_weight[r];
+    for (std::size_t v = 0; v < region; ++v) {
+      const std::uint64_t fresh = s.reach[v] & ~s.seen[v];
+      if (fresh) add_bits(fresh, w, values[s.region_vertices[v]], sum, weight);
+    }
+  }
+}
+
+// Face rings for the batch points[0 .. count).
+void kring_face_batch(const std::uint32_t* points, int count, int k, const float* ring_weight,
+                      const std::vector<glm::uvec3>& triangles, const Adjacency& vf,
+                      const Adjacency& vv, const float* values, BatchScratch& s, double* sum,
+                      double* weight) {
+  const std::uint32_t epoch = s.next_epoch();
+  s.region_vertices.clear();
+  for (int b = 0; b < count; ++b)
+    for (int c = 0; c < 3; ++c) {
+      const std::uint32_t v = triangles[points[b]][c];
+      if (s.vertex_stamp[v] == epoch) continue;
+      s.vertex_stamp[v] = epoch;
+      s.vertex_local[v] = static_cast<std::uint32_t>(s.region_vertices.size());
+      s.region_vertices.push_back(v);
+    }
+  grow_region(s, k - 1, vv, epoch);
+  // The faces around the region's vertices, the batch faces first.
+  s.region_faces.clear();
+  for (int b = 0; b < count; ++b) {
+    s.face_stamp[points[b]] = epoch;
+    s.face_local[points[b]] = static_cast<std::uint32_t>(b);
+    s.region_faces.push_back(points[b]);
+  }
+  for (std::uint32_t v : s.region_vertices)
+    for (std::uint32_t j = vf.offsets[v]; j < vf.offsets[v + 1]; ++j) {
+      const std::uint32_t g = vf.items[j];
+      if (s.face_stamp[g] == epoch) continue;
+      s.face_stamp[g] = epoch;
+      s.face_local[g] = static_cast<std::uint32_t>(s.region_faces.size());
+      s.region_faces.push_back(g);
+    }
+  const std::size_t faces = s.region_faces.size(), region = s.region_vertices.size();
+  s.face_corners.resize(3 * faces);
+  for (std::size_t f = 0; f < faces; ++f)
+    for (int c = 0; c < 3; ++c) {
+      const std::uint32_t v = triangles[s.region_faces[f]][c];
+      s.face_corners[3 * f + c] = s.vertex_stamp[v] == epoch ? static_cast<std::int32_t>(s.vertex_local[v]) : -1;
+    }
+  s.reach.assign(region, 0u);
+  s.next.resize(region);
+  s.seen.assign(faces, 0u);
+  for (int b = 0; b < count; ++b) {
+    const std::uint64_t bit = std::uint64_t(1) << b;
+    s.seen[b] = bit;
+    for (int c = 0; c < 3; ++c) s.reach[s.vertex_local[triangles[points[b]][c]]] |= bit;
+    sum[b] = ring_weight[0] * static_cast<double>(values[points[b]]);
+    weight[b] = ring_weight[0];
+  }
+  for (int d = 0; d < k; ++d) {
+    if (d > 0) spread(s);
+    const double w = ring_weight[d + 1];
+    for (std::size_t f = 0; f < faces; ++f) {
+      std::uint64_t m = 0;
+      for (int c = 0; c < 3; ++c) {
+        const std::int32_t v = s.face_corners[3 * f + c];
+        if (v >= 0) m |= s.reach[v];
+      }
+      const std::uint64_t fresh = m & ~s.seen[f];
+      if (!fresh) continue;
+      s.seen[f] |= fresh;
+      add_bits(fresh, w, values[s.region_faces[f]], sum, weight);
+    }
+  }
+}
+
+// Points in Morton order of their positions, so that a batch of consecutive points is a
+// compact patch and the region it walks stays small.
+std::vector<std::uint32_t> morton_order(const std::vector<glm::vec3>& positions) {
+  glm::vec3 lo(std::numeric_limits<float>::infinity()), hi(-lo);
+  for (const glm::vec3& p : positions) {
+    lo = glm::min(lo, p);
+    hi = glm::max(hi, p);
+  }
+  const glm::vec3 extent = hi - lo;
+  const float side = std::max(extent.x, std::max(extent.y, extent.z));
+  const float scale = side > 0.0f ? 1023.0f / side : 0.0f;
+  auto spread10 = [](std::uint32_t x) {
+    x &= 0x3ffu;
+    x = (x | x << 16) & 0x030000ffu;
+    x = (x | x << 8) & 0x0300f00fu;
+    x = (x | x << 4) & 0x030c30c3u;
+    x = (x | x << 2) & 0x09249249u;
+    return x;
+  };
+  std::vector<std::uint64_t> keyed(positions.size());
+  for (std::size_t i = 0; i < positions.size(); ++i) {
+    const glm::vec3 q = (positions[i] - lo) * scale;
+    const std::uint32_t key = spread10(static_cast<std::uint32_t>(q.x)) |
+                              spread10(static_cast<std::uint32_t>(q.y)) << 1 |
+                              spread10(static_cast<std::uint32_t>(q.z)) << 2;
+    keyed[i] = static_cast<std::uint64_t>(key) << 32 | i;
+  }
+  std::sort(keyed.begin(), keyed.end());
+  std::vector<std::uint32_t> order(positions.size());
+  for (std::size_t i = 0; i < order.size(); ++i) order[i] = static_cast<std::uint32_t>(keyed[i]);
+  return order;
+}
+
+// ---- Rings with corner preservation: one walk per point (kernel style: flat arrays). ----
 // Scratch: `stamp` has one entry per item walked (vertex or face); an item is visited in the
 // current walk when stamp[item] == epoch, so nothing is cleared between points. `queue` holds
 // the items of the walk, ring after ring.
-
-// Vertex rings: Gaussian-weighted mean over the vertices at edge distance 0..k from `center`.
-double kring_vertex_mean(std::uint32_t center, int k, const float* ring_weight,
-                         const std::uint32_t* vv_offsets, const std::uint32_t* vv_items,
-                         const float* values, std::uint32_t* stamp, std::uint32_t epoch,
-                         std::uint32_t* queue, float* low, float* high) {
-  std::uint32_t begin = 0, end = 1;
-  queue[0] = center;
-  stamp[center] = epoch;
-  double sum = ring_weight[0] * static_cast<double>(values[center]);
-  double weight = ring_weight[0];
-  float lo = values[center], hi = values[center];
-  for (int r = 1; r <= k; ++r) {
-    const std::uint32_t ring_end = end;
-    for (std::uint32_t i = begin; i < ring_end; ++i) {
-      const std::uint32_t v = queue[i];
-      for (std::uint32_t j = vv_offsets[v]; j < vv_offsets[v + 1]; ++j) {
-        const std::uint32_t u = vv_items[j];
-        if (stamp[u] == epoch) continue;
-        stamp[u] = epoch;
-        queue[end++] = u;
-        const float x = values[u];
-        sum += ring_weight[r] * static_cast<double>(x);
-        weight += ring_weight[r];
-        lo = std::min(lo, x);
-        hi = std::max(hi, x);
-      }
-    }
-    begin = ring_end;
-    if (begin == end) break;  // the component is exhausted
-  }
-  *low = lo;
-  *high = hi;
-  return sum / weight;
-}
-
-// Face rings (faces sharing a vertex) through the identity in the header: a multi-source walk
-// over vertices from the centre face's corners to distance k - 1; the faces around a vertex at
-// distance d that are new belong to ring d + 1.
-double kring_face_mean(std::uint32_t center, int k, const float* ring_weight,
-                       const std::uint32_t* triangles, const std::uint32_t* vf_offsets,
-                       const std::uint32_t* vf_items, const std::uint32_t* vv_offsets,
-                       const std::uint32_t* vv_items, const float* values,
-                       std::uint32_t* vertex_stamp, std::uint32_t* face_stamp,
-                       std::uint32_t epoch, std::uint32_t* queue, float* low, float* high) {
-  face_stamp[center] = epoch;
-  double sum = ring_weight[0] * static_cast<double>(values[center]);
-  double weight = ring_weight[0];
-  float lo = values[center], hi = values[center];
-  std::uint32_t end = 0;
-  for (int c = 0; c < 3; ++c) {
-    const std::uint32_t v = triangles[3 * center + c];
-    if (vertex_stamp[v] == epoch) continue;
-    vertex_stamp[v] = epoch;
-    queue[end++] = v;
-  }
-  std::uint32_t begin = 0;
-  for (int d = 0; d < k; ++d) {
-    const std::uint32_t ring_end = end;
-    const double w = ring_weight[d + 1];
-    for (std::uint32_t i = begin; i < ring_end; ++i) {
-      const std::uint32_t v = queue[i];
-      for (std::uint32_t j = vf_offsets[v]; j < vf_offsets[v + 1]; ++j) {
-        const std::uint32_t g = vf_items[j];
-        if (face_stamp[g] == epoch) continue;
-        face_stamp[g] = epoch;
-        const float x = values[g];
-        sum += w * static_cast<double>(x);
-        weight += w;
-        lo = std::min(lo, x);
-        hi = std::max(hi, x);
-      }
-      if (d + 1 < k) {
-        for (std::uint32_t j = vv_offsets[v]; j < vv_offsets[v + 1]; ++j) {
-          const std::uint32_t u = vv_items[j];
-          if (vertex_stamp[u] == epoch) continue;
-          vertex_stamp[u] = epoch;
-          queue[end++] = u;
-        }
-      }
-    }
-    begin = ring_end;
-    if (begin == end) break;
-  }
-  *low = lo;
-  *high = hi;
-  return sum / weight;
-}
 
 // Weight of a step between two points whose unit normals are a and b: exp(-1/2 (angle /
 // corner)^2), 1 where a normal is undefined (zero).
@@ -183,16 +314,16 @@ double kring_corner_mean(std::uint32_t center, int k, const float* ring_weight,
 
 // ---- Host side ----
 
+// Scratch of the corner walk (items are faces or vertices, by the kind).
 struct Scratch {
-  std::vector<std::uint32_t> vertex_stamp, face_stamp, queue;
+  std::vector<std::uint32_t> stamp, queue;
   std::vector<std::uint8_t> ring_of;
   std::vector<float> factor;
   std::uint32_t epoch = 0;
   // Next walk's epoch; on wrap-around every stamp is cleared so no old mark looks current.
   std::uint32_t next_epoch() {
     if (++epoch == 0) {
-      std::fill(vertex_stamp.begin(), vertex_stamp.end(), 0u);
-      std::fill(face_stamp.begin(), face_stamp.end(), 0u);
+      std::fill(stamp.begin(), stamp.end(), 0u);
       epoch = 1;
     }
     return epoch;
@@ -200,40 +331,30 @@ struct Scratch {
 };
 
 // One scratch per concurrent chunk, made on first need and reused by later chunks.
+template <class S>
 class ScratchPool {
  public:
-  ScratchPool(std::size_t vertices, std::size_t faces, bool corner)
-      : vertices_(vertices), faces_(faces), corner_(corner) {}
-  std::unique_ptr<Scratch> acquire() {
+  explicit ScratchPool(std::function<std::unique_ptr<S>()> make) : make_(std::move(make)) {}
+  std::unique_ptr<S> acquire() {
     {
       std::lock_guard<std::mutex> lock(mutex_);
       if (!free_.empty()) {
-        std::unique_ptr<Scratch> s = std::move(free_.back());
+        std::unique_ptr<S> s = std::move(free_.back());
         free_.pop_back();
         return s;
       }
     }
-    auto s = std::make_unique<Scratch>();
-    s->vertex_stamp.assign(vertices_, 0u);
-    s->face_stamp.assign(faces_, 0u);
-    const std::size_t items = std::max(vertices_, faces_);
-    s->queue.resize(items);
-    if (corner_) {
-      s->ring_of.resize(items);
-      s->factor.resize(items);
-    }
-    return s;
+    return make_();
   }
-  void release(std::unique_ptr<Scratch> s) {
+  void release(std::unique_ptr<S> s) {
     std::lock_guard<std::mutex> lock(mutex_);
     free_.push_back(std::move(s));
   }
 
  private:
-  std::size_t vertices_, faces_;
-  bool corner_;
+  std::function<std::unique_ptr<S>()> make_;
   std::mutex mutex_;
-  std::vector<std::unique_ptr<Scratch>> free_;
+  std::vector<std::unique_ptr<S>> free_;
 };
 
 glm::vec3 unit_or_zero(glm::vec3 v) {
@@ -332,37 +453,78 @@ std::vector<float> smooth_kring(const Mesh& mesh, PointKind kind, const float* v
                            faces ? vf.items.data() : vv.items.data(), normals.data(), faces};
 
   std::vector<float> smoothed(points);
-  ScratchPool pool(weld.count, faces ? n : 0, corner);
-  parallel_for(
-      points, 512, options.threads,
-      [&](std::size_t begin, std::size_t end) {
-        std::unique_ptr<Scratch> s = pool.acquire();
-        for (std::size_t p = begin; p < end; ++p) {
-          const std::uint32_t epoch = s->next_epoch();
-          const std::uint32_t c = static_cast<std::uint32_t>(p);
-          float local_lo, local_hi;
-          double mean;
-          if (corner) {
-            std::uint32_t* stamp = faces ? s->face_stamp.data() : s->vertex_stamp.data();
-            mean = kring_corner_mean(c, k, ring_weight.data(), &walk, inv_corner, point_values,
-                                     stamp, epoch, s->queue.data(), s->ring_of.data(),
-                                     s->factor.data(), &local_lo, &local_hi);
-          } else if (faces) {
-            mean = kring_face_mean(c, k, ring_weight.data(), walk.triangles, vf.offsets.data(),
-                                   vf.items.data(), vv.offsets.data(), vv.items.data(),
-                                   point_values, s->vertex_stamp.data(), s->face_stamp.data(),
-                                   epoch, s->queue.data(), &local_lo, &local_hi);
-          } else {
-            mean = kring_vertex_mean(c, k, ring_weight.data(), vv.offsets.data(), vv.items.data(),
-                                     point_values, s->vertex_stamp.data(), epoch, s->queue.data(),
-                                     &local_lo, &local_hi);
+  if (corner) {
+    const std::size_t items = faces ? n : weld.count;
+    ScratchPool<Scratch> pool([items] {
+      auto s = std::make_unique<Scratch>();
+      s->stamp.assign(items, 0u);
+      s->queue.resize(items);
+      s->ring_of.resize(items);
+      s->factor.resize(items);
+      return s;
+    });
+    parallel_for(
+        points, 512, options.threads,
+        [&](std::size_t begin, std::size_t end) {
+          std::unique_ptr<Scratch> s = pool.acquire();
+          for (std::size_t p = begin; p < end; ++p) {
+            const std::uint32_t epoch = s->next_epoch();
+            float local_lo, local_hi;
+            const double mean = kring_corner_mean(
+                static_cast<std::uint32_t>(p), k, ring_weight.data(), &walk, inv_corner,
+                point_values, s->stamp.data(), epoch, s->queue.data(), s->ring_of.data(),
+                s->factor.data(), &local_lo, &local_hi);
+            // A weighted mean lies within what it averages; the clamp only removes rounding.
+            smoothed[p] = std::min(local_hi, std::max(local_lo, static_cast<float>(mean)));
           }
-          // A weighted mean lies within the values it averages; the clamp only removes rounding.
-          smoothed[p] = std::min(local_hi, std::max(local_lo, static_cast<float>(mean)));
-        }
-        pool.release(std::move(s));
-      },
-      progress, progress_from, progress_to);
+          pool.release(std::move(s));
+        },
+        progress, progress_from, progress_to);
+  } else {
+    // Batches of nearby points: Morton order of face centroids or merged vertex positions.
+    std::vector<glm::vec3> positions(points);
+    if (faces) {
+      for (std::size_t f = 0; f < n; ++f) {
+        const glm::uvec3 t = mesh.triangles[f];
+        positions[f] = mesh.vertices[t.x] + mesh.vertices[t.y] + mesh.vertices[t.z];
+      }
+    } else {
+      for (std::size_t v = mesh.vertices.size(); v-- > 0;) positions[weld.merged[v]] = mesh.vertices[v];
+    }
+    const std::vector<std::uint32_t> order = morton_order(positions);
+    const std::size_t vertex_count = weld.count, face_count = faces ? n : 0;
+    ScratchPool<BatchScratch> pool([vertex_count, face_count] {
+      auto s = std::make_unique<BatchScratch>();
+      s->vertex_stamp.assign(vertex_count, 0u);
+      s->vertex_local.resize(vertex_count);
+      s->face_stamp.assign(face_count, 0u);
+      s->face_local.resize(face_count);
+      return s;
+    });
+    const std::size_t batches = (points + kBatch - 1) / kBatch;
+    parallel_for(
+        batches, 16, options.threads,
+        [&](std::size_t begin, std::size_t end) {
+          std::unique_ptr<BatchScratch> s = pool.acquire();
+          double sum[kBatch], weight[kBatch];
+          for (std::size_t b = begin; b < end; ++b) {
+            const std::uint32_t* batch = order.data() + b * kBatch;
+            const int count = static_cast<int>(std::min<std::size_t>(kBatch, points - b * kBatch));
+            if (faces)
+              kring_face_batch(batch, count, k, ring_weight.data(), tris, vf, vv, point_values,
+                               *s, sum, weight);
+            else
+              kring_vertex_batch(batch, count, k, ring_weight.data(), vv, point_values, *s, sum,
+                                 weight);
+            // Sums in double, then one rounding to float: a constant region gives back its
+            // value exactly; the clamp only guards the input's range.
+            for (int i = 0; i < count; ++i)
+              smoothed[batch[i]] = std::min(hi, std::max(lo, static_cast<float>(sum[i] / weight[i])));
+          }
+          pool.release(std::move(s));
+        },
+        progress, progress_from, progress_to);
+  }
   if (progress && !progress(progress_to)) throw Cancelled();
 
   if (faces) return smoothed;
