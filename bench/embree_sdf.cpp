@@ -1,11 +1,12 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
 // Benchmark reference only, never part of the product: our SDF rule cast with Embree 3
-// (rtcIntersect1 per ray, every core), the best-in-class CPU ray caster. Ray directions and
-// the per-point reduction come from kernels/ (the rule being measured is ours); the casting
-// is Embree's own BVH and intersector, so it also checks our traversal independently.
+// (rtcIntersect1 per ray, every core), the best-in-class CPU ray caster. Points, ray
+// directions and the per-point reduction are the core's (the rule being measured is ours);
+// the casting is Embree's own BVH and intersector, so it also checks our traversal.
 //   embree_sdf IN.off RAYS OUT.txt   -> one value per face (-1: no valid ray); time on stderr
 #include <embree3/rtcore.h>
 
+#include <algorithm>
 #include <atomic>
 #include <chrono>
 #include <cmath>
@@ -16,6 +17,9 @@
 #include <vector>
 
 #include "../kernels/sdf_reduce.h"
+#include "mesh.h"
+#include "rays.h"
+#include "sampling.h"
 
 namespace {
 
@@ -52,7 +56,6 @@ int main(int argc, char** argv) {
   const Off mesh = read_off(argv[1]);
   const int rays = std::stoi(argv[2]);
   const std::size_t nf = mesh.f.size() / 3;
-  using sdf::kern::float3;
 
   RTCDevice device = rtcNewDevice(nullptr);
   const auto t0 = std::chrono::steady_clock::now();
@@ -71,43 +74,37 @@ int main(int argc, char** argv) {
   rtcCommitScene(scene);
   const auto t1 = std::chrono::steady_clock::now();
 
-  float lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
-  for (std::size_t i = 0; i < mesh.v.size(); ++i) {
-    lo[i % 3] = std::fmin(lo[i % 3], mesh.v[i]);
-    hi[i % 3] = std::fmax(hi[i % 3], mesh.v[i]);
-  }
-  const float extent = std::fmax(hi[0] - lo[0], std::fmax(hi[1] - lo[1], hi[2] - lo[2]));
-  const float tmin = 2e-5f * extent;
-  const float cos_half = 0.5f, sin_half = std::sqrt(0.75f);
-  const float floor = sdf::kern::sdf_angle_floor(rays, cos_half);
+  // Points, tangent frames, ray directions and the reduction are the product's own (the rule
+  // being measured); only the casting is Embree's.
+  std::vector<double> vd(mesh.v.begin(), mesh.v.end());
+  std::vector<std::int64_t> fd(mesh.f.begin(), mesh.f.end());
+  const sdf::Mesh m = sdf::make_mesh(vd.data(), vd.size() / 3, fd.data(), nf);
+  const sdf::SamplePoints points = sdf::sample_points(m, sdf::PointKind::Faces);
+  const sdf::Cone cone = sdf::make_cone(rays, 120.0, sdf::Sampling::Fibonacci, 0);
+  const float tmin = sdf::minimum_closeness(m);
+  const glm::vec3 center(m.center);
 
   std::vector<float> out(nf);
   std::atomic<std::size_t> next{0};
   auto worker = [&] {
-    std::vector<float> lengths(rays), angles(rays);
+    std::vector<glm::vec3> directions(rays);
+    std::vector<float> angles(rays), lengths(rays), kept_angles(rays);
     RTCIntersectContext context;
     for (;;) {
       const std::size_t begin = next.fetch_add(256);
       if (begin >= nf) break;
       for (std::size_t f = begin; f < std::min(nf, begin + 256); ++f) {
-        const float* a = &mesh.v[3 * mesh.f[3 * f]];
-        const float* b = &mesh.v[3 * mesh.f[3 * f + 1]];
-        const float* c = &mesh.v[3 * mesh.f[3 * f + 2]];
-        const float3 pa(a[0], a[1], a[2]), pb(b[0], b[1], b[2]), pc(c[0], c[1], c[2]);
-        const float3 n = glm::cross(pb - pa, pc - pa);
-        const float len = glm::length(n);
-        if (!(len > 0.0f)) {
+        const glm::vec3 axis = points.axes[f];
+        if (axis == glm::vec3(0.0f)) {
           out[f] = -1.0f;
           continue;
         }
-        const float3 axis = -n / len, origin = (pa + pb + pc) / 3.0f;
-        float3 b1, b2;
-        sdf::kern::sdf_frame(SDF_SAMPLING_FIBONACCI, axis, &b1, &b2);
+        sdf::cone_rays(cone, axis, points.tangents[f], static_cast<std::uint32_t>(f),
+                       directions.data(), angles.data());
+        const glm::vec3 origin = points.origins[f] + center;  // Embree has the input coordinates
         int kept = 0;
         for (int r = 0; r < rays; ++r) {
-          const float3 local = sdf::kern::sdf_ray_local(SDF_SAMPLING_FIBONACCI, r, rays, cos_half,
-                                                        sin_half, 0u, 0u);
-          const float3 d = sdf::kern::sdf_to_world(local, b1, b2, axis);
+          const glm::vec3 d = directions[r];
           rtcInitIntersectContext(&context);
           RTCRayHit rh;
           rh.ray.org_x = origin.x;
@@ -128,10 +125,10 @@ int main(int argc, char** argv) {
           const float dn = d.x * rh.hit.Ng_x + d.y * rh.hit.Ng_y + d.z * rh.hit.Ng_z;
           if (dn <= 0.0f) continue;  // entering the solid: the ray is dropped
           lengths[kept] = rh.ray.tfar;
-          angles[kept++] = sdf::kern::sdf_ray_angle(local);
+          kept_angles[kept++] = angles[r];
         }
-        out[f] = sdf::kern::sdf_reduce(SDF_SAMPLING_FIBONACCI, lengths.data(), angles.data(), kept,
-                                       floor);
+        out[f] = sdf::kern::sdf_reduce(SDF_SAMPLING_FIBONACCI, lengths.data(), kept_angles.data(),
+                                       kept, cone.angle_floor);
       }
     }
   };

@@ -112,6 +112,7 @@ py::dict compute(const Doubles& vertices, const Int64s& triangles, int rays, dou
   result["timings"] = timings;
   result["fill"] = fill_name(out.fill);
   result["engine"] = out.engine;
+  result["device_bytes"] = out.device_bytes;
   return result;
 }
 

@@ -90,6 +90,7 @@ void cast_on_opencl(const Mesh& mesh, const Options& options, const SamplePoints
   out.timings.emplace_back("upload", t.upload);
   out.timings.emplace_back("cast", t.cast);
   out.timings.emplace_back("download", t.download);
+  out.device_bytes = t.device_bytes;
   out.engine.clear();
   for (const cl::Device* d : devices)
     out.engine += (out.engine.empty() ? "" : " + ") + std::string("opencl:") +

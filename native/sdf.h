@@ -37,6 +37,7 @@ struct Output {
   std::vector<std::pair<std::string, double>> timings;  // stage -> seconds
   FillResult fill = FillResult::NothingToFill;
   std::string engine;                      // what ran, e.g. "cpu (2 threads, bvh)"
+  std::uint64_t device_bytes = 0;          // OpenCL buffers on the device (0 on the CPU)
 };
 
 Output compute(const Mesh& mesh, const Options& options, const ProgressFn& progress = nullptr);

@@ -162,6 +162,7 @@ void run_device(const Device& device, const Scene& scene, const SamplePoints& po
     sizes.push_back(bytes_of(scene.octree->triangles));
   }
   check_fits(device, sizes);
+  for (std::size_t b : sizes) result.timings.device_bytes += b;
 
   cl_program program = program_for(device, s, options);
   const Clock::time_point upload_start = Clock::now();
@@ -322,6 +323,7 @@ CastTimings cast_opencl(const std::vector<const Device*>& devices, const Scene& 
     timings.upload = std::max(timings.upload, r.timings.upload);
     timings.cast = std::max(timings.cast, r.timings.cast);
     timings.download = std::max(timings.download, r.timings.download);
+    timings.device_bytes = std::max(timings.device_bytes, r.timings.device_bytes);
   }
   for (std::size_t i = 0; i < n; ++i) {
     raw[order[i]] = raw_ordered[i];

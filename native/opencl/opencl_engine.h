@@ -25,6 +25,7 @@ struct Scene {
 
 struct CastTimings {
   double upload = 0.0, cast = 0.0, download = 0.0;
+  std::uint64_t device_bytes = 0;  // buffers on the device (the largest of several devices)
 };
 
 // Casts every point on `devices` (several: points are shared out dynamically; results are

@@ -36,6 +36,8 @@ class Result:
     """What ran, e.g. 'cpu (2 threads)'."""
     points: str = "faces"
     rays: int = 30
+    device_memory: int = 0
+    """Bytes of OpenCL buffers the run used on its device (0 for the CPU engine)."""
 
 
 def engines() -> list:
@@ -224,6 +226,7 @@ def compute(
         engine=out["engine"] + (f" [fell back: {fallback}]" if fallback else ""),
         points=points,
         rays=int(rays),
+        device_memory=int(out["device_bytes"]),
     )
 
 
