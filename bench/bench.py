@@ -84,6 +84,7 @@ def main():
                         help="run CGAL on meshes up to this size (it takes minutes beyond)")
     parser.add_argument("--engines", default="",
                         help="comma-separated engines (default: cpu and every OpenCL device)")
+    parser.add_argument("--only", default="", help="comma-separated mesh names to run")
     parser.add_argument("--title", default="", help="section title in RESULTS.md")
     parser.add_argument("--out", default=str(ROOT / "bench" / "RESULTS.md"))
     args = parser.parse_args()
@@ -96,7 +97,10 @@ def main():
     rows, notes = [], []
     tmp = Path(tempfile.mkdtemp(prefix="sdf-bench-"))
     meshes = benchmark_meshes(largest=not args.quick)
+    only = set(filter(None, args.only.split(",")))
     for name, vertices, triangles in meshes:
+        if only and name not in only:
+            continue
         faces = len(triangles)
         npz = CACHE / f"{name}.npz"
         if not npz.exists():
@@ -151,7 +155,7 @@ def main():
             f"{fmt(r.get('mrays'), '.2f')} | {fmt(r.get('x_cgal'), '.1f')} | "
             f"{fmt(r.get('x_embree'), '.2f')} | {fmt(r.get('r_cgal'), '.3f')} | "
             f"{fmt(r.get('peak'), '.0f')} | {fmt(r.get('device'), '.0f')} |")
-    if not args.quick:
+    if not args.quick and (not only or "armadillo-x16" in only):
         big = next(m for m in meshes if m[0] == "armadillo-x16")
         notes += [""] + octree_depth_table(*big)
     title = args.title or f"{machine_line()}"
