@@ -27,5 +27,5 @@ PYTHONUNBUFFERED=1 /tmp/sdfv/bin/python -m pytest tests/python/test_opencl.py -q
 echo "== benchmark"
 gpu=$(/tmp/sdfv/bin/python -c "import shape_diameter as s; print(next(e['name'] for e in s.engines() if e['type'] == 'GPU'))")
 PYTHONUNBUFFERED=1 /tmp/sdfv/bin/python bench/bench.py --engines "$gpu,cpu" --out "$OUT/RESULTS-gpu.md" "$@"
-PYTHONUNBUFFERED=1 /tmp/sdfv/bin/python bench/bench.py --engines "$gpu" --rays 64 --quick \
+PYTHONUNBUFFERED=1 /tmp/sdfv/bin/python bench/bench.py --engines "$gpu" --rays 64 \
   --only bunny00-x16,armadillo-x16 --title "64 rays" --out "$OUT/RESULTS-gpu.md"
