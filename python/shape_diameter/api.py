@@ -12,6 +12,7 @@ import numpy as np
 
 from . import _core
 from .normalization import NORMALIZATIONS, normalize_values
+from .smoothing import check_smoothing, smooth
 
 SAMPLINGS = ("fibonacci", "random", "cgal")
 POINTS = ("faces", "vertices")
@@ -25,7 +26,7 @@ class Result:
     raw: np.ndarray
     """float32: the SDF in mesh units, after points with no valid ray were filled."""
     values: np.ndarray
-    """float32: the field after smoothing (equal to raw: no smoothing is applied yet)."""
+    """float32: the field after smoothing (compute's `smoothing`); equal to raw for 'none'."""
     normalized: np.ndarray
     """float32 in [0, 1]: values normalised as asked (linear or log)."""
     valid_rays: np.ndarray
@@ -104,6 +105,15 @@ def _check_integer(name, value, lo, hi):
         raise ValueError(f"{name} must be an integer in [{lo}, {hi}], got {value!r}")
 
 
+def _check_cone_angle(cone_angle):
+    if (
+        isinstance(cone_angle, bool)
+        or not isinstance(cone_angle, (int, float, np.integer, np.floating))
+        or not 0.0 < float(cone_angle) < 180.0
+    ):
+        raise ValueError(f"cone_angle must be a number in (0, 180) degrees, got {cone_angle!r}")
+
+
 def _check_choice(name, value, choices):
     if value not in choices:
         raise ValueError(f"{name} must be one of {choices}, got {value!r}")
@@ -114,12 +124,7 @@ ACCELERATIONS = ("bvh", "octree")
 
 def _check_options(rays, cone_angle, sampling, points, normalize_method, engine, progress, seed):
     _check_integer("rays", rays, 1, MAX_RAYS)
-    if (
-        isinstance(cone_angle, bool)
-        or not isinstance(cone_angle, (int, float, np.integer, np.floating))
-        or not 0.0 < float(cone_angle) < 180.0
-    ):
-        raise ValueError(f"cone_angle must be a number in (0, 180) degrees, got {cone_angle!r}")
+    _check_cone_angle(cone_angle)
     _check_choice("sampling", sampling, SAMPLINGS)
     _check_choice("points", points, POINTS)
     _check_choice("normalize", normalize_method, NORMALIZATIONS)
@@ -152,6 +157,9 @@ def compute(
     accel: str = "bvh",
     octree_depth: int = 10,
     octree_leaf_size: int = 8,
+    smoothing: str = "none",
+    uvs=None,
+    smoothing_options: Optional[dict] = None,
 ) -> Result:
     """Shape Diameter Function of a triangle mesh.
 
@@ -176,6 +184,11 @@ def compute(
     progress: called with the fraction done in [0, 1] from the calling thread; if it raises,
         the computation stops and the exception propagates.
     threads: CPU threads, 0 for every core.
+    smoothing: 'none', 'kring', 'projected' or 'texture' (paper 4.4; see smooth()), applied
+        to the SDF after filling: Result.values and Result.normalized are the smoothed field,
+        Result.raw stays as cast. uvs: per-corner (m, 3, 2) or per-vertex (n, 2) texture
+        coordinates, needed by 'texture'. smoothing_options: a dict of the method's options
+        (smooth()'s keyword options; return_image is smooth()'s alone).
 
     Points where no ray was kept (zero-area faces, rays escaping an open mesh, ...) take the
     mean of their neighbours' values (valid_rays == 0 marks them). Raises ValueError for bad
@@ -188,12 +201,20 @@ def compute(
     _check_choice("accel", accel, ACCELERATIONS)
     _check_integer("octree_depth", octree_depth, 0, 16)
     _check_integer("octree_leaf_size", octree_leaf_size, 1, 2**31 - 1)
+    check_smoothing(smoothing, smoothing_options, uvs=uvs, face_count=len(t),
+                    vertex_count=len(v))  # fmt: skip
+    if smoothing_options and smoothing_options.get("return_image"):
+        raise ValueError("return_image is an option of shape_diameter.smooth(), not compute()")
     chosen = _resolve_engine(engine)
+    # With smoothing, casting reports [0, 0.9] of the progress and smoothing the rest.
+    cast_progress = progress
+    if progress is not None and smoothing != "none":
+        cast_progress = lambda fraction: progress(0.9 * fraction)  # noqa: E731
 
     def run(engine_name):
         return _core.compute(
             v, t, int(rays), float(cone_angle), sampling, int(seed), points, int(threads),
-            progress, engine_name, accel, int(octree_depth), int(octree_leaf_size),
+            cast_progress, engine_name, accel, int(octree_depth), int(octree_leaf_size),
         )
 
     fallback = None
@@ -212,14 +233,23 @@ def compute(
             stacklevel=2,
         )
     timings = dict(out["timings"])
+    raw = out["raw"]
+    values = raw.copy()
+    if smoothing != "none":
+        clock = time.perf_counter()
+        values = smooth(
+            v, t, raw, smoothing, uvs=uvs, points=points, threads=int(threads),
+            progress=None if progress is None else lambda fraction: progress(0.9 + 0.1 * fraction),
+            **(smoothing_options or {}),
+        )
+        timings["smooth"] = time.perf_counter() - clock
     clock = time.perf_counter()
-    normalized = normalize_values(out["raw"], normalize)
+    normalized = normalize_values(values, normalize)
     timings["normalize"] = time.perf_counter() - clock
     timings["total"] = time.perf_counter() - start
-    raw = out["raw"]
     return Result(
         raw=raw,
-        values=raw.copy(),
+        values=values,
         normalized=normalized,
         valid_rays=out["valid_rays"],
         timings=timings,
@@ -258,8 +288,7 @@ def reduce_lengths(lengths, angles, sampling="fibonacci", rays=None, cone_angle=
     _check_choice("sampling", sampling, SAMPLINGS)
     if rays is not None:
         _check_integer("rays", rays, 1, MAX_RAYS)
-    if isinstance(cone_angle, bool) or not 0.0 < float(cone_angle) < 180.0:
-        raise ValueError(f"cone_angle must be in (0, 180) degrees, got {cone_angle!r}")
+    _check_cone_angle(cone_angle)
     lengths = np.asarray(lengths, dtype=np.float32).reshape(-1)
     angles = np.asarray(angles, dtype=np.float32).reshape(-1)
     return float(

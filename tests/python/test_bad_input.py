@@ -247,18 +247,9 @@ def test_non_numeric_cone_angle_is_a_value_error_naming_it(sphere, value):
         shape_diameter.cone_rays([0.0, 0.0, 1.0], cone_angle=value)
 
 
-_REDUCE_GAP = pytest.mark.xfail(
-    strict=True,
-    reason="product gap: reduce_lengths checks cone_angle with float(cone_angle) only, so the "
-    "string '90' is accepted, 'abc' raises float()'s ValueError without naming cone_angle, "
-    "and None, complex and arrays raise TypeError (api.py reduce_lengths; compute and "
-    "cone_rays refuse all of these by name)",
-)
-
-
 @pytest.mark.parametrize(
     "value",
-    [pytest.param(v, marks=_REDUCE_GAP, id=i) for v, i in (
+    [pytest.param(v, id=i) for v, i in (
         ("abc", "str"), ("90", "numeric-str"), (None, "None"), (90 + 1j, "complex"),
         (np.array([90.0, 100.0]), "array"),
     )] + [pytest.param(True, id="bool")],
