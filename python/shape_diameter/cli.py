@@ -7,7 +7,7 @@ never needs them.
 
 ``--json`` prints one object on stdout: input, faces, vertices (of the mesh as
 read), points ("faces" or "vertices"), point_count, rays, cone, sampling, seed,
-normalize, engine, seconds (compute()'s stages: Result.timings), Mrays_per_s
+normalize, smooth, engine, seconds (compute()'s stages: Result.timings), Mrays_per_s
 (point_count * rays / seconds["cast"] / 1e6), io_seconds (load, write),
 total_seconds (the whole command) and outputs (mesh, values: paths or null).
 """
@@ -79,6 +79,29 @@ def _cone_degrees(text: str) -> float:
     return value
 
 
+def _positive_float(name: str, high: float):
+    def parse(text: str) -> float:
+        try:
+            value = float(text)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"not a number: {text!r}") from None
+        if not 0.0 <= value <= high:
+            raise argparse.ArgumentTypeError(f"{name} must be in [0, {high:g}], got {text}")
+        return value
+
+    return parse
+
+
+# Each smoothing option of the command line, the method it belongs to and its name in
+# shape_diameter.smooth().
+SMOOTHING_FLAGS = {
+    "k": ("kring", "k"),
+    "iterations": ("projected", "iterations"),
+    "texture_size": ("texture", "texture_size"),
+    "radius": ("texture", "radius"),
+}
+
+
 def default_output(input_path: str) -> str:
     """INPUT with its suffix replaced by .sdf.ply, in the same folder."""
     return os.path.splitext(input_path)[0] + DEFAULT_SUFFIX
@@ -142,10 +165,44 @@ def build_parser() -> argparse.ArgumentParser:
         help="how values map to colours (default: linear)",
     )
     parser.add_argument(
+        "--smooth",
+        choices=("none", "kring", "projected", "texture"),
+        default="none",
+        help="smooth the SDF before colouring (paper 4.4): kring = Gaussian over mesh rings, "
+        "projected = octree of points moved inward by half their SDF, texture = blur in the "
+        "UV layout (needs UVs in INPUT: OBJ vt, glTF TEXCOORD_0, PLY texture coordinates) "
+        "(default: none)",
+    )
+    parser.add_argument(
+        "--k",
+        type=_int_in(0, 255),
+        metavar="K",
+        help="--smooth kring: rings around each point (default: from the face count, 2 near "
+        "20k faces, 5 at 500k)",
+    )
+    parser.add_argument(
+        "--iterations",
+        type=_int_in(0, 1000),
+        metavar="N",
+        help="--smooth projected: passes (default: 1)",
+    )
+    parser.add_argument(
+        "--texture-size",
+        type=_int_in(1, 16384),
+        metavar="PX",
+        help="--smooth texture: width and height of the texture in texels (default: 1024)",
+    )
+    parser.add_argument(
+        "--radius",
+        type=_positive_float("--radius", 16384.0),
+        metavar="PX",
+        help="--smooth texture: blur radius in texels (default: 2 per 256 texels, 8 at 1024)",
+    )
+    parser.add_argument(
         "--values",
         metavar="FILE.npy",
-        help="also save the raw SDF (float32, mesh units) as a .npy array: one value per "
-        "face or vertex, in the order they were read from INPUT",
+        help="also save the SDF (float32, mesh units; smoothed with --smooth) as a .npy "
+        "array: one value per face or vertex, in the order they were read from INPUT",
     )
     parser.add_argument(
         "--json",
@@ -191,6 +248,7 @@ def _run(args) -> int:
     # trimesh logs what it skips in odd files; this command reports errors itself.
     logging.getLogger("trimesh").setLevel(logging.CRITICAL + 1)
 
+    smoothing_options = _smoothing_options(args)
     output = args.output or default_output(args.input)
     _check_writable_path(output, mesh_io.WRITE_SUFFIXES)
     if args.values:
@@ -200,7 +258,16 @@ def _run(args) -> int:
     with warnings.catch_warnings():
         # A parser warns before it fails on a broken file; the error line says it all.
         warnings.simplefilter("ignore")
-        vertices, triangles = mesh_io.load_mesh(args.input)
+        if args.smooth == "texture":
+            vertices, triangles, uvs = mesh_io.load_mesh_with_uvs(args.input)
+            if uvs is None:
+                raise CommandError(
+                    f"{args.input}: no UVs for every face (--smooth texture needs OBJ vt, "
+                    "glTF TEXCOORD_0 or PLY texture coordinates)"
+                )
+        else:
+            vertices, triangles = mesh_io.load_mesh(args.input)
+            uvs = None
     loaded = time.perf_counter()
 
     with _progress_bar() as progress, warnings.catch_warnings(record=True) as caught:
@@ -215,6 +282,9 @@ def _run(args) -> int:
             points=args.points,
             normalize=args.normalize,
             progress=progress,
+            smoothing=args.smooth,
+            uvs=uvs,
+            smoothing_options=smoothing_options,
         )
     computed = time.perf_counter()
     for warning in caught:  # one line each, like the errors
@@ -223,7 +293,7 @@ def _run(args) -> int:
     mesh_io.save_colored(output, vertices, triangles, colormap(result.normalized), args.points)
     if args.values:
         with open(args.values, "wb") as stream:  # np.save(path) would append ".npy"
-            np.save(stream, np.asarray(result.raw, dtype=np.float32))
+            np.save(stream, np.asarray(result.values, dtype=np.float32))
     finished = time.perf_counter()
 
     # The CLI's own stages, apart from compute()'s: reading and writing files.
@@ -237,6 +307,19 @@ def _run(args) -> int:
             f"{report['total_seconds']:.2f} s on {result.engine} -> {output}"
         )
     return 0
+
+
+def _smoothing_options(args) -> dict:
+    """The smoothing flags given, as smooth() options; a flag of another method is an error."""
+    options = {}
+    for flag, (method, name) in SMOOTHING_FLAGS.items():
+        value = getattr(args, flag)
+        if value is None:
+            continue
+        if args.smooth != method:
+            raise CommandError(f"--{flag.replace('_', '-')} applies to --smooth {method}")
+        options[name] = value
+    return options
 
 
 def _check_writable_path(path: str, suffixes) -> None:
@@ -266,6 +349,7 @@ def _report(args, vertices, triangles, result, output, io_seconds, total_seconds
         "sampling": args.sampling,
         "seed": int(args.seed),
         "normalize": args.normalize,
+        "smooth": args.smooth,
         "engine": result.engine,
         "seconds": timings,
         # Rays cast per second over the casting stage alone (or the whole
