@@ -2,6 +2,7 @@
 """shape_diameter.smooth: the paper's three smoothing methods (k-ring, projected points,
 texture space) on real meshes and built shapes, their guarantees and their errors."""
 
+import json
 from pathlib import Path
 
 import numpy as np
@@ -472,3 +473,95 @@ def test_every_documented_option_is_accepted(spot):
         if method == "texture":
             options["texture_size"] = 64
         smooth(v, t, faces, method, **extra, **options)
+
+
+# ---- compute(smoothing=...) and the command line ----
+
+
+@pytest.mark.parametrize("method", METHODS)
+def test_compute_smooths_values_and_keeps_raw(spot, method):
+    v, t, uvs, faces, _ = spot
+    options = {"texture_size": 256} if method == "texture" else {}
+    result = shape_diameter.compute(v, t, smoothing=method, uvs=uvs, smoothing_options=options)
+    np.testing.assert_array_equal(result.raw, faces)
+    np.testing.assert_array_equal(result.values, smooth(v, t, faces, method, uvs=uvs, **options))
+    assert "smooth" in result.timings
+    span = result.values.max() - result.values.min()
+    np.testing.assert_allclose(result.normalized, (result.values - result.values.min()) / span,
+                               atol=1e-6)  # fmt: skip
+    plain = shape_diameter.compute(v, t)
+    np.testing.assert_array_equal(plain.values, plain.raw)
+    assert "smooth" not in plain.timings
+
+
+def test_compute_checks_smoothing_before_casting(spot):
+    v, t, uvs, _, _ = spot
+    called = []
+    cases = [
+        (dict(smoothing="blur"), "smoothing method must be one of"),
+        (dict(smoothing="texture"), "needs UVs"),
+        (dict(smoothing="kring", smoothing_options={"radius": 2}), "unknown option"),
+        (dict(smoothing="kring", smoothing_options=[("k", 2)]), "must be a dict"),
+        (dict(smoothing="texture", uvs=uvs, smoothing_options={"return_image": True}),
+         "return_image"),
+    ]  # fmt: skip
+    for kwargs, message in cases:
+        with pytest.raises(ValueError, match=message):
+            shape_diameter.compute(v, t, progress=called.append, **kwargs)
+    assert called == []  # nothing was cast
+
+
+def test_compute_progress_covers_casting_and_smoothing(spot):
+    v, t, _, _, _ = spot
+    seen = []
+    shape_diameter.compute(v, t, smoothing="kring", progress=seen.append)
+    assert seen == sorted(seen) and seen[-1] == 1.0 and max(seen[:-1]) <= 1.0
+
+
+def _cli(*args):
+    pytest.importorskip("trimesh")
+    from shape_diameter import cli
+
+    return cli.main([str(a) for a in args])
+
+
+def test_cli_smooth_writes_the_smoothed_values(tmp_path, capsys):
+    out, values = tmp_path / "out.ply", tmp_path / "v.npy"
+    assert _cli(DATA / "cow.obj", "-o", out, "--smooth", "kring", "--k", 3, "--values", values,
+                "--json") == 0  # fmt: skip
+    report = json.loads(capsys.readouterr().out)
+    assert report["smooth"] == "kring" and "smooth" in report["seconds"]
+    from shape_diameter.mesh_io import load_mesh
+
+    v, t = load_mesh(DATA / "cow.obj")
+    expected = shape_diameter.compute(v, t, smoothing="kring", smoothing_options={"k": 3})
+    np.testing.assert_array_equal(np.load(values), expected.values)
+
+
+def test_cli_texture_reads_uvs(tmp_path, capsys):
+    values = tmp_path / "v.npy"
+    argv = [DATA / "spot.obj", "-o", tmp_path / "out.ply", "--smooth", "texture",
+            "--texture-size", 256, "--radius", 4, "--values", values]  # fmt: skip
+    assert _cli(*argv) == 0
+    v, t, uvs, _ = _read_obj(DATA / "spot.obj")
+    expected = shape_diameter.compute(v, t, smoothing="texture", uvs=uvs,
+                                      smoothing_options={"texture_size": 256, "radius": 4.0})
+    np.testing.assert_array_equal(np.load(values), expected.values)
+
+
+@pytest.mark.parametrize(
+    "argv, message",
+    [
+        (["cow.obj", "--smooth", "texture"], "no UVs for every face"),
+        (["cow.obj", "--smooth", "projected", "--k", "3"], "--k applies to --smooth kring"),
+        (["cow.obj", "--iterations", "2"], "--iterations applies to --smooth projected"),
+        (["cow.obj", "--smooth", "kring", "--radius", "2"], "--radius applies to --smooth texture"),
+        (["cow.obj", "--smooth", "texture", "--texture-size", "0"], "--texture-size"),
+        (["cow.obj", "--smooth", "blur"], "invalid choice"),
+    ],
+)
+def test_cli_smoothing_errors(tmp_path, capsys, argv, message):
+    argv = [str(DATA / argv[0]), "-o", str(tmp_path / "out.ply")] + argv[1:]
+    assert _cli(*argv) == 2
+    err = capsys.readouterr().err
+    assert message in err and len(err.strip().splitlines()) == 1
