@@ -22,8 +22,8 @@ DATA = Path(__file__).resolve().parents[1] / "data"
 RAYS = 12  # enough rays to be a real run, few enough to keep the file fast
 JSON_KEYS = {
     "input", "faces", "vertices", "points", "point_count", "rays", "cone", "sampling",
-    "seed", "normalize", "smooth", "engine", "seconds", "Mrays_per_s", "io_seconds", "total_seconds",
-    "outputs",
+    "seed", "normalize", "smooth", "engine", "seconds", "Mrays_per_s", "io_seconds",
+    "total_seconds", "outputs",
 }  # fmt: skip
 
 
