@@ -238,7 +238,9 @@ def _check_mesh(vertices, triangles):
 def _check_values(values, points, n, m):
     a = np.asarray(values)
     if a.ndim != 1:
-        raise ValueError(f"values must be a 1-D array (one per face or vertex), got shape {a.shape}")
+        raise ValueError(
+            f"values must be a 1-D array (one per face or vertex), got shape {a.shape}"
+        )
     if a.dtype.kind not in "fiu":
         raise ValueError(f"values must be real numbers, got dtype {a.dtype}")
     if points is None:
@@ -342,7 +344,8 @@ def _texture_size(size):
     else:
         width = height = size
     for side in (width, height):
-        if isinstance(side, bool) or not isinstance(side, (int, np.integer)) or not 1 <= side <= 16384:
+        integer = isinstance(side, (int, np.integer)) and not isinstance(side, bool)
+        if not integer or not 1 <= side <= 16384:
             raise ValueError(
                 f"texture_size must be an integer or a (width, height) pair of integers in "
                 f"[1, 16384], got {size!r}"

@@ -261,7 +261,7 @@ def test_default_k_follows_the_paper():
 def _sphere_sdf(rays=30, cone_angle=120.0):
     """The SDF of a sphere of radius 1 under our rule: every ray at angle a to the inward
     normal travels the chord 2 cos(a); the engine's reduction of those exact lengths."""
-    directions, angles = shape_diameter.cone_rays([0, 0, -1], rays, cone_angle)
+    _, angles = shape_diameter.cone_rays([0, 0, -1], rays, cone_angle)
     return shape_diameter.reduce_lengths(2.0 * np.cos(angles), angles, rays=rays,
                                          cone_angle=cone_angle)  # fmt: skip
 
@@ -376,8 +376,8 @@ def test_default_radius_follows_the_paper():
 
 def test_load_mesh_with_uvs():
     mesh_io = pytest.importorskip("shape_diameter.mesh_io")
-    v, t, uvs = mesh_io.load_mesh_with_uvs(DATA / "spot.obj")
-    rv, rt, ruvs, _ = _read_obj(DATA / "spot.obj")
+    _, t, uvs = mesh_io.load_mesh_with_uvs(DATA / "spot.obj")
+    _, rt, ruvs, _ = _read_obj(DATA / "spot.obj")
     np.testing.assert_array_equal(t, rt)
     np.testing.assert_array_equal(uvs, ruvs)
     assert uvs.dtype == np.float32
@@ -398,7 +398,7 @@ def test_load_mesh_with_uvs_from_ply_and_glb(spot, tmp_path):
     for suffix in (".ply", ".glb"):
         path = tmp_path / f"spot{suffix}"
         mesh.export(path)
-        lv, lt, luvs = mesh_io.load_mesh_with_uvs(path)
+        _, lt, luvs = mesh_io.load_mesh_with_uvs(path)
         np.testing.assert_array_equal(lt, t)
         np.testing.assert_allclose(luvs, per_vertex[t], atol=1e-6)
 
