@@ -43,6 +43,7 @@ class ObjectResult:
     attributes: list
     shared_by: list = field(default_factory=list)
     warnings: list = field(default_factory=list)
+    image: str = ""  # name of the baked image in bpy.data.images, if any
 
 
 def engines():
@@ -54,10 +55,14 @@ def compute_objects(objects, *, depsgraph=None, write=True, **options):
     """Computes every mesh object in `objects` together and writes their attributes (all or
     none). Options, with the operator's names: rays=30, cone_angle=120.0 (degrees),
     sampling='fibonacci', seed=0, points='faces', normalize='linear', engine=None (the
-    preferences' default engine; or 'auto', or a name from engines()), attribute_name='sdf',
-    normalized_name='sdf_normalized', color_name='sdf_color' (empty: not written),
-    use_modifiers=False, apply_scale=True; and any further keyword that
-    shape_diameter.compute() accepts. write=False computes without writing."""
+    preferences' default engine; or 'auto', or a name from engines()), accel='bvh' or
+    'octree', smoothing='none', 'kring' (smoothing_rings=0: automatic), 'projected'
+    (smoothing_iterations=1) or 'texture' (texture_size=1024, texture_radius=0: automatic;
+    needs a UV map), attribute_name='sdf', normalized_name='sdf_normalized',
+    color_name='sdf_color' (empty: not written), bake_image=False, uv_map='' (the active one),
+    image_name='{object}_sdf', bake_margin=4, use_modifiers=False, apply_scale=True; and any
+    further keyword that shape_diameter.compute() accepts. write=False computes without
+    writing. The baked image is ObjectResult.image: bpy.data.images[result.image]."""
     context = bpy.context
     if options.get("engine") in (None, "DEFAULT"):
         options["engine"] = operators.resolve_engine(context, "DEFAULT")
@@ -83,6 +88,7 @@ def compute_objects(objects, *, depsgraph=None, write=True, **options):
             attributes=written,
             shared_by=list(t.shared_by),
             warnings=list(t.warnings),
+            image=t.image_name if write else "",
         )
         for t in tasks
     ]

@@ -11,6 +11,8 @@ Nothing here touches bpy, so the functions below are safe on the worker thread.
 
 import inspect
 
+import numpy as np
+
 _module = None
 _load_error = None
 _engines = None
@@ -82,3 +84,51 @@ def colors(normalized):
     """(k, 4) float32 sRGB colours in [0, 1] from the core's perceptual colour map."""
     rgba = load().colormap.colormap(normalized)
     return rgba.astype("float32") / 255.0
+
+
+def has(name):
+    """Whether the package has the function `name` (e.g. 'smooth'); False if it cannot load."""
+    try:
+        return callable(getattr(load(), name, None))
+    except CoreUnavailable:
+        return False
+
+
+def smooth(vertices, triangles, values, method, points, uvs, options, progress=None):
+    """shape_diameter.smooth: the field smoothed by 'kring', 'projected' or 'texture' (which
+    needs per-corner uvs (m, 3, 2))."""
+    return load().smooth(
+        vertices,
+        triangles,
+        values,
+        method,
+        uvs=uvs,
+        points=points,
+        progress=progress,
+        **options,
+    )
+
+
+def bake(vertices, triangles, values, points, uvs, size, radius, margin, progress=None):
+    """The field rasterised through per-corner uvs (m, 3, 2) into a (size, size, 4) float32
+    RGBA image in Blender's pixel order (row 0 at v = 0): the value in R, G and B, alpha 1
+    where a face (or the margin around an island) covers the texel, else 0. `radius` is the
+    texture-space blur in texels (0: none, None: the core's default). Rasterising and
+    blurring are the core's (shape_diameter.smooth(..., 'texture', return_image=True))."""
+    out = load().smooth(
+        vertices,
+        triangles,
+        values,
+        "texture",
+        uvs=uvs,
+        points=points,
+        progress=progress,
+        texture_size=int(size),
+        radius=radius,
+        margin=int(margin),
+        return_image=True,
+    )
+    rgba = np.empty(out.image.shape + (4,), dtype=np.float32)
+    rgba[..., :3] = out.image[..., None]
+    rgba[..., 3] = out.mask
+    return rgba

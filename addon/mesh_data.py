@@ -7,6 +7,7 @@ Called on the main thread only.
 
 from dataclasses import dataclass
 
+import bpy
 import numpy as np
 
 # bpy attribute data types -> (the property foreach_get/set reads, its width, numpy dtype).
@@ -56,6 +57,7 @@ class Triangulation:
     vertices: np.ndarray
     triangles: np.ndarray
     triangle_polygons: np.ndarray  # int32 per triangle
+    flipped: bool = False  # winding reversed (a mirroring transform)
 
 
 def topology(me):
@@ -83,12 +85,39 @@ def triangulation(me, matrix=None):
     tris = tris.reshape(m, 3)
     tri_polys = np.empty(m, dtype=np.int32)
     me.loop_triangle_polygons.foreach_get("value", tri_polys)
+    flipped = False
     if matrix is not None:
         linear = np.array(matrix.to_3x3(), dtype=np.float64)
         vertices = vertices @ linear.T
         if np.linalg.det(linear) < 0.0:
             tris = tris[:, ::-1]
-    return Triangulation(vertices, np.ascontiguousarray(tris), tri_polys)
+            flipped = True
+    return Triangulation(vertices, np.ascontiguousarray(tris), tri_polys, flipped)
+
+
+def corner_uvs(me, name, flipped=False):
+    """float32 (m, 3, 2): the UV map `name` at the corners of each loop triangle, in the
+    triangles' order (reversed with them when `flipped`). Call after triangulation()."""
+    uv = np.empty(len(me.loops) * 2, dtype=np.float32)
+    me.uv_layers[name].data.foreach_get("uv", uv)
+    m = len(me.loop_triangles)
+    loops = np.empty(m * 3, dtype=np.int32)
+    me.loop_triangles.foreach_get("loops", loops)
+    corners = uv.reshape(-1, 2)[loops.reshape(m, 3)]
+    return np.ascontiguousarray(corners[:, ::-1] if flipped else corners)
+
+
+def new_image(name, rgba):
+    """A packed float RGBA image holding `rgba` (height, width, 4), Blender's row order."""
+    height, width = rgba.shape[:2]
+    image = bpy.data.images.new(name, width, height, alpha=True, float_buffer=True)
+    try:
+        image.pixels.foreach_set(np.ascontiguousarray(rgba, dtype=np.float32).reshape(-1))
+        image.pack()
+    except BaseException:
+        bpy.data.images.remove(image)
+        raise
+    return image
 
 
 def attribute_signature(me):

@@ -181,17 +181,47 @@ class OBJECT_OT_shape_diameter(bpy.types.Operator):
             layout.prop(self, name)
         if self.sampling == "random":
             layout.prop(self, "seed")
-        for name in (
-            "points",
-            "normalize",
-            "engine",
-            "attribute_name",
-            "normalized_name",
-            "color_name",
-            "use_modifiers",
-            "apply_scale",
-        ):
+        for name in ("points", "normalize", "engine"):
             layout.prop(self, name)
+        if core.supports("accel"):
+            layout.prop(self, "accel")
+        if core.has("smooth"):
+            draw_smoothing(layout, self)
+        for name in ("attribute_name", "normalized_name", "color_name"):
+            layout.prop(self, name)
+        if core.has("smooth"):
+            draw_bake(layout, self, context)
+        for name in ("use_modifiers", "apply_scale"):
+            layout.prop(self, name)
+
+
+def draw_smoothing(layout, settings):
+    """The smoothing options that apply to the chosen method (operator and panel)."""
+    layout.prop(settings, "smoothing")
+    if settings.smoothing == "kring":
+        layout.prop(settings, "smoothing_rings")
+    elif settings.smoothing == "projected":
+        layout.prop(settings, "smoothing_iterations")
+    elif settings.smoothing == "texture":
+        layout.prop(settings, "texture_size")
+        layout.prop(settings, "texture_radius")
+
+
+def draw_bake(layout, settings, context):
+    """The bake options (operator and panel); the UV map is searched on the active mesh."""
+    layout.prop(settings, "bake_image")
+    col = layout.column()
+    col.active = settings.bake_image or settings.smoothing == "texture"
+    ob = context.active_object
+    if ob is not None and ob.type == "MESH":
+        col.prop_search(settings, "uv_map", ob.data, "uv_layers", icon="GROUP_UVS")
+    else:
+        col.prop(settings, "uv_map", icon="GROUP_UVS")
+    col = layout.column()
+    col.active = settings.bake_image
+    col.prop(settings, "image_name")
+    if settings.smoothing != "texture":
+        col.prop(settings, "texture_size")
 
 
 class VIEW3D_OT_shape_diameter_show(bpy.types.Operator):

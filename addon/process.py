@@ -13,6 +13,7 @@ the scripting API:
 import threading
 from dataclasses import dataclass, field, fields
 
+import bpy
 import numpy as np
 
 from . import core, mesh_data
@@ -30,11 +31,15 @@ class Cancelled(Exception):
     """Raised in the progress callback when the user cancels."""
 
 
+SMOOTHING_METHODS = ("none", "kring", "projected", "texture")
+
+
 @dataclass
 class Options:
-    """What a run computes and writes. The first seven are shape_diameter.compute()'s
-    keywords; `extra` carries further compute() keywords (e.g. smoothing, once the core has
-    it) and is checked against compute()'s signature."""
+    """What a run computes and writes: shape_diameter.compute()'s keywords (COMPUTE_KEYS,
+    plus OPTIONAL_COMPUTE_KEYS where the core has them), smoothing through
+    shape_diameter.smooth(), the outputs, and `extra`: further compute() keywords, checked
+    against compute()'s signature."""
 
     rays: int = 30
     cone_angle: float = 120.0
@@ -43,14 +48,39 @@ class Options:
     points: str = "faces"
     normalize: str = "linear"
     engine: str = "auto"
+    accel: str = "bvh"
+    smoothing: str = "none"
+    smoothing_rings: int = 0  # kring: rings, 0 = chosen from the face count
+    smoothing_iterations: int = 1  # projected
+    texture_size: int = 1024  # texture smoothing and the bake, square
+    texture_radius: float = 0.0  # texture smoothing: texels, 0 = 2 per 256 texels (paper)
     attribute_name: str = "sdf"
     normalized_name: str = "sdf_normalized"
     color_name: str = "sdf_color"
+    bake_image: bool = False
+    uv_map: str = ""  # empty: the active UV map
+    image_name: str = "{object}_sdf"
+    bake_margin: int = 4
     use_modifiers: bool = False
     apply_scale: bool = True
     extra: dict = field(default_factory=dict)
 
     COMPUTE_KEYS = ("rays", "cone_angle", "sampling", "seed", "points", "normalize", "engine")
+    OPTIONAL_COMPUTE_KEYS = {"accel": "bvh"}  # name: default (needs no support if default)
+
+    @property
+    def needs_uvs(self):
+        return self.bake_image or self.smoothing == "texture"
+
+    def smoothing_options(self):
+        """shape_diameter.smooth() keywords for the chosen method."""
+        if self.smoothing == "kring":
+            return {"k": self.smoothing_rings or None}
+        if self.smoothing == "projected":
+            return {"iterations": self.smoothing_iterations}
+        if self.smoothing == "texture":
+            return {"texture_size": self.texture_size, "radius": self.texture_radius or None}
+        return {}
 
     @classmethod
     def from_keywords(cls, **keywords):
@@ -67,6 +97,12 @@ class Options:
 
     def compute_options(self):
         options = {key: getattr(self, key) for key in self.COMPUTE_KEYS}
+        for key, default in self.OPTIONAL_COMPUTE_KEYS.items():
+            value = getattr(self, key)
+            if core.supports(key):
+                options[key] = value
+            elif value != default:
+                raise UserError(f"This build of the core has no {key!r} option")
         options.update(self.extra)
         return options
 
@@ -94,6 +130,12 @@ class Options:
                 raise UserError(f"Attribute name longer than {MAX_NAME_BYTES} bytes: {name!r}")
         if len(set(names)) != len(names):
             raise UserError(f"The output attribute names must differ: {', '.join(names)}")
+        if self.smoothing not in SMOOTHING_METHODS:
+            raise UserError(f"smoothing must be one of {SMOOTHING_METHODS}, got {self.smoothing!r}")
+        if self.bake_image and not self.image_name.replace("{object}", ""):
+            raise UserError("The image name is empty")
+        if (self.smoothing != "none" or self.bake_image) and not core.has("smooth"):
+            raise UserError("This build of the core has no smoothing (shape_diameter.smooth)")
 
 
 @dataclass
@@ -112,6 +154,9 @@ class Task:
     normalized: np.ndarray = None  # float32 per polygon (or vertex), in [0, 1]
     valid_rays: np.ndarray = None  # int32 per triangle (or vertex): rays kept
     colors: np.ndarray = None  # float32 (k, 4) sRGB, per polygon (or vertex)
+    corner_uvs: np.ndarray = None  # float32 (m, 3, 2) per triangle corner, when needed
+    image_name: str = ""
+    image: np.ndarray = None  # float32 (height, width, 4) RGBA, Blender's row order
     engine: str = ""
     timings: dict = None
     warnings: list = field(default_factory=list)
@@ -196,11 +241,22 @@ def prepare(depsgraph, objects, options, for_writing=True):
                         "geometry"
                     )
                 triangles = mesh_data.triangulation(temp, matrix)
+                uvs = _corner_uvs(ob, temp, options, triangles.flipped)
             finally:
                 evaluated.to_mesh_clear()
         else:
             triangles = mesh_data.triangulation(me, matrix)
-        tasks[uid] = Task(ob.name, ob.session_uid, uid, original, triangles)
+            uvs = _corner_uvs(ob, me, options, triangles.flipped)
+        task = Task(ob.name, ob.session_uid, uid, original, triangles, corner_uvs=uvs)
+        if options.bake_image:
+            task.image_name = options.image_name.replace("{object}", ob.name)
+            problem = _image_problem(bpy.data, task.image_name)
+            if problem:
+                raise UserError(problem)
+        tasks[uid] = task
+    images = [t.image_name for t in tasks.values() if t.image_name]
+    if len(set(images)) != len(images):
+        raise UserError("Several objects would bake into one image: put {object} in the image name")
     for task in tasks.values():
         if task.shared_by:
             warnings.append(
@@ -208,6 +264,22 @@ def prepare(depsgraph, objects, options, for_writing=True):
                 f"computed once, from {task.object_name}"
             )
     return list(tasks.values()), warnings
+
+
+def _corner_uvs(ob, me, options, flipped):
+    """The chosen UV map per triangle corner, when the run needs one (after triangulation())."""
+    if not options.needs_uvs:
+        return None
+    what = "the bake" if options.bake_image else "texture smoothing"
+    if options.uv_map:
+        if me.uv_layers.get(options.uv_map) is None:
+            raise UserError(f"{ob.name} has no UV map {options.uv_map!r}, needed by {what}")
+        name = options.uv_map
+    elif me.uv_layers.active is not None:
+        name = me.uv_layers.active.name
+    else:
+        raise UserError(f"{ob.name} has no UV map, needed by {what}")
+    return mesh_data.corner_uvs(me, name, flipped)
 
 
 def polygon_means(triangle_values, mesh):
@@ -243,13 +315,51 @@ def compute(tasks, options, progress=None, cancelled=None):
                 progress(done + share * fraction)
 
         step(0.0)
-        result = core.compute(task.mesh.vertices, task.mesh.triangles, compute_options, step)
+        mesh = task.mesh
+        result = core.compute(mesh.vertices, mesh.triangles, compute_options, step)
+        values = result.values
+        if options.smoothing != "none":
+            values = core.smooth(
+                mesh.vertices,
+                mesh.triangles,
+                values,
+                options.smoothing,
+                options.points,
+                task.corner_uvs,
+                options.smoothing_options(),
+                step,
+            )
         if options.points == "faces":
-            task.values = polygon_means(result.values, task.mesh)
+            task.values = polygon_means(values, mesh)
+            task.normalized = core.normalize(task.values, options.normalize)
+        elif options.smoothing != "none":
+            task.values = np.asarray(values, dtype=np.float32)
             task.normalized = core.normalize(task.values, options.normalize)
         else:
             task.values = np.asarray(result.values, dtype=np.float32)
             task.normalized = np.asarray(result.normalized, dtype=np.float32)
+        if options.bake_image:
+            # The normalised field through the UV map; blurred in texture space when that is
+            # the smoothing chosen (the paper's texture-space smoothing, 4.4).
+            radius = (
+                options.smoothing_options()["radius"] if options.smoothing == "texture" else 0.0
+            )
+            per_point = (
+                task.normalized[mesh.triangle_polygons]
+                if options.points == "faces"
+                else task.normalized
+            )
+            task.image = core.bake(
+                mesh.vertices,
+                mesh.triangles,
+                per_point,
+                options.points,
+                task.corner_uvs,
+                options.texture_size,
+                radius,
+                options.bake_margin,
+                step,
+            )
         task.valid_rays = result.valid_rays
         if len(result.valid_rays) and not np.any(result.valid_rays):
             task.warnings.append(
@@ -284,11 +394,14 @@ def write(bpy_data, tasks, options):
         ):
             raise UserError(f"{ob.name}'s mesh changed while computing; nothing was written")
         problem = _mode_problem(ob) or _editable_problem(ob) or _attribute_problem(ob, options)
+        if task.image_name:
+            problem = problem or _image_problem(bpy_data, task.image_name)
         if problem:
             raise UserError(problem + "; nothing was written")
         targets.append((ob, task))
 
     undo = []  # how to take back each change, most recent last
+    new_images = []  # (image, the name it takes once everything is written)
     try:
         for ob, task in targets:
             me = ob.data
@@ -300,6 +413,12 @@ def write(bpy_data, tasks, options):
                 )
             else:
                 colors = task.colors
+            # Restored last on failure: Blender 5.x keeps the names of removed attributes.
+            colors_before = (
+                me.color_attributes.active_color_name,
+                me.color_attributes.default_color_name,
+            )
+            undo.append((me, None, colors_before))
             data = {options.attribute_name: task.values}
             if options.normalized_name:
                 data[options.normalized_name] = task.normalized
@@ -318,21 +437,44 @@ def write(bpy_data, tasks, options):
                     undo.append((me, name, mesh_data.read_attribute(attribute)))
                 mesh_data.write_attribute(attribute, data[name])
             if options.color_name:
-                undo.append((me, None, me.color_attributes.active_color_name))
                 me.color_attributes.active_color = me.color_attributes[options.color_name]
             me.update()
+        # Images are made under a temporary name and replace the old ones (same name) only
+        # when everything else is written: users of an old image (materials) get the new one.
+        for _, task in targets:
+            if task.image is not None:
+                image = mesh_data.new_image(task.image_name + ".sdf-new", task.image)
+                new_images.append((image, task.image_name))
     except BaseException:
+        for image, _ in new_images:
+            bpy_data.images.remove(image)
         for me, name, before in reversed(undo):
             if name is None:
-                if before:
-                    me.color_attributes.active_color = me.color_attributes[before]
+                colors = me.color_attributes
+                colors.active_color_name, colors.default_color_name = before
             elif before is None:
                 me.attributes.remove(me.attributes[name])
             else:
                 mesh_data.write_attribute(me.attributes[name], before)
             me.update()
         raise
+    for image, name in new_images:
+        old = bpy_data.images.get((name, None))
+        if old is not None:
+            old.user_remap(image)
+            bpy_data.images.remove(old)
+        image.name = name
     return [ob for ob, _ in targets]
+
+
+def _image_problem(bpy_data, name):
+    if len(name.encode("utf-8")) > MAX_NAME_BYTES:
+        return f"Image name longer than {MAX_NAME_BYTES} bytes: {name!r}"
+    linked = [im for im in bpy_data.images if im.name == name and im.library is not None]
+    local = bpy_data.images.get((name, None))
+    if linked and local is None:
+        return f"Image {name!r} is linked from a library and cannot be replaced"
+    return None
 
 
 class Job:

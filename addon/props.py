@@ -70,6 +70,20 @@ POINTS_ITEMS = (
     ),
     ("vertices", "Vertices", "One value per vertex; POINT attributes"),
 )
+ACCEL_ITEMS = (
+    ("bvh", "BVH", "Binned-SAH bounding volume hierarchy"),
+    ("octree", "Octree", "The paper's octree (section 4.2)"),
+)
+SMOOTHING_ITEMS = (
+    ("none", "None", "The values as cast"),
+    ("kring", "K-Ring", "Gaussian over the rings of neighbouring faces on the mesh"),
+    (
+        "projected",
+        "Projected Points",
+        "Points moved inward by half their value, averaged in an octree (paper 4.4)",
+    ),
+    ("texture", "Texture Space", "Blurred in the UV layout, islands kept apart; needs a UV map"),
+)
 NORMALIZE_ITEMS = (
     ("linear", "Linear", "(x - min) / (max - min)"),
     (
@@ -122,6 +136,65 @@ def options():
             description="How the normalised attribute and the colours map values to [0, 1]",
             items=NORMALIZE_ITEMS,
             default="linear",
+        ),
+        "accel": EnumProperty(
+            name="Acceleration",
+            description="The structure rays are traced through",
+            items=ACCEL_ITEMS,
+            default="bvh",
+        ),
+        "smoothing": EnumProperty(
+            name="Smoothing",
+            description="Smoothing of the values after casting (paper 4.4)",
+            items=SMOOTHING_ITEMS,
+            default="none",
+        ),
+        "smoothing_rings": IntProperty(
+            name="Rings",
+            description="K-ring: rings of neighbours averaged (0: chosen from the face count)",
+            default=0,
+            min=0,
+            max=255,
+        ),
+        "smoothing_iterations": IntProperty(
+            name="Iterations",
+            description="Projected points: smoothing passes",
+            default=1,
+            min=1,
+            max=100,
+        ),
+        "texture_size": IntProperty(
+            name="Resolution",
+            description="Size in texels of the texture used by texture smoothing and the bake "
+            "(square)",
+            default=1024,
+            min=16,
+            max=16384,
+            soft_max=8192,
+        ),
+        "texture_radius": FloatProperty(
+            name="Radius",
+            description="Texture smoothing: blur reach in texels (0: 2 per 256 texels, paper)",
+            default=0.0,
+            min=0.0,
+            max=1024.0,
+        ),
+        "bake_image": BoolProperty(
+            name="Bake Image",
+            description="Also bake the normalised values into an image through a UV map "
+            "(packed into the .blend, replacing an image of the same name)",
+            default=False,
+        ),
+        "uv_map": StringProperty(
+            name="UV Map",
+            description="The UV map to bake through, and for texture smoothing (empty: the "
+            "active UV map)",
+            default="",
+        ),
+        "image_name": StringProperty(
+            name="Image",
+            description="Name of the baked image; {object} is replaced by the object's name",
+            default="{object}_sdf",
         ),
         "attribute_name": StringProperty(
             name="Attribute",

@@ -11,7 +11,7 @@
 #     behind `blender --command extension build --split-platforms` and `... validate`), run by
 #     a plain Python from the bpy package in .venv-bpy45 (made here when missing).
 #
-# Environment: PY311, PY313 (interpreters), BPY45_VENV (default .venv-bpy45).
+# Environment: PY311, PY313 (interpreters), BPY45_VENV (default .venv-bpy45), SDF_REUSE_WHEELS.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 ROOT=$PWD
@@ -44,11 +44,17 @@ if [ "$VERSION" != "$MANIFEST_VERSION" ]; then
   exit 1
 fi
 
-# 1. Wheels.
+# 1. Wheels. SDF_REUSE_WHEELS=1 keeps the last ones (to iterate on addon/ alone).
 WHEEL_DIR=build/ext-wheels
-rm -rf "$WHEEL_DIR"
+if [ "${SDF_REUSE_WHEELS:-0}" = 1 ] && [ "$(ls "$WHEEL_DIR"/*.whl 2>/dev/null | wc -l)" = 2 ]; then
+  PYTHONS=()
+  log "reusing the wheels in $WHEEL_DIR"
+else
+  PYTHONS=("$PY311" "$PY313")
+  rm -rf "$WHEEL_DIR"
+fi
 mkdir -p "$WHEEL_DIR"
-for PY in "$PY311" "$PY313"; do
+for PY in "${PYTHONS[@]}"; do
   TAG=$("$PY" -c 'import sys; print(f"cp{sys.version_info[0]}{sys.version_info[1]}")')
   VENV=build/ext-venv-$TAG
   if [ ! -x "$VENV/bin/python" ]; then

@@ -86,11 +86,35 @@ class VIEW3D_PT_shape_diameter_output(ShapeDiameterSubPanel, bpy.types.Panel):
         col.prop(settings, "color_name")
 
 
+class VIEW3D_PT_shape_diameter_smoothing(ShapeDiameterSubPanel, bpy.types.Panel):
+    bl_label = "Smoothing"
+
+    @classmethod
+    def poll(cls, context):
+        return core.has("smooth")
+
+    def draw_settings(self, layout, settings, context):
+        operators.draw_smoothing(layout, settings)
+
+
+class VIEW3D_PT_shape_diameter_bake(ShapeDiameterSubPanel, bpy.types.Panel):
+    bl_label = "Bake Image"
+
+    @classmethod
+    def poll(cls, context):
+        return core.has("smooth")
+
+    def draw_settings(self, layout, settings, context):
+        operators.draw_bake(layout, settings, context)
+
+
 class VIEW3D_PT_shape_diameter_engine(ShapeDiameterSubPanel, bpy.types.Panel):
     bl_label = "Engine"
 
     def draw_settings(self, layout, settings, context):
         layout.prop(settings, "engine")
+        if core.supports("accel"):
+            layout.prop(settings, "accel")
         layout.use_property_split = False
         draw_status(layout, with_engines=True)
 
@@ -124,7 +148,9 @@ classes = (
     VIEW3D_PT_shape_diameter,
     VIEW3D_PT_shape_diameter_rays,
     VIEW3D_PT_shape_diameter_mesh,
+    VIEW3D_PT_shape_diameter_smoothing,
     VIEW3D_PT_shape_diameter_output,
+    VIEW3D_PT_shape_diameter_bake,
     VIEW3D_PT_shape_diameter_engine,
     VIEW3D_PT_shape_diameter_result,
 )
