@@ -21,7 +21,9 @@ PANELS = (
     "VIEW3D_PT_shape_diameter",
     "VIEW3D_PT_shape_diameter_rays",
     "VIEW3D_PT_shape_diameter_mesh",
+    "VIEW3D_PT_shape_diameter_smoothing",
     "VIEW3D_PT_shape_diameter_output",
+    "VIEW3D_PT_shape_diameter_bake",
     "VIEW3D_PT_shape_diameter_engine",
     "VIEW3D_PT_shape_diameter_result",
 )
@@ -84,6 +86,15 @@ def test_everything_is_registered():
         "attribute_name",
         "normalized_name",
         "color_name",
+        "accel",
+        "smoothing",
+        "smoothing_rings",
+        "smoothing_iterations",
+        "texture_size",
+        "texture_radius",
+        "bake_image",
+        "uv_map",
+        "image_name",
     } <= set(operator.properties.keys())
     panel = bpy.types.VIEW3D_PT_shape_diameter
     assert (panel.bl_space_type, panel.bl_region_type, panel.bl_category) == (
@@ -127,6 +138,11 @@ class FakeLayout:
         assert (name in rna.properties) if rna is not None else hasattr(data, name), name
         getattr(data, name)
         self.log.append(("prop", name))
+
+    def prop_search(self, data, name, search_data, search_name, **kwargs):
+        self.prop(data, name, **kwargs)
+        assert search_name in search_data.bl_rna.properties, search_name
+        self.log.append(("prop_search", name))
 
     def operator(self, idname, **kwargs):
         self._icon(kwargs)
@@ -175,11 +191,19 @@ def test_panels_and_preferences_draw():
             ob = import_obj("suzanne.obj")
             assert bpy.ops.object.shape_diameter() == {"FINISHED"}
             select_only(ob)
-        for name in PANELS:
-            cls = getattr(bpy.types, name)
-            if hasattr(cls, "poll"):
-                cls.poll(bpy.context)
-            assert draw(cls, bpy.context), name
+        settings = bpy.context.scene.shape_diameter
+        for smoothing in ("none", "kring", "projected", "texture"):
+            settings.smoothing = smoothing
+            settings.bake_image = smoothing != "none"
+            for name in PANELS:
+                cls = getattr(bpy.types, name)
+                if hasattr(cls, "poll"):
+                    assert cls.poll(bpy.context), name
+                assert draw(cls, bpy.context), name
+        smoothing = draw(bpy.types.VIEW3D_PT_shape_diameter_smoothing, bpy.context)
+        assert ("prop", "texture_radius") in smoothing
+        bake = draw(bpy.types.VIEW3D_PT_shape_diameter_bake, bpy.context)
+        assert ("prop_search" if selected else "prop", "uv_map") in bake
         main = draw(bpy.types.VIEW3D_PT_shape_diameter, bpy.context)
         assert ("operator", "object.shape_diameter") in main
         result = draw(bpy.types.VIEW3D_PT_shape_diameter_result, bpy.context)
@@ -193,12 +217,14 @@ def test_panels_and_preferences_draw():
 
     operator = addon_module("operators").OBJECT_OT_shape_diameter
     names = bpy.ops.object.shape_diameter.get_rna_type().properties.keys()
-    fake = types.SimpleNamespace(
-        layout=FakeLayout([]),
-        sampling="random",
-        **{n: 0 for n in names if n not in ("rna_type", "sampling")},
-    )
-    operator.draw(fake, bpy.context)
+    for smoothing in ("none", "kring", "projected", "texture"):
+        fake = types.SimpleNamespace(
+            layout=FakeLayout([]),
+            sampling="random",
+            smoothing=smoothing,
+            **{n: 0 for n in names if n not in ("rna_type", "sampling", "smoothing")},
+        )
+        operator.draw(fake, bpy.context)
 
 
 def test_default_engine_preference():

@@ -221,3 +221,66 @@ def test_core_that_cannot_load_is_reported(monkeypatch):
     with pytest.raises(RuntimeError, match="core could not be loaded"):
         run()
     assert snapshot_all() == before
+
+
+def bake_without_uvs():
+    good, suzanne = suzanne_and_sphere()  # the sphere has a UV map, suzanne.obj none
+    select_only(good, suzanne)
+    return {"bake_image": True, "texture_size": 64}
+
+
+def bake_with_a_missing_uv_map():
+    good, _ = suzanne_and_sphere()
+    spot = import_obj("spot.obj")
+    select_only(good, spot)
+    return {"bake_image": True, "texture_size": 64, "uv_map": "NoSuchMap"}
+
+
+def texture_smoothing_without_uvs():
+    good, suzanne = suzanne_and_sphere()
+    select_only(suzanne, good)
+    return {"smoothing": "texture", "texture_size": 64}
+
+
+def one_image_for_two_objects():
+    good, _ = suzanne_and_sphere()
+    spot = import_obj("spot.obj")
+    select_only(good, spot)
+    return {"bake_image": True, "texture_size": 64, "image_name": "shared"}
+
+
+BAKE_CASES = [
+    (bake_without_uvs, "suzanne has no UV map, needed by the bake"),
+    (bake_with_a_missing_uv_map, "Sphere has no UV map 'NoSuchMap', needed by the bake"),
+    (texture_smoothing_without_uvs, "suzanne has no UV map, needed by texture smoothing"),
+    (one_image_for_two_objects, "Several objects would bake into one image"),
+]
+
+
+@pytest.mark.parametrize("setup, message", BAKE_CASES, ids=[c[0].__name__ for c in BAKE_CASES])
+def test_bake_failure_is_reported_and_changes_nothing(setup, message):
+    options = setup()
+    before = snapshot_all()
+    images = sorted(bpy.data.images.keys())
+    with pytest.raises(RuntimeError, match=message):
+        run(**options)
+    assert snapshot_all() == before
+    assert sorted(bpy.data.images.keys()) == images
+
+
+def test_an_image_failing_is_rolled_back_with_the_attributes(monkeypatch):
+    mesh_data = addon_module("mesh_data")
+    good, _ = suzanne_and_sphere()
+    spot = import_obj("spot.obj")
+    select_only(good, spot)
+
+    def failing(name, rgba):
+        raise MemoryError("no memory for the image")
+
+    monkeypatch.setattr(mesh_data, "new_image", failing)
+    before = snapshot_all()
+    images = sorted(bpy.data.images.keys())
+    with pytest.raises(RuntimeError, match="no memory for the image"):
+        run(rays=8, bake_image=True, texture_size=64)
+    assert snapshot_all() == before
+    assert sorted(bpy.data.images.keys()) == images

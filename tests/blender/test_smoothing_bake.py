@@ -1,0 +1,135 @@
+# SPDX-License-Identifier: GPL-3.0-or-later
+"""Smoothing methods and the UV bake, on Spot (tests/data/spot.obj: triangles with UVs, UV
+seams), against shape_diameter.compute and shape_diameter.smooth on the same triangles."""
+
+import bpy
+import numpy as np
+import pytest
+import shape_diameter
+from helpers import addon_module, attribute_array, import_obj, run, world_triangles
+
+
+def corner_uvs(ob, name=None):
+    """(m, 3, 2): the UV map at each loop triangle's corners, read independently here."""
+    me = ob.data
+    layer = me.uv_layers[name] if name else me.uv_layers.active
+    uv = np.empty(len(me.loops) * 2, dtype=np.float32)
+    layer.data.foreach_get("uv", uv)
+    me.calc_loop_triangles()
+    loops = np.empty(len(me.loop_triangles) * 3, dtype=np.int32)
+    me.loop_triangles.foreach_get("loops", loops)
+    return uv.reshape(-1, 2)[loops].reshape(-1, 3, 2)
+
+
+SMOOTHING = {
+    "kring": ({"smoothing_rings": 2}, {"k": 2}),
+    "projected": ({"smoothing_iterations": 2}, {"iterations": 2}),
+    "texture": (
+        {"texture_size": 256, "texture_radius": 3.0},
+        {"texture_size": 256, "radius": 3.0},
+    ),
+}
+
+
+@pytest.mark.parametrize("method", SMOOTHING)
+def test_smoothing_methods(method):
+    ob = import_obj("spot.obj")
+    operator_options, smooth_options = SMOOTHING[method]
+    assert run(rays=16) == {"FINISHED"}
+    plain = attribute_array(ob.data, "sdf")
+    assert run(rays=16, smoothing=method, **operator_options) == {"FINISHED"}
+    smoothed = attribute_array(ob.data, "sdf")
+
+    v, t, p = world_triangles(ob)
+    assert (p == np.arange(len(p))).all()  # Spot is all triangles: polygon i = triangle i
+    raw = shape_diameter.compute(v, t, rays=16).values
+    expected = shape_diameter.smooth(
+        v, t, raw, method, uvs=corner_uvs(ob), points="faces", **smooth_options
+    )
+    np.testing.assert_allclose(smoothed, expected, rtol=1e-5, atol=1e-7)
+    assert not np.allclose(smoothed, plain)
+    assert smoothed.min() >= plain.min() - 1e-6 and smoothed.max() <= plain.max() + 1e-6
+    assert np.std(smoothed) < np.std(plain)
+
+
+def test_smoothing_on_vertices():
+    ob = import_obj("spot.obj")
+    assert run(rays=16, points="vertices", smoothing="kring", smoothing_rings=1) == {"FINISHED"}
+    v, t, _ = world_triangles(ob)
+    raw = shape_diameter.compute(v, t, rays=16, points="vertices").values
+    expected = shape_diameter.smooth(v, t, raw, "kring", points="vertices", k=1)
+    np.testing.assert_allclose(attribute_array(ob.data, "sdf"), expected, rtol=1e-5, atol=1e-7)
+
+
+def image_pixels(image):
+    width, height = image.size
+    out = np.empty(width * height * 4, dtype=np.float32)
+    image.pixels.foreach_get(out)
+    return out.reshape(height, width, 4)
+
+
+@pytest.mark.parametrize("smoothing", ["none", "texture"])
+def test_uv_bake(smoothing):
+    ob = import_obj("spot.obj")
+    options = {"texture_radius": 2.0} if smoothing == "texture" else {}
+    assert run(rays=16, bake_image=True, texture_size=128, smoothing=smoothing, **options) == {
+        "FINISHED"
+    }
+    image = bpy.data.images["spot_sdf"]
+    assert tuple(image.size) == (128, 128)
+    assert image.is_float and image.packed_file is not None
+    pixels = image_pixels(image)
+    covered = pixels[..., 3] > 0
+    assert 0.3 < covered.mean() < 0.95  # Spot's islands, and empty space between them
+    grey = pixels[covered][:, :3]
+    assert (grey[:, 0] == grey[:, 1]).all() and (grey[:, 1] == grey[:, 2]).all()
+    assert grey.min() >= 0.0 and grey.max() <= 1.0 and np.std(grey[:, 0]) > 0.05  # not blank
+    assert (pixels[~covered][:, :3] == 0).all()
+
+    # The same bake from the package: the normalised attribute, through the same UV corners.
+    normalized = attribute_array(ob.data, "sdf_normalized")
+    v, t, _ = world_triangles(ob)
+    expected = shape_diameter.smooth(
+        v,
+        t,
+        normalized,
+        "texture",
+        uvs=corner_uvs(ob),
+        points="faces",
+        texture_size=128,
+        radius=2.0 if smoothing == "texture" else 0.0,
+        margin=4,
+        return_image=True,
+    )
+    np.testing.assert_allclose(pixels[..., 0], expected.image, atol=1e-6)
+    np.testing.assert_array_equal(covered, expected.mask)
+
+
+def test_bake_replaces_the_image_and_keeps_its_users():
+    ob = import_obj("spot.obj")
+    old = bpy.data.images.new("spot_sdf", 32, 32)
+    material = bpy.data.materials.new("spot")
+    material.use_nodes = True
+    node = material.node_tree.nodes.new("ShaderNodeTexImage")
+    node.image = old
+    ob.data.materials.append(material)
+    assert run(rays=8, bake_image=True, texture_size=64) == {"FINISHED"}
+    assert [im.name for im in bpy.data.images if im.name.startswith("spot_sdf")] == ["spot_sdf"]
+    assert node.image == bpy.data.images["spot_sdf"]
+    assert tuple(node.image.size) == (64, 64) and node.image.is_float
+
+
+def test_bake_through_a_chosen_uv_map_and_the_api():
+    api = addon_module("api")
+    ob = import_obj("spot.obj")
+    second = ob.data.uv_layers.new(name="Flat")
+    uv = np.empty(len(ob.data.loops) * 2, dtype=np.float32)
+    ob.data.uv_layers[0].data.foreach_get("uv", uv)
+    second.data.foreach_set("uv", uv * 0.5)  # everything in the lower left quarter
+    result = api.compute_object(
+        ob, rays=8, bake_image=True, uv_map="Flat", texture_size=64, image_name="flat {object}"
+    )
+    assert result.image == "flat spot"
+    pixels = image_pixels(bpy.data.images["flat spot"])
+    covered = pixels[..., 3] > 0
+    assert covered[:28, :28].any() and not covered[36:, :].any() and not covered[:, 36:].any()
