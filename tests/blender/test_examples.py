@@ -45,6 +45,22 @@ def test_batch_example_processes_a_folder(tmp_path):
         assert me.color_attributes.active_color_name == "sdf_color"
 
 
+def test_readme_example(tmp_path):
+    meshes = tmp_path / "meshes"
+    meshes.mkdir()
+    for name in ("suzanne.obj", "spot.obj"):
+        shutil.copy(DATA / name, meshes / name)
+    run = blender("sdf_folder.py", meshes, tmp_path / "out")
+    assert run.returncode == 0, run.stdout[-2000:] + run.stderr[-2000:]
+    assert "suzanne.obj: suzanne 500 values" in run.stdout
+    assert "spot.obj: spot 5856 values" in run.stdout
+    for stem in ("suzanne", "spot"):
+        assert (tmp_path / "out" / f"{stem}.blend").exists()
+        assert (tmp_path / "out" / f"{stem}.sdf.npz").exists()
+    (meshes / "zzz_no_faces.obj").write_text("v 0 0 0\nv 1 0 0\nv 0 1 0\n")
+    assert blender("sdf_folder.py", meshes, tmp_path / "out2").returncode != 0
+
+
 def test_batch_example_fails_loudly(tmp_path):
     meshes = tmp_path / "meshes"
     meshes.mkdir()
