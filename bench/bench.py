@@ -141,7 +141,7 @@ def main():
                 if embree_mrays:
                     row["x_embree"] = row["mrays"] / embree_mrays
                 rows.append(row)
-                print(json.dumps(row), flush=True)
+                print(json.dumps({**row, "timings": t}), flush=True)
 
     def fmt(v, spec):
         return "—" if v is None else format(v, spec)

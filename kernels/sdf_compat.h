@@ -8,6 +8,13 @@
 
 #ifdef __OPENCL_VERSION__
 
+/* The same arithmetic as the host: no fused multiply-adds (x86-64 C++ has none without
+ * -mfma), so a ray computes to the same bits on every device. With correctly rounded
+ * division and square root (a build option) and the vector helpers below written out,
+ * OpenCL results equal the CPU engine's except where a device's sin/cos enter (random
+ * sampling). */
+#pragma OPENCL FP_CONTRACT OFF
+
 #define SDF_KERNEL_BEGIN
 #define SDF_KERNEL_END
 #define SDF_INLINE static inline
@@ -51,10 +58,6 @@ inline float3 sdf_vmax(float3 a, float3 b) { return glm::max(a, b); }
 // the box test runs these a dozen times per node. NaN-free inputs give the same result.
 inline float sdf_min(float a, float b) { return a < b ? a : b; }
 inline float sdf_max(float a, float b) { return a > b ? a : b; }
-using glm::cross;
-using glm::dot;
-using glm::length;
-using glm::normalize;
 using std::acos;
 using std::asin;
 using std::atan2;
@@ -70,5 +73,20 @@ using std::sqrt;
 }  // namespace sdf
 
 #endif
+
+SDF_KERNEL_BEGIN
+
+/* Vector helpers written out term by term, in one order, instead of the built-ins: OpenCL's
+ * dot, cross and normalize may fuse or approximate differently on each device. */
+SDF_INLINE float sdf_dot(float3 a, float3 b) { return a.x * b.x + a.y * b.y + a.z * b.z; }
+SDF_INLINE float3 sdf_cross(float3 a, float3 b) {
+  return make_float3(a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x);
+}
+SDF_INLINE float3 sdf_normalize(float3 v) {
+  float inv = 1.0f / sqrt(sdf_dot(v, v));
+  return make_float3(v.x * inv, v.y * inv, v.z * inv);
+}
+
+SDF_KERNEL_END
 
 #endif /* SDF_COMPAT_H */

@@ -40,17 +40,17 @@ SDF_INLINE void sdf_intersect_triangle(float3 o, float3 d, float tmin,
                                        SDF_GLOBAL const SdfTriangle* tri, SdfHit* hit) {
   float3 e1 = sdf_tri_e1(tri);
   float3 e2 = sdf_tri_e2(tri);
-  float3 p = cross(d, e2);
-  float det = dot(e1, p);
+  float3 p = sdf_cross(d, e2);
+  float det = sdf_dot(e1, p);
   if (det == 0.0f) return;
   float inv_det = 1.0f / det;
   float3 s = o - sdf_tri_v0(tri);
-  float u = dot(s, p) * inv_det;
+  float u = sdf_dot(s, p) * inv_det;
   if (u < -SDF_BARYCENTRIC_SLACK || u > 1.0f + SDF_BARYCENTRIC_SLACK) return;
-  float3 q = cross(s, e1);
-  float v = dot(d, q) * inv_det;
+  float3 q = sdf_cross(s, e1);
+  float v = sdf_dot(d, q) * inv_det;
   if (v < -SDF_BARYCENTRIC_SLACK || u + v > 1.0f + SDF_BARYCENTRIC_SLACK) return;
-  float t = dot(e2, q) * inv_det;
+  float t = sdf_dot(e2, q) * inv_det;
   if (t <= tmin || t > hit->t || (t == hit->t && tri->id >= hit->id)) return;
   hit->t = t;
   hit->det = det;

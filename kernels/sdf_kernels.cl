@@ -7,7 +7,9 @@
  * paper uses one work item per ray and a second kernel per point). Fused, no ray length ever
  * reaches global memory (the paper stores rays x points floats), there is one launch instead
  * of two, and neighbouring work items (points in Morton order) still trace neighbouring rays
- * in lock step. SDF_MAX_RAYS is set by the host to the run's ray count. Results are written
+ * in lock step. SDF_MAX_RAYS is set by the host to the run's ray count. Deterministic ray
+ * sets (Fibonacci, CGAL) come from the host as a table (direction, angle), computed once with
+ * the host's sin and cos, so every device casts the very same rays as the CPU engine. Results are written
  * in launch order (raw[first + gid]), so each launch reads back one contiguous range. */
 #include "sdf_bvh_traverse.h"
 #include "sdf_octree.h"
@@ -36,13 +38,23 @@
   float angles[SDF_MAX_RAYS];                                                         \
   int kept = 0;                                                                       \
   for (int r = 0; r < params.rays; ++r) {                                             \
-    float3 dir_local = sdf_ray_local(params.sampling, r, params.rays, params.one_minus_cos_half,\
-                                 params.sin_half, params.seed, p);                    \
+    float3 dir_local;                                                                 \
+    float angle;                                                                      \
+    if (params.sampling == SDF_SAMPLING_RANDOM) {                                     \
+      dir_local = sdf_ray_local(params.sampling, r, params.rays,                      \
+                                params.one_minus_cos_half, params.sin_half,           \
+                                params.seed, p);                                      \
+      angle = sdf_ray_angle(dir_local);                                               \
+    } else {                                                                          \
+      float4 table = local_rays[r];                                                   \
+      dir_local = table.xyz;                                                          \
+      angle = table.w;                                                                \
+    }                                                                                 \
     float3 d = sdf_to_world(dir_local, b1, b2, axis);                                 \
     SdfHit hit = CLOSEST_HIT;                                                         \
     if (hit.det < 0.0f && hit.t < INFINITY) {                                         \
       lengths[kept] = hit.t;                                                          \
-      angles[kept] = sdf_ray_angle(dir_local);                                        \
+      angles[kept] = angle;                                                           \
       ++kept;                                                                         \
     }                                                                                 \
   }                                                                                   \
@@ -51,7 +63,8 @@
 
 __kernel void sdf_cast_bvh(__global const SdfBvhNode* nodes, __global const SdfTriangle* tris,
                            __global const float* origins, __global const float* axes,
-                           __global const float* tangents, __global const int* own_face, __global const uint* order,
+                           __global const float* tangents, __global const int* own_face,
+                           __global const uint* order, __global const float4* local_rays,
                            SdfCastParams params, __global float* raw,
                            __global int* valid_rays) {
   SDF_CAST_BODY(sdf_bvh_closest_hit(nodes, tris, origin, d, params.tmin, own))
@@ -60,7 +73,8 @@ __kernel void sdf_cast_bvh(__global const SdfBvhNode* nodes, __global const SdfT
 __kernel void sdf_cast_octree(__global const uint* nodes, __global const uint* leaves,
                               __global const SdfTriangle* tris, SdfOctreeRoot root,
                               __global const float* origins, __global const float* axes,
-                              __global const float* tangents, __global const int* own_face, __global const uint* order,
+                              __global const float* tangents, __global const int* own_face,
+                              __global const uint* order, __global const float4* local_rays,
                               SdfCastParams params, __global float* raw,
                               __global int* valid_rays) {
   SDF_CAST_BODY(sdf_octree_closest_hit(nodes, leaves, tris, root, origin, d, params.tmin, own))

@@ -44,7 +44,7 @@ SDF_INLINE float3 sdf_ray_local(int sampling, int i, int n, float one_minus_cos_
     float q = (float)i * SDF_GOLDEN_ANGLE;
     float3 v = make_float3(sin_half * radius * cos(q), sin_half * radius * sin(q),
                            1.0f - one_minus_cos_half);
-    return normalize(v);
+    return sdf_normalize(v);
   }
   float one_minus_z, phi;
   if (sampling == SDF_SAMPLING_RANDOM) {
@@ -68,7 +68,7 @@ SDF_INLINE float sdf_ray_angle(float3 dir_local) {
  * set turns with the mesh: rotating a mesh rotates its rays, and the values stay put). */
 SDF_INLINE void sdf_frame_from_tangent(float3 n, float3 tangent, float3* b1, float3* b2) {
   *b1 = tangent;
-  *b2 = cross(n, tangent);
+  *b2 = sdf_cross(n, tangent);
 }
 
 /* CGAL's frame: Plane_3(center, n).base1() and base2() = cross(n, base1), both normalised
@@ -89,8 +89,8 @@ SDF_INLINE void sdf_frame_cgal(float3 n, float3* b1, float3* b2) {
   } else {
     base1 = make_float3(-n.y, n.x, 0.0f);
   }
-  *b1 = normalize(base1);
-  *b2 = normalize(cross(n, base1));
+  *b1 = sdf_normalize(base1);
+  *b2 = sdf_normalize(sdf_cross(n, base1));
 }
 
 /* CGAL sampling reproduces CGAL's frame; the others turn with the mesh. */

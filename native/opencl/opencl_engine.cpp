@@ -53,6 +53,16 @@ DeviceState& state_of(const Device& device) {
   return *slot;
 }
 
+// -cl-fp32-correctly-rounded-divide-sqrt where the device offers it: with it, division and
+// square root round as on the host (OpenCL otherwise allows 2.5 and 3 ulp).
+std::string build_options(const Device& device, int rays) {
+  std::string options = "-cl-std=CL1.2 -DSDF_MAX_RAYS=" + std::to_string(std::max(rays, 1));
+  cl_device_fp_config fp = 0;
+  api()->clGetDeviceInfo(device.id, CL_DEVICE_SINGLE_FP_CONFIG, sizeof fp, &fp, nullptr);
+  if (fp & CL_FP_CORRECTLY_ROUNDED_DIVIDE_SQRT) options += " -cl-fp32-correctly-rounded-divide-sqrt";
+  return options;
+}
+
 cl_program program_for(const Device& device, DeviceState& s, const std::string& options) {
   auto it = s.programs.find(options);
   if (it != s.programs.end()) return it->second;
@@ -145,8 +155,7 @@ void run_device(const Device& device, const Scene& scene, const SamplePoints& po
   DeviceState& s = state_of(device);
   std::lock_guard<std::mutex> device_lock(s.mutex);
   const std::size_t n = points.size();
-  const std::string options =
-      "-cl-std=CL1.2 -DSDF_MAX_RAYS=" + std::to_string(std::max(cone.rays, 1));
+  const std::string options = build_options(device, cone.rays);
 
   std::vector<std::size_t> sizes = {3 * n * sizeof(float),        3 * n * sizeof(float),
                                     n * sizeof(std::int32_t),       n * sizeof(std::uint32_t),
@@ -173,6 +182,16 @@ void run_device(const Device& device, const Scene& scene, const SamplePoints& po
   Buffer raw(s, sizes[4], nullptr);
   Buffer valid(s, sizes[5], nullptr);
   Buffer tangents(s, sizes[6], points.tangents.data());
+  // The host's ray table (direction, angle) for deterministic samplings; random rays are
+  // generated on the device and read none of it.
+  std::vector<float> table(4 * std::max<std::size_t>(cone.local.size(), 1), 0.0f);
+  for (std::size_t i = 0; i < cone.local.size(); ++i) {
+    table[4 * i] = cone.local[i].x;
+    table[4 * i + 1] = cone.local[i].y;
+    table[4 * i + 2] = cone.local[i].z;
+    table[4 * i + 3] = cone.local_angle[i];
+  }
+  Buffer local_rays(s, table.size() * sizeof(float), table.data());
   std::unique_ptr<Buffer> accel0, accel1, accel2;
   std::unique_ptr<Kernel> kernel;
   kern::SdfCastParams params{};
@@ -205,6 +224,7 @@ void run_device(const Device& device, const Scene& scene, const SamplePoints& po
   kernel->arg(a++, tangents.get());
   kernel->arg(a++, own_face.get());
   kernel->arg(a++, order_buffer.get());
+  kernel->arg(a++, local_rays.get());
   const cl_uint params_index = a++;
   kernel->arg(a++, raw.get());
   kernel->arg(a++, valid.get());
@@ -344,7 +364,7 @@ std::vector<std::uint32_t> probe_layout(int index) {
   const Device& device = *select_devices("opencl:" + std::to_string(index)).front();
   DeviceState& s = state_of(device);
   std::lock_guard<std::mutex> lock(s.mutex);
-  cl_program program = program_for(device, s, "-cl-std=CL1.2 -DSDF_MAX_RAYS=1");
+  cl_program program = program_for(device, s, build_options(device, 1));
   Kernel kernel(program, "sdf_layout_probe");
   std::vector<std::uint32_t> out(16, 0);
   Buffer buffer(s, bytes_of(out), out.data());
