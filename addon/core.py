@@ -68,10 +68,13 @@ def supports(option):
         return False
 
 
-def compute(vertices, triangles, options, progress=None):
+def compute(vertices, triangles, options, progress=None, uvs=None):
     """shape_diameter.compute on one triangle mesh. `options` holds compute()'s keywords
-    (rays, cone_angle, sampling, seed, points, normalize, engine, ...); `progress` is called
-    with the fraction done and may raise to cancel."""
+    (rays, cone_angle, sampling, seed, points, normalize, engine, accel, smoothing, ...);
+    `uvs` (m, 3, 2) per triangle corner, for texture smoothing; `progress` is called with the
+    fraction done and may raise to cancel."""
+    if uvs is not None and options.get("smoothing") == "texture":
+        options = dict(options, uvs=uvs)
     return load().compute(vertices, triangles, progress=progress, **options)
 
 
@@ -92,21 +95,6 @@ def has(name):
         return callable(getattr(load(), name, None))
     except CoreUnavailable:
         return False
-
-
-def smooth(vertices, triangles, values, method, points, uvs, options, progress=None):
-    """shape_diameter.smooth: the field smoothed by 'kring', 'projected' or 'texture' (which
-    needs per-corner uvs (m, 3, 2))."""
-    return load().smooth(
-        vertices,
-        triangles,
-        values,
-        method,
-        uvs=uvs,
-        points=points,
-        progress=progress,
-        **options,
-    )
 
 
 def bake(vertices, triangles, values, points, uvs, size, radius, margin, progress=None):

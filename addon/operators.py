@@ -185,7 +185,7 @@ class OBJECT_OT_shape_diameter(bpy.types.Operator):
             layout.prop(self, name)
         if core.supports("accel"):
             layout.prop(self, "accel")
-        if core.has("smooth"):
+        if core.supports("smoothing"):
             draw_smoothing(layout, self)
         for name in ("attribute_name", "normalized_name", "color_name"):
             layout.prop(self, name)

@@ -37,9 +37,9 @@ SMOOTHING_METHODS = ("none", "kring", "projected", "texture")
 @dataclass
 class Options:
     """What a run computes and writes: shape_diameter.compute()'s keywords (COMPUTE_KEYS,
-    plus OPTIONAL_COMPUTE_KEYS where the core has them), smoothing through
-    shape_diameter.smooth(), the outputs, and `extra`: further compute() keywords, checked
-    against compute()'s signature."""
+    OPTIONAL_COMPUTE_KEYS where the core has them, smoothing and its options), the outputs,
+    the bake, and `extra`: further compute() keywords, checked against compute()'s
+    signature."""
 
     rays: int = 30
     cone_angle: float = 120.0
@@ -103,6 +103,9 @@ class Options:
                 options[key] = value
             elif value != default:
                 raise UserError(f"This build of the core has no {key!r} option")
+        if self.smoothing != "none":
+            options["smoothing"] = self.smoothing
+            options["smoothing_options"] = self.smoothing_options()
         options.update(self.extra)
         return options
 
@@ -134,8 +137,10 @@ class Options:
             raise UserError(f"smoothing must be one of {SMOOTHING_METHODS}, got {self.smoothing!r}")
         if self.bake_image and not self.image_name.replace("{object}", ""):
             raise UserError("The image name is empty")
-        if (self.smoothing != "none" or self.bake_image) and not core.has("smooth"):
-            raise UserError("This build of the core has no smoothing (shape_diameter.smooth)")
+        if self.smoothing != "none" and not core.supports("smoothing"):
+            raise UserError("This build of the core has no smoothing")
+        if self.bake_image and not core.has("smooth"):
+            raise UserError("This build of the core cannot bake (no shape_diameter.smooth)")
 
 
 @dataclass
@@ -316,24 +321,11 @@ def compute(tasks, options, progress=None, cancelled=None):
 
         step(0.0)
         mesh = task.mesh
-        result = core.compute(mesh.vertices, mesh.triangles, compute_options, step)
-        values = result.values
-        if options.smoothing != "none":
-            values = core.smooth(
-                mesh.vertices,
-                mesh.triangles,
-                values,
-                options.smoothing,
-                options.points,
-                task.corner_uvs,
-                options.smoothing_options(),
-                step,
-            )
+        # Smoothing, when chosen, is the core's too: compute() casts, then smooths
+        # (Result.values; Result.raw keeps the values as cast).
+        result = core.compute(mesh.vertices, mesh.triangles, compute_options, step, task.corner_uvs)
         if options.points == "faces":
-            task.values = polygon_means(values, mesh)
-            task.normalized = core.normalize(task.values, options.normalize)
-        elif options.smoothing != "none":
-            task.values = np.asarray(values, dtype=np.float32)
+            task.values = polygon_means(result.values, mesh)
             task.normalized = core.normalize(task.values, options.normalize)
         else:
             task.values = np.asarray(result.values, dtype=np.float32)

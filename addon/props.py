@@ -2,8 +2,8 @@
 """The run options as Blender properties, defined once and used by the operator and by the
 panel's per-scene settings (which the panel's button copies into the operator).
 
-Options the core does not have yet (accel, smoothing) are added to OPTIONS when it gains them;
-until then the add-on does not show them (see core.supports).
+Options that depend on the core (accel, smoothing: compute() keywords; the bake:
+shape_diameter.smooth) are drawn only where the core has them (core.supports, core.has).
 """
 
 import inspect

@@ -91,7 +91,7 @@ class VIEW3D_PT_shape_diameter_smoothing(ShapeDiameterSubPanel, bpy.types.Panel)
 
     @classmethod
     def poll(cls, context):
-        return core.has("smooth")
+        return core.supports("smoothing")
 
     def draw_settings(self, layout, settings, context):
         operators.draw_smoothing(layout, settings)
