@@ -40,6 +40,11 @@ def _summary(tasks, seconds):
     return f"Shape Diameter: {names}; {triangles} triangles, {engine}, {seconds:.2f} s"
 
 
+def can_run_modal(context):
+    """Timers and modal handlers need a window; `blender -b` has none."""
+    return not bpy.app.background and context.window is not None
+
+
 def _redraw(context):
     screen = getattr(context, "screen", None)
     for area in screen.areas if screen else ():
@@ -111,7 +116,7 @@ class OBJECT_OT_shape_diameter(bpy.types.Operator):
 
     def invoke(self, context, event):
         global running
-        if bpy.app.background or context.window is None:
+        if not can_run_modal(context):
             return self.execute(context)
         self._started = time.perf_counter()
         try:

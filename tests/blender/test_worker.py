@@ -1,8 +1,10 @@
 # SPDX-License-Identifier: GPL-3.0-or-later
-"""The worker thread behind the interactive operator. Under `blender -b` (and in bpy from
-PyPI) there is no window, so modal operators and timers cannot run: these tests drive
-process.Job, the part of the modal path that does the work, directly from the main thread
-as the modal timer does, and check the operator's guard while a job runs."""
+"""The interactive path of the operator. Under `blender -b` (and in bpy from PyPI) there is no
+window, so Blender itself cannot run a modal operator or a timer. These tests drive the parts
+by hand: process.Job (the worker thread) polled from the main thread as the modal timer does,
+and the operator's own invoke() and modal() on a stand-in instance and context, fed the
+TIMER and ESC events Blender would send; plus the guard while a job runs. What they cannot
+show: Blender's event loop calling modal(), the progress in the status bar, redraws."""
 
 import time
 
@@ -78,3 +80,104 @@ def test_invoke_runs_synchronously_in_background():
     assert bpy.app.background
     assert bpy.ops.object.shape_diameter("INVOKE_DEFAULT", rays=4) == {"FINISHED"}
     assert "sdf" in bpy.context.active_object.data.attributes
+
+
+class FakeWindowManager:
+    """What the modal path asks of the window manager, recorded."""
+
+    def __init__(self):
+        self.calls = []
+
+    def __getattr__(self, name):  # event_timer_add, progress_update, modal_handler_add, ...
+        return lambda *args, **kwargs: self.calls.append(name) or name
+
+
+def modal_operator(monkeypatch, **values):
+    """The operator's own invoke() and modal() on a stand-in instance and context: the parts
+    a headless Blender cannot drive (no window, no event loop), driven by hand with the
+    events Blender would send. Returns (operator, context, reports)."""
+    import dataclasses
+    import functools
+    import math
+    import types
+
+    operators = addon_module("operators")
+    process = addon_module("process")
+    monkeypatch.setattr(operators, "can_run_modal", lambda context: True)
+    options = {
+        f.name: getattr(process.Options(), f.name)
+        for f in dataclasses.fields(process.Options)
+        if f.name != "extra"
+    }
+    options.update(cone_angle=math.radians(120.0), **values)
+    reports = []
+    op = types.SimpleNamespace(report=lambda kind, text: reports.append((kind, text)), **options)
+    cls = operators.OBJECT_OT_shape_diameter
+    for name in ("_options", "_prepare", "_finish", "_report_error", "_stop", "invoke", "modal"):
+        setattr(op, name, functools.partial(getattr(cls, name), op))
+    context = types.SimpleNamespace(
+        window=object(),
+        window_manager=FakeWindowManager(),
+        workspace=None,
+        screen=None,
+        selected_objects=bpy.context.selected_objects,
+        evaluated_depsgraph_get=bpy.context.evaluated_depsgraph_get,
+        preferences=bpy.context.preferences,
+    )
+    return op, context, reports
+
+
+def event(kind, value="NOTHING"):
+    import types
+
+    return types.SimpleNamespace(type=kind, value=value)
+
+
+def test_modal_run_writes_when_the_job_is_done(monkeypatch):
+    operators = addon_module("operators")
+    ob = big_sphere()
+    op, context, reports = modal_operator(monkeypatch, rays=8)
+    assert op.invoke(context, event("LEFTMOUSE")) == {"RUNNING_MODAL"}
+    assert operators.running is not None and not bpy.ops.object.shape_diameter.poll()
+    assert "modal_handler_add" in context.window_manager.calls
+    assert op.modal(context, event("MOUSEMOVE")) == {"PASS_THROUGH"}
+    while True:
+        result = op.modal(context, event("TIMER"))
+        if result != {"PASS_THROUGH"}:
+            break
+        assert "sdf" not in ob.data.attributes  # nothing is written before the end
+        time.sleep(0.01)
+    assert result == {"FINISHED"}
+    assert operators.running is None
+    assert "sdf" in ob.data.attributes
+    assert reports[-1][0] == {"INFO"} and "Shape Diameter: Sphere" in reports[-1][1]
+    assert "event_timer_remove" in context.window_manager.calls
+
+
+def test_modal_run_cancels_on_escape(monkeypatch):
+    operators = addon_module("operators")
+    ob = big_sphere()
+    op, context, reports = modal_operator(monkeypatch, rays=256)
+    assert op.invoke(context, event("LEFTMOUSE")) == {"RUNNING_MODAL"}
+    assert op.modal(context, event("ESC", "PRESS")) == {"CANCELLED"}
+    assert operators.running is None
+    assert "sdf" not in ob.data.attributes
+    assert reports == [({"WARNING"}, "Shape Diameter cancelled: nothing was changed")]
+
+
+def test_modal_run_reports_an_engine_error(monkeypatch):
+    operators = addon_module("operators")
+    core = addon_module("core")
+    ob = big_sphere()
+
+    def broken(*args, **kwargs):
+        raise RuntimeError("device lost")
+
+    monkeypatch.setattr(core, "compute", broken)
+    op, context, reports = modal_operator(monkeypatch)
+    assert op.invoke(context, event("LEFTMOUSE")) == {"RUNNING_MODAL"}
+    while (result := op.modal(context, event("TIMER"))) == {"PASS_THROUGH"}:
+        time.sleep(0.01)
+    assert result == {"CANCELLED"} and operators.running is None
+    assert reports == [({"ERROR"}, "Shape Diameter failed: RuntimeError: device lost")]
+    assert "sdf" not in ob.data.attributes
