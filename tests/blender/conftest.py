@@ -9,65 +9,18 @@ Collecting installs the built extension zip through Blender's own install path
 test starts from an empty factory file.
 """
 
-import glob
+import importlib.util
 import os
 import sys
 import tempfile
 from pathlib import Path
 
-# Blender reads BLENDER_USER_RESOURCES when bpy is imported: never touch the real user's
-# Blender directories.
-os.environ.setdefault("BLENDER_USER_RESOURCES", tempfile.mkdtemp(prefix="sdf-blender-user-"))
-
-import bpy
-import pytest
-
-sys.path.insert(0, str(Path(__file__).parent))
-
-ROOT = Path(__file__).resolve().parents[2]
-ADDON = "bl_ext.user_default.shape_diameter"
-
-
-def extension_zip():
-    path = os.environ.get("SDF_EXTENSION_ZIP")
-    if path:
-        return os.path.abspath(path)
-    found = sorted(glob.glob(str(ROOT / "dist" / "shape_diameter-*-linux_x64.zip")))
-    if not found:
-        pytest.exit("no extension zip: run scripts/build_extension.sh first", returncode=2)
-    return found[-1]
-
-
-def _install():
-    user = os.environ["BLENDER_USER_RESOURCES"]
-    assert bpy.utils.user_resource("EXTENSIONS").startswith(user)
-    result = bpy.ops.extensions.package_install_files(
-        filepath=extension_zip(), repo="user_default", enable_on_install=True
-    )
-    assert result == {"FINISHED"}, result
-    assert ADDON in bpy.context.preferences.addons
-    # Saved, so that a new Blender process with the same user directory has it enabled
-    # (the README's headless example relies on this).
-    bpy.ops.wm.save_userpref()
-
-
-# Installed before the test modules are collected: they import the package from it.
-if ADDON not in bpy.context.preferences.addons:
-    _install()
-
-
-@pytest.fixture(scope="session")
-def extension():
-    import importlib
-
-    return importlib.import_module(ADDON)
-
-
-@pytest.fixture(autouse=True)
-def empty_file(extension):
-    bpy.ops.wm.read_homefile(use_empty=True, use_factory_startup=True)
-    yield
-    for ob in list(bpy.context.view_layer.objects):
-        if ob.mode != "OBJECT":
-            bpy.context.view_layer.objects.active = ob
-            bpy.ops.object.mode_set(mode="OBJECT")
+if importlib.util.find_spec("bpy") is None:
+    # Outside a bpy venv (`pytest tests` in .venv): nothing here can run.
+    collect_ignore_glob = ["*.py"]
+else:
+    # Blender reads BLENDER_USER_RESOURCES when bpy is imported: never touch the real
+    # user's Blender directories.
+    os.environ.setdefault("BLENDER_USER_RESOURCES", tempfile.mkdtemp(prefix="sdf-blender-user-"))
+    sys.path.insert(0, str(Path(__file__).parent))
+    from blender_session import *  # noqa: F403, E402  (installs the extension; fixtures)

@@ -295,3 +295,17 @@ def test_registers_when_the_native_core_cannot_load():
         [sys.executable, "-c", script], capture_output=True, text=True, cwd=ROOT, timeout=300
     )
     assert "CORE-UNAVAILABLE-OK" in out.stdout, out.stdout[-3000:] + out.stderr[-3000:]
+
+
+def test_show_colors_operator():
+    """view3d.shape_diameter_show on a stand-in 3D view (headless Blender has none)."""
+    show = addon_module("operators").VIEW3D_OT_shape_diameter_show
+    assert not bpy.ops.view3d.shape_diameter_show.poll()  # no 3D view here
+    shading = types.SimpleNamespace(type="WIREFRAME", color_type="MATERIAL")
+    context = types.SimpleNamespace(
+        space_data=types.SimpleNamespace(type="VIEW_3D", shading=shading)
+    )
+    assert show.execute(types.SimpleNamespace(), context) == {"FINISHED"}
+    assert (shading.type, shading.color_type) == ("SOLID", "VERTEX")
+    enum = bpy.types.View3DShading.bl_rna.properties["color_type"].enum_items
+    assert enum["VERTEX"].name == "Attribute"  # what the user sees in the shading popover
