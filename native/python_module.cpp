@@ -66,6 +66,13 @@ const char* fill_name(sdf::FillResult r) {
   return "?";
 }
 
+sdf::Orientation parse_orientation(const std::string& name) {
+  if (name == "auto") return sdf::Orientation::Auto;
+  if (name == "as_is") return sdf::Orientation::AsIs;
+  if (name == "flip") return sdf::Orientation::Flip;
+  throw std::invalid_argument("orientation must be 'auto', 'as_is' or 'flip', got '" + name + "'");
+}
+
 sdf::Accel parse_accel(const std::string& name) {
   if (name == "bvh") return sdf::Accel::Bvh;
   if (name == "octree") return sdf::Accel::Octree;
@@ -75,7 +82,8 @@ sdf::Accel parse_accel(const std::string& name) {
 py::dict compute(const Doubles& vertices, const Int64s& triangles, int rays, double cone_angle,
                  const std::string& sampling, std::uint32_t seed, const std::string& points,
                  unsigned threads, const py::object& progress, const std::string& engine,
-                 const std::string& accel, int octree_max_depth, int octree_leaf_size) {
+                 const std::string& accel, int octree_max_depth, int octree_leaf_size,
+                 const std::string& orientation) {
   sdf::Options options;
   options.rays = rays;
   options.cone_angle = cone_angle;
@@ -87,6 +95,7 @@ py::dict compute(const Doubles& vertices, const Int64s& triangles, int rays, dou
   options.accel = parse_accel(accel);
   options.octree.max_depth = octree_max_depth;
   options.octree.leaf_size = octree_leaf_size;
+  options.orientation = parse_orientation(orientation);
 
   sdf::ProgressFn report;
   if (!progress.is_none()) {
@@ -113,6 +122,8 @@ py::dict compute(const Doubles& vertices, const Int64s& triangles, int rays, dou
   result["fill"] = fill_name(out.fill);
   result["engine"] = out.engine;
   result["device_bytes"] = out.device_bytes;
+  result["flipped_faces"] = out.orientation.flipped_faces;
+  result["parts"] = out.orientation.parts;
   return result;
 }
 
@@ -228,7 +239,7 @@ PYBIND11_MODULE(_core, m) {
         py::arg("cone_angle"), py::arg("sampling"), py::arg("seed"), py::arg("points"),
         py::arg("threads"), py::arg("progress"), py::arg("engine") = "cpu",
         py::arg("accel") = "bvh", py::arg("octree_max_depth") = 10,
-        py::arg("octree_leaf_size") = 8);
+        py::arg("octree_leaf_size") = 8, py::arg("orientation") = "auto");
   m.def("opencl_devices", &opencl_devices);
   m.def("opencl_unavailable_reason", &opencl_unavailable_reason);
   m.def("host_layout", &host_layout);

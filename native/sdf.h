@@ -10,6 +10,7 @@
 #include "fill.h"
 #include "mesh.h"
 #include "octree.h"
+#include "orientation.h"
 #include "parallel.h"
 #include "rays.h"
 #include "sampling.h"
@@ -29,6 +30,7 @@ struct Options {
   std::string engine = "cpu";
   Accel accel = Accel::Bvh;
   OctreeConfig octree;
+  Orientation orientation = Orientation::Auto;
 };
 
 struct Output {
@@ -38,6 +40,7 @@ struct Output {
   FillResult fill = FillResult::NothingToFill;
   std::string engine;                      // what ran, e.g. "cpu (2 threads, bvh)"
   std::uint64_t device_bytes = 0;          // OpenCL buffers on the device (0 on the CPU)
+  OrientationReport orientation;           // faces the computation reversed
 };
 
 Output compute(const Mesh& mesh, const Options& options, const ProgressFn& progress = nullptr);

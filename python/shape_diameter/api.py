@@ -39,6 +39,9 @@ class Result:
     rays: int = 30
     device_memory: int = 0
     """Bytes of OpenCL buffers the run used on its device (0 for the CPU engine)."""
+    flipped_faces: int = 0
+    """Faces whose winding the computation reversed (orientation='auto' or 'flip'); the
+    caller's arrays are never changed."""
 
 
 def engines() -> list:
@@ -120,6 +123,7 @@ def _check_choice(name, value, choices):
 
 
 ACCELERATIONS = ("bvh", "octree")
+ORIENTATIONS = ("auto", "as_is", "flip")
 
 
 def _check_options(rays, cone_angle, sampling, points, normalize_method, engine, progress, seed):
@@ -157,6 +161,7 @@ def compute(
     accel: str = "bvh",
     octree_depth: int = 10,
     octree_leaf_size: int = 8,
+    orientation: str = "auto",
     smoothing: str = "none",
     uvs=None,
     smoothing_options: Optional[dict] = None,
@@ -179,6 +184,9 @@ def compute(
         (every GPU, sharing the points; same results as one) or 'opencl:<part of a device
         name>'. With 'auto', an OpenCL failure falls back to the CPU engine and
         Result.engine says why.
+    orientation: 'auto' (default: faces are made consistent with their neighbours, then each
+        part whose signed volume is clearly negative is turned outward, e.g. meshes exported
+        inside out), 'as_is' (trust the winding) or 'flip' (reverse every face).
     accel: 'bvh' (binned-SAH bounding volume hierarchy) or 'octree' (the paper's, section 4.2,
         with octree_depth levels at most and octree_leaf_size triangles per unsplit cell).
     progress: called with the fraction done in [0, 1] from the calling thread; if it raises,
@@ -199,6 +207,7 @@ def compute(
     _check_options(rays, cone_angle, sampling, points, normalize, engine, progress, seed)
     _check_integer("threads", threads, 0, 4096)
     _check_choice("accel", accel, ACCELERATIONS)
+    _check_choice("orientation", orientation, ORIENTATIONS)
     _check_integer("octree_depth", octree_depth, 0, 16)
     _check_integer("octree_leaf_size", octree_leaf_size, 1, 2**31 - 1)
     check_smoothing(smoothing, smoothing_options, uvs=uvs, face_count=len(t),
@@ -215,6 +224,7 @@ def compute(
         return _core.compute(
             v, t, int(rays), float(cone_angle), sampling, int(seed), points, int(threads),
             cast_progress, engine_name, accel, int(octree_depth), int(octree_leaf_size),
+            orientation,
         )
 
     fallback = None
@@ -257,6 +267,7 @@ def compute(
         points=points,
         rays=int(rays),
         device_memory=int(out["device_bytes"]),
+        flipped_faces=int(out["flipped_faces"]),
     )
 
 

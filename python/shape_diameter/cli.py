@@ -165,6 +165,33 @@ def build_parser() -> argparse.ArgumentParser:
         help="how values map to colours (default: linear)",
     )
     parser.add_argument(
+        "--orientation",
+        choices=("auto", "as_is", "flip"),
+        default="auto",
+        help="auto: turn inside-out parts and stray reversed faces outward; as_is: trust the "
+        "winding; flip: reverse every face (default: auto)",
+    )
+    parser.add_argument(
+        "--engine",
+        default="auto",
+        metavar="ENGINE",
+        help="auto (the best OpenCL GPU, else the CPU), cpu, opencl (the best OpenCL device), "
+        "opencl:N, opencl:all or opencl:<part of a device name> (default: auto)",
+    )
+    parser.add_argument(
+        "--accel",
+        choices=("bvh", "octree"),
+        default="bvh",
+        help="acceleration structure: bvh, or the paper's octree (default: bvh)",
+    )
+    parser.add_argument(
+        "--threads",
+        type=_int_in(0, 4096),
+        default=0,
+        metavar="N",
+        help="CPU engine threads, 0 for every core (default: 0)",
+    )
+    parser.add_argument(
         "--smooth",
         choices=("none", "kring", "projected", "texture"),
         default="none",
@@ -282,6 +309,10 @@ def _run(args) -> int:
             points=args.points,
             normalize=args.normalize,
             progress=progress,
+            orientation=args.orientation,
+            engine=args.engine,
+            accel=args.accel,
+            threads=args.threads,
             smoothing=args.smooth,
             uvs=uvs,
             smoothing_options=smoothing_options,
@@ -351,6 +382,7 @@ def _report(args, vertices, triangles, result, output, io_seconds, total_seconds
         "normalize": args.normalize,
         "smooth": args.smooth,
         "engine": result.engine,
+        "flipped_faces": result.flipped_faces,
         "seconds": timings,
         # Rays cast per second over the casting stage alone (or the whole
         # computation where the engine does not time casting separately).

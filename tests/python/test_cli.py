@@ -22,8 +22,8 @@ DATA = Path(__file__).resolve().parents[1] / "data"
 RAYS = 12  # enough rays to be a real run, few enough to keep the file fast
 JSON_KEYS = {
     "input", "faces", "vertices", "points", "point_count", "rays", "cone", "sampling",
-    "seed", "normalize", "smooth", "engine", "seconds", "Mrays_per_s", "io_seconds",
-    "total_seconds", "outputs",
+    "seed", "normalize", "smooth", "engine", "flipped_faces", "seconds", "Mrays_per_s",
+    "io_seconds", "total_seconds", "outputs",
 }  # fmt: skip
 
 
@@ -313,3 +313,22 @@ def test_progress_reaches_compute_and_json_stays_clean(tmp_path, capsys, monkeyp
     assert cli.main(argv) == 0
     assert len(seen) == 1 and callable(seen[0])
     assert json.loads(capsys.readouterr().out)["faces"] == 968
+
+
+def test_engine_accel_and_orientation_options_reach_compute(tmp_path, capsys):
+    out = tmp_path / "horse.ply"
+    code = cli.main([str(DATA / "horse.ply"), "-o", str(out), "--rays", "4", "--engine", "cpu",
+                 "--accel", "octree", "--orientation", "auto", "--threads", "1", "--json"])
+    assert code == 0
+    report = json.loads(capsys.readouterr().out)
+    assert report["engine"] == "cpu (1 threads, octree)"
+    assert report["flipped_faces"] == report["faces"]  # the horse is inside out
+
+
+def test_an_unknown_device_is_one_line_and_status_2(tmp_path):
+    done = subprocess.run([sys.executable, "-m", "shape_diameter.cli", str(DATA / "cow.obj"),
+                           "-o", str(tmp_path / "x.ply"), "--engine", "opencl:99"],
+                          capture_output=True, text=True)
+    assert done.returncode == 2
+    lines = done.stderr.strip().splitlines()
+    assert len(lines) == 1 and "no OpenCL device 99" in lines[0], done.stderr

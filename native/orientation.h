@@ -1,0 +1,35 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
+// Which way faces point. The SDF casts rays against the outward normal, so a mesh wound
+// inside out (or with some faces flipped) would measure nothing. Stage 0 of the pipeline.
+#pragma once
+
+#include <cstddef>
+
+#include "mesh.h"
+
+namespace sdf {
+
+enum class Orientation {
+  Auto,  // make each part consistent, then outward (below)
+  AsIs,  // trust the winding
+  Flip,  // reverse every face
+};
+
+struct OrientationReport {
+  std::size_t flipped_faces = 0;  // faces whose winding the computation reversed
+  std::size_t parts = 0;          // parts the mesh was seen as (Auto only)
+};
+
+// Auto:
+// 1. Within each patch of faces joined by manifold edges (edges of exactly two faces), faces
+//    are made to agree with their neighbours (a shared edge runs opposite ways in two faces
+//    that agree), keeping the winding of the larger area where the patch disagrees.
+// 2. Patches that touch (share a vertex position, so unwelded seams count as touching) form a
+//    part; a part whose signed volume, taken about its bounding-box centre, is clearly
+//    negative (below -1e-6 of its bounding-box diagonal cubed) is reversed. Open parts are
+//    judged the same way: their volume is indicative, and only a clearly negative one is
+//    acted on (a flat sheet, volume 0, is left alone).
+// Reverses faces in place (swapping two corners) and reports what it did.
+OrientationReport orient(Mesh& mesh, Orientation mode);
+
+}  // namespace sdf

@@ -1,0 +1,84 @@
+# SPDX-License-Identifier: GPL-3.0-or-later
+"""orientation='auto': meshes wound inside out, or with some faces reversed, give the values of
+the same mesh wound outward; meshes already right are left alone."""
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import shape_diameter as sd
+from shape_diameter.mesh_io import load_mesh
+from shapes import icosphere
+
+DATA = Path(__file__).resolve().parents[1] / "data"
+RIGHT_WAY_OUT = ["bunny00.off", "armadillo.off", "fandisk.obj", "spot.obj", "cow.obj",
+                 "suzanne.obj", "teapot.obj", "ChineseDragon-10kv.off"]
+
+
+@pytest.mark.parametrize("name", RIGHT_WAY_OUT)
+def test_meshes_already_outward_are_left_alone(name):
+    # Including the open teapot (unwelded patches), Suzanne's doubled flap and the dragon's holes.
+    vertices, triangles = load_mesh(DATA / name)
+    result = sd.compute(vertices, triangles, rays=3)
+    assert result.flipped_faces == 0
+
+
+def test_the_inside_out_horse_is_turned_outward():
+    vertices, triangles = load_mesh(DATA / "horse.ply")  # signed volume < 0 (its README)
+    auto = sd.compute(vertices, triangles, rays=10)
+    flipped = sd.compute(vertices, triangles, rays=10, orientation="flip")
+    as_is = sd.compute(vertices, triangles, rays=10, orientation="as_is")
+    assert auto.flipped_faces == len(triangles)
+    np.testing.assert_array_equal(auto.raw, flipped.raw)
+    assert (auto.valid_rays > 0).mean() > 0.999
+    # Trusting the winding, rays leave through the skin and most faces find nothing.
+    assert (as_is.valid_rays == 0).mean() > 0.5
+
+
+def test_scattered_reversed_faces_are_put_back():
+    vertices, triangles = icosphere(1.0, 3)
+    clean = sd.compute(vertices, triangles)
+    rng = np.random.default_rng(4)
+    reversed_ = rng.random(len(triangles)) < 0.1
+    messy = triangles.copy()
+    messy[reversed_] = messy[reversed_][:, [0, 2, 1]]
+    before = messy.copy()
+    result = sd.compute(vertices, messy)
+    assert result.flipped_faces == reversed_.sum()
+    np.testing.assert_array_equal(result.raw, clean.raw)
+    np.testing.assert_array_equal(messy, before)  # the caller's array is untouched
+    as_is = sd.compute(vertices, messy, orientation="as_is")
+    assert (np.abs(as_is.raw - clean.raw) > 1e-3 * clean.raw).any()
+
+
+def test_each_part_is_judged_on_its_own():
+    small_v, small_t = icosphere(1.0, 2)
+    big_v, big_t = icosphere(2.0, 2)
+    vertices = np.concatenate([small_v, big_v + [10.0, 0.0, 0.0]])
+    outward = np.concatenate([small_t, big_t + len(small_v)])
+    inside_out = np.concatenate([small_t, big_t[:, [0, 2, 1]] + len(small_v)])
+    clean = sd.compute(vertices, outward)
+    result = sd.compute(vertices, inside_out)
+    assert result.flipped_faces == len(big_t)
+    np.testing.assert_array_equal(result.raw, clean.raw)
+
+
+def test_a_flat_open_sheet_is_not_flipped_on_rounding():
+    grid = np.array([[x, y, 0.0] for y in range(4) for x in range(4)], dtype=float)
+    quads = [(y * 4 + x, y * 4 + x + 1, y * 4 + x + 5, y * 4 + x + 4)
+             for y in range(3) for x in range(3)]
+    triangles = np.array([t for a, b, c, d in quads for t in ((a, b, c), (a, c, d))])
+    with pytest.warns(RuntimeWarning, match="no ray"):
+        result = sd.compute(grid, triangles)
+    assert result.flipped_faces == 0
+
+
+def test_flip_reverses_everything_and_bad_values_are_refused():
+    vertices, triangles = icosphere(1.0, 1)
+    # A sphere turned inside out: every ray leaves through the skin, nothing is measured.
+    with pytest.warns(RuntimeWarning, match="inside out"):
+        result = sd.compute(vertices, triangles, orientation="flip")
+    assert result.flipped_faces == len(triangles)
+    with pytest.raises(ValueError, match="orientation must be one of"):
+        sd.compute(vertices, triangles, orientation="outward")
