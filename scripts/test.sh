@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # SPDX-License-Identifier: GPL-3.0-or-later
-# Every test: set-up, C++ tests (ctest) with the CGAL reference built beside them, then pytest.
+# Every test: set-up, C++ tests (ctest) with the CGAL reference built beside them, the
+# extension inside two real Blenders (bpy from PyPI), then pytest.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 bash scripts/setup.sh
@@ -10,6 +11,9 @@ cmake -S . -B build/cpp -G Ninja -DCMAKE_BUILD_TYPE=Release -DSDF_BUILD_TESTS=ON
 cmake --build build/cpp
 echo "test: ctest"
 ctest --test-dir build/cpp --output-on-failure
+
+echo "test: Blender"
+bash scripts/test_blender.sh
 
 echo "test: pytest"
 export SDF_CGAL_REFERENCE="$PWD/build/cpp/tests/reference/cgal_sdf"
