@@ -12,34 +12,19 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
-PY311=${PY311:-$HOME/.pyenv/versions/3.11.7/bin/python3.11}
-PY313=${PY313:-$HOME/.pyenv/versions/3.13.0/bin/python3.13}
 log() { echo "test_blender: $*"; }
+source scripts/blender_venv.sh
 
 bash scripts/build_extension.sh
 ZIP=$(ls -t dist/shape_diameter-*-linux_x64.zip | head -1)
-
-venv() {  # venv DIR PYTHON REQUIREMENT...
-  local dir=$1 python=$2
-  shift 2
-  local want="$*"
-  if [ ! -x "$dir/bin/python" ] || [ "$(cat "$dir/.requirements" 2>/dev/null)" != "$want" ]; then
-    log "creating $dir: $want"
-    rm -rf "$dir"
-    "$python" -m venv "$dir"
-    "$dir/bin/python" -m pip install -q --upgrade pip
-    "$dir/bin/python" -m pip install -q "$@"
-    echo "$want" > "$dir/.requirements"
-  fi
-}
 
 passed=0
 failed=0
 status=0
 for version in ${SDF_BLENDER_VERSIONS:-45 51}; do
   case $version in
-    45) venv .venv-bpy45 "$PY311" "bpy>=4.5,<4.6" "numpy<2" "pytest>=7" ;;  # as in build_extension.sh
-    51) venv .venv-bpy51 "$PY313" "bpy>=5.1" "pytest>=7" ;;
+    45) bpy45_venv ;;
+    51) bpy51_venv ;;
     *) log "unknown Blender version $version (45 or 51)" >&2; exit 2 ;;
   esac
   py=.venv-bpy$version/bin/python
