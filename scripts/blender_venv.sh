@@ -1,5 +1,4 @@
 # SPDX-License-Identifier: GPL-3.0-or-later
-#!/usr/bin/env bash
 # Sourced by the scripts that need Blender as a Python module (bpy from PyPI): makes, once,
 #   .venv-bpy45  bpy 4.5 LTS, Python 3.11, numpy < 2 (bpy 4.x does not pin it)
 #   .venv-bpy51  bpy >= 5.1, Python 3.13, numpy 2.x
