@@ -24,7 +24,8 @@ struct Weld {
 // units); otherwise it is kept. tolerance 0 merges exactly equal positions only (+0 and -0
 // count as equal). Greedy in index order, so the result does not depend on threads; chains
 // (a near b near c, a far from c) are cut where the distance to the kept vertex exceeds the
-// tolerance. Linear expected time: a hash grid of cells twice the tolerance, 8 cells per query.
+// tolerance. Linear expected time: a hash grid of cells 2 to 64 tolerances wide, 1 to 8
+// cells per query.
 Weld weld_vertices(const glm::vec3* positions, std::size_t count, float tolerance);
 
 // Merging tolerance for a mesh: `relative` times its largest bounding-box side. The default,
