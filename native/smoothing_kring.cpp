@@ -220,17 +220,29 @@ std::vector<std::uint32_t> morton_order(const std::vector<glm::vec3>& positions)
     x = (x | x << 2) & 0x09249249u;
     return x;
   };
-  std::vector<std::uint64_t> keyed(positions.size());
-  for (std::size_t i = 0; i < positions.size(); ++i) {
+  const std::size_t n = positions.size();
+  std::vector<std::uint32_t> keys(n), order(n), keys2(n), order2(n);
+  for (std::size_t i = 0; i < n; ++i) {
     const glm::vec3 q = (positions[i] - lo) * scale;
-    const std::uint32_t key = spread10(static_cast<std::uint32_t>(q.x)) |
-                              spread10(static_cast<std::uint32_t>(q.y)) << 1 |
-                              spread10(static_cast<std::uint32_t>(q.z)) << 2;
-    keyed[i] = static_cast<std::uint64_t>(key) << 32 | i;
+    keys[i] = spread10(static_cast<std::uint32_t>(q.x)) |
+              spread10(static_cast<std::uint32_t>(q.y)) << 1 |
+              spread10(static_cast<std::uint32_t>(q.z)) << 2;
+    order[i] = static_cast<std::uint32_t>(i);
   }
-  std::sort(keyed.begin(), keyed.end());
-  std::vector<std::uint32_t> order(positions.size());
-  for (std::size_t i = 0; i < order.size(); ++i) order[i] = static_cast<std::uint32_t>(keyed[i]);
+  // LSD radix sort of the 30-bit keys, 8 bits a pass: linear, and stable (ties keep index
+  // order, so the batches do not depend on anything but the mesh).
+  for (int shift = 0; shift < 30; shift += 8) {
+    std::size_t count[257] = {};
+    for (std::uint32_t k : keys) ++count[((k >> shift) & 0xffu) + 1];
+    for (int b = 0; b < 256; ++b) count[b + 1] += count[b];
+    for (std::size_t i = 0; i < n; ++i) {
+      const std::size_t to = count[(keys[i] >> shift) & 0xffu]++;
+      keys2[to] = keys[i];
+      order2[to] = order[i];
+    }
+    keys.swap(keys2);
+    order.swap(order2);
+  }
   return order;
 }
 
@@ -406,26 +418,50 @@ std::vector<float> smooth_kring(const Mesh& mesh, PointKind kind, const float* v
     for (std::size_t v = 0; v < weld.merged.size(); ++v) weld.merged[v] = static_cast<std::uint32_t>(v);
     weld.count = static_cast<std::uint32_t>(weld.merged.size());
   }
-  const std::vector<glm::uvec3> tris = welded_triangles(mesh, weld);
+  // Merged vertices, and faces, renumbered in Morton order of their positions: a batch of
+  // consecutive points is then a compact patch, and its walk reads nearby memory whatever the
+  // input's order (a subdivided mesh scatters neighbours all over its arrays).
+  const std::size_t m = mesh.triangles.size();
+  std::vector<glm::vec3> merged_position(weld.count);
+  for (std::size_t v = mesh.vertices.size(); v-- > 0;) merged_position[weld.merged[v]] = mesh.vertices[v];
+  const std::vector<std::uint32_t> vertex_order = morton_order(merged_position);  // new -> merged
+  std::vector<std::uint32_t> vertex_rank(weld.count);                            // merged -> new
+  for (std::uint32_t i = 0; i < weld.count; ++i) vertex_rank[vertex_order[i]] = i;
+  std::vector<std::uint32_t> face_order(m);  // new -> input face
+  if (faces) {
+    std::vector<glm::vec3> centroid(m);
+    for (std::size_t f = 0; f < m; ++f) {
+      const glm::uvec3 t = mesh.triangles[f];
+      centroid[f] = mesh.vertices[t.x] + mesh.vertices[t.y] + mesh.vertices[t.z];
+    }
+    face_order = morton_order(centroid);
+  } else {
+    for (std::uint32_t f = 0; f < m; ++f) face_order[f] = f;  // faces only link vertices
+  }
+  std::vector<glm::uvec3> tris(m);
+  for (std::size_t f = 0; f < m; ++f) {
+    const glm::uvec3 t = mesh.triangles[face_order[f]];
+    tris[f] = glm::uvec3(vertex_rank[weld.merged[t.x]], vertex_rank[weld.merged[t.y]],
+                         vertex_rank[weld.merged[t.z]]);
+  }
   const Adjacency vf = faces_of_vertices(tris, weld.count);
   const Adjacency vv = vertex_neighbours(tris, vf);
 
-  // Vertex values live on merged vertices: the mean of the duplicates' values.
-  std::vector<float> merged_values;
-  const float* point_values = values;
-  if (!faces) {
+  // Values in the new numbering; a merged vertex takes the mean of its duplicates' values.
+  const std::size_t points = faces ? n : weld.count;
+  std::vector<float> point_values(points);
+  if (faces) {
+    for (std::size_t f = 0; f < n; ++f) point_values[f] = values[face_order[f]];
+  } else {
     std::vector<double> sum(weld.count, 0.0);
     std::vector<std::uint32_t> count(weld.count, 0);
     for (std::size_t v = 0; v < n; ++v) {
-      sum[weld.merged[v]] += values[v];
-      ++count[weld.merged[v]];
+      sum[vertex_rank[weld.merged[v]]] += values[v];
+      ++count[vertex_rank[weld.merged[v]]];
     }
-    merged_values.resize(weld.count);
     for (std::size_t w = 0; w < weld.count; ++w)
-      merged_values[w] = std::min(hi, std::max(lo, static_cast<float>(sum[w] / count[w])));
-    point_values = merged_values.data();
+      point_values[w] = std::min(hi, std::max(lo, static_cast<float>(sum[w] / count[w])));
   }
-  const std::size_t points = faces ? n : weld.count;
 
   const double sigma = options.sigma > 0.0 ? options.sigma : 0.5 * k;
   std::vector<float> ring_weight(k + 1);
@@ -436,8 +472,8 @@ std::vector<float> smooth_kring(const Mesh& mesh, PointKind kind, const float* v
   std::vector<glm::vec3> normals;
   if (corner) {
     // Face normals; vertex normals are the area-weighted mean of the merged faces around.
-    std::vector<glm::vec3> face_normals(mesh.triangles.size());
-    for (std::size_t f = 0; f < face_normals.size(); ++f) face_normals[f] = face_area_normal(mesh, f);
+    std::vector<glm::vec3> face_normals(m);
+    for (std::size_t f = 0; f < m; ++f) face_normals[f] = face_area_normal(mesh, face_order[f]);
     if (faces) {
       normals.resize(n);
       for (std::size_t f = 0; f < n; ++f) normals[f] = unit_or_zero(face_normals[f]);
@@ -472,7 +508,7 @@ std::vector<float> smooth_kring(const Mesh& mesh, PointKind kind, const float* v
             float local_lo, local_hi;
             const double mean = kring_corner_mean(
                 static_cast<std::uint32_t>(p), k, ring_weight.data(), &walk, inv_corner,
-                point_values, s->stamp.data(), epoch, s->queue.data(), s->ring_of.data(),
+                point_values.data(), s->stamp.data(), epoch, s->queue.data(), s->ring_of.data(),
                 s->factor.data(), &local_lo, &local_hi);
             // A weighted mean lies within what it averages; the clamp only removes rounding.
             smoothed[p] = std::min(local_hi, std::max(local_lo, static_cast<float>(mean)));
@@ -481,17 +517,6 @@ std::vector<float> smooth_kring(const Mesh& mesh, PointKind kind, const float* v
         },
         progress, progress_from, progress_to);
   } else {
-    // Batches of nearby points: Morton order of face centroids or merged vertex positions.
-    std::vector<glm::vec3> positions(points);
-    if (faces) {
-      for (std::size_t f = 0; f < n; ++f) {
-        const glm::uvec3 t = mesh.triangles[f];
-        positions[f] = mesh.vertices[t.x] + mesh.vertices[t.y] + mesh.vertices[t.z];
-      }
-    } else {
-      for (std::size_t v = mesh.vertices.size(); v-- > 0;) positions[weld.merged[v]] = mesh.vertices[v];
-    }
-    const std::vector<std::uint32_t> order = morton_order(positions);
     const std::size_t vertex_count = weld.count, face_count = faces ? n : 0;
     ScratchPool<BatchScratch> pool([vertex_count, face_count] {
       auto s = std::make_unique<BatchScratch>();
@@ -507,15 +532,16 @@ std::vector<float> smooth_kring(const Mesh& mesh, PointKind kind, const float* v
         [&](std::size_t begin, std::size_t end) {
           std::unique_ptr<BatchScratch> s = pool.acquire();
           double sum[kBatch], weight[kBatch];
+          std::uint32_t batch[kBatch];
           for (std::size_t b = begin; b < end; ++b) {
-            const std::uint32_t* batch = order.data() + b * kBatch;
             const int count = static_cast<int>(std::min<std::size_t>(kBatch, points - b * kBatch));
+            for (int i = 0; i < count; ++i) batch[i] = static_cast<std::uint32_t>(b * kBatch + i);
             if (faces)
-              kring_face_batch(batch, count, k, ring_weight.data(), tris, vf, vv, point_values,
-                               *s, sum, weight);
+              kring_face_batch(batch, count, k, ring_weight.data(), tris, vf, vv,
+                               point_values.data(), *s, sum, weight);
             else
-              kring_vertex_batch(batch, count, k, ring_weight.data(), vv, point_values, *s, sum,
-                                 weight);
+              kring_vertex_batch(batch, count, k, ring_weight.data(), vv, point_values.data(), *s,
+                                 sum, weight);
             // Sums in double, then one rounding to float: a constant region gives back its
             // value exactly; the clamp only guards the input's range.
             for (int i = 0; i < count; ++i)
@@ -527,8 +553,11 @@ std::vector<float> smooth_kring(const Mesh& mesh, PointKind kind, const float* v
   }
   if (progress && !progress(progress_to)) throw Cancelled();
 
-  if (faces) return smoothed;
-  for (std::size_t v = 0; v < n; ++v) out[v] = smoothed[weld.merged[v]];
+  if (faces) {
+    for (std::size_t f = 0; f < n; ++f) out[face_order[f]] = smoothed[f];
+  } else {
+    for (std::size_t v = 0; v < n; ++v) out[v] = smoothed[vertex_rank[weld.merged[v]]];
+  }
   return out;
 }
 
