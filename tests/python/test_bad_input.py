@@ -647,11 +647,12 @@ def test_single_triangle_warns_and_gives_zeros():
         assert (result.normalized == 0).all()
 
 
-def test_inside_out_mesh_warns(sphere):
-    # Reversed winding: every ray meets the surface from the outside (det > 0), none exits.
+def test_inside_out_mesh_warns_when_its_winding_is_trusted(sphere):
+    # Reversed winding kept as is: every ray meets the surface from the outside (det > 0),
+    # none exits. (orientation="auto", the default, turns it outward: test_orientation.py.)
     V, F = sphere
     with pytest.warns(RuntimeWarning, match=r"inside out"):
-        result = shape_diameter.compute(V, F[:, ::-1])
+        result = shape_diameter.compute(V, F[:, ::-1], orientation="as_is")
     assert (result.raw == 0).all() and (result.valid_rays == 0).all()
 
 
