@@ -64,7 +64,10 @@ def load_mesh(path) -> tuple[np.ndarray, np.ndarray]:
         reason = str(exc) or type(exc).__name__
         raise ValueError(f"{path}: cannot read mesh ({reason})") from exc
 
-    vertices, triangles, other_kinds = _flatten(scene)
+    try:
+        vertices, triangles, other_kinds = _flatten(scene)
+    except ValueError as exc:
+        raise ValueError(f"{path}: cannot read mesh ({exc})") from exc
     if len(triangles) == 0:
         found = f" (it holds {', '.join(sorted(other_kinds))})" if other_kinds else ""
         raise ValueError(f"{path}: no triangles found{found}")
@@ -181,7 +184,16 @@ def _plain_obj(path: str) -> bytes:
         if not fields:
             continue
         if fields[0] == "v":
-            out.append(line.strip())
+            # Three numbers, checked here: trimesh makes a one-number line a one-column
+            # array. Colours after them are dropped.
+            try:
+                if len(fields) < 4:
+                    raise ValueError
+                for token in fields[1:4]:
+                    float(token)
+            except ValueError:
+                raise ValueError(f"malformed vertex {line.strip()[:60]!r}") from None
+            out.append(" ".join(fields[:4]))
             vertex_count += 1
         elif fields[0] == "f":
             try:
@@ -221,6 +233,11 @@ def _flatten(scene: trimesh.Scene) -> tuple[np.ndarray, np.ndarray, set]:
             continue
         vertices = np.asarray(geometry.vertices, dtype=np.float64)
         triangles = np.asarray(geometry.faces, dtype=np.int64)
+        # trimesh keeps what a broken file declares (e.g. glTF positions of one component).
+        if vertices.ndim != 2 or vertices.shape[1] != 3:
+            raise ValueError(f"vertices of shape {vertices.shape}, not (n, 3)")
+        if triangles.ndim != 2 or triangles.shape[1] != 3:
+            raise ValueError(f"faces of shape {triangles.shape}, not (m, 3)")
         transform = np.asarray(transform, dtype=np.float64)
         if not np.array_equal(transform, np.eye(4)):
             vertices = vertices @ transform[:3, :3].T + transform[:3, 3]
