@@ -92,7 +92,8 @@ def _rotation(seed: int) -> np.ndarray:
 # --------------------------------------------------------------------------- scaling
 
 
-@pytest.mark.parametrize("scale", [2.0**-10, 8.0, 2.0**10])
+# Down to coordinates around 1e-6 and up to 1e6 (issue 7: extreme scales), bit for bit.
+@pytest.mark.parametrize("scale", [2.0**-20, 2.0**-10, 8.0, 2.0**10, 2.0**20])
 def test_power_of_two_scaling_scales_raw_exactly(fandisk, baseline, scale):
     V, F = fandisk
     result = shape_diameter.compute(V * scale, F)
@@ -102,7 +103,7 @@ def test_power_of_two_scaling_scales_raw_exactly(fandisk, baseline, scale):
     assert np.array_equal(result.normalized, baseline.normalized)
 
 
-@pytest.mark.parametrize("scale", [1e-3, 7.5, 1e3])
+@pytest.mark.parametrize("scale", [1e-3, 7.5, 1e3, 1e6])
 def test_scaling_scales_raw(fandisk, baseline, scale):
     V, F = fandisk
     result = shape_diameter.compute(V * scale, F)
