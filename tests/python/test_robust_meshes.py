@@ -1,0 +1,57 @@
+# SPDX-License-Identifier: GPL-3.0-or-later
+"""Meshes as people have them (issue 7): non-manifold edges and vertices, self-intersections,
+unwelded patches and holes give finite values everywhere, with valid rays on the faces that
+can see the other side."""
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import shape_diameter as sd
+from shape_diameter.mesh_io import load_mesh
+from shapes import box, icosphere
+
+DATA = Path(__file__).resolve().parents[1] / "data"
+
+
+@pytest.mark.parametrize(
+    "name, at_least_valid",
+    [
+        ("cow.obj", 0.999),  # a non-manifold vertex (two fans touching at one point)
+        ("suzanne.obj", 0.97),  # a doubled triangle with opposite winding (a flap), 3 parts
+        ("teapot.obj", 0.99),  # 19 unwelded patches, openings at spout, handle, lid
+        ("ChineseDragon-10kv.off", 0.999),  # two small holes
+    ],
+)
+def test_real_meshes_with_defects(name, at_least_valid):
+    vertices, triangles = load_mesh(DATA / name)
+    result = sd.compute(vertices, triangles)
+    assert np.isfinite(result.raw).all() and (result.raw > 0).all()
+    assert (result.valid_rays > 0).mean() >= at_least_valid
+
+
+def test_a_fin_on_a_non_manifold_edge():
+    # A box with an extra triangle hanging off one of its edges: that edge has three faces.
+    vertices, triangles = box(2.0, 2.0, 2.0)
+    edge = next((a, b) for a, b, _ in triangles)
+    tip = len(vertices)
+    vertices = np.vstack([vertices, vertices[[edge[0], edge[1]]].mean(axis=0) + [0.0, 0.0, 3.0]])
+    triangles = np.vstack([triangles, [edge[0], edge[1], tip]])
+    clean = sd.compute(*box(2.0, 2.0, 2.0))
+    result = sd.compute(vertices, triangles)
+    assert np.isfinite(result.raw).all()
+    # The box's faces keep their thickness (2, up to the rays the fin blocks).
+    inside = result.raw[:-1]
+    assert np.median(np.abs(inside - clean.raw) / clean.raw) < 0.01
+
+
+def test_self_intersecting_spheres():
+    # Two spheres passing through each other, one mesh: every face still measures something.
+    v1, t1 = icosphere(1.0, 3)
+    vertices = np.vstack([v1, v1 + [1.0, 0.0, 0.0]])
+    triangles = np.vstack([t1, t1 + len(v1)])
+    result = sd.compute(vertices, triangles)
+    assert np.isfinite(result.raw).all() and (result.raw > 0).all()
+    assert (result.valid_rays > 0).mean() > 0.99
+    assert result.raw.max() <= 2.0 + 1e-3  # no ray is longer than a sphere's diameter
