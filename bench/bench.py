@@ -93,7 +93,6 @@ def main():
 
     engines = args.engines.split(",") if args.engines else (
         ["cpu"] + [e["name"] for e in sd.engines() if e["name"].startswith("opencl")])
-    devices = {e["name"]: e.get("device", "") for e in sd.engines()}
     cgal = BUILD / "tests" / "reference" / "cgal_sdf"
     embree = BUILD / "bench" / "embree_sdf"
     rows, notes = [], []
@@ -132,7 +131,6 @@ def main():
                            total=r["wall"] * 1e3, mrays=faces * args.rays / cast / 1e6,
                            peak=r["peak_mib"], device=r["device_mib"])
                 if engine.startswith("opencl"):
-                    row["engine"] += f" {devices.get(engine, '')}"
                     row["upload"] = t.get("upload", 0) * 1e3
                     row["download"] = t.get("download", 0) * 1e3
                 if cgal_s:
