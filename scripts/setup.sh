@@ -13,6 +13,7 @@ APT_PACKAGES=(
   ocl-icd-libopencl1 pocl-opencl-icd clinfo   # an OpenCL driver on the CPU (PoCL) for the tests
   libgtest-dev                                # C++ tests
   libcgal-dev                                 # reference implementation, tests/benchmarks only
+  clang libclang-rt-14-dev                    # sanitizers and libFuzzer (scripts/fuzz.sh)
   python3 python3-venv python3-dev            # the Python package
 )
 missing=()
@@ -35,7 +36,7 @@ fi
 # directory that survives between runs (incremental rebuilds).
 .venv/bin/python -m pip install -q --upgrade pip
 .venv/bin/python -m pip install -q "scikit-build-core>=0.10" "pybind11>=2.12" numpy \
-  "trimesh>=4.4" "tqdm>=4.60" "pytest>=7" "scipy>=1.9"
+  "trimesh>=4.4" "tqdm>=4.60" "pytest>=7" "scipy>=1.9" "atheris>=2.3"
 echo "setup: building shape_diameter"
 .venv/bin/python -m pip install -q --no-build-isolation --no-deps ".[cli,test]"
 .venv/bin/python -c "import shape_diameter as s; print('setup: shape_diameter', s.__version__, 'engines:', [e['name'] for e in s.engines()])"
