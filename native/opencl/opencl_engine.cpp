@@ -12,6 +12,7 @@
 #include <stdexcept>
 #include <thread>
 
+#include "device_state.h"
 #include "program_cache.h"
 
 namespace sdf::cl {
@@ -22,115 +23,6 @@ using Clock = std::chrono::steady_clock;
 
 double seconds_since(Clock::time_point t) {
   return std::chrono::duration<double>(Clock::now() - t).count();
-}
-
-// A context, a queue and the programs built so far for one device, kept for the life of the
-// process: a second compute() in the same session neither recompiles nor reloads.
-struct DeviceState {
-  cl_context context = nullptr;
-  cl_command_queue queue = nullptr;
-  std::map<std::string, cl_program> programs;
-  std::mutex mutex;  // one computation at a time per device
-};
-
-DeviceState& state_of(const Device& device) {
-  static std::mutex registry_mutex;
-  static std::map<int, std::unique_ptr<DeviceState>> registry;
-  std::lock_guard<std::mutex> lock(registry_mutex);
-  std::unique_ptr<DeviceState>& slot = registry[device.index];
-  if (!slot) {
-    auto s = std::make_unique<DeviceState>();
-    const Api& cl = *api();
-    cl_int err = CL_SUCCESS;
-    const cl_context_properties props[] = {
-        CL_CONTEXT_PLATFORM, reinterpret_cast<cl_context_properties>(device.platform), 0};
-    s->context = cl.clCreateContext(props, 1, &device.id, nullptr, nullptr, &err);
-    check(err, "clCreateContext");
-    s->queue = cl.clCreateCommandQueue(s->context, device.id, 0, &err);
-    check(err, "clCreateCommandQueue");
-    slot = std::move(s);
-  }
-  return *slot;
-}
-
-// -cl-fp32-correctly-rounded-divide-sqrt where the device offers it: with it, division and
-// square root round as on the host (OpenCL otherwise allows 2.5 and 3 ulp).
-std::string build_options(const Device& device, int rays) {
-  std::string options = "-cl-std=CL1.2 -DSDF_MAX_RAYS=" + std::to_string(std::max(rays, 1));
-  cl_device_fp_config fp = 0;
-  api()->clGetDeviceInfo(device.id, CL_DEVICE_SINGLE_FP_CONFIG, sizeof fp, &fp, nullptr);
-  if (fp & CL_FP_CORRECTLY_ROUNDED_DIVIDE_SQRT) options += " -cl-fp32-correctly-rounded-divide-sqrt";
-  return options;
-}
-
-cl_program program_for(const Device& device, DeviceState& s, const std::string& options) {
-  auto it = s.programs.find(options);
-  if (it != s.programs.end()) return it->second;
-  cl_program program = build_program(device, s.context, options);
-  s.programs[options] = program;
-  return program;
-}
-
-class Kernel {
- public:
-  Kernel(cl_program program, const char* name) {
-    cl_int err = CL_SUCCESS;
-    kernel_ = api()->clCreateKernel(program, name, &err);
-    check(err, "clCreateKernel");
-  }
-  ~Kernel() { api()->clReleaseKernel(kernel_); }
-  Kernel(const Kernel&) = delete;
-  Kernel& operator=(const Kernel&) = delete;
-  template <class T>
-  void arg(cl_uint index, const T& value) {
-    check(api()->clSetKernelArg(kernel_, index, sizeof(T), &value), "clSetKernelArg");
-  }
-  cl_kernel get() const { return kernel_; }
-
- private:
-  cl_kernel kernel_ = nullptr;
-};
-
-class Buffer {
- public:
-  Buffer(DeviceState& s, std::size_t bytes, const void* data) {
-    cl_int err = CL_SUCCESS;
-    // Zero-sized buffers are invalid in OpenCL; an empty array still gets one word.
-    const std::size_t size = std::max<std::size_t>(bytes, 4);
-    mem_ = api()->clCreateBuffer(s.context, CL_MEM_READ_WRITE, size, nullptr, &err);
-    check(err, "clCreateBuffer");
-    if (data && bytes)
-      check(api()->clEnqueueWriteBuffer(s.queue, mem_, CL_FALSE, 0, bytes, data, 0, nullptr, nullptr),
-            "clEnqueueWriteBuffer");
-  }
-  ~Buffer() { api()->clReleaseMemObject(mem_); }
-  Buffer(const Buffer&) = delete;
-  Buffer& operator=(const Buffer&) = delete;
-  cl_mem get() const { return mem_; }
-
- private:
-  cl_mem mem_ = nullptr;
-};
-
-template <class T>
-std::size_t bytes_of(const std::vector<T>& v) {
-  return v.size() * sizeof(T);
-}
-
-std::string mib(std::uint64_t bytes) { return std::to_string((bytes + (1 << 20) - 1) >> 20) + " MiB"; }
-
-// Refuses, before allocating anything, a scene that cannot fit the device.
-void check_fits(const Device& device, const std::vector<std::size_t>& buffers) {
-  std::uint64_t total = 0, largest = 0;
-  for (std::size_t b : buffers) {
-    total += b;
-    largest = std::max<std::uint64_t>(largest, b);
-  }
-  if (largest > device.max_allocation || total > device.global_memory)
-    throw std::runtime_error("the mesh does not fit OpenCL device " + device.name + ": it needs " +
-                             mib(total) + " (largest buffer " + mib(largest) + "), the device has " +
-                             mib(device.global_memory) + " (largest buffer " +
-                             mib(device.max_allocation) + "); use engine='cpu'");
 }
 
 // Shared by the device threads: the next range of points in Morton order to hand out.

@@ -1,0 +1,63 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
+#include "device_state.h"
+
+#include <algorithm>
+#include <memory>
+#include <stdexcept>
+
+#include "program_cache.h"
+
+namespace sdf::cl {
+
+DeviceState& state_of(const Device& device) {
+  static std::mutex registry_mutex;
+  static std::map<int, std::unique_ptr<DeviceState>> registry;
+  std::lock_guard<std::mutex> lock(registry_mutex);
+  std::unique_ptr<DeviceState>& slot = registry[device.index];
+  if (!slot) {
+    auto s = std::make_unique<DeviceState>();
+    const Api& cl = *api();
+    cl_int err = CL_SUCCESS;
+    const cl_context_properties props[] = {
+        CL_CONTEXT_PLATFORM, reinterpret_cast<cl_context_properties>(device.platform), 0};
+    s->context = cl.clCreateContext(props, 1, &device.id, nullptr, nullptr, &err);
+    check(err, "clCreateContext");
+    s->queue = cl.clCreateCommandQueue(s->context, device.id, 0, &err);
+    check(err, "clCreateCommandQueue");
+    slot = std::move(s);
+  }
+  return *slot;
+}
+
+std::string build_options(const Device& device, int rays) {
+  std::string options = "-cl-std=CL1.2 -DSDF_MAX_RAYS=" + std::to_string(std::max(rays, 1));
+  cl_device_fp_config fp = 0;
+  api()->clGetDeviceInfo(device.id, CL_DEVICE_SINGLE_FP_CONFIG, sizeof fp, &fp, nullptr);
+  if (fp & CL_FP_CORRECTLY_ROUNDED_DIVIDE_SQRT) options += " -cl-fp32-correctly-rounded-divide-sqrt";
+  return options;
+}
+
+cl_program program_for(const Device& device, DeviceState& s, const std::string& options) {
+  auto it = s.programs.find(options);
+  if (it != s.programs.end()) return it->second;
+  cl_program program = build_program(device, s.context, options);
+  s.programs[options] = program;
+  return program;
+}
+
+std::string mib(std::uint64_t bytes) { return std::to_string((bytes + (1 << 20) - 1) >> 20) + " MiB"; }
+
+void check_fits(const Device& device, const std::vector<std::size_t>& buffers) {
+  std::uint64_t total = 0, largest = 0;
+  for (std::size_t b : buffers) {
+    total += b;
+    largest = std::max<std::uint64_t>(largest, b);
+  }
+  if (largest > device.max_allocation || total > device.global_memory)
+    throw std::runtime_error("the mesh does not fit OpenCL device " + device.name + ": it needs " +
+                             mib(total) + " (largest buffer " + mib(largest) + "), the device has " +
+                             mib(device.global_memory) + " (largest buffer " +
+                             mib(device.max_allocation) + "); use engine='cpu'");
+}
+
+}  // namespace sdf::cl

@@ -1,0 +1,86 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
+// Internal to the OpenCL engine: the per-device context, queue and program cache, and small
+// RAII wrappers for kernels and buffers, shared by the casting (opencl_engine.cpp) and the
+// smoothing (opencl_smoothing.cpp) host code.
+#pragma once
+
+#include <algorithm>
+#include <cstdint>
+#include <map>
+#include <mutex>
+#include <string>
+#include <vector>
+
+#include "devices.h"
+
+namespace sdf::cl {
+
+// A context, a queue and the programs built so far for one device, kept for the life of the
+// process: a second compute() in the same session neither recompiles nor reloads.
+struct DeviceState {
+  cl_context context = nullptr;
+  cl_command_queue queue = nullptr;
+  std::map<std::string, cl_program> programs;
+  std::mutex mutex;  // one computation at a time per device
+};
+
+DeviceState& state_of(const Device& device);
+
+// -cl-fp32-correctly-rounded-divide-sqrt where the device offers it: with it, division and
+// square root round as on the host (OpenCL otherwise allows 2.5 and 3 ulp).
+std::string build_options(const Device& device, int rays);
+
+cl_program program_for(const Device& device, DeviceState& s, const std::string& options);
+
+class Kernel {
+ public:
+  Kernel(cl_program program, const char* name) {
+    cl_int err = CL_SUCCESS;
+    kernel_ = api()->clCreateKernel(program, name, &err);
+    check(err, "clCreateKernel");
+  }
+  ~Kernel() { api()->clReleaseKernel(kernel_); }
+  Kernel(const Kernel&) = delete;
+  Kernel& operator=(const Kernel&) = delete;
+  template <class T>
+  void arg(cl_uint index, const T& value) {
+    check(api()->clSetKernelArg(kernel_, index, sizeof(T), &value), "clSetKernelArg");
+  }
+  cl_kernel get() const { return kernel_; }
+
+ private:
+  cl_kernel kernel_ = nullptr;
+};
+
+class Buffer {
+ public:
+  Buffer(DeviceState& s, std::size_t bytes, const void* data) {
+    cl_int err = CL_SUCCESS;
+    // Zero-sized buffers are invalid in OpenCL; an empty array still gets one word.
+    const std::size_t size = std::max<std::size_t>(bytes, 4);
+    mem_ = api()->clCreateBuffer(s.context, CL_MEM_READ_WRITE, size, nullptr, &err);
+    check(err, "clCreateBuffer");
+    if (data && bytes)
+      check(api()->clEnqueueWriteBuffer(s.queue, mem_, CL_FALSE, 0, bytes, data, 0, nullptr, nullptr),
+            "clEnqueueWriteBuffer");
+  }
+  ~Buffer() { api()->clReleaseMemObject(mem_); }
+  Buffer(const Buffer&) = delete;
+  Buffer& operator=(const Buffer&) = delete;
+  cl_mem get() const { return mem_; }
+
+ private:
+  cl_mem mem_ = nullptr;
+};
+
+template <class T>
+std::size_t bytes_of(const std::vector<T>& v) {
+  return v.size() * sizeof(T);
+}
+
+std::string mib(std::uint64_t bytes);
+
+// Refuses, before allocating anything, a scene that cannot fit the device.
+void check_fits(const Device& device, const std::vector<std::size_t>& buffers);
+
+}  // namespace sdf::cl
