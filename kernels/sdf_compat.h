@@ -27,6 +27,13 @@ typedef uint sdf_uint32;
 #define sdf_vmax(a, b) fmax((a), (b))
 #define sdf_min(a, b) fmin((a), (b))
 #define sdf_max(a, b) fmax((a), (b))
+/* Wide accumulators (sums over many terms): double where the device has it, as on the host. */
+#ifdef cl_khr_fp64
+#pragma OPENCL EXTENSION cl_khr_fp64 : enable
+typedef double sdf_wide;
+#else
+typedef float sdf_wide;
+#endif
 
 #else /* C++ */
 
@@ -51,6 +58,7 @@ namespace kern {
 typedef glm::vec3 float3;
 typedef std::int32_t sdf_int32;
 typedef std::uint32_t sdf_uint32;
+typedef double sdf_wide;
 inline float3 make_float3(float x, float y, float z) { return float3(x, y, z); }
 inline float3 sdf_vmin(float3 a, float3 b) { return glm::min(a, b); }
 inline float3 sdf_vmax(float3 a, float3 b) { return glm::max(a, b); }
@@ -63,6 +71,7 @@ using std::asin;
 using std::atan2;
 using std::copysign;
 using std::cos;
+using std::exp;
 using std::fabs;
 using std::floor;
 using std::fmax;

@@ -11,13 +11,7 @@ namespace sdf {
 
 namespace {
 
-constexpr int kMaxDepth = 20;  // 3 bits per level in a 64-bit Morton key
-// Children pushed per visit are at most 8, one visit pops 1: 7 more per level.
-constexpr int kStackSize = 7 * kMaxDepth + 2;
-
-// Radius of the ball with the volume of a cube of side 1: (3 / (4 pi))^(1/3). A cube cut by a
-// sphere is treated as that ball for its inside fraction.
-constexpr float kBallOfUnitCube = 0.62035049f;
+constexpr int kMaxDepth = SDF_POINT_MAX_DEPTH;  // 3 bits per level in a 64-bit Morton key
 
 // Spreads the low 21 bits of x three apart (bit i goes to bit 3i).
 std::uint64_t spread3(std::uint64_t x) {
@@ -112,7 +106,7 @@ std::vector<PointOctreeNode> build_point_octree(const glm::vec3* points, const f
     node.center[0] = c.x;
     node.center[1] = c.y;
     node.center[2] = c.z;
-    node.half = half;
+    node.half_side = half;
     node.count = end - begin;
     node.mean = static_cast<float>((prefix[end] - prefix[begin]) / node.count);
     node.first_child = -1;
@@ -136,7 +130,7 @@ std::vector<PointOctreeNode> build_point_octree(const glm::vec3* points, const f
     float test_value = node.mean;
     if (by_min)
       test_value = *std::min_element(sorted_values.begin() + t.begin, sorted_values.begin() + t.end);
-    const bool branch = test_value <= options.node_size_ratio * 2.0 * node.half;
+    const bool branch = test_value <= options.node_size_ratio * 2.0 * node.half_side;
     if (!branch) continue;
     const int shift = 3 * (depth - t.level - 1);
     const std::uint32_t first = static_cast<std::uint32_t>(nodes.size());
@@ -148,7 +142,7 @@ std::vector<PointOctreeNode> build_point_octree(const glm::vec3* points, const f
                                [&](std::uint64_t k) { return ((k >> shift) & 7u) <= octant; }) -
           keys.begin());
       if (end == begin) continue;
-      const float q = 0.5f * node.half;
+      const float q = 0.5f * node.half_side;
       const glm::vec3 c(node.center[0] + ((octant & 1) ? q : -q),
                         node.center[1] + ((octant & 2) ? q : -q),
                         node.center[2] + ((octant & 4) ? q : -q));
@@ -162,56 +156,19 @@ std::vector<PointOctreeNode> build_point_octree(const glm::vec3* points, const f
   return nodes;
 }
 
-// ---- Per-point work: plain loops over flat arrays (kernel style). ----
+// ---- Per-point work: kernels/sdf_smooth_projected.h (shared with the OpenCL kernels). ----
 float cube_fraction_in_sphere(float side, float distance, float radius) {
-  const float rho = kBallOfUnitCube * side;
-  const float r = radius, d = distance;
-  if (!(r > 0.0f) || d >= r + rho) return 0.0f;
-  const float ball = rho * rho * rho;  // volumes below without the common 4 pi / 3
-  if (d <= std::fabs(r - rho)) return r >= rho ? 1.0f : std::min(1.0f, (r * r * r) / ball);
-  // Lens of two balls (radii r, rho, centres d apart): pi (r + rho - d)^2 (d^2 + 2 d (r + rho)
-  // - 3 (r - rho)^2) / (12 d); over (4 pi / 3) rho^3 that is the expression below.
-  const float s = r + rho - d;
-  const float lens = s * s * (d * d + 2.0f * d * (r + rho) - 3.0f * (r - rho) * (r - rho)) / (16.0f * d);
-  return std::min(1.0f, std::max(0.0f, lens / ball));
+  return kern::sdf_cube_fraction_in_sphere(side, distance, radius);
 }
 
 bool gather_sphere(const PointOctreeNode* nodes, glm::vec3 center, float radius, float* mean) {
-  std::uint32_t stack[kStackSize];
-  int top = 0;
-  stack[top++] = 0;
-  double sum = 0.0, weight = 0.0;
-  const float sqrt3 = 1.7320508f;
-  while (top > 0) {
-    const PointOctreeNode& node = nodes[stack[--top]];
-    const glm::vec3 c(node.center[0], node.center[1], node.center[2]);
-    // Distance from the sphere's centre to the cube: outside when it exceeds the radius.
-    const glm::vec3 out = glm::max(glm::abs(center - c) - glm::vec3(node.half), glm::vec3(0.0f));
-    if (glm::dot(out, out) > radius * radius) continue;
-    const float d = glm::length(center - c);
-    float fraction;
-    if (d + sqrt3 * node.half <= radius) {
-      fraction = 1.0f;  // wholly inside: the node's count and mean stand for its points
-    } else if (node.first_child >= 0) {
-      for (std::uint32_t i = 0; i < node.child_count; ++i)
-        stack[top++] = static_cast<std::uint32_t>(node.first_child) + i;
-      continue;
-    } else {
-      fraction = cube_fraction_in_sphere(2.0f * node.half, d, radius);
-      if (!(fraction > 0.0f)) continue;
-    }
-    const double w = static_cast<double>(node.count) * fraction;
-    sum += w * node.mean;
-    weight += w;
-  }
-  if (!(weight > 0.0)) return false;
-  *mean = static_cast<float>(sum / weight);
-  return true;
+  return kern::sdf_gather_sphere(nodes, center, radius, mean) != 0;
 }
 
 std::vector<float> smooth_projected(const Mesh& mesh, PointKind kind, const float* values,
                                     const ProjectedOptions& options, const ProgressFn& progress,
-                                    double progress_from, double progress_to) {
+                                    double progress_from, double progress_to,
+                                    const ProjectedGatherFn& gather) {
   if (options.iterations < 0)
     throw std::invalid_argument("iterations must be >= 0, got " +
                                 std::to_string(options.iterations));
@@ -250,15 +207,17 @@ std::vector<float> smooth_projected(const Mesh& mesh, PointKind kind, const floa
     const std::vector<PointOctreeNode> nodes =
         build_point_octree(tree_points.data(), tree_values.data(), members.size(), options);
     const double span = (progress_to - progress_from) / options.iterations;
+    if (gather) {
+      gather(nodes, projected, current, lo, hi, next);
+      current.swap(next);
+      if (progress && !progress(progress_from + (it + 1) * span)) throw Cancelled();
+      continue;
+    }
     parallel_for(
         n, 1024, options.threads,
         [&](std::size_t begin, std::size_t end) {
-          for (std::size_t i = begin; i < end; ++i) {
-            float mean;
-            next[i] = gather_sphere(nodes.data(), projected[i], current[i], &mean)
-                          ? std::min(hi, std::max(lo, mean))
-                          : current[i];
-          }
+          for (std::size_t i = begin; i < end; ++i)
+            next[i] = kern::sdf_smooth_projected_point(nodes.data(), projected[i], current[i], lo, hi);
         },
         progress, progress_from + it * span, progress_from + (it + 1) * span);
     current.swap(next);

@@ -11,7 +11,10 @@
 #pragma once
 
 #include <cstdint>
+#include <functional>
 #include <vector>
+
+#include "../kernels/sdf_smooth_projected.h"
 
 #include "mesh.h"
 #include "parallel.h"
@@ -42,23 +45,14 @@ struct ProjectedOptions {
   unsigned threads = 0;  // 0: every core
 };
 
-// One octree node, 32 bytes (a kernel reads the array as it is). Children of a branching node
-// are stored next to each other (empty octants have none) from first_child on.
-struct PointOctreeNode {
-  float center[3];
-  float half;                // half the side of the node's cube
-  float mean;                // mean value of the points inside
-  std::uint32_t count;       // points inside (> 0)
-  std::int32_t first_child;  // -1 for a leaf
-  std::uint32_t child_count;
-};
-static_assert(sizeof(PointOctreeNode) == 32, "PointOctreeNode is 32 bytes");
+// One octree node (kernels/sdf_smooth_projected.h: the same bytes on the host and on an
+// OpenCL device). Children of a branching node are stored next to each other from
+// first_child on.
+using PointOctreeNode = kern::SdfPointNode;
 
-// Approximate fraction of a cube of side `side` whose centre is `distance` from the centre of
-// a sphere of radius `radius` that lies inside the sphere: the cube is taken as the ball of
-// equal volume (radius 0.6204 side) and the fraction is the volume of the two balls' lens
-// over that ball's volume. Exact when one ball holds the other; never above
-// sphere volume / cube volume.
+// kernels/sdf_smooth_projected.h's sdf_cube_fraction_in_sphere: approximate fraction of a
+// cube of side `side` whose centre is `distance` from the centre of a sphere of radius
+// `radius` that lies inside the sphere (the cube taken as the ball of equal volume).
 float cube_fraction_in_sphere(float side, float distance, float radius);
 
 // Octree over points with values; nodes[0] is the root. Throws std::invalid_argument for bad
@@ -73,9 +67,17 @@ bool gather_sphere(const PointOctreeNode* nodes, glm::vec3 center, float radius,
 // values: one per face (kind Faces) or vertex (kind Vertices), >= 0. Returns the smoothed
 // values, clamped to the input's [min, max]. A point that gathers nothing keeps its value.
 // Throws std::invalid_argument for negative or non-finite values or bad options.
+//
+// gather: runs one iteration's per-point step on another device (the OpenCL engine); null:
+// on the CPU threads. It must set next[i] = kern::sdf_smooth_projected_point(nodes,
+// projected[i], current[i], lo, hi) for every point.
+using ProjectedGatherFn = std::function<void(
+    const std::vector<PointOctreeNode>& nodes, const std::vector<glm::vec3>& projected,
+    const std::vector<float>& current, float lo, float hi, std::vector<float>& next)>;
 std::vector<float> smooth_projected(const Mesh& mesh, PointKind kind, const float* values,
                                     const ProjectedOptions& options,
                                     const ProgressFn& progress = nullptr,
-                                    double progress_from = 0.0, double progress_to = 1.0);
+                                    double progress_from = 0.0, double progress_to = 1.0,
+                                    const ProjectedGatherFn& gather = nullptr);
 
 }  // namespace sdf

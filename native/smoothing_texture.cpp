@@ -8,6 +8,7 @@
 #include <stdexcept>
 #include <string>
 
+#include "../kernels/sdf_smooth_texture.h"
 #include "mesh_weld.h"
 
 namespace sdf {
@@ -113,79 +114,83 @@ std::int64_t texel_at(float u, float v, int width, int height) {
   return static_cast<std::int64_t>(y) * width + static_cast<std::int64_t>(x);
 }
 
-// One ring of dilation for row y: an empty texel next to texels with a value takes the
-// smallest island among its 8 neighbours and the mean of its neighbours of that island.
+// One ring of dilation for row y (kernels/sdf_smooth_texture.h, per texel).
 void dilate_row(int y, int width, int height, const std::int32_t* island, const float* value,
                 std::int32_t* island_out, float* value_out) {
-  for (int x = 0; x < width; ++x) {
-    const std::size_t t = static_cast<std::size_t>(y) * width + x;
-    island_out[t] = island[t];
-    value_out[t] = value[t];
-    if (island[t] >= 0) continue;
-    std::int32_t best = -1;
-    for (int dy = -1; dy <= 1; ++dy)
-      for (int dx = -1; dx <= 1; ++dx) {
-        const int nx = x + dx, ny = y + dy;
-        if (nx < 0 || ny < 0 || nx >= width || ny >= height) continue;
-        const std::int32_t i = island[static_cast<std::size_t>(ny) * width + nx];
-        if (i >= 0 && (best < 0 || i < best)) best = i;
-      }
-    if (best < 0) continue;
-    double sum = 0.0;
-    int count = 0;
-    for (int dy = -1; dy <= 1; ++dy)
-      for (int dx = -1; dx <= 1; ++dx) {
-        const int nx = x + dx, ny = y + dy;
-        if (nx < 0 || ny < 0 || nx >= width || ny >= height) continue;
-        const std::size_t n = static_cast<std::size_t>(ny) * width + nx;
-        if (island[n] != best) continue;
-        sum += value[n];
-        ++count;
-      }
-    island_out[t] = best;
-    value_out[t] = static_cast<float>(sum / count);
-  }
+  for (int x = 0; x < width; ++x)
+    kern::sdf_dilate_texel(x, y, width, height, island, value, island_out, value_out);
 }
 
-// One 1-D pass of the island-masked Gaussian over a line of `count` texels `stride` apart.
-// In: value_sum / weight_sum per texel (for the first pass, the value and 1). Out: the
-// weighted sums over the taps of the centre's island. Bilateral: taps also weigh
-// exp(-1/2 ((v_tap - v_centre) * inv_range)^2), v = value_sum / weight_sum.
+// One 1-D pass of the island-masked Gaussian over a line of `count` texels `stride` apart
+// (kernels/sdf_smooth_texture.h, per texel).
 void blur_line(int count, std::size_t stride, const std::int32_t* island, const float* value_sum,
                const float* weight_sum, const float* taps, int radius, float inv_range,
                float* value_out, float* weight_out) {
   for (int i = 0; i < count; ++i) {
     const std::size_t t = i * stride;
-    const std::int32_t own = island[t];
-    if (own < 0) {
-      value_out[t] = 0.0f;
-      weight_out[t] = 0.0f;
-      continue;
-    }
-    const int lo = std::max(0, i - radius), hi = std::min(count - 1, i + radius);
-    float sv = 0.0f, sw = 0.0f;
-    if (inv_range > 0.0f) {
-      const float centre = value_sum[t] / weight_sum[t];
-      for (int j = lo; j <= hi; ++j) {
-        const std::size_t n = j * stride;
-        if (island[n] != own) continue;
-        const float d = (value_sum[n] / weight_sum[n] - centre) * inv_range;
-        const float w = taps[j > i ? j - i : i - j] * std::exp(-0.5f * d * d);
-        sv += w * value_sum[n];
-        sw += w * weight_sum[n];
-      }
-    } else {
-      for (int j = lo; j <= hi; ++j) {
-        const std::size_t n = j * stride;
-        if (island[n] != own) continue;
-        const float w = taps[j > i ? j - i : i - j];
-        sv += w * value_sum[n];
-        sw += w * weight_sum[n];
-      }
-    }
-    value_out[t] = sv;
-    weight_out[t] = sw;
+    kern::sdf_blur_texel(i, count, stride, island, value_sum, weight_sum, taps, radius, inv_range,
+                         value_out + t, weight_out + t);
   }
+}
+
+// Steps 3 and 4 on the CPU threads: dilates island and value in place and returns the
+// blurred image.
+std::vector<float> filter_cpu(const TextureFilter& f, std::vector<std::int32_t>& island,
+                              std::vector<float>& value, unsigned threads,
+                              const ProgressFn& progress, double progress_from,
+                              double progress_to) {
+  const int width = f.width, height = f.height, taps = f.taps;
+  const std::size_t texels = static_cast<std::size_t>(width) * height;
+  auto report = [&](double fraction) {
+    if (progress && !progress(progress_from + (progress_to - progress_from) * fraction))
+      throw Cancelled();
+  };
+  // Dilate.
+  {
+    std::vector<std::int32_t> island2(texels);
+    std::vector<float> value2(texels);
+    for (int ring = 0; ring < f.margin; ++ring) {
+      parallel_for(height, 16, threads, [&](std::size_t begin, std::size_t end) {
+        for (std::size_t y = begin; y < end; ++y)
+          dilate_row(static_cast<int>(y), width, height, island.data(), value.data(),
+                     island2.data(), value2.data());
+      });
+      island.swap(island2);
+      value.swap(value2);
+    }
+  }
+  report(0.15);
+
+  // Blur: rows, then columns.
+  std::vector<float> blurred = value;
+  if (taps >= 1) {
+    const float* kernel = f.kernel.data();
+    std::vector<float> ones(texels, 1.0f), row_value(texels), row_weight(texels), col_weight(texels);
+    parallel_for(
+        height, 8, threads,
+        [&](std::size_t begin, std::size_t end) {
+          for (std::size_t y = begin; y < end; ++y) {
+            const std::size_t o = y * width;
+            blur_line(width, 1, island.data() + o, value.data() + o, ones.data() + o,
+                      kernel, taps, f.inv_range, row_value.data() + o, row_weight.data() + o);
+          }
+        },
+        progress, progress_from + 0.15 * (progress_to - progress_from),
+        progress_from + 0.5 * (progress_to - progress_from));
+    parallel_for(
+        width, 8, threads,
+        [&](std::size_t begin, std::size_t end) {
+          for (std::size_t x = begin; x < end; ++x)
+            blur_line(height, width, island.data() + x, row_value.data() + x,
+                      row_weight.data() + x, kernel, taps, f.inv_range, blurred.data() + x,
+                      col_weight.data() + x);
+        },
+        progress, progress_from + 0.5 * (progress_to - progress_from),
+        progress_from + 0.85 * (progress_to - progress_from));
+    for (std::size_t t = 0; t < texels; ++t)
+      if (island[t] >= 0) blurred[t] = kern::sdf_blur_normalize(blurred[t], col_weight[t], f.lo, f.hi);
+  }
+  return blurred;
 }
 
 }  // namespace
@@ -234,7 +239,7 @@ std::vector<std::int32_t> uv_islands(const Mesh& mesh, const float* uvs, double 
 TextureSmoothing smooth_texture(const Mesh& mesh, PointKind kind, const float* values,
                                 const float* uvs, const TextureOptions& options, bool keep_image,
                                 const ProgressFn& progress, double progress_from,
-                                double progress_to) {
+                                double progress_to, const TextureFilterFn& filter) {
   const int width = options.width, height = options.height;
   if (width < 1 || height < 1 || width > kMaxSize || height > kMaxSize)
     throw std::invalid_argument("the texture size must be in [1, " + std::to_string(kMaxSize) +
@@ -309,58 +314,29 @@ TextureSmoothing smooth_texture(const Mesh& mesh, PointKind kind, const float* v
   }
   report(0.1);
 
-  // Dilate.
-  {
-    std::vector<std::int32_t> island2(texels);
-    std::vector<float> value2(texels);
-    for (int ring = 0; ring < options.margin; ++ring) {
-      parallel_for(height, 16, options.threads, [&](std::size_t begin, std::size_t end) {
-        for (std::size_t y = begin; y < end; ++y)
-          dilate_row(static_cast<int>(y), width, height, island.data(), value.data(),
-                     island2.data(), value2.data());
-      });
-      island.swap(island2);
-      value.swap(value2);
-    }
-  }
-  report(0.15);
-
-  // Blur: rows, then columns.
-  std::vector<float> blurred = value;
-  const int taps = static_cast<int>(std::floor(radius));
-  if (taps >= 1) {
+  // Dilate and blur: on the CPU threads, or by `filter` on another device.
+  TextureFilter f;
+  f.width = width;
+  f.height = height;
+  f.margin = options.margin;
+  f.taps = std::max(0, static_cast<int>(std::floor(radius)));
+  f.lo = lo;
+  f.hi = hi;
+  if (f.taps >= 1) {
     const double sigma = 0.5 * radius;
-    std::vector<float> kernel(taps + 1);
-    for (int j = 0; j <= taps; ++j) kernel[j] = static_cast<float>(std::exp(-0.5 * (j / sigma) * (j / sigma)));
-    const float inv_range =
+    f.kernel.resize(f.taps + 1);
+    for (int j = 0; j <= f.taps; ++j)
+      f.kernel[j] = static_cast<float>(std::exp(-0.5 * (j / sigma) * (j / sigma)));
+    f.inv_range =
         options.bilateral && hi > lo ? static_cast<float>(1.0 / (options.range_sigma * (hi - lo))) : 0.0f;
-    std::vector<float> ones(texels, 1.0f), row_value(texels), row_weight(texels), col_weight(texels);
-    parallel_for(
-        height, 8, options.threads,
-        [&](std::size_t begin, std::size_t end) {
-          for (std::size_t y = begin; y < end; ++y) {
-            const std::size_t o = y * width;
-            blur_line(width, 1, island.data() + o, value.data() + o, ones.data() + o,
-                      kernel.data(), taps, inv_range, row_value.data() + o, row_weight.data() + o);
-          }
-        },
-        progress, progress_from + 0.15 * (progress_to - progress_from),
-        progress_from + 0.5 * (progress_to - progress_from));
-    parallel_for(
-        width, 8, options.threads,
-        [&](std::size_t begin, std::size_t end) {
-          for (std::size_t x = begin; x < end; ++x)
-            blur_line(height, width, island.data() + x, row_value.data() + x,
-                      row_weight.data() + x, kernel.data(), taps, inv_range, blurred.data() + x,
-                      col_weight.data() + x);
-        },
-        progress, progress_from + 0.5 * (progress_to - progress_from),
-        progress_from + 0.85 * (progress_to - progress_from));
-    for (std::size_t t = 0; t < texels; ++t) {
-      if (island[t] < 0) continue;
-      // The centre texel itself always counts, so the weight is > 0.
-      blurred[t] = std::min(hi, std::max(lo, blurred[t] / col_weight[t]));
-    }
+  }
+  std::vector<float> blurred;
+  if (filter) {
+    filter(f, island, value);
+    blurred.swap(value);
+    report(0.85);
+  } else {
+    blurred = filter_cpu(f, island, value, options.threads, progress, progress_from, progress_to);
   }
 
   // Read back.

@@ -25,6 +25,7 @@
 #pragma once
 
 #include <cstdint>
+#include <functional>
 #include <vector>
 
 #include "mesh.h"
@@ -55,13 +56,31 @@ struct TextureSmoothing {
   int width = 0, height = 0;
 };
 
+// Steps 3 and 4 (dilate, blur) of one image, as smooth_texture runs them.
+struct TextureFilter {
+  int width = 0, height = 0;
+  int margin = 0;              // rings of dilation
+  int taps = 0;                // blur reach in texels; 0: no blur
+  std::vector<float> kernel;   // taps + 1 Gaussian weights, kernel[|offset|]
+  float inv_range = 0.0f;      // bilateral: 1 / the value deviation; 0: plain Gaussian
+  float lo = 0.0f, hi = 0.0f;  // the input's range: blurred texels are clamped to it
+};
+// Runs steps 3 and 4 on another device (the OpenCL engine). island and value come in as
+// rasterised (row-major, -1 and 0 where empty); island must leave dilated and value blurred
+// (sdf_blur_normalize where island >= 0), as the CPU's loops over
+// kernels/sdf_smooth_texture.h leave them.
+using TextureFilterFn = std::function<void(const TextureFilter& filter,
+                                           std::vector<std::int32_t>& island,
+                                           std::vector<float>& value)>;
+
 // uvs: per face corner, (u, v) for corners 0, 1, 2 of face 0, then face 1, ... (6 floats a
 // face), finite. keep_image: fill image and mask (else they stay empty). Throws
-// std::invalid_argument for bad options, non-finite values or UVs.
+// std::invalid_argument for bad options, non-finite values or UVs. filter: null runs
+// steps 3 and 4 on the CPU threads.
 TextureSmoothing smooth_texture(const Mesh& mesh, PointKind kind, const float* values,
                                 const float* uvs, const TextureOptions& options, bool keep_image,
                                 const ProgressFn& progress = nullptr, double progress_from = 0.0,
-                                double progress_to = 1.0);
+                                double progress_to = 1.0, const TextureFilterFn& filter = nullptr);
 
 // UV islands (step 1): one id per face, 0, 1, 2, ... in order of each island's first face.
 std::vector<std::int32_t> uv_islands(const Mesh& mesh, const float* uvs, double weld_tolerance);

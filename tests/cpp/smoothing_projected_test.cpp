@@ -45,12 +45,12 @@ TEST(PointOctree, NodesSumUpAndFollowTheBranchRules) {
     }
     // Branching nodes hold more than 0.2% of the points and a mean at most their side.
     EXPECT_GT(n.count, 0.002 * p.size());
-    EXPECT_LE(n.mean, 2.0f * n.half);
+    EXPECT_LE(n.mean, 2.0f * n.half_side);
     std::uint32_t count = 0;
     double sum = 0.0;
     for (std::uint32_t c = 0; c < n.child_count; ++c) {
       const PointOctreeNode& child = nodes[n.first_child + c];
-      EXPECT_FLOAT_EQ(child.half, 0.5f * n.half);
+      EXPECT_FLOAT_EQ(child.half_side, 0.5f * n.half_side);
       count += child.count;
       sum += double(child.mean) * child.count;
     }
@@ -67,9 +67,9 @@ TEST(PointOctree, NodesSumUpAndFollowTheBranchRules) {
       const PointOctreeNode* next = nullptr;
       for (std::uint32_t c = 0; c < n->child_count; ++c) {
         const PointOctreeNode& child = nodes[n->first_child + c];
-        if (std::fabs(p[i].x - child.center[0]) <= child.half &&
-            std::fabs(p[i].y - child.center[1]) <= child.half &&
-            std::fabs(p[i].z - child.center[2]) <= child.half)
+        if (std::fabs(p[i].x - child.center[0]) <= child.half_side &&
+            std::fabs(p[i].y - child.center[1]) <= child.half_side &&
+            std::fabs(p[i].z - child.center[2]) <= child.half_side)
           next = &child;
       }
       ASSERT_NE(next, nullptr) << i;
