@@ -12,6 +12,10 @@
 #include "smoothing_kring.h"
 #include "smoothing_projected.h"
 #include "smoothing_texture.h"
+#ifdef SDF_HAVE_OPENCL
+#include "opencl/devices.h"
+#include "opencl/opencl_smoothing.h"
+#endif
 
 namespace py = pybind11;
 
@@ -55,6 +59,24 @@ sdf::ProgressFn progress_from(const py::object& progress) {
   };
 }
 
+// The OpenCL device an engine string names ("opencl", "opencl:N", "opencl:<name>"; the first
+// of "opencl:all"), or null for "cpu". Throws std::invalid_argument naming the devices there
+// are when nothing matches.
+#ifdef SDF_HAVE_OPENCL
+const sdf::cl::Device* device_for(const std::string& engine) {
+  if (engine == "cpu") return nullptr;
+  if (engine.compare(0, 6, "opencl") != 0)
+    throw std::invalid_argument("engine must be 'cpu' or 'opencl...', got '" + engine + "'");
+  return sdf::cl::select_devices(engine).front();
+}
+#else
+const void* device_for(const std::string& engine) {
+  if (engine == "cpu") return nullptr;
+  throw std::invalid_argument("this build of shape_diameter has no OpenCL engine (engine '" +
+                              engine + "')");
+}
+#endif
+
 py::array_t<float> to_array(const std::vector<float>& v) {
   return py::array_t<float>(static_cast<py::ssize_t>(v.size()), v.data());
 }
@@ -85,8 +107,8 @@ py::array_t<float> smooth_projected(const Doubles& vertices, const Int64s& trian
                                     const Floats& values, const std::string& points,
                                     int iterations, int max_depth, double min_points,
                                     double node_size_ratio, const std::string& branch_on,
-                                    unsigned threads,
-                                    const py::object& progress) {
+                                    unsigned threads, const py::object& progress,
+                                    const std::string& engine) {
   const sdf::Mesh mesh = mesh_from(vertices, triangles);
   const sdf::PointKind kind = kind_from(points);
   const float* v = point_values(mesh, kind, values);
@@ -99,11 +121,17 @@ py::array_t<float> smooth_projected(const Doubles& vertices, const Int64s& trian
   else if (branch_on == "min") options.branch_on = sdf::ProjectedOptions::Branch::Min;
   else throw std::invalid_argument("branch_on must be 'mean' or 'min', got '" + branch_on + "'");
   options.threads = threads;
+  const auto* device = device_for(engine);
+  (void)device;  // unused without OpenCL
   const sdf::ProgressFn report = progress_from(progress);
   std::vector<float> out;
   {
     py::gil_scoped_release release;
-    out = sdf::smooth_projected(mesh, kind, v, options, report);
+#ifdef SDF_HAVE_OPENCL
+    if (device) out = sdf::cl::smooth_projected_opencl(*device, mesh, kind, v, options, report);
+    else
+#endif
+      out = sdf::smooth_projected(mesh, kind, v, options, report);
   }
   return to_array(out);
 }
@@ -112,7 +140,7 @@ py::dict smooth_texture(const Doubles& vertices, const Int64s& triangles, const 
                         const std::string& points, const Floats& uvs, int width, int height,
                         double radius, bool bilateral, double range_sigma, int margin,
                         double weld_tolerance, bool return_image, unsigned threads,
-                        const py::object& progress) {
+                        const py::object& progress, const std::string& engine) {
   const sdf::Mesh mesh = mesh_from(vertices, triangles);
   const sdf::PointKind kind = kind_from(points);
   const float* v = point_values(mesh, kind, values);
@@ -128,11 +156,19 @@ py::dict smooth_texture(const Doubles& vertices, const Int64s& triangles, const 
   options.margin = margin;
   options.weld_tolerance = weld_tolerance;
   options.threads = threads;
+  const auto* device = device_for(engine);
+  (void)device;  // unused without OpenCL
   const sdf::ProgressFn report = progress_from(progress);
   sdf::TextureSmoothing out;
   {
     py::gil_scoped_release release;
-    out = sdf::smooth_texture(mesh, kind, v, uvs.data(), options, return_image, report);
+#ifdef SDF_HAVE_OPENCL
+    if (device)
+      out = sdf::cl::smooth_texture_opencl(*device, mesh, kind, v, uvs.data(), options,
+                                           return_image, report);
+    else
+#endif
+      out = sdf::smooth_texture(mesh, kind, v, uvs.data(), options, return_image, report);
   }
   py::dict result;
   result["values"] = to_array(out.values);
@@ -185,12 +221,12 @@ void bind_smoothing(py::module_& m) {
   m.def("smooth_projected", &smooth_projected, py::arg("vertices"), py::arg("triangles"),
         py::arg("values"), py::arg("points"), py::arg("iterations"), py::arg("max_depth"),
         py::arg("min_points"), py::arg("node_size_ratio"), py::arg("branch_on"), py::arg("threads"),
-        py::arg("progress"));
+        py::arg("progress"), py::arg("engine") = "cpu");
   m.def("smooth_texture", &smooth_texture, py::arg("vertices"), py::arg("triangles"),
         py::arg("values"), py::arg("points"), py::arg("uvs"), py::arg("width"),
         py::arg("height"), py::arg("radius"), py::arg("bilateral"), py::arg("range_sigma"),
         py::arg("margin"), py::arg("weld_tolerance"), py::arg("return_image"),
-        py::arg("threads"), py::arg("progress"));
+        py::arg("threads"), py::arg("progress"), py::arg("engine") = "cpu");
   m.def("default_kring_k", [](std::size_t faces) { return sdf::default_kring_k(faces); },
         py::arg("faces"));
   m.def("weld_vertices", &weld_vertices, py::arg("vertices"), py::arg("triangles"),

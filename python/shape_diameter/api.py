@@ -126,12 +126,7 @@ ACCELERATIONS = ("bvh", "octree")
 ORIENTATIONS = ("auto", "as_is", "flip")
 
 
-def _check_options(rays, cone_angle, sampling, points, normalize_method, engine, progress, seed):
-    _check_integer("rays", rays, 1, MAX_RAYS)
-    _check_cone_angle(cone_angle)
-    _check_choice("sampling", sampling, SAMPLINGS)
-    _check_choice("points", points, POINTS)
-    _check_choice("normalize", normalize_method, NORMALIZATIONS)
+def _check_engine(engine):
     if not isinstance(engine, str) or not (
         engine in ("auto", "cpu") or engine == "opencl" or engine.startswith("opencl:")
     ):
@@ -140,6 +135,15 @@ def _check_options(rays, cone_angle, sampling, points, normalize_method, engine,
             f"unknown engine {engine!r}; available here: {names} (also 'opencl' for the best "
             "OpenCL device, 'opencl:all' for every GPU, 'opencl:<part of a device name>')"
         )
+
+
+def _check_options(rays, cone_angle, sampling, points, normalize_method, engine, progress, seed):
+    _check_integer("rays", rays, 1, MAX_RAYS)
+    _check_cone_angle(cone_angle)
+    _check_choice("sampling", sampling, SAMPLINGS)
+    _check_choice("points", points, POINTS)
+    _check_choice("normalize", normalize_method, NORMALIZATIONS)
+    _check_engine(engine)
     if progress is not None and not callable(progress):
         raise ValueError("progress must be a callable taking a fraction in [0, 1], or None")
     _check_integer("seed", seed, 0, 2**32 - 1)
@@ -194,8 +198,11 @@ def compute(
     threads: CPU threads, 0 for every core.
     smoothing: 'none', 'kring', 'projected' or 'texture' (paper 4.4; see smooth()), applied
         to the SDF after filling: Result.values and Result.normalized are the smoothed field,
-        Result.raw stays as cast. uvs: per-corner (m, 3, 2) or per-vertex (n, 2) texture
-        coordinates, needed by 'texture'. smoothing_options: a dict of the method's options
+        Result.raw stays as cast. 'projected' and 'texture' run on the engine that cast (an
+        OpenCL device, or the CPU; after an 'auto' fallback, the CPU; 'opencl:all': its first
+        device), 'kring' on the CPU; with 'auto', an OpenCL smoothing failure also falls back
+        to the CPU and Result.engine says so. uvs: per-corner (m, 3, 2) or per-vertex (n, 2)
+        texture coordinates, needed by 'texture'. smoothing_options: a dict of the method's options
         (smooth()'s keyword options; return_image is smooth()'s alone).
 
     Points where no ray was kept (zero-area faces, rays escaping an open mesh, ...) take the
@@ -247,11 +254,22 @@ def compute(
     values = raw.copy()
     if smoothing != "none":
         clock = time.perf_counter()
-        values = smooth(
-            v, t, raw, smoothing, uvs=uvs, points=points, threads=int(threads),
-            progress=None if progress is None else lambda fraction: progress(0.9 + 0.1 * fraction),
-            **(smoothing_options or {}),
-        )
+        smooth_engine = "cpu" if fallback else chosen
+
+        def run_smoothing(engine_name):
+            return smooth(
+                v, t, raw, smoothing, uvs=uvs, points=points, threads=int(threads),
+                progress=None if progress is None else lambda f: progress(0.9 + 0.1 * f),
+                engine=engine_name, **(smoothing_options or {}),
+            )
+
+        try:
+            values = run_smoothing(smooth_engine)
+        except RuntimeError as error:
+            if engine != "auto" or smooth_engine == "cpu":
+                raise
+            fallback = f"smoothing on {smooth_engine} failed: {error}".splitlines()[0]
+            values = run_smoothing("cpu")
         timings["smooth"] = time.perf_counter() - clock
     clock = time.perf_counter()
     normalized = normalize_values(values, normalize)

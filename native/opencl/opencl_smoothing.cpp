@@ -1,0 +1,175 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
+#include "opencl_smoothing.h"
+
+#include <algorithm>
+#include <cstdint>
+#include <memory>
+#include <mutex>
+#include <string>
+
+#include "device_state.h"
+
+namespace sdf::cl {
+
+namespace {
+
+// The smoothing kernels do not depend on SDF_MAX_RAYS: any program already built for the
+// device has them, so a compute() followed by smoothing builds (or loads) nothing more. With
+// none yet, the program for the default 30 rays (what a later compute() will most likely
+// need).
+cl_program smoothing_program(const Device& device, DeviceState& s) {
+  if (!s.programs.empty()) return s.programs.begin()->second;
+  return program_for(device, s, build_options(device, 30));
+}
+
+void launch(DeviceState& s, const Kernel& kernel, cl_uint dims, const std::size_t* global,
+            const std::size_t* local) {
+  check(api()->clEnqueueNDRangeKernel(s.queue, kernel.get(), dims, nullptr, global, local, 0,
+                                      nullptr, nullptr),
+        "clEnqueueNDRangeKernel");
+}
+
+void read(DeviceState& s, const Buffer& buffer, std::size_t bytes, void* out) {
+  check(api()->clEnqueueReadBuffer(s.queue, buffer.get(), CL_TRUE, 0, bytes, out, 0, nullptr,
+                                   nullptr),
+        "clEnqueueReadBuffer");
+}
+
+// 2-D global size rounded up to the local size (8 x 8 on GPUs; the driver's choice on CPUs).
+void image_launch(const Device& device, DeviceState& s, const Kernel& kernel, int width,
+                  int height) {
+  if (device.gpu) {
+    const std::size_t local[2] = {8, 8};
+    const std::size_t global[2] = {(static_cast<std::size_t>(width) + 7) / 8 * 8,
+                                   (static_cast<std::size_t>(height) + 7) / 8 * 8};
+    launch(s, kernel, 2, global, local);
+  } else {
+    const std::size_t global[2] = {static_cast<std::size_t>(width),
+                                   static_cast<std::size_t>(height)};
+    launch(s, kernel, 2, global, nullptr);
+  }
+}
+
+}  // namespace
+
+std::vector<float> smooth_projected_opencl(const Device& device, const Mesh& mesh, PointKind kind,
+                                           const float* values, const ProjectedOptions& options,
+                                           const ProgressFn& progress) {
+  DeviceState& s = state_of(device);
+  auto gather = [&](const std::vector<PointOctreeNode>& nodes,
+                    const std::vector<glm::vec3>& projected, const std::vector<float>& current,
+                    float lo, float hi, std::vector<float>& next) {
+    static_assert(sizeof(glm::vec3) == 3 * sizeof(float), "vec3 is 3 packed floats");
+    const std::size_t n = current.size();
+    const std::vector<std::size_t> sizes = {bytes_of(nodes), bytes_of(projected), bytes_of(current),
+                                            bytes_of(next)};
+    check_fits(device, sizes);
+    std::lock_guard<std::mutex> lock(s.mutex);
+    cl_program program = smoothing_program(device, s);
+    Buffer node_buffer(s, sizes[0], nodes.data());
+    Buffer projected_buffer(s, sizes[1], projected.data());
+    Buffer current_buffer(s, sizes[2], current.data());
+    Buffer next_buffer(s, sizes[3], nullptr);
+    Kernel kernel(program, "sdf_smooth_projected");
+    kernel.arg(0, node_buffer.get());
+    kernel.arg(1, projected_buffer.get());
+    kernel.arg(2, current_buffer.get());
+    kernel.arg(3, lo);
+    kernel.arg(4, hi);
+    kernel.arg(7, next_buffer.get());
+    // Launches of at most 2^18 points keep each one short (display watchdogs). Work-group
+    // size as for casting: 64 on GPUs, 1 on CPUs (PoCL vectorises a group as a loop, which
+    // divergent traversals defeat).
+    const std::size_t local = device.gpu ? 64 : 1;
+    constexpr std::size_t kChunk = std::size_t(1) << 18;
+    for (std::size_t first = 0; first < n; first += kChunk) {
+      const std::size_t count = std::min(kChunk, n - first);
+      kernel.arg(5, static_cast<cl_uint>(first));
+      kernel.arg(6, static_cast<cl_uint>(count));
+      const std::size_t global = (count + local - 1) / local * local;
+      launch(s, kernel, 1, &global, &local);
+    }
+    read(s, next_buffer, sizes[3], next.data());
+  };
+  return smooth_projected(mesh, kind, values, options, progress, 0.0, 1.0, gather);
+}
+
+TextureSmoothing smooth_texture_opencl(const Device& device, const Mesh& mesh, PointKind kind,
+                                       const float* values, const float* uvs,
+                                       const TextureOptions& options, bool keep_image,
+                                       const ProgressFn& progress) {
+  DeviceState& s = state_of(device);
+  auto filter = [&](const TextureFilter& f, std::vector<std::int32_t>& island,
+                    std::vector<float>& value) {
+    const std::size_t texels = island.size();
+    const std::size_t image = texels * sizeof(float);
+    const bool blur = f.taps >= 1;
+    // island and value, their dilation copies, and for the blur: ones, the row pass's two
+    // sums and the taps (the result goes to the second value buffer).
+    std::vector<std::size_t> sizes = {image, image, image, image};
+    if (blur) sizes.insert(sizes.end(), {image, image, image, bytes_of(f.kernel)});
+    check_fits(device, sizes);
+    std::lock_guard<std::mutex> lock(s.mutex);
+    cl_program program = smoothing_program(device, s);
+    std::unique_ptr<Buffer> island_a = std::make_unique<Buffer>(s, image, island.data());
+    std::unique_ptr<Buffer> value_a = std::make_unique<Buffer>(s, image, value.data());
+    std::unique_ptr<Buffer> island_b = std::make_unique<Buffer>(s, image, nullptr);
+    std::unique_ptr<Buffer> value_b = std::make_unique<Buffer>(s, image, nullptr);
+    if (f.margin > 0) {
+      Kernel dilate(program, "sdf_texture_dilate");
+      dilate.arg(0, static_cast<cl_int>(f.width));
+      dilate.arg(1, static_cast<cl_int>(f.height));
+      for (int ring = 0; ring < f.margin; ++ring) {
+        dilate.arg(2, island_a->get());
+        dilate.arg(3, value_a->get());
+        dilate.arg(4, island_b->get());
+        dilate.arg(5, value_b->get());
+        image_launch(device, s, dilate, f.width, f.height);
+        std::swap(island_a, island_b);
+        std::swap(value_a, value_b);
+      }
+    }
+    if (blur) {
+      const std::vector<float> ones(texels, 1.0f);
+      Buffer ones_buffer(s, image, ones.data());
+      Buffer row_value(s, image, nullptr);
+      Buffer row_weight(s, image, nullptr);
+      Buffer taps(s, bytes_of(f.kernel), f.kernel.data());
+      Kernel rows(program, "sdf_texture_blur_rows");
+      cl_uint a = 0;
+      rows.arg(a++, static_cast<cl_int>(f.width));
+      rows.arg(a++, static_cast<cl_int>(f.height));
+      rows.arg(a++, island_a->get());
+      rows.arg(a++, value_a->get());
+      rows.arg(a++, ones_buffer.get());
+      rows.arg(a++, taps.get());
+      rows.arg(a++, static_cast<cl_int>(f.taps));
+      rows.arg(a++, f.inv_range);
+      rows.arg(a++, row_value.get());
+      rows.arg(a++, row_weight.get());
+      image_launch(device, s, rows, f.width, f.height);
+      Kernel columns(program, "sdf_texture_blur_columns");
+      a = 0;
+      columns.arg(a++, static_cast<cl_int>(f.width));
+      columns.arg(a++, static_cast<cl_int>(f.height));
+      columns.arg(a++, island_a->get());
+      columns.arg(a++, row_value.get());
+      columns.arg(a++, row_weight.get());
+      columns.arg(a++, taps.get());
+      columns.arg(a++, static_cast<cl_int>(f.taps));
+      columns.arg(a++, f.inv_range);
+      columns.arg(a++, f.lo);
+      columns.arg(a++, f.hi);
+      columns.arg(a++, value_b->get());
+      image_launch(device, s, columns, f.width, f.height);
+      std::swap(value_a, value_b);
+      // The buffers above are released at the end of this block: finish with them first.
+      check(api()->clFinish(s.queue), "clFinish (blur)");
+    }
+    read(s, *island_a, image, island.data());
+    read(s, *value_a, image, value.data());
+  };
+  return smooth_texture(mesh, kind, values, uvs, options, keep_image, progress, 0.0, 1.0, filter);
+}
+
+}  // namespace sdf::cl

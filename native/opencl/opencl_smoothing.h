@@ -1,0 +1,30 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
+// The OpenCL versions of two smoothing methods (paper 4.4): projected points (the octree is
+// built on the host each iteration and uploaded; the per-point gather runs on the device) and
+// texture space (rasterisation and read-back on the host; dilation and both blur passes on
+// the device). The device code is kernels/sdf_smooth_*.h, which the CPU versions run as C++,
+// so the results agree with the CPU's to float rounding (exp, and float sums where a device
+// has no double).
+#pragma once
+
+#include <vector>
+
+#include "../smoothing_projected.h"
+#include "../smoothing_texture.h"
+#include "devices.h"
+
+namespace sdf::cl {
+
+// As sdf::smooth_projected, on `device`. Throws Error for OpenCL failures and
+// std::runtime_error when the octree and points do not fit the device.
+std::vector<float> smooth_projected_opencl(const Device& device, const Mesh& mesh, PointKind kind,
+                                           const float* values, const ProjectedOptions& options,
+                                           const ProgressFn& progress = nullptr);
+
+// As sdf::smooth_texture, on `device` (the same errors as smooth_projected_opencl).
+TextureSmoothing smooth_texture_opencl(const Device& device, const Mesh& mesh, PointKind kind,
+                                       const float* values, const float* uvs,
+                                       const TextureOptions& options, bool keep_image,
+                                       const ProgressFn& progress = nullptr);
+
+}  // namespace sdf::cl
