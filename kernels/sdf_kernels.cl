@@ -14,6 +14,7 @@
 #include "sdf_bvh_traverse.h"
 #include "sdf_octree.h"
 #include "sdf_reduce.h"
+#include "sdf_smooth_projected.h"
 
 #ifndef SDF_MAX_RAYS
 #define SDF_MAX_RAYS 32
@@ -97,4 +98,9 @@ __kernel void sdf_layout_probe(__global uint* out) {
   out[10] = sizeof(SdfCastParams);
   out[11] = SDF_OFFSET(SdfCastParams, tmin);
   out[12] = SDF_OFFSET(SdfCastParams, count);
+  out[13] = sizeof(SdfPointNode);
+  out[14] = SDF_OFFSET(SdfPointNode, half_side);
+  out[15] = SDF_OFFSET(SdfPointNode, count);
+  out[16] = SDF_OFFSET(SdfPointNode, first_child);
+  out[17] = SDF_OFFSET(SdfPointNode, child_count);
 }

@@ -13,6 +13,7 @@
 
 #include "../kernels/sdf_octree.h"
 #include "../kernels/sdf_reduce.h"
+#include "../kernels/sdf_smooth_projected.h"
 #include "parallel.h"
 #include "sdf.h"
 #ifdef SDF_HAVE_OPENCL
@@ -166,7 +167,9 @@ std::vector<std::uint32_t> host_layout() {
           offsetof(SdfBvhNode, count), sizeof(SdfTriangle),         offsetof(SdfTriangle, id),
           offsetof(SdfTriangle, e1_x), offsetof(SdfTriangle, e2_x), sizeof(SdfOctreeRoot),
           offsetof(SdfOctreeRoot, size), sizeof(SdfCastParams),    offsetof(SdfCastParams, tmin),
-          offsetof(SdfCastParams, count)};
+          offsetof(SdfCastParams, count), sizeof(SdfPointNode),  offsetof(SdfPointNode, half_side),
+          offsetof(SdfPointNode, count), offsetof(SdfPointNode, first_child),
+          offsetof(SdfPointNode, child_count)};
 }
 
 glm::vec3 unit_vector(const Floats& v, const char* what) {

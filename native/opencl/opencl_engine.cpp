@@ -258,7 +258,7 @@ std::vector<std::uint32_t> probe_layout(int index) {
   std::lock_guard<std::mutex> lock(s.mutex);
   cl_program program = program_for(device, s, build_options(device, 1));
   Kernel kernel(program, "sdf_layout_probe");
-  std::vector<std::uint32_t> out(16, 0);
+  std::vector<std::uint32_t> out(32, 0);
   Buffer buffer(s, bytes_of(out), out.data());
   kernel.arg(0, buffer.get());
   const std::size_t one = 1;
@@ -268,7 +268,7 @@ std::vector<std::uint32_t> probe_layout(int index) {
   check(api()->clEnqueueReadBuffer(s.queue, buffer.get(), CL_TRUE, 0, bytes_of(out), out.data(), 0,
                                    nullptr, nullptr),
         "clEnqueueReadBuffer");
-  out.resize(13);
+  out.resize(18);
   return out;
 }
 
