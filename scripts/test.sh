@@ -11,6 +11,7 @@ cmake -S . -B build/cpp -G Ninja -DCMAKE_BUILD_TYPE=Release -DSDF_BUILD_TESTS=ON
 cmake --build build/cpp
 echo "test: ctest"
 ctest --test-dir build/cpp --output-on-failure
+bash scripts/fuzz.sh
 
 echo "test: Blender"
 bash scripts/test_blender.sh
