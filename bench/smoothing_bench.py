@@ -137,6 +137,8 @@ def main():
     parser.add_argument("--cast-repeat", type=int, default=2, help="casts per mesh (the fastest)")
     parser.add_argument("--threads", type=int, default=0, help="CPU threads, 0 for all")
     parser.add_argument("--opencl", metavar="ENGINE", help="time the OpenCL versions on ENGINE")
+    parser.add_argument("--title", default="Smoothing (OpenCL)",
+                        help="with --opencl: the RESULTS.md section to write")  # fmt: skip
     parser.add_argument("--out", default=str(ROOT / "bench" / "RESULTS.md"))
     args = parser.parse_args()
     repeat = 1 if args.quick else args.repeat
@@ -298,7 +300,7 @@ def opencl_main(args, repeat, threads):
     commit = subprocess.run(["git", "rev-parse", "--short", "HEAD"], capture_output=True,
                             text=True, cwd=ROOT).stdout.strip()  # fmt: skip
     load = ", ".join(f"{x:.1f}" for x in os.getloadavg())
-    title = "Smoothing (OpenCL)"
+    title = args.title
     section = [f"## {title}", "",
                f"{machine_line()}; {engine}: {described}; CPU versions on "
                f"{meshes[0].engine}; {datetime.date.today().isoformat()}, commit {commit}; best "
