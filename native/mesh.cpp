@@ -30,6 +30,12 @@ Mesh make_mesh(const double* vertices, std::size_t vertex_count, const std::int6
   mesh.center = 0.5 * (lo + hi);
   const glm::dvec3 size = hi - lo;
   mesh.max_extent = std::max(size.x, std::max(size.y, size.z));
+  // The engines compute in 32-bit floats on coordinates centred on the box: past ~1e30 the
+  // sums and differences of a centroid or an edge leave the float range (found by fuzzing).
+  if (!(mesh.max_extent <= 1e30))
+    throw std::invalid_argument("the mesh spans " + std::to_string(mesh.max_extent) +
+                                " units on an axis, more than the 1e30 that 32-bit floats "
+                                "leave room for; scale it down");
   mesh.vertices.resize(vertex_count);
   for (std::size_t i = 0; i < vertex_count; ++i) {
     const glm::dvec3 p(vertices[3 * i], vertices[3 * i + 1], vertices[3 * i + 2]);

@@ -19,8 +19,9 @@ struct Mesh {
 };
 
 // Copies a mesh from row-major arrays: vertices (n, 3) and triangles (m, 3), 0-based.
-// Throws std::invalid_argument naming the problem for an empty mesh, an index out of range or
-// a coordinate that is not finite. Vertices no triangle uses are allowed (they take no part).
+// Throws std::invalid_argument naming the problem for an empty mesh, an index out of range, a
+// coordinate that is not finite, or a bounding box wider than 1e30 on an axis. Vertices no
+// triangle uses are allowed (they take no part).
 Mesh make_mesh(const double* vertices, std::size_t vertex_count, const std::int64_t* triangles,
                std::size_t triangle_count);
 

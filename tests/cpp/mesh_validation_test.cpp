@@ -49,3 +49,20 @@ TEST(MeshValidation, FaceNormalsPointOutOfTheBox) {
 
 }  // namespace
 }  // namespace sdf
+
+namespace sdf {
+namespace {
+
+TEST(MeshValidation, RejectsMeshesWiderThanTheFloatRange) {
+  // Finite doubles, but past what float arithmetic on the centred mesh can hold.
+  const double far[9] = {1e300, 0, 0, 0, 1, 0, 0, 0, 1};
+  const std::int64_t tri[3] = {0, 1, 2};
+  EXPECT_THROW(make_mesh(far, 3, tri, 1), std::invalid_argument);
+  const double wide[9] = {-3e38, 0, 0, 3e38, 1, 0, 0, 0, 1};
+  EXPECT_THROW(make_mesh(wide, 3, tri, 1), std::invalid_argument);
+  const double fine[9] = {-1e29, 0, 0, 1e29, 1, 0, 0, 0, 1};
+  EXPECT_NO_THROW(make_mesh(fine, 3, tri, 1));
+}
+
+}  // namespace
+}  // namespace sdf
