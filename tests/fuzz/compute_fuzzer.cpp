@@ -18,7 +18,8 @@
 //          otherwise (b - 7.5) * 180 / 248, inside (0, 180)
 //   2      bits 0-1 sampling (fibonacci, random, cgal, fibonacci); bit 2 points = vertices;
 //          bit 3 accel = octree; bit 4 two threads; bits 5-7 octree max_depth 0..7
-//   3      bits 0-3 octree leaf_size 1..16; bits 4-6 cancel at that progress call (0 never)
+//   3      bits 0-3 octree leaf_size 1..16; bits 4-6 cancel at that progress call (0 never);
+//          bit 7 orientation as_is (seed even) or flip (seed odd), else auto
 //   4-7    seed
 //   8      scale of grid coordinates: 2^(int8)b
 //   9      offset added to grid coordinates: 0, or 2^(int8)b when b != 0
@@ -152,11 +153,14 @@ void describe(const sdf::Options& o, int cancel_at, const std::vector<double>& v
   static const char* const samplings[] = {"fibonacci", "random", "cgal"};
   std::fprintf(stderr,
                "rays=%d cone_angle=%.17g sampling=%s seed=%u points=%s accel=%s threads=%u "
-               "octree.max_depth=%d octree.leaf_size=%d cancel_at=%d\n",
+               "octree.max_depth=%d octree.leaf_size=%d cancel_at=%d orientation=%s\n",
                o.rays, o.cone_angle, samplings[static_cast<int>(o.sampling)], o.seed,
                o.points == sdf::PointKind::Faces ? "faces" : "vertices",
                o.accel == sdf::Accel::Bvh ? "bvh" : "octree", o.threads, o.octree.max_depth,
-               o.octree.leaf_size, cancel_at);
+               o.octree.leaf_size, cancel_at,
+               o.orientation == sdf::Orientation::Auto   ? "auto"
+               : o.orientation == sdf::Orientation::AsIs ? "as_is"
+                                                          : "flip");
   std::fprintf(stderr, "vertices (%zu):\n", vertices.size() / 3);
   for (std::size_t i = 0; i < vertices.size(); i += 3)
     std::fprintf(stderr, "  %.17g %.17g %.17g\n", vertices[i], vertices[i + 1], vertices[i + 2]);
@@ -184,6 +188,8 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   options.octree.leaf_size = 1 + (more & 15);
   const int cancel_at = (more >> 4) & 7;
   options.seed = in.take<std::uint32_t>();
+  if (more & 128)
+    options.orientation = options.seed & 1 ? sdf::Orientation::Flip : sdf::Orientation::AsIs;
   const double scale = std::ldexp(1.0, in.take<std::int8_t>());
   const std::int8_t offset_exponent = in.take<std::int8_t>();
   const double offset = offset_exponent == 0 ? 0.0 : std::ldexp(1.0, offset_exponent);
@@ -240,6 +246,11 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
       options.points == sdf::PointKind::Faces ? triangle_count : vertex_count;
   if (out.raw.size() != points || out.valid_rays.size() != points)
     fail("output size is not the point count");
+  if (out.orientation.flipped_faces > triangle_count) fail("more faces flipped than there are");
+  if ((options.orientation == sdf::Orientation::AsIs && out.orientation.flipped_faces != 0) ||
+      (options.orientation == sdf::Orientation::Flip &&
+       out.orientation.flipped_faces != triangle_count))
+    fail("flipped_faces does not match the orientation asked for");
   for (std::size_t i = 0; i < points; ++i) {
     if (!std::isfinite(out.raw[i])) fail("a raw value is not finite");
     if (out.raw[i] < 0.0f) fail("a raw value is negative");
