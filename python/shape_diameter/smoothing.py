@@ -103,11 +103,12 @@ def smooth(
         best OpenCL GPU if there is one, else 'cpu'; an OpenCL failure falls back to the CPU
         with a RuntimeWarning), 'cpu', 'opencl', 'opencl:N' or 'opencl:<part of a device
         name>' ('opencl:all' uses the first of its devices). OpenCL runs the same kernel code
-        as the CPU (kernels/sdf_smooth_*.h): results agree within float rounding (1e-4
-        relative), not bit for bit. 'projected' builds its octree on the host and gathers on
-        the device; 'texture' rasterises and reads back on the host and dilates and blurs on
-        the device. 'kring' and 'none' always run on the CPU. A device name that matches
-        nothing raises ValueError listing the devices.
+        as the CPU (kernels/sdf_smooth_*.h): results agree within 1e-4 relative, and are
+        usually the CPU's bits (the bilateral weights' exp, and sums on a device without
+        double precision, can differ in the last bits). 'projected' builds its octree on the
+        host and gathers on the device; 'texture' rasterises and reads back on the host and
+        dilates and blurs on the device. 'kring' and 'none' always run on the CPU. A device
+        name that matches nothing raises ValueError listing the devices.
 
     Options of 'kring' (Gaussian over ring index on the mesh, duplicate positions merged):
         k: rings, int >= 0 (0 returns the values); default default_k(m).
