@@ -176,7 +176,8 @@ def build_parser() -> argparse.ArgumentParser:
         default="auto",
         metavar="ENGINE",
         help="auto (the best OpenCL GPU, else the CPU), cpu, opencl (the best OpenCL device), "
-        "opencl:N, opencl:all or opencl:<part of a device name> (default: auto)",
+        "opencl:N, opencl:all or opencl:<part of a device name> (default: auto); "
+        "--smooth projected and texture run there too",
     )
     parser.add_argument(
         "--accel",

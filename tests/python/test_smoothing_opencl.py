@@ -135,3 +135,11 @@ def test_a_device_that_does_not_exist_is_a_clear_error(spot, method):
         sd.smooth(v, t, faces, method, uvs=uvs, engine="opencl:99")
     with pytest.raises(ValueError, match="unknown engine 'gpu'; available here: auto, cpu"):
         sd.smooth(v, t, faces, method, uvs=uvs, engine="gpu")
+
+
+@pytest.mark.parametrize("method", ["projected", "texture"])
+def test_opencl_all_smooths_on_its_first_device(spot, method):
+    v, t, uvs, faces, _ = spot
+    options = {"uvs": uvs, "texture_size": 256} if method == "texture" else {}
+    np.testing.assert_array_equal(sd.smooth(v, t, faces, method, engine="opencl:all", **options),
+                                  sd.smooth(v, t, faces, method, engine=DEVICE, **options))
