@@ -32,9 +32,7 @@
 //          INT64_MIN, INT64_MAX, 2^32, 2^32 + 1); 0xFFF6 an int64 follows; others as they are.
 //
 // tests/fuzz/make_corpus.py writes real meshes in this layout (the seed corpus).
-// Environment: SDF_FUZZ_DESCRIBE=1 prints the decoded input and the outcome (for reports);
-// SDF_FUZZ_SUPPRESS skips a known bug's inputs (below).
-#include <algorithm>
+// SDF_FUZZ_DESCRIBE=1 in the environment prints the decoded input and its outcome.
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
@@ -126,27 +124,6 @@ std::int64_t index(Reader& in, std::size_t vertex_count) {
   }
 }
 
-// SDF_FUZZ_SUPPRESS=extent-over-1e30: skips meshes whose bounding box is wider than 1e30 (or
-// whose coordinates are all finite but overflow on the way), the known bug in
-// tests/fuzz/known/README.md, so that a run looks for other bugs. scripts/fuzz.sh sets it
-// while that bug is open.
-bool suppressed(const std::vector<double>& vertices) {
-  static const bool extent = [] {
-    const char* list = std::getenv("SDF_FUZZ_SUPPRESS");
-    return list != nullptr && std::strstr(list, "extent-over-1e30") != nullptr;
-  }();
-  if (!extent || vertices.empty()) return false;
-  double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
-  for (std::size_t i = 0; i < vertices.size(); ++i) {
-    if (!std::isfinite(vertices[i])) return false;  // make_mesh refuses these
-    lo[i % 3] = std::min(lo[i % 3], vertices[i]);
-    hi[i % 3] = std::max(hi[i % 3], vertices[i]);
-  }
-  for (int k = 0; k < 3; ++k)
-    if (!(hi[k] - lo[k] <= 1e30)) return true;
-  return false;
-}
-
 // SDF_FUZZ_DESCRIBE=1: prints the decoded input (for reports and regression tests).
 void describe(const sdf::Options& o, int cancel_at, const std::vector<double>& vertices,
               const std::vector<std::int64_t>& triangles) {
@@ -167,7 +144,8 @@ void describe(const sdf::Options& o, int cancel_at, const std::vector<double>& v
   std::fprintf(stderr, "triangles (%zu):\n", triangles.size() / 3);
   for (std::size_t i = 0; i < triangles.size(); i += 3)
     std::fprintf(stderr, "  %lld %lld %lld\n", static_cast<long long>(triangles[i]),
-                 static_cast<long long>(triangles[i + 1]), static_cast<long long>(triangles[i + 2]));
+                 static_cast<long long>(triangles[i + 1]),
+                 static_cast<long long>(triangles[i + 2]));
 }
 
 }  // namespace
@@ -212,7 +190,6 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     if (verbose) std::fprintf(stderr, "outcome: %s %s\n", what, detail);
     return 0;
   };
-  if (suppressed(vertices)) return outcome("skipped (SDF_FUZZ_SUPPRESS)");
 
   sdf::Mesh mesh;
   try {
