@@ -11,7 +11,6 @@ the same files every time.
 
 from __future__ import annotations
 
-import io
 import struct
 import sys
 from pathlib import Path
@@ -22,9 +21,8 @@ import trimesh
 ROOT = Path(__file__).resolve().parents[2]
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
-from mesh_io_fuzzer import SUFFIXES  # noqa: E402
-
-from shape_diameter.mesh_io import load_mesh  # noqa: E402
+from mesh_io_fuzzer import SUFFIXES
+from shape_diameter.mesh_io import load_mesh
 
 DATA = ROOT / "tests" / "data"
 
@@ -151,9 +149,13 @@ def mesh_io_corpus():
         yield f"{name}-scene.glb", index[".glb"], _export(scene, "glb")
         yield f"{name}.gltf", index[".gltf"] | with_uvs, _export(textured, "gltf",
                                                                   embed_buffers=True)
-    yield "off-polygons.off", index[".off"], b"OFF\n4 2 0\n0 0 0\n1 0 0\n1 1 0\n0 1 0\n4 0 1 2 3\n3 0 1 2 255 0 0\n"
-    yield "coff.off", index[".off"], b"COFF\n3 1 0\n0 0 0 1 2 3 4\n1 0 0 1 2 3 4\n0 1 0 1 2 3 4\n3 0 1 2\n"
-    yield "points.ply", index[".ply"], b"ply\nformat ascii 1.0\nelement vertex 2\nproperty float x\nproperty float y\nproperty float z\nend_header\n0 0 0\n1 1 1\n"
+    yield "off-polygons.off", index[".off"], (
+        b"OFF\n4 2 0\n0 0 0\n1 0 0\n1 1 0\n0 1 0\n4 0 1 2 3\n3 0 1 2 255 0 0\n")
+    yield "coff.off", index[".off"], (
+        b"COFF\n3 1 0\n0 0 0 1 2 3 4\n1 0 0 1 2 3 4\n0 1 0 1 2 3 4\n3 0 1 2\n")
+    yield "points.ply", index[".ply"], (
+        b"ply\nformat ascii 1.0\nelement vertex 2\nproperty float x\nproperty float y\n"
+        b"property float z\nend_header\n0 0 0\n1 1 1\n")
 
 
 def main(argv):
