@@ -2,6 +2,7 @@
 #include "mesh.h"
 
 #include <cmath>
+#include <cstdio>
 #include <limits>
 #include <stdexcept>
 #include <string>
@@ -33,9 +34,13 @@ Mesh make_mesh(const double* vertices, std::size_t vertex_count, const std::int6
   // The engines compute in 32-bit floats on coordinates centred on the box: past ~1e30 the
   // sums and differences of a centroid or an edge leave the float range (found by fuzzing).
   if (!(mesh.max_extent <= 1e30))
-    throw std::invalid_argument("the mesh spans " + std::to_string(mesh.max_extent) +
+  {
+    char extent[32];
+    std::snprintf(extent, sizeof extent, "%.3g", mesh.max_extent);
+    throw std::invalid_argument(std::string("the mesh spans ") + extent +
                                 " units on an axis, more than the 1e30 that 32-bit floats "
                                 "leave room for; scale it down");
+  }
   mesh.vertices.resize(vertex_count);
   for (std::size_t i = 0; i < vertex_count; ++i) {
     const glm::dvec3 p(vertices[3 * i], vertices[3 * i + 1], vertices[3 * i + 2]);

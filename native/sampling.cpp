@@ -11,20 +11,23 @@ namespace sdf {
 
 namespace {
 
-// Unit vector, or zero when the direction is undefined (zero, denormal or not finite).
+// Unit vector, or zero when the direction is undefined (zero or not finite). Divided by its
+// largest component first: squaring a cross product (edge length to the fourth) would
+// overflow or underflow float for edges past ~4e9 or below ~5e-12 (found by fuzzing).
 glm::vec3 unit_or_zero(glm::vec3 v) {
-  const float len = glm::length(v);
-  if (!(len > 1e-30f) || !std::isfinite(len)) return glm::vec3(0.0f);
-  return v / len;
+  const float big = std::max(std::fabs(v.x), std::max(std::fabs(v.y), std::fabs(v.z)));
+  if (!(big > 0.0f) || !std::isfinite(big)) return glm::vec3(0.0f);
+  v /= big;
+  return v / glm::length(v);
 }
 
 // The part of `edge` perpendicular to unit `axis`, normalised; fallback_tangent() when that
 // part vanishes (or the axis is zero).
 glm::vec3 tangent_from_edge(glm::vec3 axis, glm::vec3 edge) {
   if (axis.x == 0.0f && axis.y == 0.0f && axis.z == 0.0f) return glm::vec3(0.0f);
-  const glm::vec3 t = edge - glm::dot(edge, axis) * axis;
-  const float len = glm::length(t);
-  if (len > 1e-6f * glm::length(edge) && std::isfinite(len)) return t / len;
+  const glm::vec3 unit_edge = unit_or_zero(edge);
+  const glm::vec3 t = unit_edge - glm::dot(unit_edge, axis) * axis;
+  if (glm::length(t) > 1e-6f) return glm::normalize(t);
   return fallback_tangent(axis);
 }
 

@@ -55,3 +55,20 @@ def test_self_intersecting_spheres():
     assert np.isfinite(result.raw).all() and (result.raw > 0).all()
     assert (result.valid_rays > 0).mean() > 0.99
     assert result.raw.max() <= 2.0 + 1e-3  # no ray is longer than a sphere's diameter
+
+
+@pytest.mark.parametrize("scale", [1e10, 1e-11])
+def test_far_beyond_everyday_scales_the_values_still_scale(scale):
+    # Face normals were once squared in float (edge length to the fourth): every axis became
+    # zero past ~4e9 or below ~5e-12 and the values silently 0 (found by fuzzing).
+    vertices, triangles = icosphere(1.0, 2)
+    unit = sd.compute(vertices, triangles)
+    scaled = sd.compute(vertices * scale, triangles)
+    assert (scaled.valid_rays > 0).all()
+    np.testing.assert_allclose(scaled.raw / scale, unit.raw, rtol=1e-4)
+
+
+def test_a_mesh_wider_than_float_range_is_refused_readably():
+    vertices = np.array([[1e300, 0, 0], [0, 1, 0], [0, 0, 1]], dtype=float)
+    with pytest.raises(ValueError, match=r"spans 1e\+300 units on an axis"):
+        sd.compute(vertices, [[0, 1, 2]])
