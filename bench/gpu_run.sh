@@ -24,7 +24,8 @@ echo "== python package"
 "$PY" -m pip install -q --no-build-isolation --no-deps . 2>&1 | tail -3
 "$PY" -c "import shape_diameter as s, json; print(json.dumps(s.engines(), indent=1))"
 echo "== OpenCL tests (GPU first)"
-PYTHONUNBUFFERED=1 "$PY" -m pytest tests/python/test_opencl.py -q -p no:cacheprovider 2>&1 | tail -15
+PYTHONUNBUFFERED=1 "$PY" -m pytest tests/python/test_opencl.py tests/python/test_smoothing_opencl.py \
+  -q -p no:cacheprovider 2>&1 | tail -15
 echo "== benchmark"
 gpu=$("$PY" -c "import shape_diameter as s; print(next(e['name'] for e in s.engines() if e['type'] == 'GPU'))")
 PYTHONUNBUFFERED=1 "$PY" bench/bench.py --engines "$gpu,cpu" --out "$OUT/RESULTS-gpu.md" "$@"
