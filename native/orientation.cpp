@@ -23,35 +23,51 @@ struct DisjointSets {
 };
 
 // Per face: reverse it (1) or not (0) so that faces agree with their manifold-edge neighbours.
+// Edges are matched through the faces around each vertex (linear time, no sort of all edges:
+// this runs on every compute() call).
 std::vector<char> consistent_flips(const Mesh& mesh) {
-  const std::size_t n = mesh.triangles.size();
-  // Every directed edge as (low vertex, high vertex, face, runs low->high).
-  std::vector<std::tuple<std::uint32_t, std::uint32_t, std::uint32_t, bool>> edges;
-  edges.reserve(3 * n);
+  const std::size_t n = mesh.triangles.size(), nv = mesh.vertices.size();
+  // Around each vertex: the faces using it, each with its next and previous corner, stored
+  // inline so that matching an edge reads one short contiguous list (no random face loads).
+  struct Corner {
+    std::uint32_t face, next, prev;
+  };
+  std::vector<std::uint32_t> offsets(nv + 1, 0);
+  for (const glm::uvec3& t : mesh.triangles)
+    for (int k = 0; k < 3; ++k) ++offsets[t[k] + 1];
+  for (std::size_t v = 0; v < nv; ++v) offsets[v + 1] += offsets[v];
+  std::vector<Corner> around(offsets[nv]);
+  {
+    std::vector<std::uint32_t> cursor(offsets.begin(), offsets.end() - 1);
+    for (std::uint32_t f = 0; f < n; ++f) {
+      const glm::uvec3 t = mesh.triangles[f];
+      for (int k = 0; k < 3; ++k) around[cursor[t[k]]++] = Corner{f, t[(k + 1) % 3], t[(k + 2) % 3]};
+    }
+  }
+  // Up to three neighbours per face (one per manifold edge), each with "runs the same way".
+  constexpr std::uint32_t kNone = 0xffffffffu;
+  std::vector<std::uint32_t> neighbour(3 * n, kNone);
+  std::vector<char> same(3 * n, 0);
   for (std::uint32_t f = 0; f < n; ++f) {
     const glm::uvec3 t = mesh.triangles[f];
     for (int k = 0; k < 3; ++k) {
       const std::uint32_t a = t[k], b = t[(k + 1) % 3];
-      if (a != b) edges.emplace_back(std::min(a, b), std::max(a, b), f, a < b);
-    }
-  }
-  std::sort(edges.begin(), edges.end());
-  // Manifold edges join two faces; `same` says they run the same way (so they disagree).
-  std::vector<std::vector<std::pair<std::uint32_t, bool>>> neighbours(n);
-  for (std::size_t i = 0; i < edges.size();) {
-    std::size_t j = i;
-    while (j < edges.size() && std::get<0>(edges[j]) == std::get<0>(edges[i]) &&
-           std::get<1>(edges[j]) == std::get<1>(edges[i]))
-      ++j;
-    if (j - i == 2) {
-      const auto& [a0, b0, f, dir_f] = edges[i];
-      const auto& [a1, b1, g, dir_g] = edges[i + 1];
-      if (f != g) {
-        neighbours[f].emplace_back(g, dir_f == dir_g);
-        neighbours[g].emplace_back(f, dir_f == dir_g);
+      if (a == b) continue;
+      // The other faces using edge {a, b}: those with a -> b run the same way, b -> a
+      // opposite. The edge is manifold when exactly one other face uses it.
+      std::uint32_t other = kNone, count = 0;
+      bool other_same = false;
+      for (std::uint32_t i = offsets[a]; i < offsets[a + 1]; ++i) {
+        const Corner& c = around[i];
+        if (c.face == f) continue;
+        if (c.next == b) other = c.face, other_same = true, ++count;
+        if (c.prev == b) other = c.face, other_same = false, ++count;
+      }
+      if (count == 1) {
+        neighbour[3 * f + k] = other;
+        same[3 * f + k] = other_same;
       }
     }
-    i = j;
   }
   std::vector<char> flip(n, 0), seen(n, 0);
   std::vector<std::uint32_t> patch, queue;
@@ -64,15 +80,19 @@ std::vector<char> consistent_flips(const Mesh& mesh) {
       const std::uint32_t f = queue.back();
       queue.pop_back();
       patch.push_back(f);
-      for (const auto& [g, same] : neighbours[f]) {
-        if (seen[g]) continue;  // a non-orientable patch keeps its first assignment
+      for (int k = 0; k < 3; ++k) {
+        const std::uint32_t g = neighbour[3 * f + k];
+        if (g == kNone || seen[g]) continue;  // a non-orientable patch keeps its first choice
         seen[g] = 1;
-        flip[g] = flip[f] ^ static_cast<char>(same);
+        flip[g] = flip[f] ^ same[3 * f + k];
         queue.push_back(g);
       }
     }
     // Keep the winding that most of the patch's area already has.
     double kept = 0.0, reversed = 0.0;
+    bool any_reversed = false;
+    for (std::uint32_t f : patch) any_reversed |= flip[f] != 0;
+    if (!any_reversed) continue;  // the common case: the patch already agrees
     for (std::uint32_t f : patch) (flip[f] ? reversed : kept) += glm::length(face_area_normal(mesh, f));
     if (reversed > kept)
       for (std::uint32_t f : patch) flip[f] ^= 1;
@@ -82,18 +102,21 @@ std::vector<char> consistent_flips(const Mesh& mesh) {
 
 // Per vertex, the index of the first vertex at exactly the same position.
 std::vector<std::uint32_t> weld_exact(const Mesh& mesh) {
-  std::vector<std::uint32_t> order(mesh.vertices.size());
-  std::iota(order.begin(), order.end(), 0u);
-  auto key = [&](std::uint32_t v) {
-    const glm::vec3 p = mesh.vertices[v];
-    return std::make_tuple(p.x, p.y, p.z);
+  struct Keyed {
+    float x, y, z;
+    std::uint32_t v;
+    bool operator<(const Keyed& o) const {
+      return std::tie(x, y, z, v) < std::tie(o.x, o.y, o.z, o.v);
+    }
+    bool same_place(const Keyed& o) const { return x == o.x && y == o.y && z == o.z; }
   };
-  std::sort(order.begin(), order.end(), [&](std::uint32_t a, std::uint32_t b) {
-    return key(a) < key(b) || (key(a) == key(b) && a < b);
-  });
+  std::vector<Keyed> keyed(mesh.vertices.size());
+  for (std::uint32_t v = 0; v < keyed.size(); ++v)
+    keyed[v] = Keyed{mesh.vertices[v].x, mesh.vertices[v].y, mesh.vertices[v].z, v};
+  std::sort(keyed.begin(), keyed.end());
   std::vector<std::uint32_t> rep(mesh.vertices.size());
-  for (std::size_t i = 0; i < order.size(); ++i)
-    rep[order[i]] = (i > 0 && key(order[i]) == key(order[i - 1])) ? rep[order[i - 1]] : order[i];
+  for (std::size_t i = 0; i < keyed.size(); ++i)
+    rep[keyed[i].v] = (i > 0 && keyed[i].same_place(keyed[i - 1])) ? rep[keyed[i - 1].v] : keyed[i].v;
   return rep;
 }
 
