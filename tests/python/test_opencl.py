@@ -253,3 +253,22 @@ def test_auto_picks_a_gpu_or_the_cpu_engine():
     result = sd.compute(vertices, triangles)
     has_gpu = any(e["type"] == "GPU" for e in sd.engines())
     assert result.engine.startswith("opencl" if has_gpu else "cpu")
+
+
+def test_auto_falls_back_to_the_cpu_engine_and_says_why():
+    # 'auto' picks OpenCL only for a GPU; here it is made to pick the first OpenCL device, whose
+    # memory is capped below what the mesh needs, so the OpenCL run fails and the CPU runs.
+    code = (
+        "import json, numpy as np, shape_diameter as sd\n"
+        "from shape_diameter import api\n"
+        "from shape_diameter.mesh_io import load_mesh\n"
+        f"v, t = load_mesh({str(DATA / 'cow.obj')!r})\n"
+        "api._resolve_engine = lambda engine: 'opencl:0' if engine == 'auto' else engine\n"
+        "r = sd.compute(v, t)\n"
+        "cpu = sd.compute(v, t, engine='cpu')\n"
+        "print(json.dumps({'engine': r.engine, 'same': bool(np.array_equal(r.raw, cpu.raw))}))\n"
+    )
+    out = run_python(code, SDF_OPENCL_MAX_MEMORY=1 << 16)
+    assert out["engine"].startswith("cpu") and "fell back: opencl:0 failed" in out["engine"]
+    assert "does not fit" in out["engine"]
+    assert out["same"]
