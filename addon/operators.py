@@ -188,8 +188,9 @@ class OBJECT_OT_shape_diameter(bpy.types.Operator):
             layout.prop(self, "seed")
         for name in ("points", "normalize", "engine"):
             layout.prop(self, name)
-        if core.supports("accel"):
-            layout.prop(self, "accel")
+        for name in ("orientation", "accel"):
+            if core.supports(name):
+                layout.prop(self, name)
         if core.supports("smoothing"):
             draw_smoothing(layout, self)
         for name in ("attribute_name", "normalized_name", "color_name"):

@@ -49,6 +49,7 @@ class Options:
     normalize: str = "linear"
     engine: str = "auto"
     accel: str = "bvh"
+    orientation: str = "auto"
     smoothing: str = "none"
     smoothing_rings: int = 0  # kring: rings, 0 = chosen from the face count
     smoothing_iterations: int = 1  # projected
@@ -66,7 +67,8 @@ class Options:
     extra: dict = field(default_factory=dict)
 
     COMPUTE_KEYS = ("rays", "cone_angle", "sampling", "seed", "points", "normalize", "engine")
-    OPTIONAL_COMPUTE_KEYS = {"accel": "bvh"}  # name: default (needs no support if default)
+    # name: default (needs no support if default)
+    OPTIONAL_COMPUTE_KEYS = {"accel": "bvh", "orientation": "auto"}
 
     @property
     def needs_uvs(self):

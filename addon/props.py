@@ -70,6 +70,11 @@ POINTS_ITEMS = (
     ),
     ("vertices", "Vertices", "One value per vertex; POINT attributes"),
 )
+ORIENTATION_ITEMS = (
+    ("auto", "Auto", "Turn inside-out parts and stray reversed faces outward for computing"),
+    ("as_is", "As Is", "Trust the faces' winding"),
+    ("flip", "Flip", "Reverse every face for computing"),
+)
 ACCEL_ITEMS = (
     ("bvh", "BVH", "Binned-SAH bounding volume hierarchy"),
     ("octree", "Octree", "The paper's octree (section 4.2)"),
@@ -136,6 +141,12 @@ def options():
             description="How the normalised attribute and the colours map values to [0, 1]",
             items=NORMALIZE_ITEMS,
             default="linear",
+        ),
+        "orientation": EnumProperty(
+            name="Orientation",
+            description="Which way faces point for computing (the mesh itself is not changed)",
+            items=ORIENTATION_ITEMS,
+            default="auto",
         ),
         "accel": EnumProperty(
             name="Acceleration",

@@ -113,8 +113,9 @@ class VIEW3D_PT_shape_diameter_engine(ShapeDiameterSubPanel, bpy.types.Panel):
 
     def draw_settings(self, layout, settings, context):
         layout.prop(settings, "engine")
-        if core.supports("accel"):
-            layout.prop(settings, "accel")
+        for name in ("orientation", "accel"):
+            if core.supports(name):
+                layout.prop(settings, name)
         layout.use_property_split = False
         draw_status(layout, with_engines=True)
 

@@ -55,6 +55,25 @@ def test_uv_sphere_vertices_match_the_analytic_sphere():
     assert np.abs(relative).max() < 0.03
 
 
+def test_an_inside_out_mesh_is_measured_outward_unless_told_otherwise():
+    ob = uv_sphere(radius=1.0, segments=32, rings=16)
+    assert run() == {"FINISHED"}
+    outward = attribute_array(ob.data, "sdf")
+    ob.data.flip_normals()  # the mesh itself is inside out now
+    corners = np.empty(len(ob.data.loops), dtype=np.int32)
+    ob.data.loops.foreach_get("vertex_index", corners)
+    assert run() == {"FINISHED"}  # orientation="auto"
+    np.testing.assert_allclose(attribute_array(ob.data, "sdf"), outward, rtol=1e-5)
+    with pytest.warns(RuntimeWarning, match="no ray of any point"):
+        result = addon_module("api").compute_object(ob, orientation="as_is")
+    assert result.warnings  # every ray left through the skin: zeros, and it says so
+    assert np.allclose(attribute_array(ob.data, "sdf"), 0.0)
+    # The computation reversed its own copy: the mesh's winding is untouched.
+    after = np.empty_like(corners)
+    ob.data.loops.foreach_get("vertex_index", after)
+    np.testing.assert_array_equal(after, corners)
+
+
 @pytest.mark.parametrize(
     "scale, apply_scale, factor",
     [((2.0, 2.0, 2.0), True, 2.0), ((2.0, 2.0, 2.0), False, 1.0), ((-1.0, 1.0, 1.0), True, 1.0)],
