@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <memory>
+#include <vector>
 #include <stdexcept>
 
 #include "program_cache.h"
@@ -12,8 +13,13 @@ namespace sdf::cl {
 DeviceState& state_of(const Device& device) {
   static std::mutex registry_mutex;
   static std::map<int, std::unique_ptr<DeviceState>> registry;
+  static std::vector<std::unique_ptr<DeviceState>> set_aside;
   std::lock_guard<std::mutex> lock(registry_mutex);
   std::unique_ptr<DeviceState>& slot = registry[device.index];
+  if (slot && slot->broken && slot->mutex.try_lock()) {  // nobody is computing on it now
+    slot->mutex.unlock();
+    set_aside.push_back(std::move(slot));
+  }
   if (!slot) {
     auto s = std::make_unique<DeviceState>();
     const Api& cl = *api();

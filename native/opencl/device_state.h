@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <cstdint>
+#include <atomic>
 #include <map>
 #include <mutex>
 #include <string>
@@ -22,8 +23,13 @@ struct DeviceState {
   cl_command_queue queue = nullptr;
   std::map<std::string, cl_program> programs;
   std::mutex mutex;  // one computation at a time per device
+  // Set when an OpenCL call failed while computing (a lost device, a driver reset): the next
+  // computation gets a fresh context and queue instead of this one.
+  std::atomic<bool> broken{false};
 };
 
+// The device's state; a fresh one when the last computation on it failed. A broken state is
+// never released (its driver objects may be dead): it is set aside.
 DeviceState& state_of(const Device& device);
 
 // -cl-fp32-correctly-rounded-divide-sqrt where the device offers it: with it, division and

@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <atomic>
 #include <chrono>
+#include <cstdlib>
 #include <condition_variable>
 #include <exception>
 #include <map>
@@ -132,6 +133,11 @@ void run_device(const Device& device, const Scene& scene, const SamplePoints& po
   // runs a work group as a loop it tries to vectorise, and divergent traversal loops defeat
   // that: measured about 3x faster than its default on fandisk.
   const std::size_t local = device.gpu ? 64 : 1;
+  // Test hook: act out a device lost after this many launches (a driver reset, an unplugged
+  // eGPU), which real hardware cannot be asked to do on cue.
+  const char* lose = std::getenv("SDF_OPENCL_TEST_LOSE_DEVICE_AFTER");
+  const long lose_after = lose && *lose ? std::strtol(lose, nullptr, 10) : -1;
+  long launches = 0;
   while (!work.stop.load()) {
     const std::size_t first = work.next.fetch_add(chunk);
     if (first >= work.total) break;
@@ -144,6 +150,9 @@ void run_device(const Device& device, const Scene& scene, const SamplePoints& po
     check(cl.clEnqueueNDRangeKernel(s.queue, kernel->get(), 1, nullptr, &global, &local, 0,
                                     nullptr, nullptr),
           "clEnqueueNDRangeKernel");
+    if (lose_after >= 0 && launches++ >= lose_after)
+      throw Error("OpenCL clFinish (cast) failed: CL_DEVICE_NOT_AVAILABLE (simulated by "
+                  "SDF_OPENCL_TEST_LOSE_DEVICE_AFTER)", CL_DEVICE_NOT_AVAILABLE);
     check(cl.clFinish(s.queue), "clFinish (cast)");
     const double took = seconds_since(launch);
     result.timings.cast += took;
@@ -196,6 +205,11 @@ CastTimings cast_opencl(const std::vector<const Device*>& devices, const Scene& 
       try {
         run_device(*devices[i], scene, points, order, cone, min_closeness, raw_ordered,
                    valid_ordered, work, done_mutex, done_changed, results[i]);
+      } catch (const Error&) {
+        // An OpenCL call failed: the device may be lost, so the next run starts afresh.
+        results[i].failure = std::current_exception();
+        state_of(*devices[i]).broken = true;
+        work.stop = true;
       } catch (...) {
         results[i].failure = std::current_exception();
         work.stop = true;

@@ -272,3 +272,34 @@ def test_auto_falls_back_to_the_cpu_engine_and_says_why():
     assert out["engine"].startswith("cpu") and "fell back: opencl:0 failed" in out["engine"]
     assert "does not fit" in out["engine"]
     assert out["same"]
+
+
+def test_a_device_lost_mid_run_is_reported_and_then_recovered_from():
+    # SDF_OPENCL_TEST_LOSE_DEVICE_AFTER acts out a device lost after one launch.
+    code = (
+        "import json, os, numpy as np, shape_diameter as sd\n"
+        "from shape_diameter import api\n"
+        "from shape_diameter.mesh_io import load_mesh\n"
+        f"v, t = load_mesh({str(DATA / 'bunny00.off')!r})\n"
+        "cpu = sd.compute(v, t, engine='cpu')\n"
+        "os.environ['SDF_OPENCL_TEST_LOSE_DEVICE_AFTER'] = '1'\n"
+        "try:\n"
+        "    sd.compute(v, t, engine='opencl:0')\n"
+        "    error = None\n"
+        "except RuntimeError as e:\n"
+        "    error = str(e)\n"
+        "api._resolve_engine = lambda engine: 'opencl:0' if engine == 'auto' else engine\n"
+        "fallback = sd.compute(v, t)\n"
+        "del os.environ['SDF_OPENCL_TEST_LOSE_DEVICE_AFTER']\n"
+        "again = sd.compute(v, t, engine='opencl:0')\n"
+        "print(json.dumps({'error': error, 'fallback': fallback.engine,\n"
+        "                  'fallback_same': bool(np.array_equal(fallback.raw, cpu.raw)),\n"
+        "                  'again': again.engine,\n"
+        "                  'again_same': bool(np.array_equal(again.raw, cpu.raw))}))\n"
+    )
+    out = run_python(code)
+    assert "clFinish" in out["error"] and "CL_DEVICE_NOT_AVAILABLE" in out["error"]
+    assert out["fallback"].startswith("cpu") and "fell back" in out["fallback"]
+    assert out["fallback_same"]
+    # The next run gets a fresh context and queue on the same device, and the same bits.
+    assert out["again"].startswith("opencl:0") and out["again_same"]
