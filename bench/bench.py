@@ -3,7 +3,7 @@
 our OpenCL engine on every device (BVH and octree), CGAL's sdf_values and an Embree 3 caster
 of our rule, in one run on one machine. Prints a table and writes it into bench/RESULTS.md.
 
-    .venv/bin/python bench/bench.py --depth-table   # everything (CGAL up to 100k faces)
+    .venv/bin/python bench/bench.py                 # everything (CGAL up to 100k faces)
     .venv/bin/python bench/bench.py --quick         # no 1.2M-face mesh
 """
 
@@ -80,7 +80,8 @@ def main():
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--quick", action="store_true", help="skip the 1.2M-face mesh")
     parser.add_argument("--depth-table", action="store_true",
-                        help="also time the octree build against its depth (paper's Table 2)")
+                        help="also time the octree build against its depth (paper's Table 2; "
+                        "slow: it casts one ray per face, and shallow octrees have huge leaves)")
     parser.add_argument("--rays", type=int, default=30)
     parser.add_argument("--cgal-max-faces", type=int, default=100_000,
                         help="run CGAL on meshes up to this size (it takes minutes beyond)")
