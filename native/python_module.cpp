@@ -9,6 +9,7 @@
 #include <stdexcept>
 #include <string>
 
+#include <chrono>
 #include <cstddef>
 
 #include "../kernels/sdf_octree.h"
@@ -151,6 +152,29 @@ py::list opencl_devices() {
   return list;
 }
 
+// The octree alone, for the benchmark's build-time table (paper's Table 2).
+py::dict octree_stats(const Doubles& vertices, const Int64s& triangles, int max_depth,
+                      int leaf_size) {
+  const sdf::Mesh mesh = to_mesh(vertices, triangles);
+  sdf::OctreeConfig config;
+  config.max_depth = max_depth;
+  config.leaf_size = leaf_size;
+  sdf::Octree tree;
+  double seconds = 0.0;
+  {
+    py::gil_scoped_release release;
+    const auto start = std::chrono::steady_clock::now();
+    tree = sdf::build_octree(mesh, config);
+    seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  }
+  py::dict d;
+  d["seconds"] = seconds;
+  d["nodes"] = tree.nodes.size();
+  d["leaf_words"] = tree.leaves.size();
+  d["depth"] = tree.depth;
+  return d;
+}
+
 std::string opencl_unavailable_reason() {
 #ifdef SDF_HAVE_OPENCL
   return sdf::cl::devices().empty() ? sdf::cl::unavailable_reason() : "";
@@ -244,6 +268,8 @@ PYBIND11_MODULE(_core, m) {
         py::arg("accel") = "bvh", py::arg("octree_max_depth") = 10,
         py::arg("octree_leaf_size") = 8, py::arg("orientation") = "auto");
   m.def("opencl_devices", &opencl_devices);
+  m.def("octree_stats", &octree_stats, py::arg("vertices"), py::arg("triangles"),
+        py::arg("max_depth") = 10, py::arg("leaf_size") = 8);
   m.def("opencl_unavailable_reason", &opencl_unavailable_reason);
   m.def("host_layout", &host_layout);
 #ifdef SDF_HAVE_OPENCL
