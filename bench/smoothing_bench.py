@@ -30,30 +30,13 @@ from pathlib import Path
 import numpy as np
 
 import shape_diameter as sd
+from shape_diameter.mesh_io import load_mesh_with_uvs
 from bench import machine_line, write_section
 from meshes import CACHE, DATA, ROOT, read_off, subdivide
 
 KRING_K = range(1, 9)
 TEXTURE_RADII = (2, 4, 8, 16, 32, 64)
 TITLE = "Smoothing (CPU)"
-
-
-def read_obj_with_uvs(path):
-    """spot.obj: positions, triangles and per-corner UVs (every face is 'f v/vt v/vt v/vt')."""
-    v, vt, f, ft = [], [], [], []
-    for line in Path(path).read_text().splitlines():
-        p = line.split()
-        if not p:
-            continue
-        if p[0] == "v":
-            v.append([float(x) for x in p[1:4]])
-        elif p[0] == "vt":
-            vt.append([float(x) for x in p[1:3]])
-        elif p[0] == "f":
-            f.append([int(c.split("/")[0]) - 1 for c in p[1:4]])
-            ft.append([int(c.split("/")[1]) - 1 for c in p[1:4]])
-    uv = np.array(vt, dtype=np.float32)[np.array(ft)]
-    return np.array(v), np.array(f, dtype=np.int64), uv
 
 
 def subdivide_with_uvs(vertices, triangles, uvs):
@@ -72,7 +55,7 @@ def spot_mesh(times):
     if cached.exists():
         z = np.load(cached)
         return z["vertices"], z["triangles"], z["uvs"]
-    v, t, uv = read_obj_with_uvs(DATA / "spot.obj")
+    v, t, uv = load_mesh_with_uvs(DATA / "spot.obj")
     for _ in range(times):
         v, t, uv = subdivide_with_uvs(v, t, uv)
     CACHE.mkdir(parents=True, exist_ok=True)
