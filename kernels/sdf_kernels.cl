@@ -12,6 +12,7 @@
  * the host's sin and cos, so every device casts the very same rays as the CPU engine. Results are written
  * in launch order (raw[first + gid]), so each launch reads back one contiguous range. */
 #include "sdf_bvh_traverse.h"
+#include "sdf_bvh4_traverse.h"
 #include "sdf_octree.h"
 #include "sdf_reduce.h"
 #include "sdf_smooth_projected.h"
@@ -62,22 +63,99 @@
   raw[out] = sdf_reduce(params.sampling, lengths, angles, kept, params.angle_floor);  \
   valid_rays[out] = kept;
 
-__kernel void sdf_cast_bvh(__global const SdfBvhNode* nodes, __global const SdfTriangle* tris,
-                           __global const float* origins, __global const float* axes,
-                           __global const float* tangents, __global const int* own_face,
-                           __global const uint* order, __global const float4* local_rays,
-                           SdfCastParams params, __global float* raw,
-                           __global int* valid_rays) {
+/* One work item per ray: a work group holds P points x rays work items (P = local size /
+ * rays; item l casts ray l / P of point l % P, so a warp holds one ray index of neighbouring
+ * points, as the per-point kernel's lock step does), writes the ray's length to local memory,
+ * and the first P items reduce their point's rays in ray order, exactly as the per-point
+ * kernel does. Threads are 30 times shorter and hold no length arrays while they trace. */
+#define SDF_CAST_PER_RAY_BODY(CLOSEST_HIT)                                            \
+  uint lid = get_local_id(0);                                                         \
+  uint group_points = get_local_size(0) / params.rays;                                \
+  uint slot = lid % group_points;                                                     \
+  int r = (int)(lid / group_points);                                                  \
+  uint gid = get_group_id(0) * group_points + slot;                                   \
+  float t_kept = -1.0f;                                                               \
+  float angle = 0.0f;                                                                 \
+  uint p = 0;                                                                         \
+  float3 axis = make_float3(0.0f, 0.0f, 0.0f);                                        \
+  if (gid < params.count && r < params.rays) {                                        \
+    p = order[params.first + gid];                                                    \
+    axis = vload3(p, axes);                                                           \
+  }                                                                                   \
+  if (axis.x != 0.0f || axis.y != 0.0f || axis.z != 0.0f) {                           \
+    float3 origin = vload3(p, origins);                                               \
+    int own = own_face[p];                                                            \
+    float3 b1, b2;                                                                    \
+    sdf_frame(params.sampling, axis, vload3(p, tangents), &b1, &b2);                  \
+    float3 dir_local;                                                                 \
+    if (params.sampling == SDF_SAMPLING_RANDOM) {                                     \
+      dir_local = sdf_ray_local(params.sampling, r, params.rays,                      \
+                                params.one_minus_cos_half, params.sin_half,           \
+                                params.seed, p);                                      \
+      angle = sdf_ray_angle(dir_local);                                               \
+    } else {                                                                          \
+      float4 table = local_rays[r];                                                   \
+      dir_local = table.xyz;                                                          \
+      angle = table.w;                                                                \
+    }                                                                                 \
+    float3 d = sdf_to_world(dir_local, b1, b2, axis);                                 \
+    SdfHit hit = CLOSEST_HIT;                                                         \
+    if (hit.det < 0.0f && hit.t < INFINITY) t_kept = hit.t;                           \
+  }                                                                                   \
+  ray_t[lid] = t_kept;                                                                \
+  ray_angle[lid] = angle;                                                             \
+  barrier(CLK_LOCAL_MEM_FENCE);                                                       \
+  if (lid >= group_points || gid >= params.count) return;                             \
+  /* Kept lengths are > tmin >= 0, so -1 marks a ray not kept. */                     \
+  float lengths[SDF_MAX_RAYS];                                                        \
+  float angles[SDF_MAX_RAYS];                                                         \
+  int kept = 0;                                                                       \
+  for (int k = 0; k < params.rays; ++k) {                                             \
+    float t = ray_t[k * group_points + slot];                                         \
+    if (t >= 0.0f) {                                                                  \
+      lengths[kept] = t;                                                              \
+      angles[kept] = ray_angle[k * group_points + slot];                              \
+      ++kept;                                                                         \
+    }                                                                                 \
+  }                                                                                   \
+  uint out = params.first + gid;                                                      \
+  raw[out] = sdf_reduce(params.sampling, lengths, angles, kept, params.angle_floor);  \
+  valid_rays[out] = kept;
+
+/* The per-point inputs and outputs every cast kernel takes after its acceleration structure.
+ * restrict: nothing aliases, and NVIDIA's compiler then reads through the read-only cache. */
+#define SDF_POINT_ARGS                                                                     \
+  __global const float* restrict origins, __global const float* restrict axes,             \
+      __global const float* restrict tangents, __global const int* restrict own_face,      \
+      __global const uint* restrict order, __global const float4* restrict local_rays,     \
+      SdfCastParams params, __global float* restrict raw, __global int* restrict valid_rays
+
+__kernel void sdf_cast_bvh(__global const SdfBvhNode* restrict nodes,
+                           __global const SdfTriangle* restrict tris, SDF_POINT_ARGS) {
   SDF_CAST_BODY(sdf_bvh_closest_hit(nodes, tris, origin, d, params.tmin, own))
 }
 
-__kernel void sdf_cast_octree(__global const uint* nodes, __global const uint* leaves,
-                              __global const SdfTriangle* tris, SdfOctreeRoot root,
-                              __global const float* origins, __global const float* axes,
-                              __global const float* tangents, __global const int* own_face,
-                              __global const uint* order, __global const float4* local_rays,
-                              SdfCastParams params, __global float* raw,
-                              __global int* valid_rays) {
+__kernel void sdf_cast_bvh4(__global const SdfBvh4Node* restrict nodes,
+                            __global const SdfTriangle* restrict tris, SDF_POINT_ARGS) {
+  SDF_CAST_BODY(sdf_bvh4_closest_hit(nodes, tris, origin, d, params.tmin, own))
+}
+
+__kernel void sdf_cast_bvh_per_ray(__global const SdfBvhNode* restrict nodes,
+                                   __global const SdfTriangle* restrict tris, SDF_POINT_ARGS,
+                                   __local float* ray_t, __local float* ray_angle) {
+  SDF_CAST_PER_RAY_BODY(sdf_bvh_closest_hit(nodes, tris, origin, d, params.tmin, own))
+}
+
+__kernel void sdf_cast_bvh4_per_ray(__global const SdfBvh4Node* restrict nodes,
+                                    __global const SdfTriangle* restrict tris, SDF_POINT_ARGS,
+                                    __local float* ray_t, __local float* ray_angle) {
+  SDF_CAST_PER_RAY_BODY(sdf_bvh4_closest_hit(nodes, tris, origin, d, params.tmin, own))
+}
+
+__kernel void sdf_cast_octree(__global const uint* restrict nodes,
+                              __global const uint* restrict leaves,
+                              __global const SdfTriangle* restrict tris, SdfOctreeRoot root,
+                              SDF_POINT_ARGS) {
   SDF_CAST_BODY(sdf_octree_closest_hit(nodes, leaves, tris, root, origin, d, params.tmin, own))
 }
 

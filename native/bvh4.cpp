@@ -1,7 +1,9 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
 #include "bvh4.h"
 
+#include <algorithm>
 #include <limits>
+#include <utility>
 
 namespace sdf {
 
@@ -105,6 +107,22 @@ Bvh4 collapse_to_bvh4(const Bvh& bvh) {
     collapser.emit(0);
   }
   return out;
+}
+
+int bvh4_depth(const Bvh4& bvh) {
+  if (bvh.empty()) return 0;
+  int deepest = 0;
+  std::vector<std::pair<std::int32_t, int>> stack{{0, 0}};
+  while (!stack.empty()) {
+    const auto [index, depth] = stack.back();
+    stack.pop_back();
+    deepest = std::max(deepest, depth);
+    for (int i = 0; i < 4; ++i) {
+      const Bvh4Node& n = bvh.nodes[index];
+      if (n.child[i] >= 0) stack.push_back({n.child[i], depth + 1});
+    }
+  }
+  return deepest;
 }
 
 }  // namespace sdf

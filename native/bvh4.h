@@ -5,6 +5,7 @@
 // The binary BVH stays the layout the OpenCL kernels read.
 #pragma once
 
+#include <cstddef>
 #include <cstdint>
 #include <vector>
 
@@ -22,6 +23,12 @@ struct alignas(16) Bvh4Node {
   std::int32_t count[4];
 };
 static_assert(sizeof(Bvh4Node) == 128, "Bvh4Node is two cache lines");
+// The OpenCL engine uploads these nodes as the kernels' SdfBvh4Node: the same bytes.
+static_assert(sizeof(Bvh4Node) == sizeof(kern::SdfBvh4Node) &&
+                  offsetof(Bvh4Node, hi_x) == offsetof(kern::SdfBvh4Node, hi_x) &&
+                  offsetof(Bvh4Node, child) == offsetof(kern::SdfBvh4Node, child) &&
+                  offsetof(Bvh4Node, count) == offsetof(kern::SdfBvh4Node, count),
+              "Bvh4Node and SdfBvh4Node share one layout");
 
 struct Bvh4 {
   std::vector<Bvh4Node> nodes;  // nodes[0] is the root (a lone leaf root becomes one slot)
@@ -31,5 +38,8 @@ struct Bvh4 {
 
 // Collapses `bvh` (which must outlive the result: triangles are shared, not copied).
 Bvh4 collapse_to_bvh4(const Bvh& bvh);
+
+// Depth of the deepest wide node (root = 0); 0 for an empty tree.
+int bvh4_depth(const Bvh4& bvh);
 
 }  // namespace sdf

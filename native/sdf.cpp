@@ -34,24 +34,38 @@ void report(const ProgressFn& progress, double fraction) {
 
 const char* accel_name(Accel a) { return a == Accel::Bvh ? "bvh" : "octree"; }
 
+// The acceleration structure options.accel asks for: the binary BVH and, when `wide`, its
+// 4-wide collapse (which points at the binary tree's triangles, so a Structures never moves),
+// or the octree.
+struct Structures {
+  Bvh bvh;
+  Bvh4 wide;
+  Octree tree;
+};
+
+void build_structures(const Mesh& mesh, const Options& options, bool wide, Structures& s) {
+  if (options.accel == Accel::Bvh) {
+    BvhConfig config;
+    config.threads = options.threads;
+    s.bvh = build_bvh(mesh, config);
+    if (wide) s.wide = collapse_to_bvh4(s.bvh);
+  } else {
+    s.tree = build_octree(mesh, options.octree);
+  }
+}
+
 // Casting and reducing are fused per point: the lengths never leave the cache (CPU) or the
 // registers (OpenCL).
 void cast_on_cpu(const Mesh& mesh, const Options& options, const SamplePoints& points,
                  const std::vector<std::uint32_t>& order, const Cone& cone, Output& out,
                  Stopwatch& clock, const ProgressFn& progress) {
+  Structures built;
+  build_structures(mesh, options, true, built);
   CpuScene scene;
-  Bvh bvh;
-  Bvh4 wide;
-  Octree tree;
   if (options.accel == Accel::Bvh) {
-    BvhConfig config;
-    config.threads = options.threads;
-    bvh = build_bvh(mesh, config);
-    wide = collapse_to_bvh4(bvh);
-    scene.bvh4 = &wide;
+    scene.bvh4 = &built.wide;
   } else {
-    tree = build_octree(mesh, options.octree);
-    scene.octree = &tree;
+    scene.octree = &built.tree;
   }
   out.timings.emplace_back("build", clock.lap());
   report(progress, 0.05);
@@ -67,17 +81,15 @@ void cast_on_opencl(const Mesh& mesh, const Options& options, const SamplePoints
                     const std::vector<std::uint32_t>& order, const Cone& cone, Output& out,
                     Stopwatch& clock, const ProgressFn& progress) {
   const std::vector<const cl::Device*> devices = cl::select_devices(options.engine);
+  const bool wide = cl::wants_wide_bvh(devices);
+  Structures built;
+  build_structures(mesh, options, wide, built);
   cl::Scene scene;
-  Bvh bvh;
-  Octree tree;
   if (options.accel == Accel::Bvh) {
-    BvhConfig config;
-    config.threads = options.threads;
-    bvh = build_bvh(mesh, config);
-    scene.bvh = &bvh;
+    scene.bvh = &built.bvh;
+    scene.bvh4 = wide ? &built.wide : nullptr;
   } else {
-    tree = build_octree(mesh, options.octree);
-    scene.octree = &tree;
+    scene.octree = &built.tree;
   }
   out.timings.emplace_back("build", clock.lap());
   report(progress, 0.05);

@@ -29,6 +29,7 @@ namespace sdf::cl {
   X(clReleaseProgram)         \
   X(clCreateKernel)           \
   X(clReleaseKernel)          \
+  X(clGetKernelWorkGroupInfo) \
   X(clSetKernelArg)           \
   X(clCreateBuffer)           \
   X(clReleaseMemObject)       \

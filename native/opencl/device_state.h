@@ -52,6 +52,18 @@ class Kernel {
   void arg(cl_uint index, const T& value) {
     check(api()->clSetKernelArg(kernel_, index, sizeof(T), &value), "clSetKernelArg");
   }
+  // The largest work group this kernel can run with on `device` (registers limit it).
+  std::size_t max_group(cl_device_id device) const {
+    std::size_t size = 0;
+    check(api()->clGetKernelWorkGroupInfo(kernel_, device, CL_KERNEL_WORK_GROUP_SIZE,
+                                          sizeof size, &size, nullptr),
+          "clGetKernelWorkGroupInfo");
+    return size;
+  }
+  // A __local array of `bytes` for argument `index`.
+  void local_arg(cl_uint index, std::size_t bytes) {
+    check(api()->clSetKernelArg(kernel_, index, bytes, nullptr), "clSetKernelArg");
+  }
   cl_kernel get() const { return kernel_; }
 
  private:

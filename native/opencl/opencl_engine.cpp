@@ -11,8 +11,10 @@
 #include <memory>
 #include <mutex>
 #include <stdexcept>
+#include <string>
 #include <thread>
 
+#include "../../kernels/sdf_bvh4_traverse.h"
 #include "device_state.h"
 #include "program_cache.h"
 
@@ -39,6 +41,34 @@ struct DeviceResult {
   std::exception_ptr failure;
 };
 
+}  // namespace
+
+// Which cast kernel a device runs for accel='bvh'. GPUs: the binary BVH, one work item per
+// ray (18% faster than one per point on an H100; the 4-wide BVH was 8-10% slower there).
+// CPU devices (PoCL): the 4-wide BVH, one work item per point (about 20% faster than the
+// binary BVH). SDF_OPENCL_KERNEL (bvh_per_point, bvh4_per_point, bvh_per_ray) overrides the
+// choice, so tests run every kernel on whatever device they have and benchmarks compare them.
+CastKernel cast_kernel_for(const Device& device) {
+  if (const char* forced = std::getenv("SDF_OPENCL_KERNEL")) {
+    const std::string name = forced;
+    if (name == "bvh_per_point") return CastKernel::BvhPerPoint;
+    if (name == "bvh4_per_point") return CastKernel::Bvh4PerPoint;
+    if (name == "bvh_per_ray") return CastKernel::BvhPerRay;
+    if (!name.empty())
+      throw std::invalid_argument("SDF_OPENCL_KERNEL='" + name +
+                                  "': use bvh_per_point, bvh4_per_point or bvh_per_ray");
+  }
+  return device.gpu ? CastKernel::BvhPerRay : CastKernel::Bvh4PerPoint;
+}
+
+bool wants_wide_bvh(const std::vector<const Device*>& devices) {
+  return std::any_of(devices.begin(), devices.end(), [](const Device* d) {
+    return cast_kernel_for(*d) == CastKernel::Bvh4PerPoint;
+  });
+}
+
+namespace {
+
 void run_device(const Device& device, const Scene& scene, const SamplePoints& points,
                 const std::vector<std::uint32_t>& order, const Cone& cone, float min_closeness,
                 std::vector<float>& raw_ordered, std::vector<std::int32_t>& valid_ordered,
@@ -55,7 +85,13 @@ void run_device(const Device& device, const Scene& scene, const SamplePoints& po
                                     n * sizeof(float),              n * sizeof(std::int32_t),
                                     3 * n * sizeof(float)};
   const std::size_t first_accel = sizes.size();
-  if (scene.bvh) {
+  const CastKernel choice = cast_kernel_for(device);
+  const bool wide = choice == CastKernel::Bvh4PerPoint && scene.bvh4 &&
+                    bvh4_depth(*scene.bvh4) <= SDF_BVH4_MAX_DEPTH;
+  if (wide) {
+    sizes.push_back(bytes_of(scene.bvh4->nodes));
+    sizes.push_back(bytes_of(scene.bvh->triangles));
+  } else if (scene.bvh) {
     sizes.push_back(bytes_of(scene.bvh->nodes));
     sizes.push_back(bytes_of(scene.bvh->triangles));
   } else {
@@ -96,10 +132,23 @@ void run_device(const Device& device, const Scene& scene, const SamplePoints& po
   params.seed = cone.seed;
   params.tmin = min_closeness;
   cl_uint a = 0;
-  if (scene.bvh) {
+  // One work item per ray: points_per_group points of `rays` items each (8 measured best on
+  // an H100; 16 and 32 were slower), fewer when registers limit the group size.
+  std::size_t points_per_group = 0;
+  if (wide) {
+    accel0 = std::make_unique<Buffer>(s, sizes[first_accel], scene.bvh4->nodes.data());
+    accel1 = std::make_unique<Buffer>(s, sizes[first_accel + 1], scene.bvh->triangles.data());
+    kernel = std::make_unique<Kernel>(program, "sdf_cast_bvh4");
+    kernel->arg(a++, accel0->get());
+    kernel->arg(a++, accel1->get());
+  } else if (scene.bvh) {
     accel0 = std::make_unique<Buffer>(s, sizes[first_accel], scene.bvh->nodes.data());
     accel1 = std::make_unique<Buffer>(s, sizes[first_accel + 1], scene.bvh->triangles.data());
-    kernel = std::make_unique<Kernel>(program, "sdf_cast_bvh");
+    if (choice == CastKernel::BvhPerRay) {
+      kernel = std::make_unique<Kernel>(program, "sdf_cast_bvh_per_ray");
+      points_per_group = std::min<std::size_t>(8, kernel->max_group(device.id) / cone.rays);
+    }
+    if (points_per_group == 0) kernel = std::make_unique<Kernel>(program, "sdf_cast_bvh");
     kernel->arg(a++, accel0->get());
     kernel->arg(a++, accel1->get());
   } else {
@@ -121,17 +170,24 @@ void run_device(const Device& device, const Scene& scene, const SamplePoints& po
   const cl_uint params_index = a++;
   kernel->arg(a++, raw.get());
   kernel->arg(a++, valid.get());
+  if (points_per_group) {
+    kernel->local_arg(a++, points_per_group * cone.rays * sizeof(float));  // lengths
+    kernel->local_arg(a++, points_per_group * cone.rays * sizeof(float));  // angles
+  }
   check(cl.clFinish(s.queue), "clFinish (upload)");
   result.timings.upload = seconds_since(upload_start);
 
   // Launches of about 100 ms on this device: short enough that a display driver's watchdog
   // never fires and progress and cancellation stay responsive, long enough to fill the device.
   constexpr double kTargetSeconds = 0.1;
-  std::size_t chunk = 4096;
+  // The first launch fills a GPU (2048 resident work items per compute unit on NVIDIA's):
+  // starting at 4096 points left it mostly idle, 11% of the cast time at 832k faces (H100).
+  std::size_t chunk = device.gpu ? std::max<std::size_t>(4096, device.compute_units * 2048u) : 4096;
   // Work-group size. GPUs: 64, two warps or one wavefront (left to the driver, NVIDIA's picks a
   // divisor of the global size, down to 1 for a prime count). CPUs (PoCL): 1, because PoCL
   // runs a work group as a loop it tries to vectorise, and divergent traversal loops defeat
   // that: measured about 3x faster than its default on fandisk.
+  // (Sizes 32 to 128 measured the same on an H100.)
   const std::size_t local = device.gpu ? 64 : 1;
   // Test hook: act out a device lost after this many launches (a driver reset, an unplugged
   // eGPU), which real hardware cannot be asked to do on cue.
@@ -146,8 +202,13 @@ void run_device(const Device& device, const Scene& scene, const SamplePoints& po
     params.count = static_cast<std::uint32_t>(count);
     kernel->arg(params_index, params);
     const Clock::time_point launch = Clock::now();
-    const std::size_t global = (count + local - 1) / local * local;
-    check(cl.clEnqueueNDRangeKernel(s.queue, kernel->get(), 1, nullptr, &global, &local, 0,
+    std::size_t group = local;
+    std::size_t global = (count + local - 1) / local * local;
+    if (points_per_group) {
+      group = points_per_group * cone.rays;
+      global = (count + points_per_group - 1) / points_per_group * group;
+    }
+    check(cl.clEnqueueNDRangeKernel(s.queue, kernel->get(), 1, nullptr, &global, &group, 0,
                                     nullptr, nullptr),
           "clEnqueueNDRangeKernel");
     if (lose_after >= 0 && launches++ >= lose_after)

@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "../bvh.h"
+#include "../bvh4.h"
 #include "../octree.h"
 #include "../parallel.h"
 #include "../rays.h"
@@ -17,11 +18,23 @@
 
 namespace sdf::cl {
 
-// Exactly one of bvh and octree is set.
+// Exactly one of bvh and octree is set. bvh4, when set, is bvh collapsed to four children
+// per node and is cast instead of it (trees too deep for its stack fall back to bvh).
 struct Scene {
   const Bvh* bvh = nullptr;
+  const Bvh4* bvh4 = nullptr;
   const Octree* octree = nullptr;
 };
+
+// The kernels that cast a BVH: the binary or the 4-wide tree, one work item per point or per
+// ray. The octree has one kernel.
+enum class CastKernel { BvhPerPoint, Bvh4PerPoint, BvhPerRay };
+
+// The kernel `device` runs (see opencl_engine.cpp for the measurements behind the choice).
+CastKernel cast_kernel_for(const Device& device);
+
+// Whether any of `devices` casts the 4-wide BVH, which the caller then builds (Scene::bvh4).
+bool wants_wide_bvh(const std::vector<const Device*>& devices);
 
 struct CastTimings {
   double upload = 0.0, cast = 0.0, download = 0.0;
