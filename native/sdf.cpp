@@ -94,7 +94,7 @@ void cast_on_opencl(const Mesh& mesh, const Options& options, const SamplePoints
   out.timings.emplace_back("build", clock.lap());
   report(progress, 0.05);
   const cl::CastTimings t =
-      cl::cast_opencl(devices, scene, points, order, cone, minimum_closeness(mesh),
+      cl::cast_opencl(devices, scene, points, order, cone, minimum_closeness(mesh), options.threads,
                       out.raw.data(), out.valid_rays.data(), progress, 0.05, 0.99);
   const double total = clock.lap();
   // Compile (or cache load) and set-up are what the three device stages leave of the total.
