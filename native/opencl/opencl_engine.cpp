@@ -242,7 +242,7 @@ void run_device(const Device& device, const Scene& scene, const SamplePoints& po
 
 CastTimings cast_opencl(const std::vector<const Device*>& devices, const Scene& scene,
                         const SamplePoints& points, const std::vector<std::uint32_t>& order,
-                        const Cone& cone, float min_closeness, unsigned threads, float* raw,
+                        const Cone& cone, float min_closeness, unsigned host_threads, float* raw,
                         std::int32_t* valid_rays, const ProgressFn& progress,
                         double progress_from, double progress_to) {
   const std::size_t n = points.size();
@@ -312,7 +312,7 @@ CastTimings cast_opencl(const std::vector<const Device*>& devices, const Scene& 
     timings.download = std::max(timings.download, r.timings.download);
     timings.device_bytes = std::max(timings.device_bytes, r.timings.device_bytes);
   }
-  parallel_for(n, 1 << 16, threads, [&](std::size_t begin, std::size_t end) {
+  parallel_for(n, 1 << 16, host_threads, [&](std::size_t begin, std::size_t end) {
     for (std::size_t i = begin; i < end; ++i) {
       raw[order[i]] = raw_ordered[i];
       valid_rays[order[i]] = valid_ordered[i];

@@ -42,12 +42,13 @@ struct CastTimings {
 };
 
 // Casts every point on `devices` (several: points are shared out dynamically; results are
-// identical to one device). `threads` host threads (0: every core) put results in place. Writes raw[i] (-1 when no ray was kept) and valid_rays[i].
+// identical to one device); `host_threads` (0: every core) put the results in mesh order.
+// Writes raw[i] (-1 when no ray was kept) and valid_rays[i].
 // Throws Error for OpenCL failures (naming the call and code) and std::runtime_error when
 // the scene does not fit a device's memory. Progress covers [progress_from, progress_to].
 CastTimings cast_opencl(const std::vector<const Device*>& devices, const Scene& scene,
                         const SamplePoints& points, const std::vector<std::uint32_t>& order,
-                        const Cone& cone, float min_closeness, unsigned threads, float* raw,
+                        const Cone& cone, float min_closeness, unsigned host_threads, float* raw,
                         std::int32_t* valid_rays, const ProgressFn& progress,
                         double progress_from, double progress_to);
 
