@@ -44,7 +44,7 @@ struct DeviceResult {
 }  // namespace
 
 // Which cast kernel a device runs for accel='bvh'. GPUs: the binary BVH, one work item per
-// ray (18% faster than one per point on an H100; the 4-wide BVH was 8-10% slower there).
+// ray (13-15% faster than one per point on an H100; the 4-wide BVH was 8-10% slower there).
 // CPU devices (PoCL): the 4-wide BVH, one work item per point (about 20% faster than the
 // binary BVH). SDF_OPENCL_KERNEL (bvh_per_point, bvh4_per_point, bvh_per_ray) overrides the
 // choice, so tests run every kernel on whatever device they have and benchmarks compare them.
@@ -132,8 +132,9 @@ void run_device(const Device& device, const Scene& scene, const SamplePoints& po
   params.seed = cone.seed;
   params.tmin = min_closeness;
   cl_uint a = 0;
-  // One work item per ray: points_per_group points of `rays` items each (8 measured best on
-  // an H100; 16 and 32 were slower), fewer when registers limit the group size.
+  // One work item per ray: points_per_group points of `rays` items each (on an H100, 4 was
+  // 2-4% faster than 8 and 7-9% faster than 2; 16 and 32 slower), fewer when registers limit
+  // the group size.
   std::size_t points_per_group = 0;
   if (wide) {
     accel0 = std::make_unique<Buffer>(s, sizes[first_accel], scene.bvh4->nodes.data());
@@ -146,7 +147,7 @@ void run_device(const Device& device, const Scene& scene, const SamplePoints& po
     accel1 = std::make_unique<Buffer>(s, sizes[first_accel + 1], scene.bvh->triangles.data());
     if (choice == CastKernel::BvhPerRay) {
       kernel = std::make_unique<Kernel>(program, "sdf_cast_bvh_per_ray");
-      points_per_group = std::min<std::size_t>(8, kernel->max_group(device.id) / cone.rays);
+      points_per_group = std::min<std::size_t>(4, kernel->max_group(device.id) / cone.rays);
     }
     if (points_per_group == 0) kernel = std::make_unique<Kernel>(program, "sdf_cast_bvh");
     kernel->arg(a++, accel0->get());
