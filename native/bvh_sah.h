@@ -1,0 +1,256 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
+// Pieces shared by the two halves of the BVH builder (bvh.cpp: the top levels, in parallel
+// within each node; bvh_subtree.cpp: the subtrees below, one thread each): primitive
+// references, SAH bins and the split decision. Both halves take the same decisions from the
+// same bins, so where the line between them falls changes the speed, never the tree's shape.
+#pragma once
+
+#include <algorithm>
+#include <cstdint>
+#include <limits>
+
+#include <glm/glm.hpp>
+
+#include "../kernels/sdf_bvh_traverse.h"
+#include "bvh_float4.h"
+
+namespace sdf::bvh_build {
+
+struct Box {
+  glm::vec3 lo{std::numeric_limits<float>::infinity()};
+  glm::vec3 hi{-std::numeric_limits<float>::infinity()};
+  void grow(const Box& b) {
+    lo = glm::min(lo, b.lo);
+    hi = glm::max(hi, b.hi);
+  }
+  void grow(glm::vec3 p) {
+    lo = glm::min(lo, p);
+    hi = glm::max(hi, p);
+  }
+  float half_area() const {
+    const glm::vec3 d = hi - lo;
+    return (d.x < 0.0f) ? 0.0f : d.x * d.y + d.y * d.z + d.z * d.x;
+  }
+};
+
+// One triangle as the builder sees it: its box and its index, 32 contiguous bytes, moved
+// around by the partitions (Embree's PrimRef). Reading boxes in place instead of through an
+// index array removes a cache miss per triangle per level.
+struct PrimRef {
+  glm::vec3 lo;
+  std::uint32_t id;
+  glm::vec3 hi;
+  std::uint32_t pad;
+  // Twice the box centre: the factor 2 is the same for every triangle, so binning and
+  // centroid bounds can use it as is and save a multiply.
+  glm::vec3 centroid2() const { return lo + hi; }
+};
+static_assert(sizeof(PrimRef) == 32, "PrimRef is meant to fill half a cache line");
+
+// A node's primitives [begin, end) of the reference array, with their bounds.
+struct Range {
+  std::uint32_t node = 0;  // where the node is stored
+  std::size_t begin = 0, end = 0;
+  int depth = 0;           // root = 0
+  Box bounds;              // of the triangles
+  Box centroids;           // of centroid2()
+  std::size_t count() const { return end - begin; }
+};
+
+// Leaves deeper than this would overflow the traversal stack; the builder stops there.
+constexpr int kMaxDepth = SDF_BVH_STACK_SIZE - 4;
+// BvhConfig::bins at most: the bins live in fixed arrays (on the stack for a subtree).
+constexpr int kMaxBins = 32;
+
+// A box in SIMD form, for the binning loops.
+struct Box4 {
+  Float4 lo = Float4::splat(std::numeric_limits<float>::infinity());
+  Float4 hi = Float4::splat(-std::numeric_limits<float>::infinity());
+  void grow(Float4 l, Float4 h) {
+    lo = min(lo, l);
+    hi = max(hi, h);
+  }
+  void grow(const Box4& b) { grow(b.lo, b.hi); }
+  Box box() const { return Box{glm::vec3(lo[0], lo[1], lo[2]), glm::vec3(hi[0], hi[1], hi[2])}; }
+  float half_area() const { return box().half_area(); }
+};
+
+inline Float4 lo4(const PrimRef& r) { return Float4::load(&r.lo.x); }
+inline Float4 hi4(const PrimRef& r) { return Float4::load(&r.hi.x); }
+
+// Maps a centroid to its bin on each axis. An axis with no extent maps everything to bin 0
+// and is skipped by the sweeps. The scalar and SIMD forms do the same float operations, so
+// the partition sends every triangle to the side its bin says.
+struct BinMapping {
+  float lo[3], scale[3];
+  Float4 lo_all, scale_all, last_bin;
+  int bins;
+  BinMapping(const Box& centroids, int bin_count) : bins(bin_count) {
+    for (int a = 0; a < 3; ++a) {
+      const float extent = centroids.hi[a] - centroids.lo[a];
+      lo[a] = centroids.lo[a];
+      scale[a] = extent > 0.0f ? bins / extent : 0.0f;
+    }
+    lo_all = Float4::set(lo[0], lo[1], lo[2]);
+    scale_all = Float4::set(scale[0], scale[1], scale[2]);
+    last_bin = Float4::splat(static_cast<float>(bins - 1));
+  }
+  // Clamped in float before the conversion, as maxps and minps do below.
+  int bin_of(float c, int axis) const {
+    float x = (c - lo[axis]) * scale[axis];
+    x = x > 0.0f ? x : 0.0f;
+    const float last = static_cast<float>(bins - 1);
+    x = x < last ? x : last;
+    return static_cast<int>(x);
+  }
+  void bins_of(const PrimRef& r, int* out) const {
+    const Float4 x = (lo4(r) + hi4(r) - lo_all) * scale_all;
+    min(max(x, Float4::splat(0.0f)), last_bin).truncate(out);
+  }
+  bool splits(int axis) const { return scale[axis] > 0.0f; }
+};
+
+// Boxes and counts per bin on each axis. Merging two sets of bins is exact (min, max and
+// integer sums), so bins gathered in chunks on any number of threads equal the serial ones.
+struct Bins {
+  Box4 box[3][kMaxBins];
+  std::uint32_t count[3][kMaxBins];
+  explicit Bins(int bins) {
+    for (int a = 0; a < 3; ++a)
+      for (int b = 0; b < bins; ++b) {
+        box[a][b] = Box4();
+        count[a][b] = 0;
+      }
+  }
+  void add(const PrimRef* refs, std::size_t n, const BinMapping& map) {
+    alignas(16) int bin[4];
+    for (std::size_t i = 0; i < n; ++i) {
+      const Float4 lo = lo4(refs[i]), hi = hi4(refs[i]);
+      map.bins_of(refs[i], bin);
+      for (int a = 0; a < 3; ++a) {
+        box[a][bin[a]].grow(lo, hi);
+        ++count[a][bin[a]];
+      }
+    }
+  }
+  void merge(const Bins& other, int bins) {
+    for (int a = 0; a < 3; ++a)
+      for (int b = 0; b < bins; ++b) {
+        box[a][b].grow(other.box[a][b]);
+        count[a][b] += other.count[a][b];
+      }
+  }
+};
+
+// What to do with a node: keep it as a leaf, split it at a SAH bin boundary, or (when every
+// centroid is equal) cut its list in two halves, the only way left to bound leaf size.
+struct Split {
+  enum Kind { Leaf, Sah, Median } kind = Leaf;
+  int axis = -1;
+  int bin = 0;  // Sah: the left side takes bins [0, bin]
+  float cost = std::numeric_limits<float>::infinity();
+  bool goes_left(const PrimRef& r, const BinMapping& map) const {
+    return map.bin_of(r.lo[axis] + r.hi[axis], axis) <= bin;
+  }
+  // Keeps the first of equal costs: the lower axis, then the lower bin.
+  void consider(float left_area, std::uint32_t left_count, float right_area,
+                std::uint32_t right_count, int at_axis, int at_bin) {
+    const float c = left_area * left_count + right_area * right_count;
+    if (c < cost) {
+      cost = c;
+      axis = at_axis;
+      bin = at_bin;
+    }
+  }
+};
+
+// Binned SAH (Wald 2007) with traversal and intersection costs of 1: split when that is
+// cheaper than a leaf, and always once the leaf would be larger than allowed.
+inline Split finish_split(Split best, const Range& range, int max_leaf_size) {
+  const std::size_t count = range.count();
+  const bool fits_in_leaf = count <= static_cast<std::size_t>(max_leaf_size);
+  if (best.axis < 0) {
+    best.kind = fits_in_leaf ? Split::Leaf : Split::Median;
+    return best;
+  }
+  const float leaf_cost = range.bounds.half_area() * count;
+  best.kind = (fits_in_leaf && leaf_cost <= best.cost + range.bounds.half_area()) ? Split::Leaf
+                                                                                 : Split::Sah;
+  return best;
+}
+
+// The SAH sweep over every bin boundary of every axis.
+inline Split choose_split(const Range& range, const Bins& bins, const BinMapping& map,
+                          int max_leaf_size) {
+  const int n_bins = map.bins;
+  Split best;
+  for (int axis = 0; axis < 3; ++axis) {
+    if (!map.splits(axis)) continue;
+    float right_area[kMaxBins];
+    std::uint32_t right_count[kMaxBins];
+    Box4 acc;
+    std::uint32_t n = 0;
+    for (int b = n_bins - 1; b > 0; --b) {
+      acc.grow(bins.box[axis][b]);
+      n += bins.count[axis][b];
+      right_area[b] = acc.half_area();
+      right_count[b] = n;
+    }
+    acc = Box4();
+    n = 0;
+    for (int b = 0; b < n_bins - 1; ++b) {
+      acc.grow(bins.box[axis][b]);
+      n += bins.count[axis][b];
+      if (n == 0 || right_count[b + 1] == 0) continue;
+      best.consider(acc.half_area(), n, right_area[b + 1], right_count[b + 1], axis, b);
+    }
+  }
+  return finish_split(best, range, max_leaf_size);
+}
+
+// Nodes this small take choose_split_few instead of bins.
+constexpr std::size_t kFewPrims = 16;
+
+// The same decision as choose_split for a node of at most kFewPrims triangles, without the
+// cost of clearing and sweeping mostly empty bins. The triangles are ordered by bin; the
+// boundaries between occupied bins are the only ones the full sweep can pick (one just after
+// an occupied bin, with every empty bin after it, has the same sides and so the same cost,
+// and the sweep keeps the first), and the areas come from the same min and max, so the
+// choice is bit for bit the same.
+inline Split choose_split_few(const PrimRef* refs, const Range& range, const BinMapping& map,
+                              int max_leaf_size) {
+  const int n = static_cast<int>(range.count());
+  alignas(16) int bin[kFewPrims][4];
+  for (int i = 0; i < n; ++i) map.bins_of(refs[i], bin[i]);
+  Split best;
+  for (int axis = 0; axis < 3; ++axis) {
+    if (!map.splits(axis)) continue;
+    int order[kFewPrims];
+    for (int i = 0; i < n; ++i) {  // insertion sort by bin
+      int j = i;
+      while (j > 0 && bin[order[j - 1]][axis] > bin[i][axis]) {
+        order[j] = order[j - 1];
+        --j;
+      }
+      order[j] = i;
+    }
+    // right_area[k]: the triangles order[k..n), defined where a new bin starts at k.
+    float right_area[kFewPrims];
+    Box4 acc;
+    for (int k = n - 1; k > 0; --k) {
+      acc.grow(lo4(refs[order[k]]), hi4(refs[order[k]]));
+      right_area[k] = acc.half_area();
+    }
+    acc = Box4();
+    for (int k = 0; k + 1 < n; ++k) {
+      acc.grow(lo4(refs[order[k]]), hi4(refs[order[k]]));
+      const int b = bin[order[k]][axis];
+      if (b == bin[order[k + 1]][axis]) continue;
+      best.consider(acc.half_area(), static_cast<std::uint32_t>(k + 1), right_area[k + 1],
+                    static_cast<std::uint32_t>(n - k - 1), axis, b);
+    }
+  }
+  return finish_split(best, range, max_leaf_size);
+}
+
+}  // namespace sdf::bvh_build
