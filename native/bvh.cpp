@@ -70,7 +70,7 @@ std::size_t make_references(const Mesh& mesh, unsigned threads, PrimRef* refs, R
         r.lo = glm::min(a, glm::min(b2, c2));
         r.hi = glm::max(a, glm::max(b2, c2));
         r.id = static_cast<std::uint32_t>(f);
-        r.pad = 0;
+        r.bins = 0;
         chunk_bounds[c].bounds.grow(Box{r.lo, r.hi});
         chunk_bounds[c].centroids.grow(r.centroid2());
       }
@@ -123,7 +123,7 @@ class TopLevels {
   }
 
   std::vector<Range> split_level(const std::vector<Range>& level, int from) {
-    const PrimRef* src = buffers_[from];
+    PrimRef* src = buffers_[from];
     PrimRef* dst = buffers_[1 - from];
     std::vector<Chunk> chunks;
     std::vector<std::size_t> first_chunk(level.size() + 1);
@@ -174,7 +174,7 @@ class TopLevels {
         std::size_t out[2] = {left_out[c], right_out[c]};
         for (std::size_t i = ch.begin; i < ch.end; ++i) {
           const PrimRef& r = src[i];
-          const bool left = split.kind == Split::Sah ? split.goes_left(r, maps[ch.node])
+          const bool left = split.kind == Split::Sah ? split.goes_left(r)
                                                       : (split.kind == Split::Leaf || i < mid);
           const int side = left ? 0 : 1;
           dst[out[side]++] = r;

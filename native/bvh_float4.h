@@ -31,7 +31,17 @@ struct Float4 {
   friend Float4 min(Float4 a, Float4 b) { return {_mm_min_ps(a.v, b.v)}; }
   friend Float4 max(Float4 a, Float4 b) { return {_mm_max_ps(a.v, b.v)}; }
   // Truncates toward zero into out[0..3] (values are clamped to a small range first).
-  void truncate(int* out) const { _mm_storeu_si128(reinterpret_cast<__m128i*>(out), _mm_cvttps_epi32(v)); }
+  void truncate(int* out) const {
+    _mm_storeu_si128(reinterpret_cast<__m128i*>(out), _mm_cvttps_epi32(v));
+  }
+  float x() const { return _mm_cvtss_f32(v); }
+  Float4 yzx() const { return {_mm_shuffle_ps(v, v, _MM_SHUFFLE(3, 0, 2, 1))}; }
+  // (x + y) + z, in that order.
+  float sum3() const {
+    const __m128 y = _mm_shuffle_ps(v, v, _MM_SHUFFLE(1, 1, 1, 1));
+    const __m128 z = _mm_shuffle_ps(v, v, _MM_SHUFFLE(2, 2, 2, 2));
+    return _mm_cvtss_f32(_mm_add_ss(_mm_add_ss(v, y), z));
+  }
 };
 #else
 struct Float4 {
@@ -53,6 +63,9 @@ struct Float4 {
   void truncate(int* out) const {
     for (int i = 0; i < 4; ++i) out[i] = static_cast<int>(f[i]);
   }
+  float x() const { return f[0]; }
+  Float4 yzx() const { return {{f[1], f[2], f[0], f[3]}}; }
+  float sum3() const { return (f[0] + f[1]) + f[2]; }
 };
 #endif
 

@@ -40,7 +40,10 @@ struct PrimRef {
   glm::vec3 lo;
   std::uint32_t id;
   glm::vec3 hi;
-  std::uint32_t pad;
+  // The triangle's bins on x, y and z, a byte each, written by the last binning of its node
+  // (BinMapping::record), so the partition that follows compares bytes instead of mapping
+  // the centroid again.
+  std::uint32_t bins;
   // Twice the box centre: the factor 2 is the same for every triangle, so binning and
   // centroid bounds can use it as is and save a multiply.
   glm::vec3 centroid2() const { return lo + hi; }
@@ -72,7 +75,11 @@ struct Box4 {
   }
   void grow(const Box4& b) { grow(b.lo, b.hi); }
   Box box() const { return Box{glm::vec3(lo[0], lo[1], lo[2]), glm::vec3(hi[0], hi[1], hi[2])}; }
-  float half_area() const { return box().half_area(); }
+  // The same operations in the same order as Box::half_area.
+  float half_area() const {
+    const Float4 d = hi - lo;
+    return d.x() < 0.0f ? 0.0f : (d * d.yzx()).sum3();
+  }
 };
 
 inline Float4 lo4(const PrimRef& r) { return Float4::load(&r.lo.x); }
@@ -108,6 +115,11 @@ struct BinMapping {
     min(max(x, Float4::splat(0.0f)), last_bin).truncate(out);
   }
   bool splits(int axis) const { return scale[axis] > 0.0f; }
+  // bins_of, also kept in r.bins.
+  void record(PrimRef& r, int* out) const {
+    bins_of(r, out);
+    r.bins = static_cast<std::uint32_t>(out[0] | (out[1] << 8) | (out[2] << 16));
+  }
 };
 
 // Boxes and counts per bin on each axis. Merging two sets of bins is exact (min, max and
@@ -122,11 +134,12 @@ struct Bins {
         count[a][b] = 0;
       }
   }
-  void add(const PrimRef* refs, std::size_t n, const BinMapping& map) {
+  // Also records each triangle's bins in it (BinMapping::record).
+  void add(PrimRef* refs, std::size_t n, const BinMapping& map) {
     alignas(16) int bin[4];
     for (std::size_t i = 0; i < n; ++i) {
       const Float4 lo = lo4(refs[i]), hi = hi4(refs[i]);
-      map.bins_of(refs[i], bin);
+      map.record(refs[i], bin);
       for (int a = 0; a < 3; ++a) {
         box[a][bin[a]].grow(lo, hi);
         ++count[a][bin[a]];
@@ -151,6 +164,10 @@ struct Split {
   float cost = std::numeric_limits<float>::infinity();
   bool goes_left(const PrimRef& r, const BinMapping& map) const {
     return map.bin_of(r.lo[axis] + r.hi[axis], axis) <= bin;
+  }
+  // The same answer from the bins recorded by the node's binning.
+  bool goes_left(const PrimRef& r) const {
+    return static_cast<int>((r.bins >> (8 * axis)) & 0xffu) <= bin;
   }
   // Keeps the first of equal costs: the lower axis, then the lower bin.
   void consider(float left_area, std::uint32_t left_count, float right_area,
@@ -212,42 +229,59 @@ inline Split choose_split(const Range& range, const Bins& bins, const BinMapping
 constexpr std::size_t kFewPrims = 16;
 
 // The same decision as choose_split for a node of at most kFewPrims triangles, without the
-// cost of clearing and sweeping mostly empty bins. The triangles are ordered by bin; the
-// boundaries between occupied bins are the only ones the full sweep can pick (one just after
-// an occupied bin, with every empty bin after it, has the same sides and so the same cost,
-// and the sweep keeps the first), and the areas come from the same min and max, so the
-// choice is bit for bit the same.
-inline Split choose_split_few(const PrimRef* refs, const Range& range, const BinMapping& map,
+// cost of clearing and sweeping mostly empty bins: only the occupied bins are set up and
+// swept, in order, found from a bit mask. The boundaries skipped are those after an empty
+// bin, which have the same two sides (so the same cost) as the boundary after the occupied
+// bin before them, and the sweep keeps the first of equal costs; the boxes come from the
+// same min and max. So the choice is bit for bit the one of choose_split.
+inline Split choose_split_few(PrimRef* refs, const Range& range, const BinMapping& map,
                               int max_leaf_size) {
+  static_assert(kMaxBins <= 32, "occupied bins are a 32-bit mask");
   const int n = static_cast<int>(range.count());
   alignas(16) int bin[kFewPrims][4];
-  for (int i = 0; i < n; ++i) map.bins_of(refs[i], bin[i]);
+  for (int i = 0; i < n; ++i) map.record(refs[i], bin[i]);
   Split best;
   for (int axis = 0; axis < 3; ++axis) {
     if (!map.splits(axis)) continue;
-    int order[kFewPrims];
-    for (int i = 0; i < n; ++i) {  // insertion sort by bin
-      int j = i;
-      while (j > 0 && bin[order[j - 1]][axis] > bin[i][axis]) {
-        order[j] = order[j - 1];
-        --j;
-      }
-      order[j] = i;
+    // Only the occupied bins are set up (Float4 has no constructor, Box4 would clear all).
+    Float4 bin_lo[kMaxBins], bin_hi[kMaxBins];
+    std::uint32_t count[kMaxBins];
+    std::uint32_t occupied = 0;
+    const Box4 empty;
+    for (int i = 0; i < n; ++i) {
+      const int b = bin[i][axis];
+      bin_lo[b] = empty.lo;
+      bin_hi[b] = empty.hi;
+      count[b] = 0;
+      occupied |= 1u << b;
     }
-    // right_area[k]: the triangles order[k..n), defined where a new bin starts at k.
+    for (int i = 0; i < n; ++i) {
+      const int b = bin[i][axis];
+      bin_lo[b] = min(bin_lo[b], lo4(refs[i]));
+      bin_hi[b] = max(bin_hi[b], hi4(refs[i]));
+      ++count[b];
+    }
+    int order[kFewPrims];  // the occupied bins, ascending
+    int m = 0;
+    for (std::uint32_t rest = occupied; rest != 0; rest &= rest - 1)
+      order[m++] = __builtin_ctz(rest);
     float right_area[kFewPrims];
+    std::uint32_t right_count[kFewPrims];
     Box4 acc;
-    for (int k = n - 1; k > 0; --k) {
-      acc.grow(lo4(refs[order[k]]), hi4(refs[order[k]]));
+    std::uint32_t k_count = 0;
+    for (int k = m - 1; k > 0; --k) {
+      acc.grow(bin_lo[order[k]], bin_hi[order[k]]);
+      k_count += count[order[k]];
       right_area[k] = acc.half_area();
+      right_count[k] = k_count;
     }
     acc = Box4();
-    for (int k = 0; k + 1 < n; ++k) {
-      acc.grow(lo4(refs[order[k]]), hi4(refs[order[k]]));
-      const int b = bin[order[k]][axis];
-      if (b == bin[order[k + 1]][axis]) continue;
-      best.consider(acc.half_area(), static_cast<std::uint32_t>(k + 1), right_area[k + 1],
-                    static_cast<std::uint32_t>(n - k - 1), axis, b);
+    k_count = 0;
+    for (int k = 0; k + 1 < m; ++k) {
+      acc.grow(bin_lo[order[k]], bin_hi[order[k]]);
+      k_count += count[order[k]];
+      best.consider(acc.half_area(), k_count, right_area[k + 1], right_count[k + 1], axis,
+                    order[k]);
     }
   }
   return finish_split(best, range, max_leaf_size);

@@ -53,24 +53,31 @@ class SubtreeBuilder {
 
   // Splits range in place into left and right and gathers their bounds on the way.
   void partition(const Range& range, const Split& split, Range& left, Range& right) {
-    std::size_t mid = range.begin + range.count() / 2;
-    if (split.kind == Split::Sah) {
-      const BinMapping map(range.centroids, bins_);
-      std::size_t i = range.begin, j = range.end;
-      for (;;) {
-        while (i < j && split.goes_left(refs_[i], map)) ++i;
-        while (i < j && !split.goes_left(refs_[j - 1], map)) --j;
-        if (i >= j) break;
-        std::swap(refs_[i], refs_[j - 1]);
-        ++i;
-        --j;
-      }
-      mid = i;
+    if (split.kind == Split::Median) {
+      const std::size_t mid = range.begin + range.count() / 2;
+      left = Range{0, range.begin, mid, range.depth + 1, Box(), Box()};
+      right = Range{0, mid, range.end, range.depth + 1, Box(), Box()};
+      gather_bounds(left);
+      gather_bounds(right);
+      return;
     }
-    left = Range{0, range.begin, mid, range.depth + 1, Box(), Box()};
-    right = Range{0, mid, range.end, range.depth + 1, Box(), Box()};
-    gather_bounds(left);
-    gather_bounds(right);
+    Box4 bounds[2], centroids[2];
+    auto grow = [&](int side, const PrimRef& r) {
+      const Float4 lo = lo4(r), hi = hi4(r), c = lo + hi;
+      bounds[side].grow(lo, hi);
+      centroids[side].grow(c, c);
+    };
+    std::size_t i = range.begin, j = range.end;
+    for (;;) {
+      while (i < j && split.goes_left(refs_[i])) grow(0, refs_[i++]);
+      while (i < j && !split.goes_left(refs_[j - 1])) grow(1, refs_[--j]);
+      if (i >= j) break;
+      std::swap(refs_[i], refs_[j - 1]);
+      grow(0, refs_[i++]);
+      grow(1, refs_[--j]);
+    }
+    left = Range{0, range.begin, i, range.depth + 1, bounds[0].box(), centroids[0].box()};
+    right = Range{0, i, range.end, range.depth + 1, bounds[1].box(), centroids[1].box()};
   }
 
   void gather_bounds(Range& r) const {
