@@ -41,47 +41,59 @@ constexpr std::size_t kChunk = 8192;
 constexpr std::size_t kTopLevelNode = 16384;
 
 // The triangles with area (zero-area ones can never be hit: Moller-Trumbore's determinant is
-// 0), in face order, with the bounds of the whole. Returns the number written to refs.
-std::size_t make_references(const Mesh& mesh, unsigned threads, PrimRef* refs, Range& root) {
+// 0), in face order, with the bounds of the whole, into refs; scratch (as large) is used on
+// the way and the two may be swapped. Returns how many there are.
+std::size_t make_references(const Mesh& mesh, unsigned threads,
+                            std::unique_ptr<PrimRef[]>& refs,
+                            std::unique_ptr<PrimRef[]>& scratch, Range& root) {
   const std::size_t faces = mesh.triangles.size();
   const std::size_t chunks = (faces + kChunk - 1) / kChunk;
-  auto has_area = [&](std::size_t f) {
-    const glm::vec3 n = face_area_normal(mesh, f);
-    return n.x != 0.0f || n.y != 0.0f || n.z != 0.0f;
-  };
+  // One pass over the vertices: each chunk writes its references from its first face's
+  // place in scratch; they are moved together only if some triangle had no area.
   std::vector<std::size_t> offset(chunks + 1, 0);
+  std::vector<Range> chunk_bounds(chunks);
+  PrimRef* out = scratch.get();
   parallel_for(chunks, 1, threads, [&](std::size_t b, std::size_t e) {
     for (std::size_t c = b; c < e; ++c) {
-      std::size_t n = 0;
-      for (std::size_t f = c * kChunk; f < std::min(faces, (c + 1) * kChunk); ++f) n += has_area(f);
-      offset[c + 1] = n;
+      std::size_t n = c * kChunk;
+      bvh_build::Box4 bounds, centroids;
+      for (std::size_t f = c * kChunk; f < std::min(faces, (c + 1) * kChunk); ++f) {
+        const glm::uvec3 t = mesh.triangles[f];
+        const glm::vec3 v0 = mesh.vertices[t.x], v1 = mesh.vertices[t.y],
+                        v2 = mesh.vertices[t.z];
+        const glm::vec3 normal = glm::cross(v1 - v0, v2 - v0);  // as face_area_normal
+        if (normal.x == 0.0f && normal.y == 0.0f && normal.z == 0.0f) continue;
+        PrimRef& r = out[n++];
+        r.lo = glm::min(v0, glm::min(v1, v2));
+        r.hi = glm::max(v0, glm::max(v1, v2));
+        r.id = static_cast<std::uint32_t>(f);
+        r.bins = 0;
+        const bvh_build::Float4 lo = bvh_build::lo4(r), hi = bvh_build::hi4(r), c2 = lo + hi;
+        bounds.grow(lo, hi);
+        centroids.grow(c2, c2);
+      }
+      offset[c + 1] = n - c * kChunk;
+      chunk_bounds[c].bounds = bounds.box();
+      chunk_bounds[c].centroids = centroids.box();
     }
   });
   std::partial_sum(offset.begin(), offset.end(), offset.begin());
-  std::vector<Range> chunk_bounds(chunks);
-  parallel_for(chunks, 1, threads, [&](std::size_t b, std::size_t e) {
-    for (std::size_t c = b; c < e; ++c) {
-      std::size_t out = offset[c];
-      for (std::size_t f = c * kChunk; f < std::min(faces, (c + 1) * kChunk); ++f) {
-        if (!has_area(f)) continue;
-        const glm::uvec3 t = mesh.triangles[f];
-        const glm::vec3 a = mesh.vertices[t.x], b2 = mesh.vertices[t.y], c2 = mesh.vertices[t.z];
-        PrimRef& r = refs[out++];
-        r.lo = glm::min(a, glm::min(b2, c2));
-        r.hi = glm::max(a, glm::max(b2, c2));
-        r.id = static_cast<std::uint32_t>(f);
-        r.bins = 0;
-        chunk_bounds[c].bounds.grow(Box{r.lo, r.hi});
-        chunk_bounds[c].centroids.grow(r.centroid2());
-      }
-    }
-  });
-  root = Range{0, 0, offset[chunks], 0, Box(), Box()};
+  const std::size_t count = offset[chunks];
+  if (count == faces) {
+    std::swap(refs, scratch);
+  } else {
+    parallel_for(chunks, 1, threads, [&](std::size_t b, std::size_t e) {
+      for (std::size_t c = b; c < e; ++c)
+        std::copy(out + c * kChunk, out + c * kChunk + (offset[c + 1] - offset[c]),
+                  refs.get() + offset[c]);
+    });
+  }
+  root = Range{0, 0, count, 0, Box(), Box()};
   for (const Range& c : chunk_bounds) {
     root.bounds.grow(c.bounds);
     root.centroids.grow(c.centroids);
   }
-  return offset[chunks];
+  return count;
 }
 
 // A node handed to phase 3, and which of the two reference buffers holds its triangles.
@@ -94,7 +106,7 @@ struct Subtree {
 // their children to nodes, and each child to next_level or subtrees by size.
 class TopLevels {
  public:
-  TopLevels(PrimRef* buffers[2], const BvhConfig& config, std::vector<kern::SdfBvhNode>& nodes,
+  TopLevels(PrimRef* buffers[2], const BvhConfig& config, NoFillVector<kern::SdfBvhNode>& nodes,
             std::vector<Subtree>& subtrees)
       : buffers_{buffers[0], buffers[1]}, config_(config), nodes_(nodes), subtrees_(subtrees) {}
 
@@ -172,14 +184,20 @@ class TopLevels {
         const Split& split = splits[ch.node];
         const std::size_t mid = level[ch.node].begin + level[ch.node].count() / 2;
         std::size_t out[2] = {left_out[c], right_out[c]};
+        bvh_build::Box4 bounds[2], centroids[2];
         for (std::size_t i = ch.begin; i < ch.end; ++i) {
           const PrimRef& r = src[i];
           const bool left = split.kind == Split::Sah ? split.goes_left(r)
                                                       : (split.kind == Split::Leaf || i < mid);
           const int side = left ? 0 : 1;
           dst[out[side]++] = r;
-          sides[c].bounds[side].grow(Box{r.lo, r.hi});
-          sides[c].centroids[side].grow(r.centroid2());
+          const bvh_build::Float4 lo = bvh_build::lo4(r), hi = bvh_build::hi4(r), c2 = lo + hi;
+          bounds[side].grow(lo, hi);
+          centroids[side].grow(c2, c2);
+        }
+        for (int s = 0; s < 2; ++s) {
+          sides[c].bounds[s] = bounds[s].box();
+          sides[c].centroids[s] = centroids[s].box();
         }
       }
     });
@@ -230,20 +248,20 @@ class TopLevels {
 
   PrimRef* buffers_[2];
   const BvhConfig& config_;
-  std::vector<kern::SdfBvhNode>& nodes_;
+  NoFillVector<kern::SdfBvhNode>& nodes_;
   std::vector<Subtree>& subtrees_;
 };
 
 // Phase 3: builds the subtrees and appends them to nodes, each after the previous one, in
 // the order they were found (so the layout does not depend on which thread finished first).
 void build_subtrees(const std::vector<Subtree>& subtrees, PrimRef* buffers[2],
-                    const BvhConfig& config, std::vector<kern::SdfBvhNode>& nodes) {
+                    const BvhConfig& config, NoFillVector<kern::SdfBvhNode>& nodes) {
   std::vector<std::size_t> largest_first(subtrees.size());
   std::iota(largest_first.begin(), largest_first.end(), 0);
   std::stable_sort(largest_first.begin(), largest_first.end(), [&](std::size_t a, std::size_t b) {
     return subtrees[a].range.count() > subtrees[b].range.count();
   });
-  std::vector<std::vector<kern::SdfBvhNode>> built(subtrees.size());
+  std::vector<NoFillVector<kern::SdfBvhNode>> built(subtrees.size());
   parallel_for(subtrees.size(), 1, config.threads, [&](std::size_t b, std::size_t e) {
     for (std::size_t k = b; k < e; ++k) {
       const Subtree& s = subtrees[largest_first[k]];
@@ -262,7 +280,7 @@ void build_subtrees(const std::vector<Subtree>& subtrees, PrimRef* buffers[2],
   nodes.resize(base[subtrees.size()]);
   parallel_for(subtrees.size(), 1, config.threads, [&](std::size_t b, std::size_t e) {
     for (std::size_t k = b; k < e; ++k) {
-      const std::vector<kern::SdfBvhNode>& local = built[k];
+      const NoFillVector<kern::SdfBvhNode>& local = built[k];
       auto relocated = [&](kern::SdfBvhNode n) {
         if (n.count == 0) n.first = static_cast<std::int32_t>(base[k] + n.first - 1);
         return n;
@@ -281,13 +299,12 @@ Bvh build_bvh(const Mesh& mesh, const BvhConfig& config) {
                                 std::to_string(bvh_build::kMaxBins) + " are required");
   const std::size_t faces = mesh.triangles.size();
   // Not std::vector: its zero fill would be a serial pass over 32 bytes per face.
-  std::unique_ptr<PrimRef[]> refs(new PrimRef[faces]);
+  std::unique_ptr<PrimRef[]> refs(new PrimRef[faces]), scratch(new PrimRef[faces]);
   Range root;
-  const std::size_t count = make_references(mesh, config.threads, refs.get(), root);
+  const std::size_t count = make_references(mesh, config.threads, refs, scratch, root);
   Bvh bvh;
   if (count == 0) return bvh;
 
-  std::unique_ptr<PrimRef[]> scratch(new PrimRef[count >= kTopLevelNode ? count : 0]);
   PrimRef* buffers[2] = {refs.get(), scratch.get()};
   bvh.nodes.reserve(2 * count);
   bvh.nodes.resize(1);

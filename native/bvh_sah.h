@@ -225,48 +225,49 @@ inline Split choose_split(const Range& range, const Bins& bins, const BinMapping
   return finish_split(best, range, max_leaf_size);
 }
 
-// Nodes this small take choose_split_few instead of bins.
-constexpr std::size_t kFewPrims = 16;
-
-// The same decision as choose_split for a node of at most kFewPrims triangles, without the
-// cost of clearing and sweeping mostly empty bins: only the occupied bins are set up and
-// swept, in order, found from a bit mask. The boundaries skipped are those after an empty
-// bin, which have the same two sides (so the same cost) as the boundary after the occupied
-// bin before them, and the sweep keeps the first of equal costs; the boxes come from the
-// same min and max. So the choice is bit for bit the one of choose_split.
-inline Split choose_split_few(PrimRef* refs, const Range& range, const BinMapping& map,
-                              int max_leaf_size) {
+// The same decision as choose_split, for one thread, without the cost of clearing and
+// sweeping empty bins: only the occupied bins are set up and swept, in order, found from a
+// bit mask. The boundaries skipped are those after an empty bin, which have the same two
+// sides (so the same cost) as the boundary after the occupied bin before them, and the sweep
+// keeps the first of equal costs; the boxes come from the same min and max. So the choice is
+// bit for bit the one of choose_split. Most nodes are small (half of them leaves), and for
+// them the clearing and the sweep of every bin cost more than the binning itself.
+// Also records each triangle's bins in it.
+inline Split choose_split_serial(PrimRef* refs, const Range& range, const BinMapping& map,
+                                 int max_leaf_size) {
   static_assert(kMaxBins <= 32, "occupied bins are a 32-bit mask");
-  const int n = static_cast<int>(range.count());
-  alignas(16) int bin[kFewPrims][4];
-  for (int i = 0; i < n; ++i) map.record(refs[i], bin[i]);
+  const std::size_t n = range.count();
+  alignas(16) int ignored[4];
+  for (std::size_t i = 0; i < n; ++i) map.record(refs[i], ignored);
   Split best;
   for (int axis = 0; axis < 3; ++axis) {
     if (!map.splits(axis)) continue;
+    const int shift = 8 * axis;
+    auto bin_of = [&](std::size_t i) { return static_cast<int>((refs[i].bins >> shift) & 0xffu); };
     // Only the occupied bins are set up (Float4 has no constructor, Box4 would clear all).
     Float4 bin_lo[kMaxBins], bin_hi[kMaxBins];
     std::uint32_t count[kMaxBins];
     std::uint32_t occupied = 0;
     const Box4 empty;
-    for (int i = 0; i < n; ++i) {
-      const int b = bin[i][axis];
+    for (std::size_t i = 0; i < n; ++i) {
+      const int b = bin_of(i);
       bin_lo[b] = empty.lo;
       bin_hi[b] = empty.hi;
       count[b] = 0;
       occupied |= 1u << b;
     }
-    for (int i = 0; i < n; ++i) {
-      const int b = bin[i][axis];
+    for (std::size_t i = 0; i < n; ++i) {
+      const int b = bin_of(i);
       bin_lo[b] = min(bin_lo[b], lo4(refs[i]));
       bin_hi[b] = max(bin_hi[b], hi4(refs[i]));
       ++count[b];
     }
-    int order[kFewPrims];  // the occupied bins, ascending
+    int order[kMaxBins];  // the occupied bins, ascending
     int m = 0;
     for (std::uint32_t rest = occupied; rest != 0; rest &= rest - 1)
       order[m++] = __builtin_ctz(rest);
-    float right_area[kFewPrims];
-    std::uint32_t right_count[kFewPrims];
+    float right_area[kMaxBins];
+    std::uint32_t right_count[kMaxBins];
     Box4 acc;
     std::uint32_t k_count = 0;
     for (int k = m - 1; k > 0; --k) {

@@ -18,7 +18,7 @@ namespace {
 
 class SubtreeBuilder {
  public:
-  SubtreeBuilder(PrimRef* refs, int bins, int max_leaf_size, std::vector<kern::SdfBvhNode>& nodes)
+  SubtreeBuilder(PrimRef* refs, int bins, int max_leaf_size, NoFillVector<kern::SdfBvhNode>& nodes)
       : refs_(refs), bins_(bins), max_leaf_size_(max_leaf_size), nodes_(nodes) {}
 
   void build(std::size_t node, const Range& range) {
@@ -44,11 +44,7 @@ class SubtreeBuilder {
   Split decide(const Range& range) const {
     if (range.count() <= 1 || range.depth >= kMaxDepth) return Split();
     const BinMapping map(range.centroids, bins_);
-    if (range.count() <= kFewPrims)
-      return choose_split_few(refs_ + range.begin, range, map, max_leaf_size_);
-    Bins bins(bins_);
-    bins.add(refs_ + range.begin, range.count(), map);
-    return choose_split(range, bins, map, max_leaf_size_);
+    return choose_split_serial(refs_ + range.begin, range, map, max_leaf_size_);
   }
 
   // Splits range in place into left and right and gathers their bounds on the way.
@@ -95,13 +91,13 @@ class SubtreeBuilder {
   PrimRef* refs_;
   int bins_;
   int max_leaf_size_;
-  std::vector<kern::SdfBvhNode>& nodes_;
+  NoFillVector<kern::SdfBvhNode>& nodes_;
 };
 
 }  // namespace
 
 void build_subtree(PrimRef* refs, const Range& root, int bins, int max_leaf_size,
-                   std::vector<kern::SdfBvhNode>& nodes) {
+                   NoFillVector<kern::SdfBvhNode>& nodes) {
   nodes.clear();
   // A subtree of n triangles has at most 2n - 1 nodes: reserving them keeps resize cheap.
   nodes.reserve(2 * root.count());

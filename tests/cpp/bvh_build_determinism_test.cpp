@@ -13,9 +13,10 @@
 namespace sdf {
 namespace {
 
-template <typename T>
-bool same_bytes(const std::vector<T>& a, const std::vector<T>& b) {
-  return a.size() == b.size() && std::memcmp(a.data(), b.data(), a.size() * sizeof(T)) == 0;
+template <typename Array>
+bool same_bytes(const Array& a, const Array& b) {
+  return a.size() == b.size() &&
+         std::memcmp(a.data(), b.data(), a.size() * sizeof(a[0])) == 0;
 }
 
 Bvh build_with_threads(const Mesh& mesh, unsigned threads) {
