@@ -237,52 +237,59 @@ inline Split choose_split_serial(PrimRef* refs, const Range& range, const BinMap
                                  int max_leaf_size) {
   static_assert(kMaxBins <= 32, "occupied bins are a 32-bit mask");
   const std::size_t n = range.count();
-  alignas(16) int ignored[4];
-  for (std::size_t i = 0; i < n; ++i) map.record(refs[i], ignored);
+  std::uint32_t occupied[3] = {0, 0, 0};
+  for (std::size_t i = 0; i < n; ++i) {
+    alignas(16) int bin[4];
+    map.record(refs[i], bin);
+    for (int a = 0; a < 3; ++a) occupied[a] |= 1u << bin[a];
+  }
+  // Only the occupied bins are set up (Float4 has no constructor, Box4 would clear all).
+  Float4 bin_lo[3][kMaxBins], bin_hi[3][kMaxBins];
+  std::uint32_t count[3][kMaxBins];
+  int order[3][kMaxBins];  // the occupied bins, ascending
+  int occupied_count[3] = {0, 0, 0};
+  const Box4 empty;
+  for (int axis = 0; axis < 3; ++axis) {
+    for (std::uint32_t rest = occupied[axis]; rest != 0; rest &= rest - 1) {
+      const int b = __builtin_ctz(rest);
+      order[axis][occupied_count[axis]++] = b;
+      bin_lo[axis][b] = empty.lo;
+      bin_hi[axis][b] = empty.hi;
+      count[axis][b] = 0;
+    }
+  }
+  for (std::size_t i = 0; i < n; ++i) {
+    const Float4 lo = lo4(refs[i]), hi = hi4(refs[i]);
+    const std::uint32_t bins = refs[i].bins;
+    for (int axis = 0; axis < 3; ++axis) {
+      const int b = static_cast<int>((bins >> (8 * axis)) & 0xffu);
+      bin_lo[axis][b] = min(bin_lo[axis][b], lo);
+      bin_hi[axis][b] = max(bin_hi[axis][b], hi);
+      ++count[axis][b];
+    }
+  }
   Split best;
   for (int axis = 0; axis < 3; ++axis) {
     if (!map.splits(axis)) continue;
-    const int shift = 8 * axis;
-    auto bin_of = [&](std::size_t i) { return static_cast<int>((refs[i].bins >> shift) & 0xffu); };
-    // Only the occupied bins are set up (Float4 has no constructor, Box4 would clear all).
-    Float4 bin_lo[kMaxBins], bin_hi[kMaxBins];
-    std::uint32_t count[kMaxBins];
-    std::uint32_t occupied = 0;
-    const Box4 empty;
-    for (std::size_t i = 0; i < n; ++i) {
-      const int b = bin_of(i);
-      bin_lo[b] = empty.lo;
-      bin_hi[b] = empty.hi;
-      count[b] = 0;
-      occupied |= 1u << b;
-    }
-    for (std::size_t i = 0; i < n; ++i) {
-      const int b = bin_of(i);
-      bin_lo[b] = min(bin_lo[b], lo4(refs[i]));
-      bin_hi[b] = max(bin_hi[b], hi4(refs[i]));
-      ++count[b];
-    }
-    int order[kMaxBins];  // the occupied bins, ascending
-    int m = 0;
-    for (std::uint32_t rest = occupied; rest != 0; rest &= rest - 1)
-      order[m++] = __builtin_ctz(rest);
+    const int m = occupied_count[axis];
     float right_area[kMaxBins];
     std::uint32_t right_count[kMaxBins];
     Box4 acc;
     std::uint32_t k_count = 0;
     for (int k = m - 1; k > 0; --k) {
-      acc.grow(bin_lo[order[k]], bin_hi[order[k]]);
-      k_count += count[order[k]];
+      const int b = order[axis][k];
+      acc.grow(bin_lo[axis][b], bin_hi[axis][b]);
+      k_count += count[axis][b];
       right_area[k] = acc.half_area();
       right_count[k] = k_count;
     }
     acc = Box4();
     k_count = 0;
     for (int k = 0; k + 1 < m; ++k) {
-      acc.grow(bin_lo[order[k]], bin_hi[order[k]]);
-      k_count += count[order[k]];
-      best.consider(acc.half_area(), k_count, right_area[k + 1], right_count[k + 1], axis,
-                    order[k]);
+      const int b = order[axis][k];
+      acc.grow(bin_lo[axis][b], bin_hi[axis][b]);
+      k_count += count[axis][b];
+      best.consider(acc.half_area(), k_count, right_area[k + 1], right_count[k + 1], axis, b);
     }
   }
   return finish_split(best, range, max_leaf_size);
