@@ -44,9 +44,6 @@ struct PrimRef {
   // (BinMapping::record), so the partition that follows compares bytes instead of mapping
   // the centroid again.
   std::uint32_t bins;
-  // Twice the box centre: the factor 2 is the same for every triangle, so binning and
-  // centroid bounds can use it as is and save a multiply.
-  glm::vec3 centroid2() const { return lo + hi; }
 };
 static_assert(sizeof(PrimRef) == 32, "PrimRef is meant to fill half a cache line");
 
@@ -56,7 +53,9 @@ struct Range {
   std::size_t begin = 0, end = 0;
   int depth = 0;           // root = 0
   Box bounds;              // of the triangles
-  Box centroids;           // of centroid2()
+  // Of the centroids, taken as lo + hi: twice the box centre, the same factor for every
+  // triangle, so binning can use it as is and save a multiply.
+  Box centroids;
   std::size_t count() const { return end - begin; }
 };
 
@@ -86,8 +85,7 @@ inline Float4 lo4(const PrimRef& r) { return Float4::load(&r.lo.x); }
 inline Float4 hi4(const PrimRef& r) { return Float4::load(&r.hi.x); }
 
 // Maps a centroid to its bin on each axis. An axis with no extent maps everything to bin 0
-// and is skipped by the sweeps. The scalar and SIMD forms do the same float operations, so
-// the partition sends every triangle to the side its bin says.
+// and is skipped by the sweeps.
 struct BinMapping {
   float lo[3], scale[3];
   Float4 lo_all, scale_all, last_bin;
@@ -102,14 +100,8 @@ struct BinMapping {
     scale_all = Float4::set(scale[0], scale[1], scale[2]);
     last_bin = Float4::splat(static_cast<float>(bins - 1));
   }
-  // Clamped in float before the conversion, as maxps and minps do below.
-  int bin_of(float c, int axis) const {
-    float x = (c - lo[axis]) * scale[axis];
-    x = x > 0.0f ? x : 0.0f;
-    const float last = static_cast<float>(bins - 1);
-    x = x < last ? x : last;
-    return static_cast<int>(x);
-  }
+  // Clamped in float before the conversion, so a centroid on the upper bound lands in the
+  // last bin and no value is too large to convert.
   void bins_of(const PrimRef& r, int* out) const {
     const Float4 x = (lo4(r) + hi4(r) - lo_all) * scale_all;
     min(max(x, Float4::splat(0.0f)), last_bin).truncate(out);
@@ -162,10 +154,8 @@ struct Split {
   int axis = -1;
   int bin = 0;  // Sah: the left side takes bins [0, bin]
   float cost = std::numeric_limits<float>::infinity();
-  bool goes_left(const PrimRef& r, const BinMapping& map) const {
-    return map.bin_of(r.lo[axis] + r.hi[axis], axis) <= bin;
-  }
-  // The same answer from the bins recorded by the node's binning.
+  // From the bins recorded by the node's binning, so the side always agrees with the bins
+  // the cost was computed from.
   bool goes_left(const PrimRef& r) const {
     return static_cast<int>((r.bins >> (8 * axis)) & 0xffu) <= bin;
   }
