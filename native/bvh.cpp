@@ -255,13 +255,17 @@ class TopLevels {
 // Phase 3: builds the subtrees and appends them to nodes, each after the previous one, in
 // the order they were found (so the layout does not depend on which thread finished first).
 void build_subtrees(const std::vector<Subtree>& subtrees, PrimRef* buffers[2],
-                    const BvhConfig& config, NoFillVector<kern::SdfBvhNode>& nodes) {
+                    std::size_t buffer_size, const BvhConfig& config,
+                    NoFillVector<kern::SdfBvhNode>& nodes) {
   std::vector<std::size_t> largest_first(subtrees.size());
   std::iota(largest_first.begin(), largest_first.end(), 0);
   std::stable_sort(largest_first.begin(), largest_first.end(), [&](std::size_t a, std::size_t b) {
     return subtrees[a].range.count() > subtrees[b].range.count();
   });
-  std::vector<NoFillVector<kern::SdfBvhNode>> built(subtrees.size());
+  // Subtree k is built at 2 * (its first triangle) of one shared array, room enough (at most
+  // 2n - 1 nodes for n triangles) without an allocation per subtree.
+  NoFillVector<kern::SdfBvhNode> built(2 * buffer_size);
+  std::vector<std::size_t> built_count(subtrees.size());
   parallel_for(subtrees.size(), 1, config.threads, [&](std::size_t b, std::size_t e) {
     for (std::size_t k = b; k < e; ++k) {
       const Subtree& s = subtrees[largest_first[k]];
@@ -269,24 +273,26 @@ void build_subtrees(const std::vector<Subtree>& subtrees, PrimRef* buffers[2],
       if (s.buffer == 1)
         std::copy(buffers[1] + s.range.begin, buffers[1] + s.range.end,
                   buffers[0] + s.range.begin);
-      bvh_build::build_subtree(buffers[0], s.range, config.bins, config.max_leaf_size,
-                               built[largest_first[k]]);
+      built_count[largest_first[k]] =
+          bvh_build::build_subtree(buffers[0], s.range, config.bins, config.max_leaf_size,
+                                   built.data() + 2 * s.range.begin);
     }
   });
-  // built[k][0] replaces the subtree's root; built[k][1..] go to base[k].
+  // Subtree k's root replaces its node; the rest of it goes to base[k].
   std::vector<std::size_t> base(subtrees.size() + 1);
   base[0] = nodes.size();
-  for (std::size_t k = 0; k < subtrees.size(); ++k) base[k + 1] = base[k] + built[k].size() - 1;
+  for (std::size_t k = 0; k < subtrees.size(); ++k) base[k + 1] = base[k] + built_count[k] - 1;
   nodes.resize(base[subtrees.size()]);
   parallel_for(subtrees.size(), 1, config.threads, [&](std::size_t b, std::size_t e) {
     for (std::size_t k = b; k < e; ++k) {
-      const NoFillVector<kern::SdfBvhNode>& local = built[k];
+      const kern::SdfBvhNode* local = built.data() + 2 * subtrees[k].range.begin;
       auto relocated = [&](kern::SdfBvhNode n) {
         if (n.count == 0) n.first = static_cast<std::int32_t>(base[k] + n.first - 1);
         return n;
       };
       nodes[subtrees[k].range.node] = relocated(local[0]);
-      for (std::size_t j = 1; j < local.size(); ++j) nodes[base[k] + j - 1] = relocated(local[j]);
+      for (std::size_t j = 1; j < built_count[k]; ++j)
+        nodes[base[k] + j - 1] = relocated(local[j]);
     }
   });
 }
@@ -311,7 +317,7 @@ Bvh build_bvh(const Mesh& mesh, const BvhConfig& config) {
   bvh_build::set_node_bounds(bvh.nodes[0], root.bounds);
   std::vector<Subtree> subtrees;
   TopLevels(buffers, config, bvh.nodes, subtrees).build(root);
-  build_subtrees(subtrees, buffers, config, bvh.nodes);
+  build_subtrees(subtrees, buffers, count, config, bvh.nodes);
 
   bvh.triangles.resize(count);
   parallel_for(count, kChunk, config.threads, [&](std::size_t b, std::size_t e) {

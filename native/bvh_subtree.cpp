@@ -18,8 +18,10 @@ namespace {
 
 class SubtreeBuilder {
  public:
-  SubtreeBuilder(PrimRef* refs, int bins, int max_leaf_size, NoFillVector<kern::SdfBvhNode>& nodes)
+  SubtreeBuilder(PrimRef* refs, int bins, int max_leaf_size, kern::SdfBvhNode* nodes)
       : refs_(refs), bins_(bins), max_leaf_size_(max_leaf_size), nodes_(nodes) {}
+
+  std::size_t node_count() const { return used_; }
 
   void build(std::size_t node, const Range& range) {
     const Split split = decide(range);
@@ -30,8 +32,8 @@ class SubtreeBuilder {
     }
     Range left, right;
     partition(range, split, left, right);
-    const std::size_t first = nodes_.size();
-    nodes_.resize(first + 2);
+    const std::size_t first = used_;
+    used_ += 2;
     nodes_[node].first = static_cast<std::int32_t>(first);
     nodes_[node].count = 0;
     set_node_bounds(nodes_[first], left.bounds);
@@ -91,19 +93,18 @@ class SubtreeBuilder {
   PrimRef* refs_;
   int bins_;
   int max_leaf_size_;
-  NoFillVector<kern::SdfBvhNode>& nodes_;
+  kern::SdfBvhNode* nodes_;
+  std::size_t used_ = 1;  // the root
 };
 
 }  // namespace
 
-void build_subtree(PrimRef* refs, const Range& root, int bins, int max_leaf_size,
-                   NoFillVector<kern::SdfBvhNode>& nodes) {
-  nodes.clear();
-  // A subtree of n triangles has at most 2n - 1 nodes: reserving them keeps resize cheap.
-  nodes.reserve(2 * root.count());
-  nodes.resize(1);
+std::size_t build_subtree(PrimRef* refs, const Range& root, int bins, int max_leaf_size,
+                          kern::SdfBvhNode* nodes) {
   set_node_bounds(nodes[0], root.bounds);
-  SubtreeBuilder(refs, bins, max_leaf_size, nodes).build(0, root);
+  SubtreeBuilder builder(refs, bins, max_leaf_size, nodes);
+  builder.build(0, root);
+  return builder.node_count();
 }
 
 }  // namespace sdf::bvh_build

@@ -5,18 +5,17 @@
 #include <vector>
 
 #include "../kernels/sdf_layout.h"
-#include "bvh.h"
 #include "bvh_sah.h"
 
 namespace sdf::bvh_build {
 
-using sdf::NoFillVector;
-
 // Builds the subtree over refs[root.begin, root.end), reordering that part of refs into leaf
-// order. nodes[0] receives the subtree's root; its descendants follow, children adjacent,
-// each pair's `first` counted from nodes[0]. Leaves' `first` index refs itself.
-void build_subtree(PrimRef* refs, const Range& root, int bins, int max_leaf_size,
-                   NoFillVector<kern::SdfBvhNode>& nodes);
+// order, and returns its number of nodes. nodes[0] receives the subtree's root; its
+// descendants follow, children adjacent, each pair's `first` counted from nodes[0]. Leaves'
+// `first` index refs itself. nodes must have room for 2 * root.count() - 1 (a binary tree of
+// n leaves, none empty).
+std::size_t build_subtree(PrimRef* refs, const Range& root, int bins, int max_leaf_size,
+                          kern::SdfBvhNode* nodes);
 
 // Writes a node's box (the link fields are set separately).
 void set_node_bounds(kern::SdfBvhNode& node, const Box& b);
