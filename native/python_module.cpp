@@ -15,6 +15,8 @@
 #include "../kernels/sdf_octree.h"
 #include "../kernels/sdf_reduce.h"
 #include "../kernels/sdf_smooth_projected.h"
+#include "bvh.h"
+#include "bvh_stats.h"
 #include "parallel.h"
 #include "sdf.h"
 #ifdef SDF_HAVE_OPENCL
@@ -175,6 +177,28 @@ py::dict octree_stats(const Doubles& vertices, const Int64s& triangles, int max_
   return d;
 }
 
+// The BVH alone, for the build benchmark: its time, size and SAH cost (a tree quality figure).
+py::dict bvh_stats(const Doubles& vertices, const Int64s& triangles, unsigned threads) {
+  const sdf::Mesh mesh = to_mesh(vertices, triangles);
+  sdf::BvhConfig config;
+  config.threads = threads;
+  sdf::Bvh bvh;
+  double seconds = 0.0;
+  {
+    py::gil_scoped_release release;
+    const auto start = std::chrono::steady_clock::now();
+    bvh = sdf::build_bvh(mesh, config);
+    seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  }
+  py::dict d;
+  d["seconds"] = seconds;
+  d["nodes"] = bvh.nodes.size();
+  d["triangles"] = bvh.triangles.size();
+  d["depth"] = sdf::bvh_depth(bvh);
+  d["sah_cost"] = sdf::bvh_sah_cost(bvh);
+  return d;
+}
+
 std::string opencl_unavailable_reason() {
 #ifdef SDF_HAVE_OPENCL
   return sdf::cl::devices().empty() ? sdf::cl::unavailable_reason() : "";
@@ -270,6 +294,8 @@ PYBIND11_MODULE(_core, m) {
   m.def("opencl_devices", &opencl_devices);
   m.def("octree_stats", &octree_stats, py::arg("vertices"), py::arg("triangles"),
         py::arg("max_depth") = 10, py::arg("leaf_size") = 8);
+  m.def("bvh_stats", &bvh_stats, py::arg("vertices"), py::arg("triangles"),
+        py::arg("threads") = 0);
   m.def("opencl_unavailable_reason", &opencl_unavailable_reason);
   m.def("host_layout", &host_layout);
 #ifdef SDF_HAVE_OPENCL

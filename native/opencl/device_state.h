@@ -91,8 +91,8 @@ class Buffer {
   cl_mem mem_ = nullptr;
 };
 
-template <class T>
-std::size_t bytes_of(const std::vector<T>& v) {
+template <class T, class Allocator>
+std::size_t bytes_of(const std::vector<T, Allocator>& v) {
   return v.size() * sizeof(T);
 }
 

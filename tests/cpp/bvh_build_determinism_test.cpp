@@ -1,0 +1,71 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
+// The parallel BVH builder must give the same bytes for any thread count: results and their
+// timings are then reproducible, and a bug in the parallel phases shows up as a difference.
+#include <gtest/gtest.h>
+
+#include <cstring>
+
+#include "../../kernels/sdf_bvh_traverse.h"
+#include "bvh.h"
+#include "bvh_stats.h"
+#include "test_meshes.h"
+
+namespace sdf {
+namespace {
+
+template <typename Array>
+bool same_bytes(const Array& a, const Array& b) {
+  return a.size() == b.size() &&
+         std::memcmp(a.data(), b.data(), a.size() * sizeof(a[0])) == 0;
+}
+
+Bvh build_with_threads(const Mesh& mesh, unsigned threads) {
+  BvhConfig config;
+  config.threads = threads;
+  return build_bvh(mesh, config);
+}
+
+class BvhDeterminism : public ::testing::TestWithParam<int> {};
+
+// Sizes below, at and well above the size where nodes are split by all threads together, so
+// the serial subtrees, the parallel top levels and the hand-over between them all run.
+TEST_P(BvhDeterminism, SameArraysForOneAndFourThreads) {
+  const Mesh mesh = test::soup(GetParam(), 17).mesh();
+  const Bvh one = build_with_threads(mesh, 1);
+  const Bvh four = build_with_threads(mesh, 4);
+  ASSERT_FALSE(one.empty());
+  EXPECT_TRUE(same_bytes(one.nodes, four.nodes));
+  EXPECT_TRUE(same_bytes(one.triangles, four.triangles));
+  EXPECT_TRUE(same_bytes(one.nodes, build_with_threads(mesh, 3).nodes));
+}
+
+INSTANTIATE_TEST_SUITE_P(Sizes, BvhDeterminism, ::testing::Values(1000, 16384, 150000));
+
+TEST(BvhDeterminism, ManyIdenticalTrianglesStillSplitTheSameWay) {
+  // Every centroid equal: the top levels cut the list by position, as the subtrees do.
+  test::Arrays a;
+  for (int t = 0; t < 40000; ++t) {
+    a.vertices.insert(a.vertices.end(), {0, 0, 0, 1, 0, 0, 0, 1, 0});
+    a.triangles.insert(a.triangles.end(), {3 * t, 3 * t + 1, 3 * t + 2});
+  }
+  const Mesh mesh = a.mesh();
+  const Bvh one = build_with_threads(mesh, 1);
+  const Bvh four = build_with_threads(mesh, 4);
+  EXPECT_TRUE(same_bytes(one.nodes, four.nodes));
+  EXPECT_TRUE(same_bytes(one.triangles, four.triangles));
+  for (const auto& node : one.nodes) EXPECT_LE(node.count, BvhConfig().max_leaf_size);
+  EXPECT_LT(bvh_depth(one), SDF_BVH_STACK_SIZE);
+}
+
+TEST(BvhSahCost, OneTriangleCostsOneAndASplitTreeCostsLessThanALeaf) {
+  test::Arrays a;
+  a.vertices = {0, 0, 0, 1, 0, 0, 0, 1, 0};
+  a.triangles = {0, 1, 2};
+  EXPECT_DOUBLE_EQ(bvh_sah_cost(build_bvh(a.mesh())), 1.0);
+  const Bvh soup = build_bvh(test::soup(5000, 3).mesh());
+  EXPECT_GT(bvh_sah_cost(soup), 1.0);
+  EXPECT_LT(bvh_sah_cost(soup), 5000.0 / 10);  // far below one leaf holding everything
+}
+
+}  // namespace
+}  // namespace sdf
