@@ -27,12 +27,14 @@ struct SamplePoints {
 // Vertices: the vertex, axis = minus the area-weighted mean of the normals of the faces around
 // it; a vertex with no face, or whose normals cancel, gets a zero axis.
 // Points with a zero axis cast no ray and are filled from their neighbours later.
-SamplePoints sample_points(const Mesh& mesh, PointKind kind);
+// `threads` as in Options (0 = every core); the result does not depend on it.
+SamplePoints sample_points(const Mesh& mesh, PointKind kind, unsigned threads = 0);
 
 // Point indices in Morton (Z-curve) order of their origins. Neighbouring points cast similar
 // rays through the same nodes, so working through them in space order keeps the tree in
 // cache (measured 20-30% faster than file order on the bunny) and keeps GPU work items that
 // run together coherent.
-std::vector<std::uint32_t> spatial_order(const SamplePoints& points);
+// Ties in the code keep index order; the order does not depend on `threads`.
+std::vector<std::uint32_t> spatial_order(const SamplePoints& points, unsigned threads = 0);
 
 }  // namespace sdf
