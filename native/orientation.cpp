@@ -10,6 +10,7 @@
 #include "orientation_edges.h"
 #include "orientation_parts.h"
 #include "parallel.h"
+#include "uninitialized_vector.h"
 
 namespace sdf {
 
@@ -112,7 +113,7 @@ OrientationReport orient_auto(Mesh& mesh, unsigned threads, bool fast_path) {
   const std::vector<Box> boxes = part_boxes(mesh, parts, threads);
   // Signed volume of each part about its bounding-box centre, in double. The terms in
   // parallel; their sum in face order, as always, so that no rounding changes.
-  std::vector<double> term(n);
+  UninitializedVector<double> term(n);
   parallel_for(n, kGrain, threads, [&](std::size_t begin, std::size_t end) {
     for (std::size_t f = begin; f < end; ++f) {
       const Box& box = boxes[parts.part_of[f]];

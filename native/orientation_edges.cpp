@@ -6,6 +6,7 @@
 #include <tuple>
 
 #include "parallel.h"
+#include "uninitialized_vector.h"
 
 namespace sdf {
 
@@ -34,7 +35,7 @@ struct EdgeUse {
 };
 
 struct UseBuckets {
-  std::vector<EdgeUse> uses;
+  UninitializedVector<EdgeUse> uses;  // every element written by the scatter
   std::vector<std::size_t> offsets;  // bucket b: uses[offsets[b] .. offsets[b + 1])
   int shift = 0;                     // bucket of vertex v: v >> shift
 };

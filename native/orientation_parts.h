@@ -7,18 +7,20 @@
 #include <vector>
 
 #include "mesh.h"
+#include "uninitialized_vector.h"
 
 namespace sdf {
 
 constexpr std::uint32_t kNoPart = 0xffffffffu;
 
 struct Parts {
-  std::vector<std::uint32_t> part_of;  // per face; parts numbered in order of their first face
+  UninitializedVector<std::uint32_t> part_of;  // per face; parts numbered by their first face
   std::size_t count = 0;
   // Per vertex, the vertex standing for its set; per such root, its part, or kNoPart for a
   // set no face uses. A vertex's part is part_of_root[root_of_vertex[v]]: it lies at the
   // position of some corner of that part's faces, or is used by none (kNoPart).
-  std::vector<std::uint32_t> root_of_vertex, part_of_root;
+  UninitializedVector<std::uint32_t> root_of_vertex;
+  std::vector<std::uint32_t> part_of_root;
 };
 
 // Linear expected time, parallel over `threads` (0 = every core); the result does not depend

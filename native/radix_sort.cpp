@@ -17,7 +17,7 @@ constexpr std::size_t kMinItemsPerBlock = 1 << 16;
 
 }  // namespace
 
-void radix_sort_by_bits(std::vector<std::uint64_t>& items, int low_bit, int key_bits,
+void radix_sort_by_bits(UninitializedVector<std::uint64_t>& items, int low_bit, int key_bits,
                         unsigned threads) {
   const std::size_t n = items.size();
   if (n < 2 || key_bits <= 0) return;
@@ -28,7 +28,7 @@ void radix_sort_by_bits(std::vector<std::uint64_t>& items, int low_bit, int key_
       1, std::min<std::size_t>(resolve_threads(threads), n / kMinItemsPerBlock));
   auto block_begin = [&](std::size_t b) { return n * b / blocks; };
 
-  std::vector<std::uint64_t> scratch(n);
+  UninitializedVector<std::uint64_t> scratch(n);
   // counts[b * buckets + d]: items of block b with digit d; then where block b writes them.
   std::vector<std::size_t> counts(blocks * buckets);
   for (int pass = 0; pass < passes; ++pass) {

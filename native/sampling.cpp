@@ -124,7 +124,7 @@ std::vector<std::uint32_t> spatial_order(const SamplePoints& points, unsigned th
   }
   const glm::vec3 scale = 1023.0f / glm::max(hi - lo, glm::vec3(1e-30f));
   // (code << 32) | index, sorted stably on the code: the order of std::sort on (code, index).
-  std::vector<std::uint64_t> keyed(n);
+  UninitializedVector<std::uint64_t> keyed(n);
   parallel_for(n, kGrain, threads, [&](std::size_t begin, std::size_t end) {
     for (std::size_t i = begin; i < end; ++i) {
       const glm::uvec3 c = glm::uvec3((points.origins[i] - lo) * scale);

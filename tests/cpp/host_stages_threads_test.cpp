@@ -81,14 +81,14 @@ TEST(HostStagesThreads, SpatialOrderIsTheSortedOrderForAnyThreadCount) {
 
 TEST(HostStagesThreads, RadixSortIsAStableSortOnTheKeyBits) {
   std::mt19937_64 rng(9);
-  std::vector<std::uint64_t> items(300000);
+  UninitializedVector<std::uint64_t> items(300000);
   for (std::size_t i = 0; i < items.size(); ++i)
     items[i] = (rng() % 5000) << 20 | (rng() & 0xfffff);  // 13 key bits above 20 others
-  std::vector<std::uint64_t> expected = items;
+  UninitializedVector<std::uint64_t> expected = items;
   std::stable_sort(expected.begin(), expected.end(),
                    [](std::uint64_t a, std::uint64_t b) { return (a >> 20) < (b >> 20); });
   for (unsigned threads : {1u, 3u}) {
-    std::vector<std::uint64_t> sorted = items;
+    UninitializedVector<std::uint64_t> sorted = items;
     radix_sort_by_bits(sorted, 20, 13, threads);
     EXPECT_EQ(sorted, expected);
   }
