@@ -73,7 +73,7 @@ SamplePoints sample_points(const Mesh& mesh, PointKind kind, unsigned threads) {
         if (next_corner[t[k]] == kNone && t[(k + 1) % 3] != t[k]) next_corner[t[k]] = t[(k + 1) % 3];
       }
     }
-    points.origins = mesh.vertices;
+    points.origins.assign(mesh.vertices.begin(), mesh.vertices.end());
     points.axes.resize(n);
     points.tangents.resize(n);
     points.own_face.assign(n, -1);

@@ -17,9 +17,10 @@
 namespace sdf {
 namespace {
 
-template <class T>
-bool same_bits(const std::vector<T>& a, const std::vector<T>& b) {
-  return a.size() == b.size() && std::memcmp(a.data(), b.data(), a.size() * sizeof(T)) == 0;
+template <class Vector>
+bool same_bits(const Vector& a, const Vector& b) {
+  return a.size() == b.size() &&
+         std::memcmp(a.data(), b.data(), a.size() * sizeof(typename Vector::value_type)) == 0;
 }
 
 // A soup of 60k triangles, with some faces collapsed (zero area: zero axis) and shared
