@@ -92,9 +92,9 @@ Mesh make_mesh(const double* vertices, std::size_t vertex_count, const std::int6
     return triangles[i] < 0 || static_cast<std::uint64_t>(triangles[i]) >= vertex_count;
   });
   if (bad_index != kNoItem)
-    throw std::invalid_argument("triangle " + std::to_string(bad_index / 3) + " uses vertex index " +
-                                std::to_string(triangles[bad_index]) + ", outside [0, " +
-                                std::to_string(vertex_count) + ")");
+    throw std::invalid_argument("triangle " + std::to_string(bad_index / 3) +
+                                " uses vertex index " + std::to_string(triangles[bad_index]) +
+                                ", outside [0, " + std::to_string(vertex_count) + ")");
   mesh.vertices.resize(vertex_count);
   parallel_for(vertex_count, kGrain, threads, [&](std::size_t begin, std::size_t end) {
     for (std::size_t i = begin; i < end; ++i) mesh.vertices[i] = glm::vec3(point(i) - mesh.center);

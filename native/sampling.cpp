@@ -107,7 +107,8 @@ std::vector<std::uint32_t> spatial_order(const SamplePoints& points, unsigned th
   const std::size_t n = points.size();
   // Bounding box: per-chunk boxes, then merged (min and max are exact in any order).
   const std::size_t chunks = (n + kGrain - 1) / kGrain;
-  std::vector<glm::vec3> chunk_lo(chunks, glm::vec3(INFINITY)), chunk_hi(chunks, glm::vec3(-INFINITY));
+  std::vector<glm::vec3> chunk_lo(chunks, glm::vec3(INFINITY)),
+      chunk_hi(chunks, glm::vec3(-INFINITY));
   parallel_for(n, kGrain, threads, [&](std::size_t begin, std::size_t end) {
     glm::vec3 lo(INFINITY), hi(-INFINITY);
     for (std::size_t i = begin; i < end; ++i) {
@@ -128,7 +129,8 @@ std::vector<std::uint32_t> spatial_order(const SamplePoints& points, unsigned th
   parallel_for(n, kGrain, threads, [&](std::size_t begin, std::size_t end) {
     for (std::size_t i = begin; i < end; ++i) {
       const glm::uvec3 c = glm::uvec3((points.origins[i] - lo) * scale);
-      const std::uint64_t code = spread_bits(c.x) | (spread_bits(c.y) << 1) | (spread_bits(c.z) << 2);
+      const std::uint64_t code =
+          spread_bits(c.x) | (spread_bits(c.y) << 1) | (spread_bits(c.z) << 2);
       keyed[i] = (code << 32) | i;
     }
   });

@@ -27,8 +27,10 @@ bool same_bits(const Vector& a, const Vector& b) {
 // vertices, so that vertex normals sum several faces.
 Mesh test_mesh() {
   test::Arrays a = test::soup(60000, 5);
-  for (std::size_t f = 0; f < a.triangles.size() / 3; f += 17) a.triangles[3 * f + 2] = a.triangles[3 * f];
-  for (std::size_t f = 1; f < a.triangles.size() / 3; f += 5) a.triangles[3 * f + 1] = a.triangles[3 * f - 3];
+  for (std::size_t f = 0; f < a.triangles.size() / 3; f += 17)
+    a.triangles[3 * f + 2] = a.triangles[3 * f];
+  for (std::size_t f = 1; f < a.triangles.size() / 3; f += 5)
+    a.triangles[3 * f + 1] = a.triangles[3 * f - 3];
   return a.mesh();
 }
 
@@ -64,7 +66,8 @@ std::vector<std::uint32_t> reference_spatial_order(const SamplePoints& points) {
   std::vector<std::pair<std::uint32_t, std::uint32_t>> keyed(points.size());
   for (std::size_t i = 0; i < points.size(); ++i) {
     const glm::uvec3 c = glm::uvec3((points.origins[i] - lo) * scale);
-    keyed[i] = {spread(c.x) | (spread(c.y) << 1) | (spread(c.z) << 2), static_cast<std::uint32_t>(i)};
+    keyed[i] = {spread(c.x) | (spread(c.y) << 1) | (spread(c.z) << 2),
+                static_cast<std::uint32_t>(i)};
   }
   std::sort(keyed.begin(), keyed.end());
   std::vector<std::uint32_t> order(points.size());

@@ -152,7 +152,8 @@ TEST(OrientationPaths, ConsistentMeshTakesTheFastPathAndAgrees) {
   const test::Arrays a = torus(300, 200, 0.0, 11);  // 120k faces, shuffled
   EXPECT_FALSE(some_edge_disagrees(a));
   expect_all_paths_agree(a);
-  EXPECT_EQ(run(a, [](Mesh& m) { return orient(m, Orientation::Auto, 2); }).report.flipped_faces, 0u);
+  EXPECT_EQ(run(a, [](Mesh& m) { return orient(m, Orientation::Auto, 2); }).report.flipped_faces,
+            0u);
 }
 
 TEST(OrientationPaths, InsideOutMeshIsReversedWhole) {
