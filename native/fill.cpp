@@ -13,31 +13,55 @@ struct Csr {
   std::vector<std::uint32_t> offsets, items;
 };
 
-Csr faces_of_vertices(const Mesh& mesh) {
-  Csr csr;
-  csr.offsets.assign(mesh.vertices.size() + 1, 0);
+// The faces around each vertex of `wanted` (in face order, a face twice where it uses the
+// vertex twice), for those vertices only: list_of[v] is v's list, kNoList for the others.
+// Only the points being filled ask for their lists, usually a few percent of the mesh, so
+// this is two sequential passes over the faces with a lookup in a byte per vertex, where
+// lists for every vertex cost scattered counters over the whole mesh.
+constexpr std::uint32_t kNoList = 0xffffffffu;
+
+struct FacesAround {
+  std::vector<std::uint32_t> list_of;
+  Csr lists;
+};
+
+FacesAround faces_around(const Mesh& mesh, const std::vector<char>& wanted) {
+  FacesAround out;
+  out.list_of.assign(mesh.vertices.size(), kNoList);
+  std::uint32_t count = 0;
+  for (std::size_t v = 0; v < wanted.size(); ++v)
+    if (wanted[v]) out.list_of[v] = count++;
+  Csr& csr = out.lists;
+  csr.offsets.assign(count + 1, 0);
   for (const glm::uvec3& t : mesh.triangles)
-    for (int k = 0; k < 3; ++k) ++csr.offsets[t[k] + 1];
-  for (std::size_t v = 0; v < mesh.vertices.size(); ++v) csr.offsets[v + 1] += csr.offsets[v];
+    for (int k = 0; k < 3; ++k)
+      if (wanted[t[k]]) ++csr.offsets[out.list_of[t[k]] + 1];
+  for (std::size_t i = 0; i < count; ++i) csr.offsets[i + 1] += csr.offsets[i];
   csr.items.resize(csr.offsets.back());
   std::vector<std::uint32_t> cursor(csr.offsets.begin(), csr.offsets.end() - 1);
   for (std::uint32_t f = 0; f < mesh.triangles.size(); ++f)
-    for (int k = 0; k < 3; ++k) csr.items[cursor[mesh.triangles[f][k]]++] = f;
-  return csr;
+    for (int k = 0; k < 3; ++k) {
+      const std::uint32_t v = mesh.triangles[f][k];
+      if (wanted[v]) csr.items[cursor[out.list_of[v]]++] = f;
+    }
+  return out;
 }
 
 // Calls visit(neighbour) for each neighbour of point p (a point may be visited twice).
+// Only for points still without a value (whose lists faces_around built).
 template <class Visit>
-void for_each_neighbour(const Mesh& mesh, PointKind kind, const Csr& vf, std::uint32_t p,
-                        Visit&& visit) {
+void for_each_neighbour(const Mesh& mesh, PointKind kind, const FacesAround& around,
+                        std::uint32_t p, Visit&& visit) {
+  const Csr& vf = around.lists;
   if (kind == PointKind::Faces) {
     for (int k = 0; k < 3; ++k) {
-      const std::uint32_t v = mesh.triangles[p][k];
+      const std::uint32_t v = around.list_of[mesh.triangles[p][k]];
       for (std::uint32_t i = vf.offsets[v]; i < vf.offsets[v + 1]; ++i)
         if (vf.items[i] != p) visit(vf.items[i]);
     }
   } else {
-    for (std::uint32_t i = vf.offsets[p]; i < vf.offsets[p + 1]; ++i) {
+    const std::uint32_t v = around.list_of[p];
+    for (std::uint32_t i = vf.offsets[v]; i < vf.offsets[v + 1]; ++i) {
       const glm::uvec3 t = mesh.triangles[vf.items[i]];
       for (int k = 0; k < 3; ++k)
         if (t[k] != p) visit(t[k]);
@@ -62,7 +86,17 @@ FillResult fill_missing(const Mesh& mesh, PointKind kind, float* raw,
     return FillResult::NoValueAnywhere;
   }
 
-  const Csr vf = faces_of_vertices(mesh);
+  // The vertices whose face lists the filling reads: those of the points without a value.
+  std::vector<char> wanted(mesh.vertices.size(), 0);
+  for (std::size_t p = 0; p < n; ++p) {
+    if (known[p]) continue;
+    if (kind == PointKind::Vertices) {
+      wanted[p] = 1;
+    } else {
+      for (int k = 0; k < 3; ++k) wanted[mesh.triangles[p][k]] = 1;
+    }
+  }
+  const FacesAround vf = faces_around(mesh, wanted);
   std::vector<std::uint32_t> layer;
   std::vector<char> queued(n, 0);
   for (std::uint32_t p = 0; p < n; ++p) {

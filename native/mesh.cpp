@@ -6,25 +6,72 @@
 #include <limits>
 #include <stdexcept>
 #include <string>
+#include <vector>
+
+#include "parallel.h"
 
 namespace sdf {
 
+namespace {
+
+// Items per parallel_for chunk: a few hundred microseconds of work each.
+constexpr std::size_t kGrain = 1 << 15;
+constexpr std::size_t kNoItem = static_cast<std::size_t>(-1);
+
+// The smallest index in [0, count) for which bad(i) holds, or kNoItem; chunks in parallel,
+// so that the error names the same item a serial scan would.
+template <class Bad>
+std::size_t first_bad(std::size_t count, unsigned threads, Bad&& bad) {
+  std::vector<std::size_t> per_chunk((count + kGrain - 1) / kGrain, kNoItem);
+  parallel_for(count, kGrain, threads, [&](std::size_t begin, std::size_t end) {
+    for (std::size_t i = begin; i < end; ++i)
+      if (bad(i)) {
+        per_chunk[begin / kGrain] = i;
+        return;
+      }
+  });
+  for (std::size_t first : per_chunk)
+    if (first != kNoItem) return first;
+  return kNoItem;
+}
+
+}  // namespace
+
 Mesh make_mesh(const double* vertices, std::size_t vertex_count, const std::int64_t* triangles,
-               std::size_t triangle_count) {
+               std::size_t triangle_count, unsigned threads) {
   if (vertex_count == 0) throw std::invalid_argument("the mesh has no vertices");
   if (triangle_count == 0) throw std::invalid_argument("the mesh has no triangles");
   if (vertex_count > std::numeric_limits<std::uint32_t>::max())
     throw std::invalid_argument("more than 2^32 - 1 vertices are not supported");
 
+  auto point = [&](std::size_t i) {
+    return glm::dvec3(vertices[3 * i], vertices[3 * i + 1], vertices[3 * i + 2]);
+  };
+  const std::size_t not_finite = first_bad(vertex_count, threads, [&](std::size_t i) {
+    const glm::dvec3 p = point(i);
+    return !std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z);
+  });
+  if (not_finite != kNoItem)
+    throw std::invalid_argument("vertex " + std::to_string(not_finite) +
+                                " has a coordinate that is not finite");
+  // Bounding box: per-chunk boxes merged (min and max of finite values are exact in any order).
+  const std::size_t chunks = (vertex_count + kGrain - 1) / kGrain;
+  std::vector<glm::dvec3> chunk_lo(chunks), chunk_hi(chunks);
+  parallel_for(vertex_count, kGrain, threads, [&](std::size_t begin, std::size_t end) {
+    glm::dvec3 lo(std::numeric_limits<double>::infinity());
+    glm::dvec3 hi(-std::numeric_limits<double>::infinity());
+    for (std::size_t i = begin; i < end; ++i) {
+      lo = glm::min(lo, point(i));
+      hi = glm::max(hi, point(i));
+    }
+    chunk_lo[begin / kGrain] = lo;
+    chunk_hi[begin / kGrain] = hi;
+  });
   glm::dvec3 lo(std::numeric_limits<double>::infinity());
   glm::dvec3 hi(-std::numeric_limits<double>::infinity());
-  for (std::size_t i = 0; i < vertex_count; ++i) {
-    const glm::dvec3 p(vertices[3 * i], vertices[3 * i + 1], vertices[3 * i + 2]);
-    if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z))
-      throw std::invalid_argument("vertex " + std::to_string(i) +
-                                  " has a coordinate that is not finite");
-    lo = glm::min(lo, p);
-    hi = glm::max(hi, p);
+  for (std::size_t c = 0; c < chunks; ++c) {
+    lo = glm::min(lo, chunk_lo[c]);
+    hi = glm::max(hi, chunk_hi[c]);
   }
 
   Mesh mesh;
@@ -41,22 +88,23 @@ Mesh make_mesh(const double* vertices, std::size_t vertex_count, const std::int6
                                 " units on an axis, more than the 1e30 that 32-bit floats "
                                 "leave room for; scale it down");
   }
+  const std::size_t bad_index = first_bad(3 * triangle_count, threads, [&](std::size_t i) {
+    return triangles[i] < 0 || static_cast<std::uint64_t>(triangles[i]) >= vertex_count;
+  });
+  if (bad_index != kNoItem)
+    throw std::invalid_argument("triangle " + std::to_string(bad_index / 3) +
+                                " uses vertex index " + std::to_string(triangles[bad_index]) +
+                                ", outside [0, " + std::to_string(vertex_count) + ")");
   mesh.vertices.resize(vertex_count);
-  for (std::size_t i = 0; i < vertex_count; ++i) {
-    const glm::dvec3 p(vertices[3 * i], vertices[3 * i + 1], vertices[3 * i + 2]);
-    mesh.vertices[i] = glm::vec3(p - mesh.center);
-  }
+  parallel_for(vertex_count, kGrain, threads, [&](std::size_t begin, std::size_t end) {
+    for (std::size_t i = begin; i < end; ++i) mesh.vertices[i] = glm::vec3(point(i) - mesh.center);
+  });
   mesh.triangles.resize(triangle_count);
-  for (std::size_t f = 0; f < triangle_count; ++f) {
-    for (int k = 0; k < 3; ++k) {
-      const std::int64_t v = triangles[3 * f + k];
-      if (v < 0 || static_cast<std::uint64_t>(v) >= vertex_count)
-        throw std::invalid_argument("triangle " + std::to_string(f) + " uses vertex index " +
-                                    std::to_string(v) + ", outside [0, " +
-                                    std::to_string(vertex_count) + ")");
-      mesh.triangles[f][k] = static_cast<std::uint32_t>(v);
-    }
-  }
+  parallel_for(triangle_count, kGrain, threads, [&](std::size_t begin, std::size_t end) {
+    for (std::size_t f = begin; f < end; ++f)
+      for (int k = 0; k < 3; ++k)
+        mesh.triangles[f][k] = static_cast<std::uint32_t>(triangles[3 * f + k]);
+  });
   return mesh;
 }
 

@@ -21,9 +21,10 @@ struct Mesh {
 // Copies a mesh from row-major arrays: vertices (n, 3) and triangles (m, 3), 0-based.
 // Throws std::invalid_argument naming the problem for an empty mesh, an index out of range, a
 // coordinate that is not finite, or a bounding box wider than 1e30 on an axis. Vertices no
-// triangle uses are allowed (they take no part).
+// triangle uses are allowed (they take no part). Checks and copies on `threads` (0 = every
+// core); the result, and which problem an error names (the first), do not depend on it.
 Mesh make_mesh(const double* vertices, std::size_t vertex_count, const std::int64_t* triangles,
-               std::size_t triangle_count);
+               std::size_t triangle_count, unsigned threads = 0);
 
 // Outward face normal scaled by twice the area (cross(v1 - v0, v2 - v0)).
 glm::vec3 face_area_normal(const Mesh& mesh, std::size_t face);

@@ -29,7 +29,12 @@ struct OrientationReport {
 //    negative (below -1e-6 of its bounding-box diagonal cubed) is reversed. Open parts are
 //    judged the same way: their volume is indicative, and only a clearly negative one is
 //    acted on (a flat sheet, volume 0, is left alone).
-// Reverses faces in place (swapping two corners) and reports what it did.
-OrientationReport orient(Mesh& mesh, Orientation mode);
+// Reverses faces in place (swapping two corners) and reports what it did. Runs on `threads`
+// (0 = every core); the result does not depend on the thread count.
+OrientationReport orient(Mesh& mesh, Orientation mode, unsigned threads = 0);
+
+// Auto as orient() does it, but with step 1 always run. orient() skips it when no manifold
+// edge runs the same way in its two faces (it would reverse nothing); tests compare the two.
+OrientationReport orient_auto_without_fast_path(Mesh& mesh, unsigned threads = 0);
 
 }  // namespace sdf

@@ -8,6 +8,7 @@
 
 #include <stdexcept>
 #include <string>
+#include <utility>
 
 #include <chrono>
 #include <cstddef>
@@ -54,11 +55,11 @@ void require_rows_of_3(const py::array& a, const char* what) {
     throw std::invalid_argument(std::string(what) + " must have shape (n, 3)");
 }
 
-sdf::Mesh to_mesh(const Doubles& vertices, const Int64s& triangles) {
+sdf::Mesh to_mesh(const Doubles& vertices, const Int64s& triangles, unsigned threads = 0) {
   require_rows_of_3(vertices, "vertices");
   require_rows_of_3(triangles, "triangles");
   return sdf::make_mesh(vertices.data(), static_cast<std::size_t>(vertices.shape(0)),
-                        triangles.data(), static_cast<std::size_t>(triangles.shape(0)));
+                        triangles.data(), static_cast<std::size_t>(triangles.shape(0)), threads);
 }
 
 const char* fill_name(sdf::FillResult r) {
@@ -113,9 +114,9 @@ py::dict compute(const Doubles& vertices, const Int64s& triangles, int rays, dou
   }
   sdf::Output out;
   {
-    const sdf::Mesh mesh = to_mesh(vertices, triangles);
+    sdf::Mesh mesh = to_mesh(vertices, triangles, threads);
     py::gil_scoped_release release;
-    out = sdf::compute(mesh, options, report);
+    out = sdf::compute(std::move(mesh), options, report);  // moved: no copy of a large mesh
   }
   py::dict result;
   result["raw"] = py::array_t<float>(out.raw.size(), out.raw.data());

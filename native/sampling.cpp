@@ -1,6 +1,8 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
 #include "sampling.h"
 
+#include "parallel.h"
+#include "radix_sort.h"
 #include "rays.h"
 
 #include <algorithm>
@@ -31,9 +33,13 @@ glm::vec3 tangent_from_edge(glm::vec3 axis, glm::vec3 edge) {
   return fallback_tangent(axis);
 }
 
+// Items per parallel_for chunk for the per-point loops: small enough to balance, large enough
+// that handing out a chunk costs nothing next to its work.
+constexpr std::size_t kGrain = 1 << 14;
+
 }  // namespace
 
-SamplePoints sample_points(const Mesh& mesh, PointKind kind) {
+SamplePoints sample_points(const Mesh& mesh, PointKind kind, unsigned threads) {
   SamplePoints points;
   if (kind == PointKind::Faces) {
     const std::size_t n = mesh.triangles.size();
@@ -41,17 +47,20 @@ SamplePoints sample_points(const Mesh& mesh, PointKind kind) {
     points.axes.resize(n);
     points.own_face.resize(n);
     points.tangents.resize(n);
-    for (std::size_t f = 0; f < n; ++f) {
-      const glm::uvec3 t = mesh.triangles[f];
-      points.origins[f] =
-          (mesh.vertices[t.x] + mesh.vertices[t.y] + mesh.vertices[t.z]) * (1.0f / 3.0f);
-      points.axes[f] = -unit_or_zero(face_area_normal(mesh, f));
-      points.own_face[f] = static_cast<std::int32_t>(f);
-      points.tangents[f] =
-          tangent_from_edge(points.axes[f], mesh.vertices[t.y] - mesh.vertices[t.x]);
-    }
+    parallel_for(n, kGrain, threads, [&](std::size_t begin, std::size_t end) {
+      for (std::size_t f = begin; f < end; ++f) {
+        const glm::uvec3 t = mesh.triangles[f];
+        points.origins[f] =
+            (mesh.vertices[t.x] + mesh.vertices[t.y] + mesh.vertices[t.z]) * (1.0f / 3.0f);
+        points.axes[f] = -unit_or_zero(face_area_normal(mesh, f));
+        points.own_face[f] = static_cast<std::int32_t>(f);
+        points.tangents[f] =
+            tangent_from_edge(points.axes[f], mesh.vertices[t.y] - mesh.vertices[t.x]);
+      }
+    });
   } else {
     const std::size_t n = mesh.vertices.size();
+    // Serial: each vertex's float sum must add its faces in face order, as it always has.
     std::vector<glm::vec3> normal_sum(n, glm::vec3(0.0f));
     // For each vertex, the next corner of the first triangle that uses it: its tangent edge.
     constexpr std::uint32_t kNone = 0xffffffffu;
@@ -64,16 +73,19 @@ SamplePoints sample_points(const Mesh& mesh, PointKind kind) {
         if (next_corner[t[k]] == kNone && t[(k + 1) % 3] != t[k]) next_corner[t[k]] = t[(k + 1) % 3];
       }
     }
-    points.origins = mesh.vertices;
+    points.origins.assign(mesh.vertices.begin(), mesh.vertices.end());
     points.axes.resize(n);
     points.tangents.resize(n);
     points.own_face.assign(n, -1);
-    for (std::size_t v = 0; v < n; ++v) {
-      points.axes[v] = -unit_or_zero(normal_sum[v]);
-      const glm::vec3 edge =
-          next_corner[v] == kNone ? glm::vec3(0.0f) : mesh.vertices[next_corner[v]] - mesh.vertices[v];
-      points.tangents[v] = tangent_from_edge(points.axes[v], edge);
-    }
+    parallel_for(n, kGrain, threads, [&](std::size_t begin, std::size_t end) {
+      for (std::size_t v = begin; v < end; ++v) {
+        points.axes[v] = -unit_or_zero(normal_sum[v]);
+        const glm::vec3 edge = next_corner[v] == kNone
+                                   ? glm::vec3(0.0f)
+                                   : mesh.vertices[next_corner[v]] - mesh.vertices[v];
+        points.tangents[v] = tangent_from_edge(points.axes[v], edge);
+      }
+    });
   }
   return points;
 }
@@ -91,22 +103,42 @@ std::uint32_t spread_bits(std::uint32_t v) {
 
 }  // namespace
 
-std::vector<std::uint32_t> spatial_order(const SamplePoints& points) {
+std::vector<std::uint32_t> spatial_order(const SamplePoints& points, unsigned threads) {
+  const std::size_t n = points.size();
+  // Bounding box: per-chunk boxes, then merged (min and max are exact in any order).
+  const std::size_t chunks = (n + kGrain - 1) / kGrain;
+  std::vector<glm::vec3> chunk_lo(chunks, glm::vec3(INFINITY)),
+      chunk_hi(chunks, glm::vec3(-INFINITY));
+  parallel_for(n, kGrain, threads, [&](std::size_t begin, std::size_t end) {
+    glm::vec3 lo(INFINITY), hi(-INFINITY);
+    for (std::size_t i = begin; i < end; ++i) {
+      lo = glm::min(lo, points.origins[i]);
+      hi = glm::max(hi, points.origins[i]);
+    }
+    chunk_lo[begin / kGrain] = lo;
+    chunk_hi[begin / kGrain] = hi;
+  });
   glm::vec3 lo(INFINITY), hi(-INFINITY);
-  for (const glm::vec3& p : points.origins) {
-    lo = glm::min(lo, p);
-    hi = glm::max(hi, p);
+  for (std::size_t c = 0; c < chunks; ++c) {
+    lo = glm::min(lo, chunk_lo[c]);
+    hi = glm::max(hi, chunk_hi[c]);
   }
   const glm::vec3 scale = 1023.0f / glm::max(hi - lo, glm::vec3(1e-30f));
-  std::vector<std::pair<std::uint32_t, std::uint32_t>> keyed(points.size());
-  for (std::size_t i = 0; i < points.size(); ++i) {
-    const glm::uvec3 c = glm::uvec3((points.origins[i] - lo) * scale);
-    keyed[i] = {spread_bits(c.x) | (spread_bits(c.y) << 1) | (spread_bits(c.z) << 2),
-                static_cast<std::uint32_t>(i)};
-  }
-  std::sort(keyed.begin(), keyed.end());
-  std::vector<std::uint32_t> order(points.size());
-  for (std::size_t i = 0; i < keyed.size(); ++i) order[i] = keyed[i].second;
+  // (code << 32) | index, sorted stably on the code: the order of std::sort on (code, index).
+  UninitializedVector<std::uint64_t> keyed(n);
+  parallel_for(n, kGrain, threads, [&](std::size_t begin, std::size_t end) {
+    for (std::size_t i = begin; i < end; ++i) {
+      const glm::uvec3 c = glm::uvec3((points.origins[i] - lo) * scale);
+      const std::uint64_t code =
+          spread_bits(c.x) | (spread_bits(c.y) << 1) | (spread_bits(c.z) << 2);
+      keyed[i] = (code << 32) | i;
+    }
+  });
+  radix_sort_by_bits(keyed, 32, 30, threads);
+  std::vector<std::uint32_t> order(n);
+  parallel_for(n, kGrain, threads, [&](std::size_t begin, std::size_t end) {
+    for (std::size_t i = begin; i < end; ++i) order[i] = static_cast<std::uint32_t>(keyed[i]);
+  });
   return order;
 }
 

@@ -121,7 +121,7 @@ bool opencl_built() {
 #endif
 }
 
-Output compute(const Mesh& input, const Options& options, const ProgressFn& progress) {
+Output compute(Mesh mesh, const Options& options, const ProgressFn& progress) {
   const Cone cone = make_cone(options.rays, options.cone_angle, options.sampling, options.seed);
   const bool cpu = options.engine == "cpu";
   if (!cpu && options.engine.compare(0, 6, "opencl") != 0)
@@ -132,11 +132,10 @@ Output compute(const Mesh& input, const Options& options, const ProgressFn& prog
   Output out;
   Stopwatch clock;
   report(progress, 0.0);
-  // The computation's own copy, wound outward; the caller's mesh is never changed.
-  Mesh mesh = input;
-  out.orientation = orient(mesh, options.orientation);
-  const SamplePoints points = sample_points(mesh, options.points);
-  const std::vector<std::uint32_t> order = spatial_order(points);
+  // `mesh` is the computation's own copy, wound outward; the caller's mesh is never changed.
+  out.orientation = orient(mesh, options.orientation, options.threads);
+  const SamplePoints points = sample_points(mesh, options.points, options.threads);
+  const std::vector<std::uint32_t> order = spatial_order(points, options.threads);
   out.raw.resize(points.size());
   out.valid_rays.resize(points.size());
   out.timings.emplace_back("prepare", clock.lap());

@@ -43,7 +43,9 @@ struct Output {
   OrientationReport orientation;           // faces the computation reversed
 };
 
-Output compute(const Mesh& mesh, const Options& options, const ProgressFn& progress = nullptr);
+// Takes the mesh by value: the computation reorients its own copy, and a caller that has no
+// further use for its mesh moves it in and saves the copy (~10 ms per million faces).
+Output compute(Mesh mesh, const Options& options, const ProgressFn& progress = nullptr);
 
 // Whether this build has the OpenCL engine (it still needs a driver at run time).
 bool opencl_built();

@@ -16,7 +16,16 @@ def normalize_values(values, method: str = "linear") -> np.ndarray:
         raise ValueError(f"normalize must be one of {NORMALIZATIONS}, got {method!r}")
     v = np.asarray(values, dtype=np.float64)
     lo, hi = (float(v.min()), float(v.max())) if v.size else (0.0, 0.0)
-    out = (v - lo) / (hi - lo) if hi > lo else np.zeros_like(v)
+    # The same operations as (v - lo) / (hi - lo), log1p(4 x) / log1p(4) and clip, done in
+    # place: no temporary arrays for a million points.
+    if hi > lo:
+        out = np.subtract(v, lo)
+        out /= hi - lo
+    else:
+        out = np.zeros_like(v)
     if method == "log":
-        out = np.log1p(LOG_STRENGTH * out) / np.log1p(LOG_STRENGTH)
-    return np.clip(out, 0.0, 1.0).astype(np.float32)
+        out *= LOG_STRENGTH
+        np.log1p(out, out=out)
+        out /= np.log1p(LOG_STRENGTH)
+    np.clip(out, 0.0, 1.0, out=out)
+    return out.astype(np.float32)

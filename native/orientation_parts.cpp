@@ -1,0 +1,175 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
+#include "orientation_parts.h"
+
+#include <algorithm>
+#include <atomic>
+#include <cstring>
+
+#include "parallel.h"
+
+namespace sdf {
+
+namespace {
+
+constexpr std::size_t kGrain = 1 << 14;
+
+// Float bits of a position, with -0 read as +0 (they are the same place).
+std::uint32_t bits_of(float x) {
+  if (x == 0.0f) x = 0.0f;
+  std::uint32_t b;
+  std::memcpy(&b, &x, sizeof b);
+  return b;
+}
+
+// A hint to start loading what a later step of the loop reads at a scattered address, so that
+// a batch of such loads overlaps instead of waiting one after another.
+inline void prefetch(const void* p) {
+#if defined(__GNUC__) || defined(__clang__)
+  __builtin_prefetch(p);
+#else
+  (void)p;
+#endif
+}
+
+// Items handled per batch of prefetches.
+constexpr std::size_t kBatch = 16;
+
+std::uint64_t position_hash(glm::vec3 p) {
+  std::uint64_t h = bits_of(p.x) * 0x9E3779B97F4A7C15ull;
+  h = (h ^ bits_of(p.y)) * 0xC2B2AE3D27D4EB4Full;
+  h = (h ^ bits_of(p.z)) * 0x165667B19E3779F9ull;
+  return h ^ (h >> 31);
+}
+
+// Per vertex, one vertex at exactly the same position, the same for all of them and its own
+// (which one depends on thread timing; only the grouping is used). A lock-free
+// open-addressing table: equal positions probe the same slots, and the first to claim an
+// empty one stands for them. A slot holds the hash's high half beside the vertex, so that a
+// probe past another position rarely has to load that vertex (a cache miss on a mesh whose
+// vertex order is scattered).
+UninitializedVector<std::uint32_t> weld_exact(const Mesh& mesh, unsigned threads) {
+  const std::size_t nv = mesh.vertices.size();
+  std::size_t size = 16;
+  while (2 * size < 3 * nv) size *= 2;  // at most 2/3 full: short probe runs, a small table
+  const std::size_t mask = size - 1;
+  // hash high << 32 | vertex + 1; 0 = empty
+  UninitializedVector<std::atomic<std::uint64_t>> slot(size);
+  parallel_for(size, kGrain, threads, [&](std::size_t begin, std::size_t end) {
+    for (std::size_t s = begin; s < end; ++s) slot[s].store(0, std::memory_order_relaxed);
+  });
+  UninitializedVector<std::uint32_t> rep(nv);
+  parallel_for(nv, kGrain, threads, [&](std::size_t begin, std::size_t end) {
+    std::uint64_t hash[kBatch];
+    for (std::size_t first = begin; first < end; first += kBatch) {
+      const std::size_t count = std::min(kBatch, end - first);
+      for (std::size_t i = 0; i < count; ++i) {
+        hash[i] = position_hash(mesh.vertices[first + i]);
+        prefetch(&slot[hash[i] & mask]);
+      }
+      for (std::size_t i = 0; i < count; ++i) {
+        const std::size_t v = first + i;
+        const glm::vec3 p = mesh.vertices[v];
+        const std::uint64_t mine = (hash[i] & 0xffffffff00000000ull) | (v + 1);
+        for (std::size_t s = hash[i] & mask;; s = (s + 1) & mask) {
+          std::uint64_t held = slot[s].load(std::memory_order_acquire);
+          if (held == 0 && slot[s].compare_exchange_strong(held, mine, std::memory_order_acq_rel)) {
+            rep[v] = static_cast<std::uint32_t>(v);
+            break;
+          }
+          const std::uint32_t other = static_cast<std::uint32_t>(held) - 1;
+          // == reads -0 and +0 as equal, as the sort this replaced did.
+          if ((held >> 32) == (hash[i] >> 32) && mesh.vertices[other] == p) {
+            rep[v] = other;
+            break;
+          }
+        }
+      }
+    }
+  });
+  return rep;
+}
+
+// Disjoint sets that threads join concurrently: a root is linked under a smaller root by a
+// compare-and-swap, finds halve paths (parents only ever move up, so no cycle can form).
+class ConcurrentSets {
+ public:
+  // Starts from `parent`: each item's parent must be a root (its own parent).
+  explicit ConcurrentSets(const UninitializedVector<std::uint32_t>& parent, unsigned threads)
+      : parent_(parent.size()) {
+    parallel_for(parent.size(), kGrain, threads, [&](std::size_t begin, std::size_t end) {
+      for (std::size_t i = begin; i < end; ++i)
+        parent_[i].store(parent[i], std::memory_order_relaxed);
+    });
+  }
+  void prefetch_parent(std::uint32_t x) const { prefetch(&parent_[x]); }
+  std::uint32_t find(std::uint32_t x) {
+    for (;;) {
+      const std::uint32_t p = parent_[x].load(std::memory_order_relaxed);
+      if (p == x) return x;
+      const std::uint32_t grand = parent_[p].load(std::memory_order_relaxed);
+      if (grand != p) parent_[x].store(grand, std::memory_order_relaxed);
+      x = grand;
+    }
+  }
+  void unite(std::uint32_t a, std::uint32_t b) {
+    for (;;) {
+      a = find(a);
+      b = find(b);
+      if (a == b) return;
+      if (a < b) std::swap(a, b);
+      std::uint32_t expected = a;
+      if (parent_[a].compare_exchange_weak(expected, b, std::memory_order_acq_rel)) return;
+    }
+  }
+
+ private:
+  UninitializedVector<std::atomic<std::uint32_t>> parent_;
+};
+
+}  // namespace
+
+Parts find_parts(const Mesh& mesh, unsigned threads) {
+  const std::size_t n = mesh.triangles.size(), nv = mesh.vertices.size();
+  // Vertices at one position start in one set (each points at the one standing for them).
+  ConcurrentSets sets(weld_exact(mesh, threads), threads);
+  parallel_for(n, kGrain, threads, [&](std::size_t begin, std::size_t end) {
+    for (std::size_t first = begin; first < end; first += kBatch) {
+      const std::size_t last = std::min(end, first + kBatch);
+      for (std::size_t f = first; f < last; ++f)
+        for (int k = 0; k < 3; ++k) sets.prefetch_parent(mesh.triangles[f][k]);
+      for (std::size_t f = first; f < last; ++f) {
+        const glm::uvec3 t = mesh.triangles[f];
+        sets.unite(t.x, t.y);
+        sets.unite(t.x, t.z);
+      }
+    }
+  });
+  Parts parts;
+  parts.root_of_vertex.resize(nv);
+  parallel_for(nv, kGrain, threads, [&](std::size_t begin, std::size_t end) {
+    for (std::size_t v = begin; v < end; ++v)
+      parts.root_of_vertex[v] = sets.find(static_cast<std::uint32_t>(v));
+  });
+  parts.part_of.resize(n);
+  parallel_for(n, kGrain, threads, [&](std::size_t begin, std::size_t end) {
+    for (std::size_t f = begin; f < end; ++f)
+      parts.part_of[f] = parts.root_of_vertex[mesh.triangles[f].x];
+  });
+  // Roots to part numbers in order of first face: serial, but light (a sequential read and
+  // mostly one compare per face).
+  parts.part_of_root.assign(nv, kNoPart);
+  std::uint32_t previous_root = kNoPart, previous_part = 0;
+  for (std::size_t f = 0; f < n; ++f) {
+    const std::uint32_t root = parts.part_of[f];
+    if (root != previous_root) {
+      std::uint32_t& part = parts.part_of_root[root];
+      if (part == kNoPart) part = static_cast<std::uint32_t>(parts.count++);
+      previous_root = root;
+      previous_part = part;
+    }
+    parts.part_of[f] = previous_part;
+  }
+  return parts;
+}
+
+}  // namespace sdf

@@ -1,0 +1,30 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
+// The parts orient() turns outward one by one (orientation.h, step 2): faces joined through
+// shared vertex positions, so that unwelded seams do not split a part.
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include "mesh.h"
+#include "uninitialized_vector.h"
+
+namespace sdf {
+
+constexpr std::uint32_t kNoPart = 0xffffffffu;
+
+struct Parts {
+  UninitializedVector<std::uint32_t> part_of;  // per face; parts numbered by their first face
+  std::size_t count = 0;
+  // Per vertex, the vertex standing for its set; per such root, its part, or kNoPart for a
+  // set no face uses. A vertex's part is part_of_root[root_of_vertex[v]]: it lies at the
+  // position of some corner of that part's faces, or is used by none (kNoPart).
+  UninitializedVector<std::uint32_t> root_of_vertex;
+  std::vector<std::uint32_t> part_of_root;
+};
+
+// Linear expected time, parallel over `threads` (0 = every core); the result does not depend
+// on the thread count.
+Parts find_parts(const Mesh& mesh, unsigned threads);
+
+}  // namespace sdf

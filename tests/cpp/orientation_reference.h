@@ -1,0 +1,156 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
+// orient(Auto) as it was written first: serial, vertex-corner lists and a sort to weld. Kept
+// as the specification the parallel version (native/orientation*.cpp) must match face for
+// face: the same faces reversed, the same parts.
+#pragma once
+
+#include <algorithm>
+#include <cstdint>
+#include <numeric>
+#include <tuple>
+#include <utility>
+#include <vector>
+
+#include "orientation.h"
+
+namespace sdf::test {
+
+inline std::vector<char> reference_consistent_flips(const Mesh& mesh) {
+  const std::size_t n = mesh.triangles.size(), nv = mesh.vertices.size();
+  struct Corner {
+    std::uint32_t face, next, prev;
+  };
+  std::vector<std::uint32_t> offsets(nv + 1, 0);
+  for (const glm::uvec3& t : mesh.triangles)
+    for (int k = 0; k < 3; ++k) ++offsets[t[k] + 1];
+  for (std::size_t v = 0; v < nv; ++v) offsets[v + 1] += offsets[v];
+  std::vector<Corner> around(offsets[nv]);
+  {
+    std::vector<std::uint32_t> cursor(offsets.begin(), offsets.end() - 1);
+    for (std::uint32_t f = 0; f < n; ++f) {
+      const glm::uvec3 t = mesh.triangles[f];
+      for (int k = 0; k < 3; ++k) around[cursor[t[k]]++] = Corner{f, t[(k + 1) % 3], t[(k + 2) % 3]};
+    }
+  }
+  constexpr std::uint32_t kNone = 0xffffffffu;
+  std::vector<std::uint32_t> neighbour(3 * n, kNone);
+  std::vector<char> same(3 * n, 0);
+  for (std::uint32_t f = 0; f < n; ++f) {
+    const glm::uvec3 t = mesh.triangles[f];
+    for (int k = 0; k < 3; ++k) {
+      const std::uint32_t a = t[k], b = t[(k + 1) % 3];
+      if (a == b) continue;
+      std::uint32_t other = kNone, count = 0;
+      bool other_same = false;
+      for (std::uint32_t i = offsets[a]; i < offsets[a + 1]; ++i) {
+        const Corner& c = around[i];
+        if (c.face == f) continue;
+        if (c.next == b) other = c.face, other_same = true, ++count;
+        if (c.prev == b) other = c.face, other_same = false, ++count;
+      }
+      if (count == 1) {
+        neighbour[3 * f + k] = other;
+        same[3 * f + k] = other_same;
+      }
+    }
+  }
+  std::vector<char> flip(n, 0), seen(n, 0);
+  std::vector<std::uint32_t> patch, queue;
+  for (std::uint32_t seed = 0; seed < n; ++seed) {
+    if (seen[seed]) continue;
+    patch.clear();
+    queue.assign(1, seed);
+    seen[seed] = 1;
+    while (!queue.empty()) {
+      const std::uint32_t f = queue.back();
+      queue.pop_back();
+      patch.push_back(f);
+      for (int k = 0; k < 3; ++k) {
+        const std::uint32_t g = neighbour[3 * f + k];
+        if (g == kNone || seen[g]) continue;
+        seen[g] = 1;
+        flip[g] = flip[f] ^ same[3 * f + k];
+        queue.push_back(g);
+      }
+    }
+    double kept = 0.0, reversed = 0.0;
+    bool any_reversed = false;
+    for (std::uint32_t f : patch) any_reversed |= flip[f] != 0;
+    if (!any_reversed) continue;
+    for (std::uint32_t f : patch) (flip[f] ? reversed : kept) += glm::length(face_area_normal(mesh, f));
+    if (reversed > kept)
+      for (std::uint32_t f : patch) flip[f] ^= 1;
+  }
+  return flip;
+}
+
+inline std::vector<std::uint32_t> reference_weld_exact(const Mesh& mesh) {
+  struct Keyed {
+    float x, y, z;
+    std::uint32_t v;
+    bool operator<(const Keyed& o) const {
+      return std::tie(x, y, z, v) < std::tie(o.x, o.y, o.z, o.v);
+    }
+    bool same_place(const Keyed& o) const { return x == o.x && y == o.y && z == o.z; }
+  };
+  std::vector<Keyed> keyed(mesh.vertices.size());
+  for (std::uint32_t v = 0; v < keyed.size(); ++v)
+    keyed[v] = Keyed{mesh.vertices[v].x, mesh.vertices[v].y, mesh.vertices[v].z, v};
+  std::sort(keyed.begin(), keyed.end());
+  std::vector<std::uint32_t> rep(mesh.vertices.size());
+  for (std::size_t i = 0; i < keyed.size(); ++i)
+    rep[keyed[i].v] = (i > 0 && keyed[i].same_place(keyed[i - 1])) ? rep[keyed[i - 1].v] : keyed[i].v;
+  return rep;
+}
+
+inline OrientationReport reference_orient_auto(Mesh& mesh) {
+  OrientationReport report;
+  std::vector<char> flip = reference_consistent_flips(mesh);
+  const std::vector<std::uint32_t> rep = reference_weld_exact(mesh);
+  std::vector<std::uint32_t> parent(mesh.vertices.size());
+  std::iota(parent.begin(), parent.end(), 0u);
+  auto find = [&](std::uint32_t x) {
+    while (parent[x] != x) x = parent[x] = parent[parent[x]];
+    return x;
+  };
+  for (const glm::uvec3& t : mesh.triangles) {
+    parent[find(rep[t.x])] = find(rep[t.y]);
+    parent[find(rep[t.x])] = find(rep[t.z]);
+  }
+  std::vector<std::uint32_t> part_of(mesh.triangles.size());
+  std::vector<std::uint32_t> part_index(mesh.vertices.size(), 0xffffffffu);
+  for (std::size_t f = 0; f < mesh.triangles.size(); ++f) {
+    const std::uint32_t root = find(rep[mesh.triangles[f].x]);
+    if (part_index[root] == 0xffffffffu) part_index[root] = static_cast<std::uint32_t>(report.parts++);
+    part_of[f] = part_index[root];
+  }
+  std::vector<glm::dvec3> lo(report.parts, glm::dvec3(1e300)), hi(report.parts, glm::dvec3(-1e300));
+  for (std::size_t f = 0; f < mesh.triangles.size(); ++f)
+    for (int k = 0; k < 3; ++k) {
+      const glm::dvec3 p(mesh.vertices[mesh.triangles[f][k]]);
+      lo[part_of[f]] = glm::min(lo[part_of[f]], p);
+      hi[part_of[f]] = glm::max(hi[part_of[f]], p);
+    }
+  std::vector<double> volume(report.parts, 0.0);
+  for (std::size_t f = 0; f < mesh.triangles.size(); ++f) {
+    const std::uint32_t part = part_of[f];
+    const glm::dvec3 c = 0.5 * (lo[part] + hi[part]);
+    const glm::uvec3 t = mesh.triangles[f];
+    const glm::dvec3 p0 = glm::dvec3(mesh.vertices[t.x]) - c, p1 = glm::dvec3(mesh.vertices[t.y]) - c,
+                     p2 = glm::dvec3(mesh.vertices[t.z]) - c;
+    const double v = glm::dot(p0, glm::cross(p1, p2)) / 6.0;
+    volume[part] += flip[f] ? -v : v;
+  }
+  for (std::size_t f = 0; f < mesh.triangles.size(); ++f) {
+    const std::uint32_t part = part_of[f];
+    const double diagonal = glm::length(hi[part] - lo[part]);
+    if (volume[part] < -1e-6 * diagonal * diagonal * diagonal) flip[f] ^= 1;
+    if (flip[f]) {
+      std::swap(mesh.triangles[f].y, mesh.triangles[f].z);
+      ++report.flipped_faces;
+    }
+  }
+  return report;
+}
+
+}  // namespace sdf::test
