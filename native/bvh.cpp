@@ -106,7 +106,7 @@ struct Subtree {
 // their children to nodes, and each child to next_level or subtrees by size.
 class TopLevels {
  public:
-  TopLevels(PrimRef* buffers[2], const BvhConfig& config, NoFillVector<kern::SdfBvhNode>& nodes,
+  TopLevels(PrimRef* buffers[2], const BvhConfig& config, UninitializedVector<kern::SdfBvhNode>& nodes,
             std::vector<Subtree>& subtrees)
       : buffers_{buffers[0], buffers[1]}, config_(config), nodes_(nodes), subtrees_(subtrees) {}
 
@@ -248,7 +248,7 @@ class TopLevels {
 
   PrimRef* buffers_[2];
   const BvhConfig& config_;
-  NoFillVector<kern::SdfBvhNode>& nodes_;
+  UninitializedVector<kern::SdfBvhNode>& nodes_;
   std::vector<Subtree>& subtrees_;
 };
 
@@ -256,7 +256,7 @@ class TopLevels {
 // the order they were found (so the layout does not depend on which thread finished first).
 void build_subtrees(const std::vector<Subtree>& subtrees, PrimRef* buffers[2],
                     std::size_t buffer_size, const BvhConfig& config,
-                    NoFillVector<kern::SdfBvhNode>& nodes) {
+                    UninitializedVector<kern::SdfBvhNode>& nodes) {
   std::vector<std::size_t> largest_first(subtrees.size());
   std::iota(largest_first.begin(), largest_first.end(), 0);
   std::stable_sort(largest_first.begin(), largest_first.end(), [&](std::size_t a, std::size_t b) {
@@ -264,7 +264,7 @@ void build_subtrees(const std::vector<Subtree>& subtrees, PrimRef* buffers[2],
   });
   // Subtree k is built at 2 * (its first triangle) of one shared array, room enough (at most
   // 2n - 1 nodes for n triangles) without an allocation per subtree.
-  NoFillVector<kern::SdfBvhNode> built(2 * buffer_size);
+  UninitializedVector<kern::SdfBvhNode> built(2 * buffer_size);
   std::vector<std::size_t> built_count(subtrees.size());
   parallel_for(subtrees.size(), 1, config.threads, [&](std::size_t b, std::size_t e) {
     for (std::size_t k = b; k < e; ++k) {

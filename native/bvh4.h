@@ -32,7 +32,7 @@ static_assert(sizeof(Bvh4Node) == sizeof(kern::SdfBvh4Node) &&
 
 struct Bvh4 {
   std::vector<Bvh4Node> nodes;  // nodes[0] is the root (a lone leaf root becomes one slot)
-  const NoFillVector<kern::SdfTriangle>* triangles = nullptr;  // the binary BVH's, shared
+  const UninitializedVector<kern::SdfTriangle>* triangles = nullptr;  // the binary BVH's, shared
   bool empty() const { return nodes.empty(); }
 };
 
