@@ -4,9 +4,10 @@
 // alternating the two, so that the load of a shared machine hits both alike. Only casting and
 // reducing are timed: points, rays and structures are built once, outside the clock.
 //   cast_timing IN.off RAYS ROUNDS [VALUES_OUT.bin]
-//   -> per round the CPU seconds (all threads; time spent descheduled by other work on a
-//      shared machine does not count) of each and the median ratio of rays/s (ours / Embree);
-//      VALUES_OUT.bin receives our raw values (float32) to check changes bit for bit.
+//   -> per round the rays per CPU second (all threads; time spent descheduled by other work on
+//      a shared machine does not count) of Embree and of our 4-wide and 8-wide trees, and
+//      their median ratios to Embree; checks that both trees give the same values, bit for
+//      bit. VALUES_OUT.bin receives our raw values (float32) to compare builds.
 #include <embree3/rtcore.h>
 
 #include <algorithm>
@@ -22,6 +23,8 @@
 #include "../kernels/sdf_reduce.h"
 #include "bvh.h"
 #include "bvh4.h"
+#include "bvh8.h"
+#include "bvh_margin.h"
 #include "cpu_engine.h"
 #include "mesh.h"
 #include "rays.h"
@@ -155,31 +158,44 @@ int main(int argc, char** argv) {
   const sdf::Cone cone = sdf::make_cone(rays, 120.0, sdf::Sampling::Fibonacci, 0);
   const float tmin = sdf::minimum_closeness(m);
 
-  const sdf::Bvh bvh = sdf::build_bvh(m);
-  const sdf::Bvh4 wide = sdf::collapse_to_bvh4(bvh);
-  sdf::CpuScene scene;
-  scene.bvh4 = &wide;
+  sdf::Bvh bvh = sdf::build_bvh(m);
+  sdf::grow_boxes_to_cover_hits(bvh);
+  const sdf::Bvh4 wide4 = sdf::collapse_to_bvh4(bvh);
+  sdf::CpuScene scene4;
+  scene4.bvh4 = &wide4;
+  const sdf::Bvh8 wide8 = sdf::collapse_to_bvh8(bvh);
+  sdf::CpuScene scene8;
+  scene8.bvh8 = &wide8;
+  if (!sdf::bvh8_supported()) scene8 = scene4;
 
   RTCDevice device = rtcNewDevice(nullptr);
   RTCScene rtc = embree_scene(device, off);
 
-  std::vector<float> raw(nf);
+  std::vector<float> raw(nf), raw4(nf);
   std::vector<std::int32_t> valid(nf);
-  std::vector<double> ratios;
+  std::vector<double> ratios4, ratios8;
+  auto ours = [&](const sdf::CpuScene& scene, std::vector<float>& values) {
+    const double t0 = cpu_seconds();
+    sdf::cast_cpu(scene, points, order, cone, tmin, 0, values.data(), valid.data(), nullptr,
+                  0.0, 1.0);
+    return cpu_seconds() - t0;
+  };
+  const double mrays = nf * rays / 1e6;
   for (int r = 0; r < rounds; ++r) {
     const double embree_s = embree_cast(rtc, m, points, cone, tmin);
-    const double t0 = cpu_seconds();
-    sdf::cast_cpu(scene, points, order, cone, tmin, 0, raw.data(), valid.data(), nullptr, 0.0,
-                  1.0);
-    const double ours_s = cpu_seconds() - t0;
-    ratios.push_back(embree_s / ours_s);
-    std::printf("round %d: ours %.3f cpu s (%.2f Mrays/cpu s), embree %.3f cpu s (%.2f), ratio %.3f\n",
-                r, ours_s, nf * rays / ours_s / 1e6, embree_s, nf * rays / embree_s / 1e6,
-                ratios.back());
+    const double bvh4_s = ours(scene4, raw4);
+    const double bvh8_s = ours(scene8, raw);
+    ratios4.push_back(embree_s / bvh4_s);
+    ratios8.push_back(embree_s / bvh8_s);
+    std::printf("round %d: Mrays per cpu s: embree %.2f, bvh4 %.2f (%.3f), bvh8 %.2f (%.3f)\n", r,
+                mrays / embree_s, mrays / bvh4_s, ratios4.back(), mrays / bvh8_s,
+                ratios8.back());
   }
-  std::sort(ratios.begin(), ratios.end());
-  std::printf("%s faces=%zu median ratio (ours/embree rays/s) %.3f\n", argv[1], nf,
-              ratios[ratios.size() / 2]);
+  std::sort(ratios4.begin(), ratios4.end());
+  std::sort(ratios8.begin(), ratios8.end());
+  std::printf("%s faces=%zu median ratio to Embree's rays/s: bvh4 %.3f, bvh8 %.3f; bvh8 values %s\n",
+              argv[1], nf, ratios4[rounds / 2], ratios8[rounds / 2],
+              raw == raw4 ? "equal to bvh4's" : "DIFFER from bvh4's");
   if (argc == 5) {
     std::ofstream out(argv[4], std::ios::binary);
     out.write(reinterpret_cast<const char*>(raw.data()), raw.size() * sizeof(float));

@@ -7,6 +7,7 @@
 #include "../kernels/sdf_octree.h"
 #include "../kernels/sdf_reduce.h"
 #include "bvh4_traverse.h"
+#include "bvh8_traverse.h"
 
 namespace sdf {
 
@@ -57,6 +58,16 @@ void cast_cpu(const CpuScene& scene, const SamplePoints& points,
               const std::vector<std::uint32_t>& order, const Cone& cone, float min_closeness,
               unsigned threads, float* raw, std::int32_t* valid_rays, const ProgressFn& progress,
               double progress_from, double progress_to) {
+#if SDF_HAVE_BVH8
+  if (scene.bvh8) {
+    const Bvh8& bvh = *scene.bvh8;
+    cast_points(points, order, cone, threads, raw, valid_rays, progress, progress_from,
+                progress_to, [&](glm::vec3 o, glm::vec3 d, std::int32_t own) {
+                  return bvh8_closest_hit_avx2(bvh, o, d, min_closeness, own);
+                });
+    return;
+  }
+#endif
   if (scene.bvh4) {
     const Bvh4& bvh = *scene.bvh4;
     cast_points(points, order, cone, threads, raw, valid_rays, progress, progress_from,

@@ -6,6 +6,8 @@
 
 #include "bvh.h"
 #include "bvh4.h"
+#include "bvh8.h"
+#include "bvh_margin.h"
 #include "cpu_engine.h"
 #ifdef SDF_HAVE_OPENCL
 #include "opencl/opencl_engine.h"
@@ -41,14 +43,21 @@ void cast_on_cpu(const Mesh& mesh, const Options& options, const SamplePoints& p
                  Stopwatch& clock, const ProgressFn& progress) {
   CpuScene scene;
   Bvh bvh;
-  Bvh4 wide;
+  Bvh4 wide4;
+  Bvh8 wide8;
   Octree tree;
   if (options.accel == Accel::Bvh) {
     BvhConfig config;
     config.threads = options.threads;
     bvh = build_bvh(mesh, config);
-    wide = collapse_to_bvh4(bvh);
-    scene.bvh4 = &wide;
+    grow_boxes_to_cover_hits(bvh);
+    if (bvh8_supported()) {
+      wide8 = collapse_to_bvh8(bvh);
+      scene.bvh8 = &wide8;
+    } else {
+      wide4 = collapse_to_bvh4(bvh);
+      scene.bvh4 = &wide4;
+    }
   } else {
     tree = build_octree(mesh, options.octree);
     scene.octree = &tree;
@@ -74,6 +83,7 @@ void cast_on_opencl(const Mesh& mesh, const Options& options, const SamplePoints
     BvhConfig config;
     config.threads = options.threads;
     bvh = build_bvh(mesh, config);
+    grow_boxes_to_cover_hits(bvh);
     scene.bvh = &bvh;
   } else {
     tree = build_octree(mesh, options.octree);

@@ -1,0 +1,162 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
+// AVX2 and FMA are enabled per function (SDF_AVX2), not for the file: inline functions of the
+// headers included here then stay baseline x86-64 wherever the linker keeps their copy.
+// Compiled with -ffp-contract=off (CMakeLists.txt): the triangle test must round exactly as
+// kern::sdf_intersect_triangle does (no fused multiply-add), while the box test fuses on
+// purpose, its boxes being grown to cover rounding (bvh_margin.h).
+#include "bvh8_traverse.h"
+
+#if SDF_HAVE_BVH8
+#include <immintrin.h>
+
+#define SDF_AVX2 __attribute__((target("avx2,fma")))
+
+namespace sdf {
+
+namespace {
+
+// kern::sdf_intersect_triangle on four triangles at once: the same operations in the same
+// order on each lane, so each lane's t, det and verdict are the scalar test's, bit for bit
+// (including NaN, which passes every comparison the scalar code writes as a rejection).
+// The lanes that pass then go through the scalar update in lane order, which keeps its ties.
+SDF_AVX2 inline void intersect_packet(const TrianglePacket4& p, glm::vec3 o, glm::vec3 d, float tmin,
+                             std::int32_t skip_id, kern::SdfHit* hit) {
+  const __m128 dx = _mm_set1_ps(d.x), dy = _mm_set1_ps(d.y), dz = _mm_set1_ps(d.z);
+  const __m128 e1x = _mm_load_ps(p.e1_x), e1y = _mm_load_ps(p.e1_y), e1z = _mm_load_ps(p.e1_z);
+  const __m128 e2x = _mm_load_ps(p.e2_x), e2y = _mm_load_ps(p.e2_y), e2z = _mm_load_ps(p.e2_z);
+  // p = cross(d, e2); det = dot(e1, p)
+  const __m128 px = _mm_sub_ps(_mm_mul_ps(dy, e2z), _mm_mul_ps(dz, e2y));
+  const __m128 py = _mm_sub_ps(_mm_mul_ps(dz, e2x), _mm_mul_ps(dx, e2z));
+  const __m128 pz = _mm_sub_ps(_mm_mul_ps(dx, e2y), _mm_mul_ps(dy, e2x));
+  const __m128 det =
+      _mm_add_ps(_mm_add_ps(_mm_mul_ps(e1x, px), _mm_mul_ps(e1y, py)), _mm_mul_ps(e1z, pz));
+  const __m128 inv_det = _mm_div_ps(_mm_set1_ps(1.0f), det);
+  // s = o - v0; u = dot(s, p) * inv_det
+  const __m128 sx = _mm_sub_ps(_mm_set1_ps(o.x), _mm_load_ps(p.v0_x));
+  const __m128 sy = _mm_sub_ps(_mm_set1_ps(o.y), _mm_load_ps(p.v0_y));
+  const __m128 sz = _mm_sub_ps(_mm_set1_ps(o.z), _mm_load_ps(p.v0_z));
+  const __m128 u = _mm_mul_ps(
+      _mm_add_ps(_mm_add_ps(_mm_mul_ps(sx, px), _mm_mul_ps(sy, py)), _mm_mul_ps(sz, pz)),
+      inv_det);
+  // q = cross(s, e1); v = dot(d, q) * inv_det; t = dot(e2, q) * inv_det
+  const __m128 qx = _mm_sub_ps(_mm_mul_ps(sy, e1z), _mm_mul_ps(sz, e1y));
+  const __m128 qy = _mm_sub_ps(_mm_mul_ps(sz, e1x), _mm_mul_ps(sx, e1z));
+  const __m128 qz = _mm_sub_ps(_mm_mul_ps(sx, e1y), _mm_mul_ps(sy, e1x));
+  const __m128 v = _mm_mul_ps(
+      _mm_add_ps(_mm_add_ps(_mm_mul_ps(dx, qx), _mm_mul_ps(dy, qy)), _mm_mul_ps(dz, qz)),
+      inv_det);
+  const __m128 t = _mm_mul_ps(
+      _mm_add_ps(_mm_add_ps(_mm_mul_ps(e2x, qx), _mm_mul_ps(e2y, qy)), _mm_mul_ps(e2z, qz)),
+      inv_det);
+  const __m128 lo = _mm_set1_ps(-SDF_BARYCENTRIC_SLACK);
+  const __m128 hi = _mm_set1_ps(1.0f + SDF_BARYCENTRIC_SLACK);
+  // Rejections exactly as the scalar code writes them (ordered comparisons: false on NaN).
+  __m128 reject = _mm_cmpeq_ps(det, _mm_setzero_ps());
+  reject = _mm_or_ps(reject, _mm_or_ps(_mm_cmplt_ps(u, lo), _mm_cmpgt_ps(u, hi)));
+  reject = _mm_or_ps(reject, _mm_or_ps(_mm_cmplt_ps(v, lo), _mm_cmpgt_ps(_mm_add_ps(u, v), hi)));
+  reject = _mm_or_ps(reject, _mm_or_ps(_mm_cmple_ps(t, _mm_set1_ps(tmin)),
+                                       _mm_cmpgt_ps(t, _mm_set1_ps(hit->t))));
+  reject = _mm_or_ps(reject, _mm_castsi128_ps(_mm_cmpeq_epi32(
+                                 _mm_load_si128(reinterpret_cast<const __m128i*>(p.id)),
+                                 _mm_set1_epi32(skip_id))));
+  int pass = ~_mm_movemask_ps(reject) & 0xF;
+  if (pass == 0) return;
+  alignas(16) float t_lane[4], det_lane[4];
+  _mm_store_ps(t_lane, t);
+  _mm_store_ps(det_lane, det);
+  while (pass) {
+    const int i = __builtin_ctz(pass);
+    pass &= pass - 1;
+    const float ti = t_lane[i];
+    if (ti > hit->t || (ti == hit->t && p.id[i] >= hit->id)) continue;
+    hit->t = ti;
+    hit->det = det_lane[i];
+    hit->id = p.id[i];
+  }
+}
+
+// One slab distance for eight boxes: the node's plane at `offset` (lo or hi of an axis).
+SDF_AVX2 inline __m256 slab(const char* node, std::size_t offset, __m256 inv, __m256 o_inv) {
+  return _mm256_fmsub_ps(_mm256_load_ps(reinterpret_cast<const float*>(node + offset)), inv,
+                         o_inv);
+}
+
+struct Entry {
+  std::int32_t child, count;
+  float t;
+};
+
+}  // namespace
+
+SDF_AVX2 kern::SdfHit bvh8_closest_hit_avx2(const Bvh8& bvh, glm::vec3 o, glm::vec3 d,
+                                            float tmin, std::int32_t skip_id) {
+  kern::SdfHit hit{INFINITY, 0.0f, -1};
+  if (bvh.empty()) return hit;
+  const glm::vec3 inv = kern::sdf_safe_inverse(d);
+  // Per axis, the plane a ray meets first is lo when it travels up the axis, hi otherwise:
+  // chosen once per ray as an offset into the node (empty slots then give near > far).
+  constexpr std::size_t kLoX = offsetof(Bvh8Node, lo_x), kHiX = offsetof(Bvh8Node, hi_x);
+  constexpr std::size_t kLoY = offsetof(Bvh8Node, lo_y), kHiY = offsetof(Bvh8Node, hi_y);
+  constexpr std::size_t kLoZ = offsetof(Bvh8Node, lo_z), kHiZ = offsetof(Bvh8Node, hi_z);
+  const std::size_t near_x = inv.x < 0.0f ? kHiX : kLoX, far_x = inv.x < 0.0f ? kLoX : kHiX;
+  const std::size_t near_y = inv.y < 0.0f ? kHiY : kLoY, far_y = inv.y < 0.0f ? kLoY : kHiY;
+  const std::size_t near_z = inv.z < 0.0f ? kHiZ : kLoZ, far_z = inv.z < 0.0f ? kLoZ : kHiZ;
+  const __m256 inv_x = _mm256_set1_ps(inv.x), inv_y = _mm256_set1_ps(inv.y),
+               inv_z = _mm256_set1_ps(inv.z);
+  const __m256 o_inv_x = _mm256_set1_ps(o.x * inv.x), o_inv_y = _mm256_set1_ps(o.y * inv.y),
+               o_inv_z = _mm256_set1_ps(o.z * inv.z);
+  const __m256 zero = _mm256_setzero_ps();
+
+  // Each visit pushes at most 7 more than it pops; the tree is at most ~60 levels deep.
+  Entry stack[512];
+  int sp = 0;
+  Entry cur{0, 0, 0.0f};
+  for (;;) {
+    if (cur.child < 0) {
+      const TrianglePacket4* packet = &bvh.packets[~cur.child];
+      for (std::int32_t k = 0; k < cur.count; ++k) intersect_packet(packet[k], o, d, tmin, skip_id, &hit);
+    } else {
+      const char* n = reinterpret_cast<const char*>(&bvh.nodes[cur.child]);
+      const __m256 t_near = _mm256_max_ps(
+          _mm256_max_ps(slab(n, near_x, inv_x, o_inv_x), slab(n, near_y, inv_y, o_inv_y)),
+          _mm256_max_ps(slab(n, near_z, inv_z, o_inv_z), zero));
+      const __m256 t_far = _mm256_min_ps(
+          _mm256_min_ps(slab(n, far_x, inv_x, o_inv_x), slab(n, far_y, inv_y, o_inv_y)),
+          _mm256_min_ps(slab(n, far_z, inv_z, o_inv_z), _mm256_set1_ps(hit.t)));
+      unsigned mask = _mm256_movemask_ps(_mm256_cmp_ps(t_near, t_far, _CMP_LE_OQ));
+      if (mask != 0) {
+        const Bvh8Node& node = *reinterpret_cast<const Bvh8Node*>(n);
+        alignas(32) float entry[8];
+        _mm256_store_ps(entry, t_near);
+        // The nearest box hit is visited next; the others are pushed farthest first, so the
+        // nearest of them is popped first.
+        Entry hits[8];
+        int h = 0;
+        while (mask) {
+          const int i = __builtin_ctz(mask);
+          mask &= mask - 1;
+          Entry c{node.child[i], node.count[i], entry[i]};
+          int j = h++;
+          while (j > 0 && hits[j - 1].t < c.t) {
+            hits[j] = hits[j - 1];
+            --j;
+          }
+          hits[j] = c;
+        }
+        for (int i = 0; i < h - 1; ++i) stack[sp++] = hits[i];
+        cur = hits[h - 1];
+        continue;
+      }
+    }
+    // Next: the nearest pushed box that may still hold a nearer hit (equal may hold a tie
+    // won by a smaller id).
+    do {
+      if (sp == 0) return hit;
+      cur = stack[--sp];
+    } while (cur.t > hit.t);
+  }
+}
+
+}  // namespace sdf
+
+#endif  // SDF_HAVE_BVH8
