@@ -14,6 +14,7 @@
 #include <atomic>
 #include <ctime>
 #include <cmath>
+#include <cstdlib>
 #include <cstdio>
 #include <fstream>
 #include <string>
@@ -158,12 +159,18 @@ int main(int argc, char** argv) {
   const sdf::Cone cone = sdf::make_cone(rays, 120.0, sdf::Sampling::Fibonacci, 0);
   const float tmin = sdf::minimum_closeness(m);
 
-  sdf::Bvh bvh = sdf::build_bvh(m);
+  sdf::BvhConfig config;  // CAST_TIMING_LEAF=n tries another leaf size
+  if (const char* leaf = std::getenv("CAST_TIMING_LEAF")) config.max_leaf_size = std::atoi(leaf);
+  sdf::Bvh bvh = sdf::build_bvh(m, config);
   sdf::grow_boxes_to_cover_hits(bvh);
   const sdf::Bvh4 wide4 = sdf::collapse_to_bvh4(bvh);
   sdf::CpuScene scene4;
   scene4.bvh4 = &wide4;
-  const sdf::Bvh8 wide8 = sdf::collapse_to_bvh8(bvh);
+  const char* merge = std::getenv("CAST_TIMING_MERGE");  // another merge_up_to
+  const sdf::Bvh8 wide8 =
+      sdf::collapse_to_bvh8(bvh, merge ? std::atoi(merge) : sdf::kBvh8MergeUpTo);
+  std::printf("bvh8: %zu nodes, %zu packets for %zu triangles\n", wide8.nodes.size(),
+              wide8.packets.size(), bvh.triangles.size());
   sdf::CpuScene scene8;
   scene8.bvh8 = &wide8;
   if (!sdf::bvh8_supported()) scene8 = scene4;

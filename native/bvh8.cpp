@@ -15,7 +15,10 @@ float half_area(const kern::SdfBvhNode& n) {
 
 class Collapser {
  public:
-  Collapser(const Bvh& bvh, Bvh8& out) : bvh_(bvh), out_(out) {}
+  Collapser(const Bvh& bvh, Bvh8& out, int merge_up_to)
+      : bvh_(bvh), out_(out), merge_up_to_(merge_up_to), triangles_below_(bvh.nodes.size(), -1) {
+    count_triangles(0);
+  }
 
   // Emits the wide node for binary node `index` and returns its position.
   std::int32_t emit(std::int32_t index) {
@@ -30,7 +33,7 @@ class Collapser {
       float best_area = -1.0f;
       for (int i = 0; i < used; ++i) {
         const kern::SdfBvhNode& n = bvh_.nodes[slots[i]];
-        if (n.count == 0 && half_area(n) > best_area) {
+        if (!is_leaf(slots[i]) && half_area(n) > best_area) {
           best_area = half_area(n);
           best = i;
         }
@@ -46,8 +49,8 @@ class Collapser {
       if (i < used) {
         const kern::SdfBvhNode n = bvh_.nodes[slots[i]];
         set_box(me, i, n);
-        if (n.count > 0) {
-          set_leaf(me, i, n);
+        if (is_leaf(slots[i])) {
+          set_leaf(me, i, slots[i]);
         } else {
           const std::int32_t child = emit(slots[i]);  // may reallocate out_.nodes
           out_.nodes[me].child[i] = child;
@@ -60,11 +63,13 @@ class Collapser {
     return me;
   }
 
+  bool root_is_leaf() const { return is_leaf(0); }
+
   // A tree whose root is a leaf: one wide node with one slot.
   void emit_leaf_root() {
     out_.nodes.emplace_back();
     set_box(0, 0, bvh_.nodes[0]);
-    set_leaf(0, 0, bvh_.nodes[0]);
+    set_leaf(0, 0, 0);
     for (int i = 1; i < 8; ++i) clear_slot(0, i);
   }
 
@@ -79,13 +84,39 @@ class Collapser {
     w.hi_z[i] = n.hi_z;
   }
 
-  // Repacks the leaf's triangles, in their order, four to a packet.
-  void set_leaf(std::int32_t node, int i, const kern::SdfBvhNode& n) {
+  // A binary leaf, or a subtree small enough to become one: its triangles in a packet or two
+  // cost one SIMD test each, less than visiting the boxes that would separate them.
+  bool is_leaf(std::int32_t index) const {
+    return bvh_.nodes[index].count > 0 || triangles_below_[index] <= merge_up_to_;
+  }
+
+  int count_triangles(std::int32_t index) {
+    const kern::SdfBvhNode& n = bvh_.nodes[index];
+    const int below = n.count > 0 ? n.count
+                                  : count_triangles(n.first) + count_triangles(n.first + 1);
+    return triangles_below_[index] = below;
+  }
+
+  // The triangles of the binary leaves below `index`, in tree order.
+  void gather(std::int32_t index, std::vector<std::int32_t>& out) const {
+    const kern::SdfBvhNode& n = bvh_.nodes[index];
+    if (n.count > 0) {
+      for (std::int32_t k = n.first; k < n.first + n.count; ++k) out.push_back(k);
+    } else {
+      gather(n.first, out);
+      gather(n.first + 1, out);
+    }
+  }
+
+  // Repacks the triangles below binary node `index`, four to a packet.
+  void set_leaf(std::int32_t node, int i, std::int32_t index) {
+    leaf_.clear();
+    gather(index, leaf_);
     const std::int32_t first = static_cast<std::int32_t>(out_.packets.size());
-    for (std::int32_t k = 0; k < n.count; ++k) {
+    for (std::size_t k = 0; k < leaf_.size(); ++k) {
       if (k % 4 == 0) out_.packets.push_back(empty_packet());
       TrianglePacket4& p = out_.packets.back();
-      const kern::SdfTriangle& t = bvh_.triangles[n.first + k];
+      const kern::SdfTriangle& t = bvh_.triangles[leaf_[k]];
       const int lane = k % 4;
       p.v0_x[lane] = t.v0_x;
       p.v0_y[lane] = t.v0_y;
@@ -119,6 +150,9 @@ class Collapser {
 
   const Bvh& bvh_;
   Bvh8& out_;
+  int merge_up_to_;
+  std::vector<int> triangles_below_;  // per binary node
+  std::vector<std::int32_t> leaf_;
 };
 
 }  // namespace
@@ -131,13 +165,13 @@ bool bvh8_supported() {
 #endif
 }
 
-Bvh8 collapse_to_bvh8(const Bvh& bvh) {
+Bvh8 collapse_to_bvh8(const Bvh& bvh, int merge_up_to) {
   Bvh8 out;
   if (bvh.empty()) return out;
   out.nodes.reserve(bvh.nodes.size() / 4 + 1);
   out.packets.reserve(bvh.triangles.size() / 2 + 1);
-  Collapser collapser(bvh, out);
-  if (bvh.nodes[0].count > 0) {
+  Collapser collapser(bvh, out, merge_up_to);
+  if (collapser.root_is_leaf()) {
     collapser.emit_leaf_root();
   } else {
     collapser.emit(0);

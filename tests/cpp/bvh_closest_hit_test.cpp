@@ -73,22 +73,27 @@ INSTANTIATE_TEST_SUITE_P(Sizes, BvhOnSoup, ::testing::Values(1, 5, 100, 5000, 20
 TEST(Bvh8, TiesOnSharedEdgesAndLargeLeavesMatchBruteForceBitForBit) {
   if (!bvh8_supported()) GTEST_SKIP() << "no AVX2 on this CPU";
   // Rays from inside a box at points of its edges and face diagonals, where two triangles
-  // tie; leaves of up to 16 triangles span several packets.
+  // tie; leaves of up to 16 triangles, and subtrees merged into one leaf (100: the whole box),
+  // span several packets.
   for (int leaf : {1, 4, 16}) {
     BvhConfig config;
     config.max_leaf_size = leaf;
     Bvh bvh = build_bvh(test::box(2, 3, 4).mesh(), config);
     grow_boxes_to_cover_hits(bvh);
-    const Bvh8 wide8 = collapse_to_bvh8(bvh);
-    for (int i = 0; i < 27; ++i) {
-      const glm::vec3 o(0.1f * (i % 3), 0.2f * (i / 3 % 3), -0.3f * (i / 9));
-      for (int k = 0; k < 125; ++k) {
-        const glm::vec3 target((k % 5 - 2) * 0.5f, (k / 5 % 5 - 2) * 0.75f, (k / 25 - 2) * 1.0f);
-        if (target == o) continue;  // no direction
-        const glm::vec3 d = glm::normalize(target - o);
-        const kern::SdfHit b = brute_force(bvh, o, d, 1e-4f, k % 12);
-        const kern::SdfHit e = bvh8_closest_hit_avx2(wide8, o, d, 1e-4f, k % 12);
-        ASSERT_EQ(std::memcmp(&e, &b, sizeof e), 0) << "leaf " << leaf << " ray " << i << "," << k;
+    for (int merge : {0, kBvh8MergeUpTo, 100}) {
+      const Bvh8 wide8 = collapse_to_bvh8(bvh, merge);
+      for (int i = 0; i < 27; ++i) {
+        const glm::vec3 o(0.1f * (i % 3), 0.2f * (i / 3 % 3), -0.3f * (i / 9));
+        for (int k = 0; k < 125; ++k) {
+          const glm::vec3 target((k % 5 - 2) * 0.5f, (k / 5 % 5 - 2) * 0.75f,
+                                 (k / 25 - 2) * 1.0f);
+          if (target == o) continue;  // no direction
+          const glm::vec3 d = glm::normalize(target - o);
+          const kern::SdfHit b = brute_force(bvh, o, d, 1e-4f, k % 12);
+          const kern::SdfHit e = bvh8_closest_hit_avx2(wide8, o, d, 1e-4f, k % 12);
+          ASSERT_EQ(std::memcmp(&e, &b, sizeof e), 0)
+              << "leaf " << leaf << " merge " << merge << " ray " << i << "," << k;
+        }
       }
     }
   }
