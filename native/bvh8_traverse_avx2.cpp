@@ -129,19 +129,39 @@ SDF_AVX2 kern::SdfHit bvh8_closest_hit_avx2(const Bvh8& bvh, glm::vec3 o, glm::v
         alignas(32) float entry[8];
         _mm256_store_ps(entry, t_near);
         // The nearest box hit is visited next; the others are pushed farthest first, so the
-        // nearest of them is popped first.
-        Entry hits[8];
-        int h = 0;
-        while (mask) {
-          const int i = __builtin_ctz(mask);
-          mask &= mask - 1;
-          Entry c{node.child[i], node.count[i], entry[i]};
+        // nearest of them is popped first. One or two boxes hit are 70% of visits (measured
+        // on bunny00 and armadillo-x4): they skip the sort.
+        const int a = __builtin_ctz(mask);
+        mask &= mask - 1;
+        const Entry first{node.child[a], node.count[a], entry[a]};
+        if (mask == 0) {
+          cur = first;
+          continue;
+        }
+        const int b = __builtin_ctz(mask);
+        mask &= mask - 1;
+        const Entry second{node.child[b], node.count[b], entry[b]};
+        if (mask == 0) {
+          const bool second_nearer = second.t < first.t;
+          stack[sp++] = second_nearer ? first : second;
+          cur = second_nearer ? second : first;
+          continue;
+        }
+        Entry hits[8] = {first};
+        int h = 1;
+        auto insert = [&](const Entry& c) {
           int j = h++;
           while (j > 0 && hits[j - 1].t < c.t) {
             hits[j] = hits[j - 1];
             --j;
           }
           hits[j] = c;
+        };
+        insert(second);
+        while (mask) {
+          const int i = __builtin_ctz(mask);
+          mask &= mask - 1;
+          insert(Entry{node.child[i], node.count[i], entry[i]});
         }
         for (int i = 0; i < h - 1; ++i) stack[sp++] = hits[i];
         cur = hits[h - 1];
