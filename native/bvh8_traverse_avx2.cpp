@@ -94,97 +94,150 @@ inline void prefetch(const Bvh8& bvh, const Entry& e) {
   for (int line = 0; line < 4; ++line) _mm_prefetch(p + 64 * line, _MM_HINT_T0);
 }
 
-}  // namespace
+// One ray's traversal as a state machine: step() does one visit (a node or a leaf), so that
+// two rays can take turns and the cache misses of one overlap the work of the other.
+class Ray {
+ public:
+  SDF_AVX2 Ray(const Bvh8& bvh, glm::vec3 o, glm::vec3 d, float tmin, std::int32_t skip_id)
+      : bvh_(bvh), o_(o), d_(d), tmin_(tmin), skip_id_(skip_id) {
+    const glm::vec3 inv = kern::sdf_safe_inverse(d);
+    // Per axis, the plane a ray meets first is lo when it travels up the axis, hi otherwise:
+    // chosen once per ray as an offset into the node (empty slots then give near > far).
+    constexpr std::size_t kLoX = offsetof(Bvh8Node, lo_x), kHiX = offsetof(Bvh8Node, hi_x);
+    constexpr std::size_t kLoY = offsetof(Bvh8Node, lo_y), kHiY = offsetof(Bvh8Node, hi_y);
+    constexpr std::size_t kLoZ = offsetof(Bvh8Node, lo_z), kHiZ = offsetof(Bvh8Node, hi_z);
+    near_x_ = inv.x < 0.0f ? kHiX : kLoX;
+    far_x_ = inv.x < 0.0f ? kLoX : kHiX;
+    near_y_ = inv.y < 0.0f ? kHiY : kLoY;
+    far_y_ = inv.y < 0.0f ? kLoY : kHiY;
+    near_z_ = inv.z < 0.0f ? kHiZ : kLoZ;
+    far_z_ = inv.z < 0.0f ? kLoZ : kHiZ;
+    inv_x_ = _mm256_set1_ps(inv.x);
+    inv_y_ = _mm256_set1_ps(inv.y);
+    inv_z_ = _mm256_set1_ps(inv.z);
+    o_inv_x_ = _mm256_set1_ps(o.x * inv.x);
+    o_inv_y_ = _mm256_set1_ps(o.y * inv.y);
+    o_inv_z_ = _mm256_set1_ps(o.z * inv.z);
+  }
 
-SDF_AVX2 kern::SdfHit bvh8_closest_hit_avx2(const Bvh8& bvh, glm::vec3 o, glm::vec3 d,
-                                            float tmin, std::int32_t skip_id) {
-  kern::SdfHit hit{INFINITY, 0.0f, -1};
-  if (bvh.empty()) return hit;
-  const glm::vec3 inv = kern::sdf_safe_inverse(d);
-  // Per axis, the plane a ray meets first is lo when it travels up the axis, hi otherwise:
-  // chosen once per ray as an offset into the node (empty slots then give near > far).
-  constexpr std::size_t kLoX = offsetof(Bvh8Node, lo_x), kHiX = offsetof(Bvh8Node, hi_x);
-  constexpr std::size_t kLoY = offsetof(Bvh8Node, lo_y), kHiY = offsetof(Bvh8Node, hi_y);
-  constexpr std::size_t kLoZ = offsetof(Bvh8Node, lo_z), kHiZ = offsetof(Bvh8Node, hi_z);
-  const std::size_t near_x = inv.x < 0.0f ? kHiX : kLoX, far_x = inv.x < 0.0f ? kLoX : kHiX;
-  const std::size_t near_y = inv.y < 0.0f ? kHiY : kLoY, far_y = inv.y < 0.0f ? kLoY : kHiY;
-  const std::size_t near_z = inv.z < 0.0f ? kHiZ : kLoZ, far_z = inv.z < 0.0f ? kLoZ : kHiZ;
-  const __m256 inv_x = _mm256_set1_ps(inv.x), inv_y = _mm256_set1_ps(inv.y),
-               inv_z = _mm256_set1_ps(inv.z);
-  const __m256 o_inv_x = _mm256_set1_ps(o.x * inv.x), o_inv_y = _mm256_set1_ps(o.y * inv.y),
-               o_inv_z = _mm256_set1_ps(o.z * inv.z);
-  const __m256 zero = _mm256_setzero_ps();
+  const kern::SdfHit& hit() const { return hit_; }
 
-  // Each visit pushes at most 7 more than it pops; the tree is at most ~60 levels deep.
-  Entry stack[512];
-  int sp = 0;
-  Entry cur{0, 0, 0.0f};
-  for (;;) {
-    if (cur.child < 0) {
-      const TrianglePacket4* packet = &bvh.packets[~cur.child];
-      for (std::int32_t k = 0; k < cur.count; ++k) intersect_packet(packet[k], o, d, tmin, skip_id, &hit);
-    } else {
-      const char* n = reinterpret_cast<const char*>(&bvh.nodes[cur.child]);
-      const __m256 t_near = _mm256_max_ps(
-          _mm256_max_ps(slab(n, near_x, inv_x, o_inv_x), slab(n, near_y, inv_y, o_inv_y)),
-          _mm256_max_ps(slab(n, near_z, inv_z, o_inv_z), zero));
-      const __m256 t_far = _mm256_min_ps(
-          _mm256_min_ps(slab(n, far_x, inv_x, o_inv_x), slab(n, far_y, inv_y, o_inv_y)),
-          _mm256_min_ps(slab(n, far_z, inv_z, o_inv_z), _mm256_set1_ps(hit.t)));
-      unsigned mask = _mm256_movemask_ps(_mm256_cmp_ps(t_near, t_far, _CMP_LE_OQ));
-      if (mask != 0) {
-        const Bvh8Node& node = *reinterpret_cast<const Bvh8Node*>(n);
-        alignas(32) float entry[8];
-        _mm256_store_ps(entry, t_near);
-        // The nearest box hit is visited next; the others are pushed farthest first, so the
-        // nearest of them is popped first. One or two boxes hit are 70% of visits (measured
-        // on bunny00 and armadillo-x4): they skip the sort.
-        const int a = __builtin_ctz(mask);
-        mask &= mask - 1;
-        const Entry first{node.child[a], node.count[a], entry[a]};
-        if (mask == 0) {
-          cur = first;
-          continue;
-        }
-        const int b = __builtin_ctz(mask);
-        mask &= mask - 1;
-        const Entry second{node.child[b], node.count[b], entry[b]};
-        if (mask == 0) {
-          const bool second_nearer = second.t < first.t;
-          stack[sp++] = second_nearer ? first : second;
-          cur = second_nearer ? second : first;
-          prefetch(bvh, stack[sp - 1]);
-          continue;
-        }
-        Entry hits[8] = {first};
-        int h = 1;
-        auto insert = [&](const Entry& c) {
-          int j = h++;
-          while (j > 0 && hits[j - 1].t < c.t) {
-            hits[j] = hits[j - 1];
-            --j;
-          }
-          hits[j] = c;
-        };
-        insert(second);
-        while (mask) {
-          const int i = __builtin_ctz(mask);
-          mask &= mask - 1;
-          insert(Entry{node.child[i], node.count[i], entry[i]});
-        }
-        for (int i = 0; i < h - 1; ++i) stack[sp++] = hits[i];
-        cur = hits[h - 1];
-        prefetch(bvh, stack[sp - 1]);
-        continue;
-      }
+  // One visit; false once the ray is done.
+  SDF_AVX2 inline __attribute__((always_inline)) bool step() {
+    if (cur_.child < 0) {
+      const TrianglePacket4* packet = &bvh_.packets[~cur_.child];
+      for (std::int32_t k = 0; k < cur_.count; ++k)
+        intersect_packet(packet[k], o_, d_, tmin_, skip_id_, &hit_);
+    } else if (visit_node()) {
+      return true;
     }
     // Next: the nearest pushed box that may still hold a nearer hit (equal may hold a tie
     // won by a smaller id).
     do {
-      if (sp == 0) return hit;
-      cur = stack[--sp];
-    } while (cur.t > hit.t);
+      if (sp_ == 0) return false;
+      cur_ = stack_[--sp_];
+    } while (cur_.t > hit_.t);
+    return true;
   }
+
+ private:
+  // Tests the eight boxes of node cur_; false when none is hit. Otherwise the nearest box hit
+  // becomes cur_ and the others are pushed farthest first, so the nearest of them pops first.
+  SDF_AVX2 inline __attribute__((always_inline)) bool visit_node() {
+    const char* n = reinterpret_cast<const char*>(&bvh_.nodes[cur_.child]);
+    const __m256 t_near = _mm256_max_ps(
+        _mm256_max_ps(slab(n, near_x_, inv_x_, o_inv_x_), slab(n, near_y_, inv_y_, o_inv_y_)),
+        _mm256_max_ps(slab(n, near_z_, inv_z_, o_inv_z_), _mm256_setzero_ps()));
+    const __m256 t_far = _mm256_min_ps(
+        _mm256_min_ps(slab(n, far_x_, inv_x_, o_inv_x_), slab(n, far_y_, inv_y_, o_inv_y_)),
+        _mm256_min_ps(slab(n, far_z_, inv_z_, o_inv_z_), _mm256_set1_ps(hit_.t)));
+    unsigned mask = _mm256_movemask_ps(_mm256_cmp_ps(t_near, t_far, _CMP_LE_OQ));
+    if (mask == 0) return false;
+    const Bvh8Node& node = *reinterpret_cast<const Bvh8Node*>(n);
+    alignas(32) float entry[8];
+    _mm256_store_ps(entry, t_near);
+    // One or two boxes hit are 70% of visits (measured on bunny00 and armadillo-x4): they
+    // skip the sort.
+    const int a = __builtin_ctz(mask);
+    mask &= mask - 1;
+    const Entry first{node.child[a], node.count[a], entry[a]};
+    if (mask == 0) {
+      cur_ = first;
+      return true;
+    }
+    const int b = __builtin_ctz(mask);
+    mask &= mask - 1;
+    const Entry second{node.child[b], node.count[b], entry[b]};
+    if (mask == 0) {
+      const bool second_nearer = second.t < first.t;
+      stack_[sp_++] = second_nearer ? first : second;
+      cur_ = second_nearer ? second : first;
+      prefetch(bvh_, stack_[sp_ - 1]);
+      return true;
+    }
+    Entry hits[8] = {first};
+    int h = 1;
+    auto insert = [&](const Entry& c) {
+      int j = h++;
+      while (j > 0 && hits[j - 1].t < c.t) {
+        hits[j] = hits[j - 1];
+        --j;
+      }
+      hits[j] = c;
+    };
+    insert(second);
+    while (mask) {
+      const int i = __builtin_ctz(mask);
+      mask &= mask - 1;
+      insert(Entry{node.child[i], node.count[i], entry[i]});
+    }
+    for (int i = 0; i < h - 1; ++i) stack_[sp_++] = hits[i];
+    cur_ = hits[h - 1];
+    prefetch(bvh_, stack_[sp_ - 1]);
+    return true;
+  }
+
+  __m256 inv_x_, inv_y_, inv_z_, o_inv_x_, o_inv_y_, o_inv_z_;
+  const Bvh8& bvh_;
+  glm::vec3 o_, d_;
+  float tmin_;
+  std::int32_t skip_id_;
+  std::size_t near_x_, far_x_, near_y_, far_y_, near_z_, far_z_;
+  kern::SdfHit hit_{INFINITY, 0.0f, -1};
+  Entry cur_{0, 0, 0.0f};
+  int sp_ = 0;
+  // Each visit pushes at most 7 more than it pops; the tree is at most ~60 levels deep.
+  Entry stack_[512];
+};
+
+}  // namespace
+
+SDF_AVX2 kern::SdfHit bvh8_closest_hit_avx2(const Bvh8& bvh, glm::vec3 o, glm::vec3 d,
+                                            float tmin, std::int32_t skip_id) {
+  if (bvh.empty()) return kern::SdfHit{INFINITY, 0.0f, -1};
+  Ray ray(bvh, o, d, tmin, skip_id);
+  while (ray.step()) {
+  }
+  return ray.hit();
+}
+
+SDF_AVX2 void bvh8_closest_hits_avx2(const Bvh8& bvh, glm::vec3 o, const glm::vec3* d,
+                                     int count, float tmin, std::int32_t skip_id,
+                                     kern::SdfHit* hits) {
+  int r = 0;
+  for (; r + 1 < count && !bvh.empty(); r += 2) {
+    Ray a(bvh, o, d[r], tmin, skip_id), b(bvh, o, d[r + 1], tmin, skip_id);
+    bool a_on = true, b_on = true;
+    while (a_on && b_on) {
+      a_on = a.step();
+      b_on = b.step();
+    }
+    while (a_on) a_on = a.step();
+    while (b_on) b_on = b.step();
+    hits[r] = a.hit();
+    hits[r + 1] = b.hit();
+  }
+  for (; r < count; ++r) hits[r] = bvh8_closest_hit_avx2(bvh, o, d[r], tmin, skip_id);
 }
 
 }  // namespace sdf
