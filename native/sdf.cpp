@@ -54,6 +54,7 @@ void cast_on_cpu(const Mesh& mesh, const Options& options, const SamplePoints& p
     if (bvh8_supported()) {
       wide8 = collapse_to_bvh8(bvh);
       scene.bvh8 = &wide8;
+      bvh = Bvh();  // the 8-wide tree holds its own copy of the triangles
     } else {
       wide4 = collapse_to_bvh4(bvh);
       scene.bvh4 = &wide4;
