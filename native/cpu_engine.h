@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "bvh4.h"
+#include "bvh8.h"
 #include "octree.h"
 #include "parallel.h"
 #include "rays.h"
@@ -14,8 +15,9 @@
 
 namespace sdf {
 
-// Exactly one of the two is set.
+// Exactly one of the three is set. bvh8 only where bvh8_supported() (AVX2), else bvh4.
 struct CpuScene {
+  const Bvh8* bvh8 = nullptr;
   const Bvh4* bvh4 = nullptr;
   const Octree* octree = nullptr;
 };

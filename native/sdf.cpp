@@ -6,6 +6,8 @@
 
 #include "bvh.h"
 #include "bvh4.h"
+#include "bvh8.h"
+#include "bvh_margin.h"
 #include "cpu_engine.h"
 #ifdef SDF_HAVE_OPENCL
 #include "opencl/opencl_engine.h"
@@ -34,21 +36,31 @@ void report(const ProgressFn& progress, double fraction) {
 
 const char* accel_name(Accel a) { return a == Accel::Bvh ? "bvh" : "octree"; }
 
-// The acceleration structure options.accel asks for: the binary BVH and, when `wide`, its
-// 4-wide collapse (which points at the binary tree's triangles, so a Structures never moves),
-// or the octree.
+// Which collapse of the binary BVH a caster reads.
+enum class Width { Binary, Four, Eight };
+
+// The acceleration structure options.accel asks for: the binary BVH (boxes grown so that no
+// engine prunes a hit, see bvh_margin.h) and its collapse to `width`, or the octree. The
+// 4-wide tree points at the binary tree's triangles, so a Structures never moves; the 8-wide
+// one copies them, and the binary tree is then freed.
 struct Structures {
   Bvh bvh;
-  Bvh4 wide;
+  Bvh4 wide4;
+  Bvh8 wide8;
   Octree tree;
 };
 
-void build_structures(const Mesh& mesh, const Options& options, bool wide, Structures& s) {
+void build_structures(const Mesh& mesh, const Options& options, Width width, Structures& s) {
   if (options.accel == Accel::Bvh) {
     BvhConfig config;
     config.threads = options.threads;
     s.bvh = build_bvh(mesh, config);
-    if (wide) s.wide = collapse_to_bvh4(s.bvh);
+    grow_boxes_to_cover_hits(s.bvh);
+    if (width == Width::Four) s.wide4 = collapse_to_bvh4(s.bvh);
+    if (width == Width::Eight) {
+      s.wide8 = collapse_to_bvh8(s.bvh);
+      s.bvh = Bvh();
+    }
   } else {
     s.tree = build_octree(mesh, options.octree);
   }
@@ -59,11 +71,16 @@ void build_structures(const Mesh& mesh, const Options& options, bool wide, Struc
 void cast_on_cpu(const Mesh& mesh, const Options& options, const SamplePoints& points,
                  const std::vector<std::uint32_t>& order, const Cone& cone, Output& out,
                  Stopwatch& clock, const ProgressFn& progress) {
+  // The 8-wide tree needs AVX2 (chosen at run time); without it the 4-wide SSE tree.
   Structures built;
-  build_structures(mesh, options, true, built);
+  build_structures(mesh, options, bvh8_supported() ? Width::Eight : Width::Four, built);
   CpuScene scene;
   if (options.accel == Accel::Bvh) {
-    scene.bvh4 = &built.wide;
+    if (bvh8_supported()) {
+      scene.bvh8 = &built.wide8;
+    } else {
+      scene.bvh4 = &built.wide4;
+    }
   } else {
     scene.octree = &built.tree;
   }
@@ -83,11 +100,11 @@ void cast_on_opencl(const Mesh& mesh, const Options& options, const SamplePoints
   const std::vector<const cl::Device*> devices = cl::select_devices(options.engine);
   const bool wide = cl::wants_wide_bvh(devices);
   Structures built;
-  build_structures(mesh, options, wide, built);
+  build_structures(mesh, options, wide ? Width::Four : Width::Binary, built);
   cl::Scene scene;
   if (options.accel == Accel::Bvh) {
     scene.bvh = &built.bvh;
-    scene.bvh4 = wide ? &built.wide : nullptr;
+    scene.bvh4 = wide ? &built.wide4 : nullptr;
   } else {
     scene.octree = &built.tree;
   }

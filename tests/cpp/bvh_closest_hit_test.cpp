@@ -2,11 +2,15 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cstring>
 #include <random>
+#include <vector>
 
 #include "../../kernels/sdf_bvh_traverse.h"
 #include "bvh.h"
+#include "bvh_margin.h"
 #include "bvh4_traverse.h"
+#include "bvh8_traverse.h"
 #include "test_meshes.h"
 
 namespace sdf {
@@ -31,8 +35,10 @@ TEST_P(BvhOnSoup, ClosestHitEqualsBruteForce) {
   const Mesh mesh = test::soup(GetParam(), 11).mesh();
   BvhConfig config;
   config.threads = 2;
-  const Bvh bvh = build_bvh(mesh, config);
+  Bvh bvh = build_bvh(mesh, config);
+  grow_boxes_to_cover_hits(bvh);
   const Bvh4 wide = collapse_to_bvh4(bvh);
+  const Bvh8 wide8 = collapse_to_bvh8(bvh);
   std::mt19937 rng(5);
   std::uniform_real_distribution<float> u(-1.2f, 1.2f);
   int hits = 0;
@@ -46,6 +52,13 @@ TEST_P(BvhOnSoup, ClosestHitEqualsBruteForce) {
     ASSERT_EQ(a.t, b.t) << "ray " << r;
     const kern::SdfHit w = bvh4_closest_hit(wide, o, d, 1e-4f, skip);
     ASSERT_EQ(w.t, b.t) << "4-wide, ray " << r;
+#if SDF_HAVE_BVH8
+    if (bvh8_supported()) {
+      // Bit for bit: the SIMD triangle test rounds as the scalar one does.
+      const kern::SdfHit e = bvh8_closest_hit_avx2(wide8, o, d, 1e-4f, skip);
+      ASSERT_EQ(std::memcmp(&e, &b, sizeof e), 0) << "8-wide, ray " << r;
+    }
+#endif
     if (std::isfinite(a.t)) {
       ++hits;
       EXPECT_EQ(a.det < 0.0f, b.det < 0.0f);
@@ -56,6 +69,47 @@ TEST_P(BvhOnSoup, ClosestHitEqualsBruteForce) {
 }
 
 INSTANTIATE_TEST_SUITE_P(Sizes, BvhOnSoup, ::testing::Values(1, 5, 100, 5000, 20000));
+
+#if SDF_HAVE_BVH8
+TEST(Bvh8, TiesOnSharedEdgesAndLargeLeavesMatchBruteForceBitForBit) {
+  if (!bvh8_supported()) GTEST_SKIP() << "no AVX2 on this CPU";
+  // Rays from inside a box at points of its edges and face diagonals, where two triangles
+  // tie; leaves of up to 16 triangles, and subtrees merged into one leaf (100: the whole box),
+  // span several packets.
+  for (int leaf : {1, 4, 16}) {
+    BvhConfig config;
+    config.max_leaf_size = leaf;
+    Bvh bvh = build_bvh(test::box(2, 3, 4).mesh(), config);
+    grow_boxes_to_cover_hits(bvh);
+    for (int merge : {0, kBvh8MergeUpTo, 100}) {
+      const Bvh8 wide8 = collapse_to_bvh8(bvh, merge);
+      for (int i = 0; i < 27; ++i) {
+        const glm::vec3 o(0.1f * (i % 3), 0.2f * (i / 3 % 3), -0.3f * (i / 9));
+        std::vector<glm::vec3> directions;
+        for (int k = 0; k < 125; ++k) {
+          const glm::vec3 target((k % 5 - 2) * 0.5f, (k / 5 % 5 - 2) * 0.75f,
+                                 (k / 25 - 2) * 1.0f);
+          if (target != o) directions.push_back(glm::normalize(target - o));  // else none
+        }
+        const int skip = i % 12;
+        // Rays from one origin two at a time (an odd count leaves one alone), as the engine
+        // casts them, and one at a time.
+        std::vector<kern::SdfHit> pairs(directions.size());
+        bvh8_closest_hits_avx2(wide8, o, directions.data(), static_cast<int>(directions.size()),
+                               1e-4f, skip, pairs.data());
+        for (std::size_t k = 0; k < directions.size(); ++k) {
+          const kern::SdfHit b = brute_force(bvh, o, directions[k], 1e-4f, skip);
+          const kern::SdfHit e = bvh8_closest_hit_avx2(wide8, o, directions[k], 1e-4f, skip);
+          ASSERT_EQ(std::memcmp(&e, &b, sizeof e), 0)
+              << "leaf " << leaf << " merge " << merge << " ray " << i << "," << k;
+          ASSERT_EQ(std::memcmp(&pairs[k], &b, sizeof b), 0)
+              << "in pairs: leaf " << leaf << " merge " << merge << " ray " << i << "," << k;
+        }
+      }
+    }
+  }
+}
+#endif
 
 TEST(Bvh, EveryTriangleOnceAndBoxesNest) {
   const Mesh mesh = test::soup(20000, 3).mesh();
