@@ -4,17 +4,28 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <vector>
 
 #include "../kernels/sdf_intersect.h"
+#include "parallel.h"
 
 namespace sdf {
 
-float bvh_box_margin(const Bvh& bvh) {
+float bvh_box_margin(const Bvh& bvh, unsigned threads) {
   if (bvh.empty()) return 0.0f;
-  float edge = 0.0f;
-  for (const kern::SdfTriangle& t : bvh.triangles)
-    edge = std::max({edge, std::fabs(t.e1_x), std::fabs(t.e1_y), std::fabs(t.e1_z),
-                     std::fabs(t.e2_x), std::fabs(t.e2_y), std::fabs(t.e2_z)});
+  // The longest edge component, per chunk then over chunks (max is exact in any order).
+  constexpr std::size_t kGrain = 1 << 16;
+  std::vector<float> chunk_edge((bvh.triangles.size() + kGrain - 1) / kGrain, 0.0f);
+  parallel_for(bvh.triangles.size(), kGrain, threads, [&](std::size_t begin, std::size_t end) {
+    float edge = 0.0f;
+    for (std::size_t i = begin; i < end; ++i) {
+      const kern::SdfTriangle& t = bvh.triangles[i];
+      edge = std::max({edge, std::fabs(t.e1_x), std::fabs(t.e1_y), std::fabs(t.e1_z),
+                       std::fabs(t.e2_x), std::fabs(t.e2_y), std::fabs(t.e2_z)});
+    }
+    chunk_edge[begin / kGrain] = edge;
+  });
+  const float edge = *std::max_element(chunk_edge.begin(), chunk_edge.end());
   const kern::SdfBvhNode& root = bvh.nodes[0];
   const float coordinate =
       std::max({std::fabs(root.lo_x), std::fabs(root.lo_y), std::fabs(root.lo_z),
@@ -25,16 +36,19 @@ float bvh_box_margin(const Bvh& bvh) {
          std::numeric_limits<float>::min();
 }
 
-void grow_boxes_to_cover_hits(Bvh& bvh) {
-  const float m = bvh_box_margin(bvh);
-  for (kern::SdfBvhNode& n : bvh.nodes) {
-    n.lo_x -= m;
-    n.lo_y -= m;
-    n.lo_z -= m;
-    n.hi_x += m;
-    n.hi_y += m;
-    n.hi_z += m;
-  }
+void grow_boxes_to_cover_hits(Bvh& bvh, unsigned threads) {
+  const float m = bvh_box_margin(bvh, threads);
+  parallel_for(bvh.nodes.size(), 1 << 16, threads, [&](std::size_t begin, std::size_t end) {
+    for (std::size_t i = begin; i < end; ++i) {
+      kern::SdfBvhNode& n = bvh.nodes[i];
+      n.lo_x -= m;
+      n.lo_y -= m;
+      n.lo_z -= m;
+      n.hi_x += m;
+      n.hi_y += m;
+      n.hi_z += m;
+    }
+  });
 }
 
 }  // namespace sdf

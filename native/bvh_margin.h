@@ -15,10 +15,10 @@ namespace sdf {
 
 // The growth used by grow_boxes_to_cover_hits: 4 x the slack of the largest triangle edge
 // (per axis) plus 2^-20 of the largest coordinate (16 ulps and more at the scene's scale).
-float bvh_box_margin(const Bvh& bvh);
+float bvh_box_margin(const Bvh& bvh, unsigned threads = 0);
 
 // Grows every node box by bvh_box_margin(bvh) on each side. Call once, after build_bvh and
-// before traversing or collapsing the tree.
-void grow_boxes_to_cover_hits(Bvh& bvh);
+// before traversing or collapsing the tree. `threads` as everywhere (0: every core).
+void grow_boxes_to_cover_hits(Bvh& bvh, unsigned threads = 0);
 
 }  // namespace sdf

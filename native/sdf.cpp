@@ -55,7 +55,7 @@ void build_structures(const Mesh& mesh, const Options& options, Width width, Str
     BvhConfig config;
     config.threads = options.threads;
     s.bvh = build_bvh(mesh, config);
-    grow_boxes_to_cover_hits(s.bvh);
+    grow_boxes_to_cover_hits(s.bvh, options.threads);
     if (width == Width::Four) s.wide4 = collapse_to_bvh4(s.bvh);
     if (width == Width::Eight) {
       s.wide8 = collapse_to_bvh8(s.bvh);
