@@ -34,5 +34,7 @@ if [ "$(nvidia-smi -L | wc -l)" -ge 2 ]; then
   PYTHONUNBUFFERED=1 "$PY" bench/bench.py --engines "$gpu,opencl:all" --only armadillo-x16,bunny00-x16 \
     --title "Several GPUs" --out "$OUT/RESULTS-gpu.md"
 fi
+echo "== stages of compute() on the GPU (end to end)"
+PYTHONUNBUFFERED=1 "$PY" bench/stages.py "$gpu" | tee "$OUT/stages.txt"
 PYTHONUNBUFFERED=1 "$PY" bench/bench.py --engines "$gpu" --rays 64 \
   --only bunny00-x16,armadillo-x16 --title "64 rays" --out "$OUT/RESULTS-gpu.md"
