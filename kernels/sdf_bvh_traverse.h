@@ -16,10 +16,7 @@ SDF_KERNEL_BEGIN
 SDF_INLINE SdfHit sdf_bvh_closest_hit(SDF_GLOBAL const SdfBvhNode* nodes,
                                       SDF_GLOBAL const SdfTriangle* tris, float3 o, float3 d,
                                       float tmin, sdf_int32 skip_id) {
-  SdfHit hit;
-  hit.t = INFINITY;
-  hit.det = 0.0f;
-  hit.id = -1;
+  SdfHit hit = sdf_no_hit();
   float3 inv_d = sdf_safe_inverse(d);
   /* Far children wait here with their entry distance, so a pop that can no longer hold a
    * nearer hit is dropped without touching the node again. */

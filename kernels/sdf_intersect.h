@@ -16,6 +16,15 @@ typedef struct SdfHit {
   sdf_int32 id;
 } SdfHit;
 
+/* No hit yet: t = INFINITY. */
+SDF_INLINE SdfHit sdf_no_hit(void) {
+  SdfHit hit;
+  hit.t = INFINITY;
+  hit.det = 0.0f;
+  hit.id = -1;
+  return hit;
+}
+
 SDF_INLINE float3 sdf_tri_v0(SDF_GLOBAL const SdfTriangle* tri) {
   return make_float3(tri->v0_x, tri->v0_y, tri->v0_z);
 }

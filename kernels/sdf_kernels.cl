@@ -23,6 +23,25 @@
 #define SDF_MAX_RAYS 32
 #endif
 
+/* Ray r of point p in world space, and its angle to the axis: from the host's table for the
+ * deterministic samplings, from the device's own sin and cos for random sampling. */
+static inline float3 sdf_cast_direction(SdfCastParams params,
+                                        __global const float4* restrict local_rays, int r,
+                                        uint p, float3 axis, float3 b1, float3 b2,
+                                        float* angle) {
+  float3 dir_local;
+  if (params.sampling == SDF_SAMPLING_RANDOM) {
+    dir_local = sdf_ray_local(params.sampling, r, params.rays, params.one_minus_cos_half,
+                              params.sin_half, params.seed, p);
+    *angle = sdf_ray_angle(dir_local);
+  } else {
+    float4 table = local_rays[r];
+    dir_local = table.xyz;
+    *angle = table.w;
+  }
+  return sdf_to_world(dir_local, b1, b2, axis);
+}
+
 #define SDF_CAST_BODY(CLOSEST_HIT)                                                    \
   uint gid = get_global_id(0);                                                        \
   if (gid >= params.count) return;                                                    \
@@ -42,19 +61,8 @@
   float angles[SDF_MAX_RAYS];                                                         \
   int kept = 0;                                                                       \
   for (int r = 0; r < params.rays; ++r) {                                             \
-    float3 dir_local;                                                                 \
     float angle;                                                                      \
-    if (params.sampling == SDF_SAMPLING_RANDOM) {                                     \
-      dir_local = sdf_ray_local(params.sampling, r, params.rays,                      \
-                                params.one_minus_cos_half, params.sin_half,           \
-                                params.seed, p);                                      \
-      angle = sdf_ray_angle(dir_local);                                               \
-    } else {                                                                          \
-      float4 table = local_rays[r];                                                   \
-      dir_local = table.xyz;                                                          \
-      angle = table.w;                                                                \
-    }                                                                                 \
-    float3 d = sdf_to_world(dir_local, b1, b2, axis);                                 \
+    float3 d = sdf_cast_direction(params, local_rays, r, p, axis, b1, b2, &angle);    \
     SdfHit hit = CLOSEST_HIT;                                                         \
     if (hit.det < 0.0f && hit.t < INFINITY) {                                         \
       lengths[kept] = hit.t;                                                          \
@@ -91,18 +99,7 @@
     int own = own_face[p];                                                            \
     float3 b1, b2;                                                                    \
     sdf_frame(params.sampling, axis, vload3(p, tangents), &b1, &b2);                  \
-    float3 dir_local;                                                                 \
-    if (params.sampling == SDF_SAMPLING_RANDOM) {                                     \
-      dir_local = sdf_ray_local(params.sampling, r, params.rays,                      \
-                                params.one_minus_cos_half, params.sin_half,           \
-                                params.seed, p);                                      \
-      angle = sdf_ray_angle(dir_local);                                               \
-    } else {                                                                          \
-      float4 table = local_rays[r];                                                   \
-      dir_local = table.xyz;                                                          \
-      angle = table.w;                                                                \
-    }                                                                                 \
-    float3 d = sdf_to_world(dir_local, b1, b2, axis);                                 \
+    float3 d = sdf_cast_direction(params, local_rays, r, p, axis, b1, b2, &angle);    \
     SdfHit hit = CLOSEST_HIT;                                                         \
     if (hit.det < 0.0f && hit.t < INFINITY) t_kept = hit.t;                           \
   }                                                                                   \

@@ -52,10 +52,7 @@ SDF_INLINE SdfHit sdf_octree_closest_hit(SDF_GLOBAL const sdf_uint32* nodes,
                                          SDF_GLOBAL const sdf_uint32* leaves,
                                          SDF_GLOBAL const SdfTriangle* tris, SdfOctreeRoot root,
                                          float3 o, float3 d, float tmin, sdf_int32 skip_id) {
-  SdfHit hit;
-  hit.t = INFINITY;
-  hit.det = 0.0f;
-  hit.id = -1;
+  SdfHit hit = sdf_no_hit();
   float3 inv_d = sdf_safe_inverse(d);
   sdf_uint32 stack_node[SDF_OCTREE_STACK_SIZE];
   float stack_lo[SDF_OCTREE_STACK_SIZE * 3];
