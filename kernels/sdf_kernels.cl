@@ -15,6 +15,7 @@
  * one contiguous range. */
 #include "sdf_bvh_traverse.h"
 #include "sdf_bvh4_traverse.h"
+#include "sdf_bvh8_traverse.h"
 #include "sdf_octree.h"
 #include "sdf_reduce.h"
 #include "sdf_smooth_projected.h"
@@ -146,6 +147,11 @@ __kernel void sdf_cast_bvh(__global const SdfBvhNode* restrict nodes,
 __kernel void sdf_cast_bvh4(__global const SdfBvh4Node* restrict nodes,
                             __global const SdfTriangle* restrict tris, SDF_POINT_ARGS) {
   SDF_CAST_BODY(sdf_bvh4_closest_hit(nodes, tris, origin, d, params.tmin, own))
+}
+
+__kernel void sdf_cast_bvh8(__global const SdfBvh8Node* restrict nodes,
+                            __global const SdfTrianglePacket4* restrict packets, SDF_POINT_ARGS) {
+  SDF_CAST_BODY(sdf_bvh8_closest_hit(nodes, packets, origin, d, params.tmin, own))
 }
 
 __kernel void sdf_cast_bvh_per_ray(__global const SdfBvhNode* restrict nodes,

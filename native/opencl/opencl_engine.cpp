@@ -53,18 +53,32 @@ CastKernel cast_kernel_for(const Device& device) {
     const std::string name = forced;
     if (name == "bvh_per_point") return CastKernel::BvhPerPoint;
     if (name == "bvh4_per_point") return CastKernel::Bvh4PerPoint;
+    if (name == "bvh8_per_point") return CastKernel::Bvh8PerPoint;
     if (name == "bvh_per_ray") return CastKernel::BvhPerRay;
     if (!name.empty())
-      throw std::invalid_argument("SDF_OPENCL_KERNEL='" + name +
-                                  "': use bvh_per_point, bvh4_per_point or bvh_per_ray");
+      throw std::invalid_argument(
+          "SDF_OPENCL_KERNEL='" + name +
+          "': use bvh_per_point, bvh4_per_point, bvh8_per_point or bvh_per_ray");
   }
   return device.gpu ? CastKernel::BvhPerRay : CastKernel::Bvh4PerPoint;
 }
 
-bool wants_wide_bvh(const std::vector<const Device*>& devices) {
-  return std::any_of(devices.begin(), devices.end(), [](const Device* d) {
-    return cast_kernel_for(*d) == CastKernel::Bvh4PerPoint;
-  });
+WantedBvhs wanted_bvhs(const std::vector<const Device*>& devices) {
+  WantedBvhs wanted;
+  for (const Device* d : devices) {
+    switch (cast_kernel_for(*d)) {
+      case CastKernel::Bvh8PerPoint:
+        wanted.eight = true;
+        break;
+      case CastKernel::Bvh4PerPoint:
+        wanted.four = true;
+        wanted.binary = true;  // its triangles, and the fallback for trees too deep
+        break;
+      default:
+        wanted.binary = true;
+    }
+  }
+  return wanted;
 }
 
 namespace {
@@ -86,9 +100,15 @@ void run_device(const Device& device, const Scene& scene, const SamplePoints& po
                                     3 * n * sizeof(float)};
   const std::size_t first_accel = sizes.size();
   const CastKernel choice = cast_kernel_for(device);
-  const bool wide = choice == CastKernel::Bvh4PerPoint && scene.bvh4 &&
+  // The 8-wide tree needs no depth check: its stack holds the deepest tree the builder makes
+  // (sdf_bvh8_traverse.h).
+  const bool wide8 = choice == CastKernel::Bvh8PerPoint && scene.bvh8;
+  const bool wide = !wide8 && choice == CastKernel::Bvh4PerPoint && scene.bvh4 &&
                     bvh4_depth(*scene.bvh4) <= SDF_BVH4_MAX_DEPTH;
-  if (wide) {
+  if (wide8) {
+    sizes.push_back(bytes_of(scene.bvh8->nodes));
+    sizes.push_back(bytes_of(scene.bvh8->packets));
+  } else if (wide) {
     sizes.push_back(bytes_of(scene.bvh4->nodes));
     sizes.push_back(bytes_of(scene.bvh->triangles));
   } else if (scene.bvh) {
@@ -136,7 +156,13 @@ void run_device(const Device& device, const Scene& scene, const SamplePoints& po
   // 2-4% faster than 8 and 7-9% faster than 2; 16 and 32 slower), fewer when registers limit
   // the group size.
   std::size_t points_per_group = 0;
-  if (wide) {
+  if (wide8) {
+    accel0 = std::make_unique<Buffer>(s, sizes[first_accel], scene.bvh8->nodes.data());
+    accel1 = std::make_unique<Buffer>(s, sizes[first_accel + 1], scene.bvh8->packets.data());
+    kernel = std::make_unique<Kernel>(program, "sdf_cast_bvh8");
+    kernel->arg(a++, accel0->get());
+    kernel->arg(a++, accel1->get());
+  } else if (wide) {
     accel0 = std::make_unique<Buffer>(s, sizes[first_accel], scene.bvh4->nodes.data());
     accel1 = std::make_unique<Buffer>(s, sizes[first_accel + 1], scene.bvh->triangles.data());
     kernel = std::make_unique<Kernel>(program, "sdf_cast_bvh4");
@@ -247,7 +273,7 @@ CastTimings cast_opencl(const std::vector<const Device*>& devices, const Scene& 
                         std::int32_t* valid_rays, const ProgressFn& progress,
                         double progress_from, double progress_to) {
   const std::size_t n = points.size();
-  if (scene.bvh && scene.bvh->empty()) {
+  if ((scene.bvh && scene.bvh->empty()) || (scene.bvh8 && scene.bvh8->empty())) {
     // Every triangle has zero area: nothing can be hit, and an empty tree has no root to read.
     std::fill(raw, raw + n, -1.0f);
     std::fill(valid_rays, valid_rays + n, 0);
