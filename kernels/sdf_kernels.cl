@@ -189,4 +189,10 @@ __kernel void sdf_layout_probe(__global uint* out) {
   out[15] = SDF_OFFSET(SdfPointNode, count);
   out[16] = SDF_OFFSET(SdfPointNode, first_child);
   out[17] = SDF_OFFSET(SdfPointNode, child_count);
+  out[18] = sizeof(SdfBvh8Node);
+  out[19] = SDF_OFFSET(SdfBvh8Node, hi_x);
+  out[20] = SDF_OFFSET(SdfBvh8Node, child);
+  out[21] = SDF_OFFSET(SdfBvh8Node, count);
+  out[22] = sizeof(SdfTrianglePacket4);
+  out[23] = SDF_OFFSET(SdfTrianglePacket4, id);
 }
