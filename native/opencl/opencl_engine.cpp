@@ -46,11 +46,11 @@ struct DeviceResult {
 // Which cast kernel a device runs for accel='bvh'. GPUs: the binary BVH, one work item per
 // ray (13-15% faster than one per point on an H100; the 4-wide BVH was 8-10% slower there).
 // CPU devices (PoCL): the CPU engine's 8-wide BVH, one work item per point, with float8 box
-// tests and float4 triangle packets (sdf_bvh8_traverse.h): 2.1-2.3x the rays/s of the 4-wide
-// BVH kernel, which was itself about 20% faster than the binary BVH (bench/opencl_vs_cpu.py,
-// PoCL 3.1 on a 2-core AVX-512 EPYC, 52k-208k faces: 0.80-0.90 of the CPU engine's rays/s,
-// the 4-wide kernel 0.36-0.41). Measured on AVX2 CPUs only, so CPUs without AVX2 (and
-// non-x86 ones) keep the 4-wide kernel. SDF_OPENCL_KERNEL (bvh_per_point, bvh4_per_point,
+// tests, float4 triangle packets and two rays taking turns (sdf_bvh8_traverse.h): 2.2-2.4x
+// the rays/s of the 4-wide BVH kernel, which was itself about 20% faster than the binary BVH
+// (bench/opencl_vs_cpu.py, interleaved runs, PoCL 3.1 on a 2-core AVX-512 EPYC, 52k-1.2M
+// faces: 0.83-0.93 of the CPU engine's rays/s, the 4-wide kernel 0.38-0.40). Measured on
+// AVX2 CPUs only, so CPUs without AVX2 (and non-x86 ones) keep the 4-wide kernel. SDF_OPENCL_KERNEL (bvh_per_point, bvh4_per_point,
 // bvh8_per_point, bvh_per_ray) overrides the choice, so tests run every kernel on whatever
 // device they have and benchmarks compare them.
 CastKernel cast_kernel_for(const Device& device) {
