@@ -16,7 +16,8 @@ from meshes import benchmark_meshes  # noqa: E402
 
 engine = sys.argv[1] if len(sys.argv) > 1 else "opencl"
 names = sys.argv[2].split(",") if len(sys.argv) > 2 else ["armadillo-x16", "bunny00-x16"]
-grid = {"SDF_OPENCL_KERNEL": ["bvh_per_point", "bvh4_per_point", "bvh_per_ray"]}
+grid = {"SDF_OPENCL_KERNEL": ["bvh_per_point", "bvh4_per_point", "bvh8_per_point",
+                              "bvh_per_ray"]}
 for name, v, f in benchmark_meshes():
     if name not in names:
         continue

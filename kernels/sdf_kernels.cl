@@ -15,6 +15,7 @@
  * one contiguous range. */
 #include "sdf_bvh_traverse.h"
 #include "sdf_bvh4_traverse.h"
+#include "sdf_bvh8_traverse.h"
 #include "sdf_octree.h"
 #include "sdf_reduce.h"
 #include "sdf_smooth_projected.h"
@@ -145,6 +146,70 @@ __kernel void sdf_cast_bvh4(__global const SdfBvh4Node* restrict nodes,
   SDF_CAST_BODY(sdf_bvh4_closest_hit(nodes, tris, origin, d, params.tmin, own))
 }
 
+/* Ray r of a point: its world direction, and in *angle the angle its length is weighed by. */
+static inline float3 sdf_cast_direction(SdfCastParams params,
+                                        __global const float4* restrict local_rays, int r,
+                                        uint p, float3 b1, float3 b2, float3 axis,
+                                        float* angle) {
+  float3 dir_local;
+  if (params.sampling == SDF_SAMPLING_RANDOM) {
+    dir_local = sdf_ray_local(params.sampling, r, params.rays, params.one_minus_cos_half,
+                              params.sin_half, params.seed, p);
+    *angle = sdf_ray_angle(dir_local);
+  } else {
+    float4 table = local_rays[r];
+    dir_local = table.xyz;
+    *angle = table.w;
+  }
+  return sdf_to_world(dir_local, b1, b2, axis);
+}
+
+/* One work item per point on the 8-wide BVH (CPU devices): SDF_CAST_BODY with the point's
+ * rays cast two at a time, taking turns visit by visit (sdf_bvh8_traverse.h). Lengths are
+ * kept in ray order, as SDF_CAST_BODY keeps them. */
+__kernel void sdf_cast_bvh8(__global const SdfBvh8Node* restrict nodes,
+                            __global const SdfTrianglePacket4* restrict packets, SDF_POINT_ARGS) {
+  uint gid = get_global_id(0);
+  if (gid >= params.count) return;
+  uint p = order[params.first + gid];
+  float3 axis = vload3(p, axes);
+  uint out = params.first + gid;
+  if (axis.x == 0.0f && axis.y == 0.0f && axis.z == 0.0f) {
+    raw[out] = -1.0f;
+    valid_rays[out] = 0;
+    return;
+  }
+  float3 origin = vload3(p, origins);
+  int own = own_face[p];
+  float3 b1, b2;
+  sdf_frame(params.sampling, axis, vload3(p, tangents), &b1, &b2);
+  float lengths[SDF_MAX_RAYS];
+  float angles[SDF_MAX_RAYS];
+  int kept = 0;
+  for (int r = 0; r < params.rays; r += 2) {
+    SdfHit hit[2];
+    float angle[2];
+    float3 d0 = sdf_cast_direction(params, local_rays, r, p, b1, b2, axis, &angle[0]);
+    int pair = r + 1 < params.rays;
+    if (pair) {
+      float3 d1 = sdf_cast_direction(params, local_rays, r + 1, p, b1, b2, axis, &angle[1]);
+      sdf_bvh8_closest_hits2(nodes, packets, origin, d0, d1, params.tmin, own, &hit[0],
+                             &hit[1]);
+    } else {
+      hit[0] = sdf_bvh8_closest_hit(nodes, packets, origin, d0, params.tmin, own);
+    }
+    for (int k = 0; k <= pair; ++k) {
+      if (hit[k].det < 0.0f && hit[k].t < INFINITY) {
+        lengths[kept] = hit[k].t;
+        angles[kept] = angle[k];
+        ++kept;
+      }
+    }
+  }
+  raw[out] = sdf_reduce(params.sampling, lengths, angles, kept, params.angle_floor);
+  valid_rays[out] = kept;
+}
+
 __kernel void sdf_cast_bvh_per_ray(__global const SdfBvhNode* restrict nodes,
                                    __global const SdfTriangle* restrict tris, SDF_POINT_ARGS,
                                    __local float* ray_t, __local float* ray_angle) {
@@ -180,4 +245,10 @@ __kernel void sdf_layout_probe(__global uint* out) {
   out[15] = SDF_OFFSET(SdfPointNode, count);
   out[16] = SDF_OFFSET(SdfPointNode, first_child);
   out[17] = SDF_OFFSET(SdfPointNode, child_count);
+  out[18] = sizeof(SdfBvh8Node);
+  out[19] = SDF_OFFSET(SdfBvh8Node, hi_x);
+  out[20] = SDF_OFFSET(SdfBvh8Node, child);
+  out[21] = SDF_OFFSET(SdfBvh8Node, count);
+  out[22] = sizeof(SdfTrianglePacket4);
+  out[23] = SDF_OFFSET(SdfTrianglePacket4, id);
 }

@@ -29,6 +29,27 @@ typedef struct SdfBvh4Node {
   sdf_int32 count[4];
 } SdfBvh4Node;
 
+/* An 8-wide BVH node, 256 bytes, for OpenCL on CPUs (sdf_bvh8_traverse.h): the 4-wide node's
+ * layout with eight slots (one float8 load per plane). child[i] < 0: a leaf of count[i]
+ * triangle packets starting at ~child[i]. The same bytes as the CPU engine's Bvh8Node
+ * (native/bvh8.h). */
+typedef struct SdfBvh8Node {
+  float lo_x[8], lo_y[8], lo_z[8];
+  float hi_x[8], hi_y[8], hi_z[8];
+  sdf_int32 child[8];
+  sdf_int32 count[8];
+} SdfBvh8Node;
+
+/* Four triangles of an 8-wide leaf, SdfTriangle's fields as structure of arrays, 160 bytes
+ * (one float4 load per field). Unused lanes have e1 = e2 = 0, never hit. The same bytes as the
+ * CPU engine's TrianglePacket4 (native/bvh8.h). */
+typedef struct SdfTrianglePacket4 {
+  float v0_x[4], v0_y[4], v0_z[4];
+  float e1_x[4], e1_y[4], e1_z[4];
+  float e2_x[4], e2_y[4], e2_z[4];
+  sdf_int32 id[4];
+} SdfTrianglePacket4;
+
 /* A triangle prepared for Moller-Trumbore, 48 bytes: v0, e1 = v1 - v0, e2 = v2 - v0, and the
  * index of the triangle in the user's array (id), so hits report user indices. */
 typedef struct SdfTriangle {
@@ -60,6 +81,8 @@ typedef struct SdfCastParams {
 
 SDF_STATIC_ASSERT(sizeof(SdfBvhNode) == 32, "SdfBvhNode is 32 bytes in every build");
 SDF_STATIC_ASSERT(sizeof(SdfBvh4Node) == 128, "SdfBvh4Node is 128 bytes in every build");
+SDF_STATIC_ASSERT(sizeof(SdfBvh8Node) == 256, "SdfBvh8Node is 256 bytes in every build");
+SDF_STATIC_ASSERT(sizeof(SdfTrianglePacket4) == 160, "SdfTrianglePacket4 is 160 bytes");
 SDF_STATIC_ASSERT(sizeof(SdfTriangle) == 48, "SdfTriangle is 48 bytes in every build");
 SDF_STATIC_ASSERT(sizeof(SdfCastParams) == 36, "SdfCastParams is 36 bytes in every build");
 

@@ -7,6 +7,7 @@
 // package must still run on x86-64 CPUs without AVX2, which keep the 4-wide SSE tree.
 #pragma once
 
+#include <cstddef>
 #include <cstdint>
 #include <vector>
 
@@ -43,6 +44,19 @@ struct alignas(16) TrianglePacket4 {
   std::int32_t id[4];
 };
 static_assert(sizeof(TrianglePacket4) == 160, "TrianglePacket4 is 40 words");
+// The OpenCL engine uploads both arrays as the kernels' SdfBvh8Node and SdfTrianglePacket4
+// (kernels/sdf_bvh8_traverse.h): the same bytes.
+static_assert(sizeof(Bvh8Node) == sizeof(kern::SdfBvh8Node) &&
+                  offsetof(Bvh8Node, lo_y) == offsetof(kern::SdfBvh8Node, lo_y) &&
+                  offsetof(Bvh8Node, hi_x) == offsetof(kern::SdfBvh8Node, hi_x) &&
+                  offsetof(Bvh8Node, child) == offsetof(kern::SdfBvh8Node, child) &&
+                  offsetof(Bvh8Node, count) == offsetof(kern::SdfBvh8Node, count),
+              "Bvh8Node and SdfBvh8Node share one layout");
+static_assert(sizeof(TrianglePacket4) == sizeof(kern::SdfTrianglePacket4) &&
+                  offsetof(TrianglePacket4, e1_x) == offsetof(kern::SdfTrianglePacket4, e1_x) &&
+                  offsetof(TrianglePacket4, e2_x) == offsetof(kern::SdfTrianglePacket4, e2_x) &&
+                  offsetof(TrianglePacket4, id) == offsetof(kern::SdfTrianglePacket4, id),
+              "TrianglePacket4 and SdfTrianglePacket4 share one layout");
 
 struct Bvh8 {
   std::vector<Bvh8Node> nodes;  // nodes[0] is the root (a lone leaf root becomes one slot)

@@ -218,7 +218,10 @@ std::vector<std::uint32_t> host_layout() {
           offsetof(SdfOctreeRoot, size), sizeof(SdfCastParams),    offsetof(SdfCastParams, tmin),
           offsetof(SdfCastParams, count), sizeof(SdfPointNode),  offsetof(SdfPointNode, half_side),
           offsetof(SdfPointNode, count), offsetof(SdfPointNode, first_child),
-          offsetof(SdfPointNode, child_count)};
+          offsetof(SdfPointNode, child_count), sizeof(SdfBvh8Node),
+          offsetof(SdfBvh8Node, hi_x), offsetof(SdfBvh8Node, child),
+          offsetof(SdfBvh8Node, count), sizeof(SdfTrianglePacket4),
+          offsetof(SdfTrianglePacket4, id)};
 }
 
 glm::vec3 unit_vector(const Floats& v, const char* what) {

@@ -36,13 +36,15 @@ void report(const ProgressFn& progress, double fraction) {
 
 const char* accel_name(Accel a) { return a == Accel::Bvh ? "bvh" : "octree"; }
 
-// Which collapse of the binary BVH a caster reads.
-enum class Width { Binary, Four, Eight };
+// Which trees the casters read: the binary BVH and its collapses to 4 and 8 children.
+struct Widths {
+  bool binary = false, four = false, eight = false;
+};
 
 // The acceleration structure options.accel asks for: the binary BVH (boxes grown so that no
-// engine prunes a hit, see bvh_margin.h) and its collapse to `width`, or the octree. The
+// engine prunes a hit, see bvh_margin.h) and its collapses in `widths`, or the octree. The
 // 4-wide tree points at the binary tree's triangles, so a Structures never moves; the 8-wide
-// one copies them, and the binary tree is then freed.
+// one copies them, and the binary tree is then freed unless a caster reads it.
 struct Structures {
   Bvh bvh;
   Bvh4 wide4;
@@ -50,17 +52,15 @@ struct Structures {
   Octree tree;
 };
 
-void build_structures(const Mesh& mesh, const Options& options, Width width, Structures& s) {
+void build_structures(const Mesh& mesh, const Options& options, Widths widths, Structures& s) {
   if (options.accel == Accel::Bvh) {
     BvhConfig config;
     config.threads = options.threads;
     s.bvh = build_bvh(mesh, config);
     grow_boxes_to_cover_hits(s.bvh, options.threads);
-    if (width == Width::Four) s.wide4 = collapse_to_bvh4(s.bvh);
-    if (width == Width::Eight) {
-      s.wide8 = collapse_to_bvh8(s.bvh);
-      s.bvh = Bvh();
-    }
+    if (widths.four) s.wide4 = collapse_to_bvh4(s.bvh);
+    if (widths.eight) s.wide8 = collapse_to_bvh8(s.bvh);
+    if (widths.eight && !widths.binary && !widths.four) s.bvh = Bvh();
   } else {
     s.tree = build_octree(mesh, options.octree);
   }
@@ -73,7 +73,10 @@ void cast_on_cpu(const Mesh& mesh, const Options& options, const SamplePoints& p
                  Stopwatch& clock, const ProgressFn& progress) {
   // The 8-wide tree needs AVX2 (chosen at run time); without it the 4-wide SSE tree.
   Structures built;
-  build_structures(mesh, options, bvh8_supported() ? Width::Eight : Width::Four, built);
+  Widths widths;
+  widths.eight = bvh8_supported();
+  widths.four = !widths.eight;
+  build_structures(mesh, options, widths, built);
   CpuScene scene;
   if (options.accel == Accel::Bvh) {
     if (bvh8_supported()) {
@@ -98,13 +101,14 @@ void cast_on_opencl(const Mesh& mesh, const Options& options, const SamplePoints
                     const std::vector<std::uint32_t>& order, const Cone& cone, Output& out,
                     Stopwatch& clock, const ProgressFn& progress) {
   const std::vector<const cl::Device*> devices = cl::select_devices(options.engine);
-  const bool wide = cl::wants_wide_bvh(devices);
+  const cl::WantedBvhs wanted = cl::wanted_bvhs(devices);
   Structures built;
-  build_structures(mesh, options, wide ? Width::Four : Width::Binary, built);
+  build_structures(mesh, options, Widths{wanted.binary, wanted.four, wanted.eight}, built);
   cl::Scene scene;
   if (options.accel == Accel::Bvh) {
-    scene.bvh = &built.bvh;
-    scene.bvh4 = wide ? &built.wide4 : nullptr;
+    scene.bvh = wanted.binary ? &built.bvh : nullptr;
+    scene.bvh4 = wanted.four ? &built.wide4 : nullptr;
+    scene.bvh8 = wanted.eight ? &built.wide8 : nullptr;
   } else {
     scene.octree = &built.tree;
   }

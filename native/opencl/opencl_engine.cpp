@@ -45,26 +45,46 @@ struct DeviceResult {
 
 // Which cast kernel a device runs for accel='bvh'. GPUs: the binary BVH, one work item per
 // ray (13-15% faster than one per point on an H100; the 4-wide BVH was 8-10% slower there).
-// CPU devices (PoCL): the 4-wide BVH, one work item per point (about 20% faster than the
-// binary BVH). SDF_OPENCL_KERNEL (bvh_per_point, bvh4_per_point, bvh_per_ray) overrides the
-// choice, so tests run every kernel on whatever device they have and benchmarks compare them.
+// CPU devices (PoCL): the CPU engine's 8-wide BVH, one work item per point, with float8 box
+// tests, float4 triangle packets and two rays taking turns (sdf_bvh8_traverse.h): 2.2-2.4x
+// the rays/s of the 4-wide BVH kernel, which was itself about 20% faster than the binary BVH
+// (bench/opencl_vs_cpu.py, interleaved runs, PoCL 3.1 on a 2-core AVX-512 EPYC, 52k-1.2M
+// faces: 0.83-0.93 of the CPU engine's rays/s, the 4-wide kernel 0.38-0.40). Measured on
+// AVX2 CPUs only, so CPUs without AVX2 (and non-x86 ones) keep the 4-wide kernel. SDF_OPENCL_KERNEL (bvh_per_point, bvh4_per_point,
+// bvh8_per_point, bvh_per_ray) overrides the choice, so tests run every kernel on whatever
+// device they have and benchmarks compare them.
 CastKernel cast_kernel_for(const Device& device) {
   if (const char* forced = std::getenv("SDF_OPENCL_KERNEL")) {
     const std::string name = forced;
     if (name == "bvh_per_point") return CastKernel::BvhPerPoint;
     if (name == "bvh4_per_point") return CastKernel::Bvh4PerPoint;
+    if (name == "bvh8_per_point") return CastKernel::Bvh8PerPoint;
     if (name == "bvh_per_ray") return CastKernel::BvhPerRay;
     if (!name.empty())
-      throw std::invalid_argument("SDF_OPENCL_KERNEL='" + name +
-                                  "': use bvh_per_point, bvh4_per_point or bvh_per_ray");
+      throw std::invalid_argument(
+          "SDF_OPENCL_KERNEL='" + name +
+          "': use bvh_per_point, bvh4_per_point, bvh8_per_point or bvh_per_ray");
   }
-  return device.gpu ? CastKernel::BvhPerRay : CastKernel::Bvh4PerPoint;
+  if (device.gpu) return CastKernel::BvhPerRay;
+  return bvh8_supported() ? CastKernel::Bvh8PerPoint : CastKernel::Bvh4PerPoint;
 }
 
-bool wants_wide_bvh(const std::vector<const Device*>& devices) {
-  return std::any_of(devices.begin(), devices.end(), [](const Device* d) {
-    return cast_kernel_for(*d) == CastKernel::Bvh4PerPoint;
-  });
+WantedBvhs wanted_bvhs(const std::vector<const Device*>& devices) {
+  WantedBvhs wanted;
+  for (const Device* d : devices) {
+    switch (cast_kernel_for(*d)) {
+      case CastKernel::Bvh8PerPoint:
+        wanted.eight = true;
+        break;
+      case CastKernel::Bvh4PerPoint:
+        wanted.four = true;
+        wanted.binary = true;  // its triangles, and the fallback for trees too deep
+        break;
+      default:
+        wanted.binary = true;
+    }
+  }
+  return wanted;
 }
 
 namespace {
@@ -86,9 +106,15 @@ void run_device(const Device& device, const Scene& scene, const SamplePoints& po
                                     3 * n * sizeof(float)};
   const std::size_t first_accel = sizes.size();
   const CastKernel choice = cast_kernel_for(device);
-  const bool wide = choice == CastKernel::Bvh4PerPoint && scene.bvh4 &&
+  // The 8-wide tree needs no depth check: its stack holds the deepest tree the builder makes
+  // (sdf_bvh8_traverse.h).
+  const bool wide8 = choice == CastKernel::Bvh8PerPoint && scene.bvh8;
+  const bool wide = !wide8 && choice == CastKernel::Bvh4PerPoint && scene.bvh4 &&
                     bvh4_depth(*scene.bvh4) <= SDF_BVH4_MAX_DEPTH;
-  if (wide) {
+  if (wide8) {
+    sizes.push_back(bytes_of(scene.bvh8->nodes));
+    sizes.push_back(bytes_of(scene.bvh8->packets));
+  } else if (wide) {
     sizes.push_back(bytes_of(scene.bvh4->nodes));
     sizes.push_back(bytes_of(scene.bvh->triangles));
   } else if (scene.bvh) {
@@ -136,7 +162,13 @@ void run_device(const Device& device, const Scene& scene, const SamplePoints& po
   // 2-4% faster than 8 and 7-9% faster than 2; 16 and 32 slower), fewer when registers limit
   // the group size.
   std::size_t points_per_group = 0;
-  if (wide) {
+  if (wide8) {
+    accel0 = std::make_unique<Buffer>(s, sizes[first_accel], scene.bvh8->nodes.data());
+    accel1 = std::make_unique<Buffer>(s, sizes[first_accel + 1], scene.bvh8->packets.data());
+    kernel = std::make_unique<Kernel>(program, "sdf_cast_bvh8");
+    kernel->arg(a++, accel0->get());
+    kernel->arg(a++, accel1->get());
+  } else if (wide) {
     accel0 = std::make_unique<Buffer>(s, sizes[first_accel], scene.bvh4->nodes.data());
     accel1 = std::make_unique<Buffer>(s, sizes[first_accel + 1], scene.bvh->triangles.data());
     kernel = std::make_unique<Kernel>(program, "sdf_cast_bvh4");
@@ -247,7 +279,7 @@ CastTimings cast_opencl(const std::vector<const Device*>& devices, const Scene& 
                         std::int32_t* valid_rays, const ProgressFn& progress,
                         double progress_from, double progress_to) {
   const std::size_t n = points.size();
-  if (scene.bvh && scene.bvh->empty()) {
+  if ((scene.bvh && scene.bvh->empty()) || (scene.bvh8 && scene.bvh8->empty())) {
     // Every triangle has zero area: nothing can be hit, and an empty tree has no root to read.
     std::fill(raw, raw + n, -1.0f);
     std::fill(valid_rays, valid_rays + n, 0);
@@ -346,7 +378,7 @@ std::vector<std::uint32_t> probe_layout(int index) {
   check(api()->clEnqueueReadBuffer(s.queue, buffer.get(), CL_TRUE, 0, bytes_of(out), out.data(), 0,
                                    nullptr, nullptr),
         "clEnqueueReadBuffer");
-  out.resize(18);
+  out.resize(24);
   return out;
 }
 

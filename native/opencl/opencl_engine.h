@@ -10,6 +10,7 @@
 
 #include "../bvh.h"
 #include "../bvh4.h"
+#include "../bvh8.h"
 #include "../octree.h"
 #include "../parallel.h"
 #include "../rays.h"
@@ -18,23 +19,29 @@
 
 namespace sdf::cl {
 
-// Exactly one of bvh and octree is set. bvh4, when set, is bvh collapsed to four children
-// per node and is cast instead of it (trees too deep for its stack fall back to bvh).
+// Either the octree or a BVH is set. bvh4, when set, is bvh collapsed to four children per
+// node and is cast instead of it (trees too deep for its stack fall back to bvh); bvh8 is the
+// 8-wide collapse, with its own triangles (bvh may then be null: no device casts it).
 struct Scene {
   const Bvh* bvh = nullptr;
   const Bvh4* bvh4 = nullptr;
+  const Bvh8* bvh8 = nullptr;
   const Octree* octree = nullptr;
 };
 
-// The kernels that cast a BVH: the binary or the 4-wide tree, one work item per point or per
-// ray. The octree has one kernel.
-enum class CastKernel { BvhPerPoint, Bvh4PerPoint, BvhPerRay };
+// The kernels that cast a BVH: the binary, 4-wide or 8-wide tree, one work item per point or
+// per ray. The octree has one kernel.
+enum class CastKernel { BvhPerPoint, Bvh4PerPoint, Bvh8PerPoint, BvhPerRay };
 
 // The kernel `device` runs (see opencl_engine.cpp for the measurements behind the choice).
 CastKernel cast_kernel_for(const Device& device);
 
-// Whether any of `devices` casts the 4-wide BVH, which the caller then builds (Scene::bvh4).
-bool wants_wide_bvh(const std::vector<const Device*>& devices);
+// Which trees `devices` cast, for the caller to build (Scene::bvh, bvh4, bvh8). The 4-wide
+// tree reads the binary tree's triangles, so `binary` is also set when `four` is.
+struct WantedBvhs {
+  bool binary = false, four = false, eight = false;
+};
+WantedBvhs wanted_bvhs(const std::vector<const Device*>& devices);
 
 struct CastTimings {
   double upload = 0.0, cast = 0.0, download = 0.0;

@@ -81,9 +81,9 @@ def test_deterministic_samplings_give_the_cpu_engines_bits(mesh, sampling):
 
 
 # Each device runs one cast kernel by default (GPUs: binary BVH, one work item per ray; CPU
-# devices: 4-wide BVH, one per point); SDF_OPENCL_KERNEL forces each, so every kernel is
+# devices: 8-wide BVH, one per point); SDF_OPENCL_KERNEL forces each, so every kernel is
 # checked on whatever device this machine has.
-CAST_KERNELS = ["bvh_per_point", "bvh4_per_point", "bvh_per_ray"]
+CAST_KERNELS = ["bvh_per_point", "bvh4_per_point", "bvh8_per_point", "bvh_per_ray"]
 
 
 @pytest.mark.parametrize("kernel", CAST_KERNELS)
