@@ -146,24 +146,6 @@ __kernel void sdf_cast_bvh4(__global const SdfBvh4Node* restrict nodes,
   SDF_CAST_BODY(sdf_bvh4_closest_hit(nodes, tris, origin, d, params.tmin, own))
 }
 
-/* Ray r of a point: its world direction, and in *angle the angle its length is weighed by. */
-static inline float3 sdf_cast_direction(SdfCastParams params,
-                                        __global const float4* restrict local_rays, int r,
-                                        uint p, float3 b1, float3 b2, float3 axis,
-                                        float* angle) {
-  float3 dir_local;
-  if (params.sampling == SDF_SAMPLING_RANDOM) {
-    dir_local = sdf_ray_local(params.sampling, r, params.rays, params.one_minus_cos_half,
-                              params.sin_half, params.seed, p);
-    *angle = sdf_ray_angle(dir_local);
-  } else {
-    float4 table = local_rays[r];
-    dir_local = table.xyz;
-    *angle = table.w;
-  }
-  return sdf_to_world(dir_local, b1, b2, axis);
-}
-
 /* One work item per point on the 8-wide BVH (CPU devices): SDF_CAST_BODY with the point's
  * rays cast two at a time, taking turns visit by visit (sdf_bvh8_traverse.h). Lengths are
  * kept in ray order, as SDF_CAST_BODY keeps them. */
@@ -189,10 +171,10 @@ __kernel void sdf_cast_bvh8(__global const SdfBvh8Node* restrict nodes,
   for (int r = 0; r < params.rays; r += 2) {
     SdfHit hit[2];
     float angle[2];
-    float3 d0 = sdf_cast_direction(params, local_rays, r, p, b1, b2, axis, &angle[0]);
+    float3 d0 = sdf_cast_direction(params, local_rays, r, p, axis, b1, b2, &angle[0]);
     int pair = r + 1 < params.rays;
     if (pair) {
-      float3 d1 = sdf_cast_direction(params, local_rays, r + 1, p, b1, b2, axis, &angle[1]);
+      float3 d1 = sdf_cast_direction(params, local_rays, r + 1, p, axis, b1, b2, &angle[1]);
       sdf_bvh8_closest_hits2(nodes, packets, origin, d0, d1, params.tmin, own, &hit[0],
                              &hit[1]);
     } else {
