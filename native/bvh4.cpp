@@ -5,14 +5,11 @@
 #include <limits>
 #include <utility>
 
+#include "bvh_collapse.h"
+
 namespace sdf {
 
 namespace {
-
-float half_area(const kern::SdfBvhNode& n) {
-  const float dx = n.hi_x - n.lo_x, dy = n.hi_y - n.lo_y, dz = n.hi_z - n.lo_z;
-  return dx * dy + dy * dz + dz * dx;
-}
 
 class Collapser {
  public:
@@ -20,24 +17,9 @@ class Collapser {
 
   // Emits the wide node for binary node `index` and returns its position.
   std::int32_t emit(std::int32_t index) {
-    // Gather up to four binary nodes below `index`: open the largest inner child until full.
-    std::int32_t slots[4] = {bvh_.nodes[index].first, bvh_.nodes[index].first + 1, -1, -1};
-    int used = 2;
-    while (used < 4) {
-      int best = -1;
-      float best_area = -1.0f;
-      for (int i = 0; i < used; ++i) {
-        const kern::SdfBvhNode& n = bvh_.nodes[slots[i]];
-        if (n.count == 0 && half_area(n) > best_area) {
-          best_area = half_area(n);
-          best = i;
-        }
-      }
-      if (best < 0) break;
-      const std::int32_t opened = slots[best];
-      slots[best] = bvh_.nodes[opened].first;
-      slots[used++] = bvh_.nodes[opened].first + 1;
-    }
+    std::int32_t slots[4];
+    const int used = gather_wide_children(
+        bvh_, index, [&](std::int32_t node) { return bvh_.nodes[node].count > 0; }, slots);
     const std::int32_t me = static_cast<std::int32_t>(out_.nodes.size());
     out_.nodes.emplace_back();
     for (int i = 0; i < 4; ++i) {
@@ -71,23 +53,9 @@ class Collapser {
 
  private:
   void set_box(std::int32_t node, int i, const kern::SdfBvhNode& n) {
-    Bvh4Node& w = out_.nodes[node];
-    w.lo_x[i] = n.lo_x;
-    w.lo_y[i] = n.lo_y;
-    w.lo_z[i] = n.lo_z;
-    w.hi_x[i] = n.hi_x;
-    w.hi_y[i] = n.hi_y;
-    w.hi_z[i] = n.hi_z;
+    set_wide_box(out_.nodes[node], i, n);
   }
-
-  void clear_slot(std::int32_t node, int i) {
-    const float inf = std::numeric_limits<float>::infinity();
-    Bvh4Node& w = out_.nodes[node];
-    w.lo_x[i] = w.lo_y[i] = w.lo_z[i] = inf;
-    w.hi_x[i] = w.hi_y[i] = w.hi_z[i] = -inf;
-    w.child[i] = ~0;
-    w.count[i] = 0;
-  }
+  void clear_slot(std::int32_t node, int i) { clear_wide_slot(out_.nodes[node], i); }
 
   const Bvh& bvh_;
   Bvh4& out_;
