@@ -105,6 +105,19 @@ def test_every_cast_kernel_gives_the_cpu_engines_bits(monkeypatch, kernel, sampl
         assert differ.size == 0, f"{kernel}: {differ.size} points differ, first {differ[:5]}"
 
 
+@pytest.mark.parametrize("engine", ["cpu", OPENCL[-1]])
+def test_the_fallback_for_cpus_without_avx2_gives_the_same_bits(monkeypatch, engine):
+    # SDF_CPU_NO_AVX2=1 acts out such a CPU: the CPU engine then casts the 4-wide SSE tree and
+    # CPU OpenCL devices the 4-wide kernel; the values must not change.
+    vertices, triangles = load_mesh(DATA / "fandisk.obj")
+    wide = sd.compute(vertices, triangles, engine=engine, rays=25)
+    monkeypatch.setenv("SDF_CPU_NO_AVX2", "1")
+    narrow = sd.compute(vertices, triangles, engine=engine, rays=25)
+    differ = np.flatnonzero(wide.raw != narrow.raw)
+    assert differ.size == 0, f"{differ.size} points differ, first {differ[:5]}"
+    np.testing.assert_array_equal(wide.valid_rays, narrow.valid_rays)
+
+
 def test_an_unknown_cast_kernel_name_is_refused(monkeypatch):
     vertices, triangles = load_mesh(DATA / "fandisk.obj")
     monkeypatch.setenv("SDF_OPENCL_KERNEL", "bvh8")
