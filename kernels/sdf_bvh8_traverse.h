@@ -63,9 +63,10 @@ __attribute__((always_inline)) SDF_INLINE void sdf_intersect_packet4(
   float4 v = (d.x * qx + d.y * qy + d.z * qz) * inv_det;
   float4 t = (e2x * qx + e2y * qy + e2z * qz) * inv_det;
   int4 id = vload4(0, p->id);
-  /* Rejections exactly as the scalar code writes them (ordered comparisons: false on NaN). */
+  /* Rejections exactly as the scalar code writes them (ordered comparisons: false on NaN,
+   * except "not greater than tmin", true on NaN, so a NaN t is turned away as there). */
   const float lo = -SDF_BARYCENTRIC_SLACK, hi = 1.0f + SDF_BARYCENTRIC_SLACK;
-  int4 reject = (det == 0.0f) | (u < lo) | (u > hi) | (v < lo) | (u + v > hi) | (t <= tmin) |
+  int4 reject = (det == 0.0f) | (u < lo) | (u > hi) | (v < lo) | (u + v > hi) | ~(t > tmin) |
                 (t > hit->t) | (id == skip_id);
   int4 pass = ~reject;
   if (!any(pass)) return;

@@ -8,8 +8,8 @@
 
 #ifdef __OPENCL_VERSION__
 
-/* The same arithmetic as the host: no fused multiply-adds (x86-64 C++ has none without
- * -mfma), so a ray computes to the same bits on every device. With correctly rounded
+/* The same arithmetic as the host: no fused multiply-adds (the C++ core is built with
+ * -ffp-contract=off), so a ray computes to the same bits on every device. With correctly rounded
  * division and square root (a build option) and the vector helpers below written out,
  * OpenCL results equal the CPU engine's except where a device's sin/cos enter (random
  * sampling). */

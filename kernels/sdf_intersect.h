@@ -60,7 +60,9 @@ SDF_INLINE void sdf_intersect_triangle(float3 o, float3 d, float tmin,
   float v = sdf_dot(d, q) * inv_det;
   if (v < -SDF_BARYCENTRIC_SLACK || u + v > 1.0f + SDF_BARYCENTRIC_SLACK) return;
   float t = sdf_dot(e2, q) * inv_det;
-  if (t <= tmin || t > hit->t || (t == hit->t && tri->id >= hit->id)) return;
+  /* !(t > tmin) also turns away a NaN t (1 / det overflowing on a vanishingly small
+   * triangle), which every other comparison here would let through. */
+  if (!(t > tmin) || t > hit->t || (t == hit->t && tri->id >= hit->id)) return;
   hit->t = t;
   hit->det = det;
   hit->id = tri->id;

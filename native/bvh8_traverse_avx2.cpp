@@ -50,11 +50,12 @@ SDF_AVX2 inline void intersect_packet(const TrianglePacket4& p, glm::vec3 o, glm
       inv_det);
   const __m128 lo = _mm_set1_ps(-SDF_BARYCENTRIC_SLACK);
   const __m128 hi = _mm_set1_ps(1.0f + SDF_BARYCENTRIC_SLACK);
-  // Rejections exactly as the scalar code writes them (ordered comparisons: false on NaN).
+  // Rejections exactly as the scalar code writes them (ordered comparisons: false on NaN,
+  // except "not greater than tmin", true on NaN, so a NaN t is turned away as there).
   __m128 reject = _mm_cmpeq_ps(det, _mm_setzero_ps());
   reject = _mm_or_ps(reject, _mm_or_ps(_mm_cmplt_ps(u, lo), _mm_cmpgt_ps(u, hi)));
   reject = _mm_or_ps(reject, _mm_or_ps(_mm_cmplt_ps(v, lo), _mm_cmpgt_ps(_mm_add_ps(u, v), hi)));
-  reject = _mm_or_ps(reject, _mm_or_ps(_mm_cmple_ps(t, _mm_set1_ps(tmin)),
+  reject = _mm_or_ps(reject, _mm_or_ps(_mm_cmpngt_ps(t, _mm_set1_ps(tmin)),
                                        _mm_cmpgt_ps(t, _mm_set1_ps(hit->t))));
   reject = _mm_or_ps(reject, _mm_castsi128_ps(_mm_cmpeq_epi32(
                                  _mm_load_si128(reinterpret_cast<const __m128i*>(p.id)),

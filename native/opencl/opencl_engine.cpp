@@ -213,8 +213,10 @@ void run_device(const Device& device, const Scene& scene, const SamplePoints& po
   // Launches of about 100 ms on this device: short enough that a display driver's watchdog
   // never fires and progress and cancellation stay responsive, long enough to fill the device.
   constexpr double kTargetSeconds = 0.1;
-  // The first launch fills a GPU (2048 resident work items per compute unit on NVIDIA's):
-  // starting at 4096 points left it mostly idle, 11% of the cast time at 832k faces (H100).
+  // The first launch holds 2048 points per compute unit: enough to fill a GPU with one work
+  // item per point (2048 resident per unit on NVIDIA's), `rays` times more with the per-ray
+  // kernel, and still short (about 12 ms for 270k points on an H100); starting at 4096 points
+  // left the GPU mostly idle, 11% of the cast time at 832k faces (H100).
   std::size_t chunk = device.gpu ? std::max<std::size_t>(4096, device.compute_units * 2048u) : 4096;
   // Work-group size. GPUs: 64, two warps or one wavefront (left to the driver, NVIDIA's picks a
   // divisor of the global size, down to 1 for a prime count). CPUs (PoCL): 1, because PoCL

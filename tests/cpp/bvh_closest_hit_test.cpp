@@ -174,3 +174,17 @@ TEST(Bvh, ExitTestSeesTheFaceTheRayLeavesThrough) {
 
 }  // namespace
 }  // namespace sdf
+
+// A triangle of edges 1e-20 has det = 1e-40 (a float denormal, not zero): 1 / det overflows
+// to infinity, and with s orthogonal to d x e2, u = 0 * inf and t = 0 * inf are NaN. Every
+// ordered comparison lets a NaN through; the test must still turn the hit away, or engines
+// whose min/max treat NaN differently would disagree.
+TEST(Intersect, ATriangleWhoseInverseDeterminantOverflowsIsNeverHit) {
+  const sdf::kern::SdfTriangle tiny{-1.0f, 0.0f, 0.0f, 7,     0.0f, 1e-20f,
+                                    0.0f,  0.0f, 1e-20f, 0.0f, 0.0f, 0.0f};
+  const glm::vec3 origin(0.0f, 0.0f, 0.0f), direction(0.0f, 0.0f, 1.0f);
+  sdf::kern::SdfHit hit{INFINITY, 0.0f, -1};
+  sdf::kern::sdf_intersect_triangle(origin, direction, 0.0f, &tiny, &hit);
+  EXPECT_EQ(hit.id, -1);
+  EXPECT_EQ(hit.t, INFINITY);
+}
