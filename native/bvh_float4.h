@@ -46,7 +46,9 @@ struct Float4 {
 #else
 struct Float4 {
   float f[4];
-  static Float4 load(const float* p) { return {{p[0], p[1], p[2], p[3]}}; }
+  // Reads p[0..2] only: lane 3 would be the PrimRef's id or pad, an integer read as a float
+  // (and past the vec3 it points into); the SSE path carries those bits but never uses them.
+  static Float4 load(const float* p) { return {{p[0], p[1], p[2], 0.0f}}; }
   static Float4 splat(float x) { return {{x, x, x, x}}; }
   static Float4 set(float x, float y, float z) { return {{x, y, z, 0.0f}}; }
   float operator[](int i) const { return f[i]; }
