@@ -16,6 +16,9 @@ typedef struct SdfHit {
   sdf_int32 id;
 } SdfHit;
 
+/* A hit that counts for the SDF: the ray leaves the solid through it (det < 0, above). */
+SDF_INLINE int sdf_exit_hit(SdfHit hit) { return hit.det < 0.0f && hit.t < INFINITY; }
+
 /* No hit yet: t = INFINITY. */
 SDF_INLINE SdfHit sdf_no_hit(void) {
   SdfHit hit;

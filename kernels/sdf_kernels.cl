@@ -43,7 +43,9 @@ static inline float3 sdf_cast_direction(SdfCastParams params,
   return sdf_to_world(dir_local, b1, b2, axis);
 }
 
-#define SDF_CAST_BODY(CLOSEST_HIT)                                                    \
+/* One work item per point: fetch the point and its ray frame (a point without an axis gets
+ * -1 and no rays), ... SDF_KEEP each ray's hit in ray order ..., then reduce and store. */
+#define SDF_POINT_BEGIN                                                               \
   uint gid = get_global_id(0);                                                        \
   if (gid >= params.count) return;                                                    \
   uint p = order[params.first + gid];                                                 \
@@ -60,19 +62,29 @@ static inline float3 sdf_cast_direction(SdfCastParams params,
   sdf_frame(params.sampling, axis, vload3(p, tangents), &b1, &b2);                    \
   float lengths[SDF_MAX_RAYS];                                                        \
   float angles[SDF_MAX_RAYS];                                                         \
-  int kept = 0;                                                                       \
+  int kept = 0;
+
+#define SDF_KEEP(HIT, ANGLE)                                                          \
+  if (sdf_exit_hit(HIT)) {                                                            \
+    lengths[kept] = (HIT).t;                                                          \
+    angles[kept] = (ANGLE);                                                           \
+    ++kept;                                                                           \
+  }
+
+#define SDF_POINT_END                                                                 \
+  raw[out] = sdf_reduce(params.sampling, lengths, angles, kept, params.angle_floor);  \
+  valid_rays[out] = kept;
+
+/* The per-point kernel of a structure whose traversal casts one ray at a time. */
+#define SDF_CAST_BODY(CLOSEST_HIT)                                                    \
+  SDF_POINT_BEGIN                                                                     \
   for (int r = 0; r < params.rays; ++r) {                                             \
     float angle;                                                                      \
     float3 d = sdf_cast_direction(params, local_rays, r, p, axis, b1, b2, &angle);    \
     SdfHit hit = CLOSEST_HIT;                                                         \
-    if (hit.det < 0.0f && hit.t < INFINITY) {                                         \
-      lengths[kept] = hit.t;                                                          \
-      angles[kept] = angle;                                                           \
-      ++kept;                                                                         \
-    }                                                                                 \
+    SDF_KEEP(hit, angle)                                                              \
   }                                                                                   \
-  raw[out] = sdf_reduce(params.sampling, lengths, angles, kept, params.angle_floor);  \
-  valid_rays[out] = kept;
+  SDF_POINT_END
 
 /* One work item per ray: a work group holds P points x rays work items, item l casting ray
  * l % rays of point l / rays, and writes the ray's length to local memory; then the first P
@@ -102,7 +114,7 @@ static inline float3 sdf_cast_direction(SdfCastParams params,
     sdf_frame(params.sampling, axis, vload3(p, tangents), &b1, &b2);                  \
     float3 d = sdf_cast_direction(params, local_rays, r, p, axis, b1, b2, &angle);    \
     SdfHit hit = CLOSEST_HIT;                                                         \
-    if (hit.det < 0.0f && hit.t < INFINITY) t_kept = hit.t;                           \
+    if (sdf_exit_hit(hit)) t_kept = hit.t;                                            \
   }                                                                                   \
   ray_t[lid] = t_kept;                                                                \
   ray_angle[lid] = angle;                                                             \
@@ -151,23 +163,7 @@ __kernel void sdf_cast_bvh4(__global const SdfBvh4Node* restrict nodes,
  * kept in ray order, as SDF_CAST_BODY keeps them. */
 __kernel void sdf_cast_bvh8(__global const SdfBvh8Node* restrict nodes,
                             __global const SdfTrianglePacket4* restrict packets, SDF_POINT_ARGS) {
-  uint gid = get_global_id(0);
-  if (gid >= params.count) return;
-  uint p = order[params.first + gid];
-  float3 axis = vload3(p, axes);
-  uint out = params.first + gid;
-  if (axis.x == 0.0f && axis.y == 0.0f && axis.z == 0.0f) {
-    raw[out] = -1.0f;
-    valid_rays[out] = 0;
-    return;
-  }
-  float3 origin = vload3(p, origins);
-  int own = own_face[p];
-  float3 b1, b2;
-  sdf_frame(params.sampling, axis, vload3(p, tangents), &b1, &b2);
-  float lengths[SDF_MAX_RAYS];
-  float angles[SDF_MAX_RAYS];
-  int kept = 0;
+  SDF_POINT_BEGIN
   for (int r = 0; r < params.rays; r += 2) {
     SdfHit hit[2];
     float angle[2];
@@ -181,15 +177,10 @@ __kernel void sdf_cast_bvh8(__global const SdfBvh8Node* restrict nodes,
       hit[0] = sdf_bvh8_closest_hit(nodes, packets, origin, d0, params.tmin, own);
     }
     for (int k = 0; k <= pair; ++k) {
-      if (hit[k].det < 0.0f && hit[k].t < INFINITY) {
-        lengths[kept] = hit[k].t;
-        angles[kept] = angle[k];
-        ++kept;
-      }
+      SDF_KEEP(hit[k], angle[k])
     }
   }
-  raw[out] = sdf_reduce(params.sampling, lengths, angles, kept, params.angle_floor);
-  valid_rays[out] = kept;
+  SDF_POINT_END
 }
 
 __kernel void sdf_cast_bvh_per_ray(__global const SdfBvhNode* restrict nodes,

@@ -42,7 +42,7 @@ void cast_points(const SamplePoints& points, const std::vector<std::uint32_t>& o
                        hits.data());
           for (int r = 0; r < cone.rays; ++r) {
             const kern::SdfHit& hit = hits[r];
-            if (hit.det < 0.0f && std::isfinite(hit.t)) {
+            if (kern::sdf_exit_hit(hit)) {
               lengths[kept] = hit.t;
               kept_angles[kept] = angles[r];
               ++kept;
