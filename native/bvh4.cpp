@@ -3,7 +3,6 @@
 
 #include <algorithm>
 #include <limits>
-#include <utility>
 
 #include "bvh_collapse.h"
 
@@ -15,8 +14,10 @@ class Collapser {
  public:
   Collapser(const Bvh& bvh, Bvh4& out) : bvh_(bvh), out_(out) {}
 
-  // Emits the wide node for binary node `index` and returns its position.
-  std::int32_t emit(std::int32_t index) {
+  // Emits the wide node for binary node `index`, `depth` wide levels below the root, and
+  // returns its position.
+  std::int32_t emit(std::int32_t index, int depth) {
+    out_.depth = std::max(out_.depth, depth);
     std::int32_t slots[4];
     const int used = gather_wide_children(
         bvh_, index, [&](std::int32_t node) { return bvh_.nodes[node].count > 0; }, slots);
@@ -30,7 +31,7 @@ class Collapser {
           out_.nodes[me].child[i] = ~n.first;
           out_.nodes[me].count[i] = n.count;
         } else {
-          const std::int32_t child = emit(slots[i]);  // may reallocate out_.nodes
+          const std::int32_t child = emit(slots[i], depth + 1);  // may reallocate out_.nodes
           out_.nodes[me].child[i] = child;
           out_.nodes[me].count[i] = 0;
         }
@@ -72,25 +73,9 @@ Bvh4 collapse_to_bvh4(const Bvh& bvh) {
   if (bvh.nodes[0].count > 0) {
     collapser.emit_leaf_root();
   } else {
-    collapser.emit(0);
+    collapser.emit(0, 0);
   }
   return out;
-}
-
-int bvh4_depth(const Bvh4& bvh) {
-  if (bvh.empty()) return 0;
-  int deepest = 0;
-  std::vector<std::pair<std::int32_t, int>> stack{{0, 0}};
-  while (!stack.empty()) {
-    const auto [index, depth] = stack.back();
-    stack.pop_back();
-    deepest = std::max(deepest, depth);
-    for (int i = 0; i < 4; ++i) {
-      const Bvh4Node& n = bvh.nodes[index];
-      if (n.child[i] >= 0) stack.push_back({n.child[i], depth + 1});
-    }
-  }
-  return deepest;
 }
 
 }  // namespace sdf

@@ -33,13 +33,11 @@ static_assert(sizeof(Bvh4Node) == sizeof(kern::SdfBvh4Node) &&
 struct Bvh4 {
   std::vector<Bvh4Node> nodes;  // nodes[0] is the root (a lone leaf root becomes one slot)
   const UninitializedVector<kern::SdfTriangle>* triangles = nullptr;  // the binary BVH's, shared
+  int depth = 0;  // of the deepest wide node (root = 0), recorded while collapsing
   bool empty() const { return nodes.empty(); }
 };
 
 // Collapses `bvh` (which must outlive the result: triangles are shared, not copied).
 Bvh4 collapse_to_bvh4(const Bvh& bvh);
-
-// Depth of the deepest wide node (root = 0); 0 for an empty tree.
-int bvh4_depth(const Bvh4& bvh);
 
 }  // namespace sdf

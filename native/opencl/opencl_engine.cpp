@@ -110,7 +110,7 @@ void run_device(const Device& device, const Scene& scene, const SamplePoints& po
   // (sdf_bvh8_traverse.h).
   const bool wide8 = choice == CastKernel::Bvh8PerPoint && scene.bvh8;
   const bool wide = !wide8 && choice == CastKernel::Bvh4PerPoint && scene.bvh4 &&
-                    bvh4_depth(*scene.bvh4) <= SDF_BVH4_MAX_DEPTH;
+                    scene.bvh4->depth <= SDF_BVH4_MAX_DEPTH;
   if (wide8) {
     sizes.push_back(bytes_of(scene.bvh8->nodes));
     sizes.push_back(bytes_of(scene.bvh8->packets));
