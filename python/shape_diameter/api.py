@@ -151,6 +151,18 @@ def _check_options(rays, cone_angle, sampling, points, normalize_method, engine,
     _check_integer("seed", seed, 0, 2**32 - 1)
 
 
+def _run_with_fallback(run, chosen, engine, what):
+    """run(chosen); with engine='auto', an OpenCL failure (RuntimeError) runs it again on the
+    CPU. Returns the result and the failure in one line ('<what><chosen> failed: ...'), or
+    None when there was none."""
+    try:
+        return run(chosen), None
+    except RuntimeError as error:
+        if engine != "auto" or chosen == "cpu":
+            raise
+        return run("cpu"), f"{what}{chosen} failed: {error}".splitlines()[0]
+
+
 def compute(
     vertices,
     triangles,
@@ -236,14 +248,7 @@ def compute(
             orientation,
         )
 
-    fallback = None
-    try:
-        out = run(chosen)
-    except RuntimeError as error:
-        if engine != "auto" or chosen == "cpu":
-            raise
-        fallback = f"{chosen} failed: {error}".splitlines()[0]
-        out = run("cpu")
+    out, fallback = _run_with_fallback(run, chosen, engine, "")
     if out["fill"] == "no-value-anywhere":
         warnings.warn(
             "no ray of any point found the other side of the mesh (is it open, flat or inside "
@@ -265,13 +270,10 @@ def compute(
                 engine=engine_name, **(smoothing_options or {}),
             )
 
-        try:
-            values = run_smoothing(smooth_engine)
-        except RuntimeError as error:
-            if engine != "auto" or smooth_engine == "cpu":
-                raise
-            fallback = f"smoothing on {smooth_engine} failed: {error}".splitlines()[0]
-            values = run_smoothing("cpu")
+        values, smoothing_fallback = _run_with_fallback(
+            run_smoothing, smooth_engine, engine, "smoothing on "
+        )
+        fallback = smoothing_fallback or fallback
         timings["smooth"] = time.perf_counter() - clock
     clock = time.perf_counter()
     normalized = normalize_values(values, normalize)
