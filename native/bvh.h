@@ -29,6 +29,12 @@ struct Bvh {
 
 Bvh build_bvh(const Mesh& mesh, const BvhConfig& config = BvhConfig());
 
+// Which trees the casters of a run read: the binary BVH and its collapses to 4 children
+// (bvh4.h) and to 8 (bvh8.h).
+struct BvhWidths {
+  bool binary = false, four = false, eight = false;
+};
+
 // Depth of the deepest leaf (root = 0). The traversal stack must hold at least this many.
 int bvh_depth(const Bvh& bvh);
 

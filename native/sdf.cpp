@@ -36,11 +36,6 @@ void report(const ProgressFn& progress, double fraction) {
 
 const char* accel_name(Accel a) { return a == Accel::Bvh ? "bvh" : "octree"; }
 
-// Which trees the casters read: the binary BVH and its collapses to 4 and 8 children.
-struct Widths {
-  bool binary = false, four = false, eight = false;
-};
-
 // The acceleration structure options.accel asks for: the binary BVH (boxes grown so that no
 // engine prunes a hit, see bvh_margin.h) and its collapses in `widths`, or the octree. The
 // 4-wide tree points at the binary tree's triangles, so a Structures never moves; the 8-wide
@@ -52,7 +47,8 @@ struct Structures {
   Octree tree;
 };
 
-void build_structures(const Mesh& mesh, const Options& options, Widths widths, Structures& s) {
+void build_structures(const Mesh& mesh, const Options& options, BvhWidths widths,
+                      Structures& s) {
   if (options.accel == Accel::Bvh) {
     BvhConfig config;
     config.threads = options.threads;
@@ -73,13 +69,13 @@ void cast_on_cpu(const Mesh& mesh, const Options& options, const SamplePoints& p
                  Stopwatch& clock, const ProgressFn& progress) {
   // The 8-wide tree needs AVX2 (chosen at run time); without it the 4-wide SSE tree.
   Structures built;
-  Widths widths;
+  BvhWidths widths;
   widths.eight = bvh8_supported();
   widths.four = !widths.eight;
   build_structures(mesh, options, widths, built);
   CpuScene scene;
   if (options.accel == Accel::Bvh) {
-    if (bvh8_supported()) {
+    if (widths.eight) {
       scene.bvh8 = &built.wide8;
     } else {
       scene.bvh4 = &built.wide4;
@@ -101,9 +97,9 @@ void cast_on_opencl(const Mesh& mesh, const Options& options, const SamplePoints
                     const std::vector<std::uint32_t>& order, const Cone& cone, Output& out,
                     Stopwatch& clock, const ProgressFn& progress) {
   const std::vector<const cl::Device*> devices = cl::select_devices(options.engine);
-  const cl::WantedBvhs wanted = cl::wanted_bvhs(devices);
+  const BvhWidths wanted = cl::wanted_bvhs(devices);
   Structures built;
-  build_structures(mesh, options, Widths{wanted.binary, wanted.four, wanted.eight}, built);
+  build_structures(mesh, options, wanted, built);
   cl::Scene scene;
   if (options.accel == Accel::Bvh) {
     scene.bvh = wanted.binary ? &built.bvh : nullptr;

@@ -69,8 +69,8 @@ CastKernel cast_kernel_for(const Device& device) {
   return bvh8_supported() ? CastKernel::Bvh8PerPoint : CastKernel::Bvh4PerPoint;
 }
 
-WantedBvhs wanted_bvhs(const std::vector<const Device*>& devices) {
-  WantedBvhs wanted;
+BvhWidths wanted_bvhs(const std::vector<const Device*>& devices) {
+  BvhWidths wanted;
   for (const Device* d : devices) {
     switch (cast_kernel_for(*d)) {
       case CastKernel::Bvh8PerPoint:

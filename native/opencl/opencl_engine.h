@@ -38,10 +38,7 @@ CastKernel cast_kernel_for(const Device& device);
 
 // Which trees `devices` cast, for the caller to build (Scene::bvh, bvh4, bvh8). The 4-wide
 // tree reads the binary tree's triangles, so `binary` is also set when `four` is.
-struct WantedBvhs {
-  bool binary = false, four = false, eight = false;
-};
-WantedBvhs wanted_bvhs(const std::vector<const Device*>& devices);
+BvhWidths wanted_bvhs(const std::vector<const Device*>& devices);
 
 struct CastTimings {
   double upload = 0.0, cast = 0.0, download = 0.0;
