@@ -18,6 +18,7 @@
 #include "../kernels/sdf_smooth_projected.h"
 #include "bvh.h"
 #include "bvh_stats.h"
+#include "normalize.h"
 #include "parallel.h"
 #include "sdf.h"
 #ifdef SDF_HAVE_OPENCL
@@ -285,6 +286,27 @@ py::tuple sample_points(const Doubles& vertices, const Int64s& triangles,
   return py::make_tuple(origins, axes, tangents);
 }
 
+// Result.normalized from values of any shape (float32 or float64, C order), same shape out.
+template <class T>
+py::array_t<float> normalize(const py::array_t<T, py::array::c_style>& values,
+                             const std::string& method, unsigned threads) {
+  sdf::Normalization how;
+  if (method == "linear") {
+    how = sdf::Normalization::Linear;
+  } else if (method == "log") {
+    how = sdf::Normalization::Log;
+  } else {
+    throw std::invalid_argument("normalize must be 'linear' or 'log', got '" + method + "'");
+  }
+  py::array_t<float> out(std::vector<py::ssize_t>(values.shape(), values.shape() + values.ndim()));
+  const T* in = values.data();
+  float* to = out.mutable_data();
+  const std::size_t n = static_cast<std::size_t>(values.size());
+  py::gil_scoped_release release;
+  sdf::normalize(in, n, how, threads, to);
+  return out;
+}
+
 }  // namespace
 
 PYBIND11_MODULE(_core, m) {
@@ -298,6 +320,10 @@ PYBIND11_MODULE(_core, m) {
   m.def("opencl_devices", &opencl_devices);
   m.def("octree_stats", &octree_stats, py::arg("vertices"), py::arg("triangles"),
         py::arg("max_depth") = 10, py::arg("leaf_size") = 8);
+  m.def("normalize", &normalize<float>, py::arg("values"), py::arg("method"),
+        py::arg("threads") = 0);
+  m.def("normalize", &normalize<double>, py::arg("values"), py::arg("method"),
+        py::arg("threads") = 0);
   m.def("bvh_stats", &bvh_stats, py::arg("vertices"), py::arg("triangles"),
         py::arg("threads") = 0);
   m.def("opencl_unavailable_reason", &opencl_unavailable_reason);

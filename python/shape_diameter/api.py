@@ -276,7 +276,7 @@ def compute(
         fallback = smoothing_fallback or fallback
         timings["smooth"] = time.perf_counter() - clock
     clock = time.perf_counter()
-    normalized = normalize_values(values, normalize)
+    normalized = normalize_values(values, normalize, threads)
     timings["normalize"] = time.perf_counter() - clock
     timings["total"] = time.perf_counter() - start
     return Result(
