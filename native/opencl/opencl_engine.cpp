@@ -91,7 +91,8 @@ namespace {
 
 void run_device(const Device& device, const Scene& scene, const SamplePoints& points,
                 const std::vector<std::uint32_t>& order, const Cone& cone, float min_closeness,
-                std::vector<float>& raw_ordered, std::vector<std::int32_t>& valid_ordered,
+                UninitializedVector<float>& raw_ordered,
+                UninitializedVector<std::int32_t>& valid_ordered,
                 WorkQueue& work, std::mutex& done_mutex, std::condition_variable& done_changed,
                 DeviceResult& result) {
   const Api& cl = *api();
@@ -288,8 +289,8 @@ CastTimings cast_opencl(const std::vector<const Device*>& devices, const Scene& 
     return CastTimings{};
   }
   // The kernels write results in Morton order (contiguous per launch); scattered back below.
-  std::vector<float> raw_ordered(n);
-  std::vector<std::int32_t> valid_ordered(n);
+  UninitializedVector<float> raw_ordered(n);
+  UninitializedVector<std::int32_t> valid_ordered(n);
   WorkQueue work;
   work.total = n;
   std::mutex done_mutex;
