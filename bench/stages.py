@@ -1,6 +1,7 @@
 # SPDX-License-Identifier: GPL-3.0-or-later
 """Where compute()'s time goes: each stage of one call (best of three by total) for the
-benchmark's largest meshes, with orientation 'auto' (the default) and 'as_is'.
+benchmark's largest meshes, with the defaults, with orientation 'as_is', and with 'as_is' and
+bvh_quality 'high'.
 Usage: python3 bench/stages.py [ENGINE [MESH,MESH]]"""
 import os
 import sys
@@ -17,14 +18,17 @@ names = sys.argv[2].split(",") if len(sys.argv) > 2 else ["armadillo-x16", "bunn
 for name, v, f in benchmark_meshes():
     if name not in names:
         continue
-    for orientation in ("auto", "as_is"):
+    # The defaults, then without orientation, then also with the SAH tree everywhere.
+    for orientation, quality in (("auto", "auto"), ("as_is", "auto"), ("as_is", "high")):
         best, wall = None, None
         for _ in range(3):
             t0 = time.perf_counter()
-            r = sd.compute(v, f, rays=30, engine=engine, orientation=orientation)
+            r = sd.compute(v, f, rays=30, engine=engine, orientation=orientation,
+                           bvh_quality=quality)
             took = (time.perf_counter() - t0) * 1e3
             if best is None or took < wall:
                 best, wall = r, took
         stages = " ".join(f"{k} {x * 1e3:.1f}" for k, x in best.timings.items())
-        print(f"{name} ({len(f):,} faces) {engine} orientation={orientation}: "
+        print(f"{name} ({len(f):,} faces) {engine} orientation={orientation} "
+              f"bvh_quality={quality}: "
               f"wall {wall:.0f} ms | {stages}", flush=True)

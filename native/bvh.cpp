@@ -44,15 +44,15 @@ constexpr std::size_t kTopLevelNode = 16384;
 // 0), in face order, with the bounds of the whole, into refs; scratch (as large) is used on
 // the way and the two may be swapped. Returns how many there are.
 std::size_t make_references(const Mesh& mesh, unsigned threads,
-                            std::unique_ptr<PrimRef[]>& refs,
-                            std::unique_ptr<PrimRef[]>& scratch, Range& root) {
+                            UninitializedVector<PrimRef>& refs,
+                            UninitializedVector<PrimRef>& scratch, Range& root) {
   const std::size_t faces = mesh.triangles.size();
   const std::size_t chunks = (faces + kChunk - 1) / kChunk;
   // One pass over the vertices: each chunk writes its references from its first face's
   // place in scratch; they are moved together only if some triangle had no area.
   std::vector<std::size_t> offset(chunks + 1, 0);
   std::vector<Range> chunk_bounds(chunks);
-  PrimRef* out = scratch.get();
+  PrimRef* out = scratch.data();
   parallel_for(chunks, 1, threads, [&](std::size_t b, std::size_t e) {
     for (std::size_t c = b; c < e; ++c) {
       std::size_t n = c * kChunk;
@@ -85,7 +85,7 @@ std::size_t make_references(const Mesh& mesh, unsigned threads,
     parallel_for(chunks, 1, threads, [&](std::size_t b, std::size_t e) {
       for (std::size_t c = b; c < e; ++c)
         std::copy(out + c * kChunk, out + c * kChunk + (offset[c + 1] - offset[c]),
-                  refs.get() + offset[c]);
+                  refs.data() + offset[c]);
     });
   }
   root = Range{0, 0, count, 0, Box(), Box()};
@@ -275,7 +275,7 @@ void build_subtrees(const std::vector<Subtree>& subtrees, PrimRef* buffers[2],
                   buffers[0] + s.range.begin);
       built_count[largest_first[k]] =
           bvh_build::build_subtree(buffers[0], s.range, config.bins, config.max_leaf_size,
-                                   built.data() + 2 * s.range.begin);
+                                   config.morton_below, built.data() + 2 * s.range.begin);
     }
   });
   // Subtree k's root replaces its node; the rest of it goes to base[k].
@@ -304,14 +304,14 @@ Bvh build_bvh(const Mesh& mesh, const BvhConfig& config) {
     throw std::invalid_argument("BvhConfig: max_leaf_size >= 1 and 2 <= bins <= " +
                                 std::to_string(bvh_build::kMaxBins) + " are required");
   const std::size_t faces = mesh.triangles.size();
-  // Not std::vector: its zero fill would be a serial pass over 32 bytes per face.
-  std::unique_ptr<PrimRef[]> refs(new PrimRef[faces]), scratch(new PrimRef[faces]);
+  // Not zero-filled: that would be a serial pass over 32 bytes per face.
+  UninitializedVector<PrimRef> refs(faces), scratch(faces);
   Range root;
   const std::size_t count = make_references(mesh, config.threads, refs, scratch, root);
   Bvh bvh;
   if (count == 0) return bvh;
 
-  PrimRef* buffers[2] = {refs.get(), scratch.get()};
+  PrimRef* buffers[2] = {refs.data(), scratch.data()};
   bvh.nodes.reserve(2 * count);
   bvh.nodes.resize(1);
   bvh_build::set_node_bounds(bvh.nodes[0], root.bounds);

@@ -17,6 +17,9 @@ struct BvhConfig {
   int max_leaf_size = 4;
   // SAH bins per axis: 16 is within a percent or two of a full sweep (Wald 2007).
   int bins = 16;
+  // Nodes of at most this many triangles are split at Morton-code bits instead of by SAH
+  // (bvh_morton.h): 0 builds SAH everywhere, the best tree; larger values build faster.
+  std::size_t morton_below = 0;
   unsigned threads = 0;  // 0: every core
 };
 

@@ -3,6 +3,8 @@
 
 #include <utility>
 
+#include "bvh_morton.h"
+
 namespace sdf::bvh_build {
 
 void set_node_bounds(kern::SdfBvhNode& node, const Box& b) {
@@ -18,12 +20,18 @@ namespace {
 
 class SubtreeBuilder {
  public:
-  SubtreeBuilder(PrimRef* refs, int bins, int max_leaf_size, kern::SdfBvhNode* nodes)
-      : refs_(refs), bins_(bins), max_leaf_size_(max_leaf_size), nodes_(nodes) {}
+  SubtreeBuilder(PrimRef* refs, int bins, int max_leaf_size, std::size_t morton_below,
+                 kern::SdfBvhNode* nodes)
+      : refs_(refs), bins_(bins), max_leaf_size_(max_leaf_size), morton_below_(morton_below),
+        morton_(max_leaf_size), nodes_(nodes) {}
 
   std::size_t node_count() const { return used_; }
 
   void build(std::size_t node, const Range& range) {
+    if (range.count() <= morton_below_) {
+      morton_.build(refs_, range, node, nodes_, &used_);
+      return;
+    }
     const Split split = decide(range);
     if (split.kind == Split::Leaf) {
       nodes_[node].first = static_cast<std::int32_t>(range.begin);
@@ -93,6 +101,8 @@ class SubtreeBuilder {
   PrimRef* refs_;
   int bins_;
   int max_leaf_size_;
+  std::size_t morton_below_;
+  MortonSubtrees morton_;
   kern::SdfBvhNode* nodes_;
   std::size_t used_ = 1;  // the root
 };
@@ -100,9 +110,9 @@ class SubtreeBuilder {
 }  // namespace
 
 std::size_t build_subtree(PrimRef* refs, const Range& root, int bins, int max_leaf_size,
-                          kern::SdfBvhNode* nodes) {
+                          std::size_t morton_below, kern::SdfBvhNode* nodes) {
   set_node_bounds(nodes[0], root.bounds);
-  SubtreeBuilder builder(refs, bins, max_leaf_size, nodes);
+  SubtreeBuilder builder(refs, bins, max_leaf_size, morton_below, nodes);
   builder.build(0, root);
   return builder.node_count();
 }

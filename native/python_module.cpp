@@ -72,6 +72,13 @@ const char* fill_name(sdf::FillResult r) {
   return "?";
 }
 
+sdf::BvhQuality parse_bvh_quality(const std::string& name) {
+  if (name == "auto") return sdf::BvhQuality::Auto;
+  if (name == "high") return sdf::BvhQuality::High;
+  if (name == "fast") return sdf::BvhQuality::Fast;
+  throw std::invalid_argument("bvh_quality must be 'auto', 'high' or 'fast', got '" + name + "'");
+}
+
 sdf::Orientation parse_orientation(const std::string& name) {
   if (name == "auto") return sdf::Orientation::Auto;
   if (name == "as_is") return sdf::Orientation::AsIs;
@@ -89,7 +96,7 @@ py::dict compute(const Doubles& vertices, const Int64s& triangles, int rays, dou
                  const std::string& sampling, std::uint32_t seed, const std::string& points,
                  unsigned threads, const py::object& progress, const std::string& engine,
                  const std::string& accel, int octree_max_depth, int octree_leaf_size,
-                 const std::string& orientation) {
+                 const std::string& orientation, const std::string& bvh_quality) {
   sdf::Options options;
   options.rays = rays;
   options.cone_angle = cone_angle;
@@ -102,6 +109,7 @@ py::dict compute(const Doubles& vertices, const Int64s& triangles, int rays, dou
   options.octree.max_depth = octree_max_depth;
   options.octree.leaf_size = octree_leaf_size;
   options.orientation = parse_orientation(orientation);
+  options.bvh_quality = parse_bvh_quality(bvh_quality);
 
   sdf::ProgressFn report;
   if (!progress.is_none()) {
@@ -316,7 +324,7 @@ PYBIND11_MODULE(_core, m) {
         py::arg("cone_angle"), py::arg("sampling"), py::arg("seed"), py::arg("points"),
         py::arg("threads"), py::arg("progress"), py::arg("engine") = "cpu",
         py::arg("accel") = "bvh", py::arg("octree_max_depth") = 10,
-        py::arg("octree_leaf_size") = 8, py::arg("orientation") = "auto");
+        py::arg("octree_leaf_size") = 8, py::arg("orientation") = "auto", py::arg("bvh_quality") = "auto");
   m.def("opencl_devices", &opencl_devices);
   m.def("octree_stats", &octree_stats, py::arg("vertices"), py::arg("triangles"),
         py::arg("max_depth") = 10, py::arg("leaf_size") = 8);

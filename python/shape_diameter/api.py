@@ -126,6 +126,7 @@ def _check_choice(name, value, choices):
 
 ACCELERATIONS = ("bvh", "octree")
 ORIENTATIONS = ("auto", "as_is", "flip")
+BVH_QUALITIES = ("auto", "high", "fast")
 
 
 def _check_engine(engine):
@@ -180,6 +181,7 @@ def compute(
     octree_depth: int = 10,
     octree_leaf_size: int = 8,
     orientation: str = "auto",
+    bvh_quality: str = "auto",
     smoothing: str = "none",
     uvs=None,
     smoothing_options: Optional[dict] = None,
@@ -207,6 +209,10 @@ def compute(
         inside out), 'as_is' (trust the winding) or 'flip' (reverse every face).
     accel: 'bvh' (binned-SAH bounding volume hierarchy) or 'octree' (the paper's, section 4.2,
         with octree_depth levels at most and octree_leaf_size triangles per unsplit cell).
+    bvh_quality: 'high' (SAH at every node: the fastest tree to cast), 'fast' (SAH down to
+        nodes of 1024 triangles, Morton-code splits below: faster to build, slower to cast) or
+        'auto' (default: 'fast' when every device casting is a GPU and rays <= 64, where the
+        build costs more than the slower cast; 'high' otherwise). Same values either way.
     progress: called with the fraction done in [0, 1] from the calling thread; if it raises,
         the computation stops and the exception propagates.
     threads: CPU threads, 0 for every core.
@@ -229,6 +235,7 @@ def compute(
     _check_integer("threads", threads, 0, 4096)
     _check_choice("accel", accel, ACCELERATIONS)
     _check_choice("orientation", orientation, ORIENTATIONS)
+    _check_choice("bvh_quality", bvh_quality, BVH_QUALITIES)
     _check_integer("octree_depth", octree_depth, 0, 16)
     _check_integer("octree_leaf_size", octree_leaf_size, 1, 2**31 - 1)
     check_smoothing(smoothing, smoothing_options, uvs=uvs, face_count=len(t),
@@ -245,7 +252,7 @@ def compute(
         return _core.compute(
             v, t, int(rays), float(cone_angle), sampling, int(seed), points, int(threads),
             cast_progress, engine_name, accel, int(octree_depth), int(octree_leaf_size),
-            orientation,
+            orientation, bvh_quality,
         )
 
     out, fallback = _run_with_fallback(run, chosen, engine, "")

@@ -186,6 +186,13 @@ def build_parser() -> argparse.ArgumentParser:
         help="acceleration structure: bvh, or the paper's octree (default: bvh)",
     )
     parser.add_argument(
+        "--bvh-quality",
+        choices=("auto", "high", "fast"),
+        default="auto",
+        help="high: SAH everywhere (fastest to cast); fast: Morton splits below 1024 "
+        "triangles (fastest to build); auto: fast on GPUs at <= 64 rays (default: auto)",
+    )
+    parser.add_argument(
         "--threads",
         type=_int_in(0, 4096),
         default=0,
@@ -313,6 +320,7 @@ def _run(args) -> int:
             orientation=args.orientation,
             engine=args.engine,
             accel=args.accel,
+            bvh_quality=args.bvh_quality,
             threads=args.threads,
             smoothing=args.smooth,
             uvs=uvs,

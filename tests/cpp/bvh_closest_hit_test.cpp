@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cstring>
 #include <random>
+#include <tuple>
 #include <vector>
 
 #include "../../kernels/sdf_bvh_traverse.h"
@@ -29,12 +30,16 @@ bool box_contains(const kern::SdfBvhNode& outer, glm::vec3 p) {
          p.y <= outer.hi_y && p.z <= outer.hi_z;
 }
 
-class BvhOnSoup : public ::testing::TestWithParam<int> {};
+// Triangle count, and BvhConfig::morton_below: SAH everywhere, Morton splits at the bottom,
+// Morton splits below the parallel top levels.
+class BvhOnSoup : public ::testing::TestWithParam<std::tuple<int, int>> {};
 
 TEST_P(BvhOnSoup, ClosestHitEqualsBruteForce) {
-  const Mesh mesh = test::soup(GetParam(), 11).mesh();
+  const int size = std::get<0>(GetParam());
+  const Mesh mesh = test::soup(size, 11).mesh();
   BvhConfig config;
   config.threads = 2;
+  config.morton_below = std::get<1>(GetParam());
   Bvh bvh = build_bvh(mesh, config);
   grow_boxes_to_cover_hits(bvh);
   const Bvh4 wide = collapse_to_bvh4(bvh);
@@ -45,7 +50,7 @@ TEST_P(BvhOnSoup, ClosestHitEqualsBruteForce) {
   for (int r = 0; r < 3000; ++r) {
     const glm::vec3 o(u(rng), u(rng), u(rng));
     const glm::vec3 d = glm::normalize(glm::vec3(u(rng), u(rng), u(rng)));
-    const int skip = r % 7 == 0 ? r % GetParam() : -1;
+    const int skip = r % 7 == 0 ? r % size : -1;
     const kern::SdfHit a = kern::sdf_bvh_closest_hit(bvh.nodes.data(), bvh.triangles.data(), o, d,
                                                      1e-4f, skip);
     const kern::SdfHit b = brute_force(bvh, o, d, 1e-4f, skip);
@@ -65,10 +70,12 @@ TEST_P(BvhOnSoup, ClosestHitEqualsBruteForce) {
     }
   }
   // The test exercises hits, not only misses (a lone triangle is rarely hit).
-  EXPECT_GT(hits, GetParam() >= 100 ? 200 : 0);
+  EXPECT_GT(hits, size >= 100 ? 200 : 0);
 }
 
-INSTANTIATE_TEST_SUITE_P(Sizes, BvhOnSoup, ::testing::Values(1, 5, 100, 5000, 20000));
+INSTANTIATE_TEST_SUITE_P(Sizes, BvhOnSoup,
+                         ::testing::Combine(::testing::Values(1, 5, 100, 5000, 20000),
+                                            ::testing::Values(0, 64, 100000)));
 
 #if SDF_HAVE_BVH8
 TEST(Bvh8, TiesOnSharedEdgesAndLargeLeavesMatchBruteForceBitForBit) {
@@ -111,9 +118,13 @@ TEST(Bvh8, TiesOnSharedEdgesAndLargeLeavesMatchBruteForceBitForBit) {
 }
 #endif
 
-TEST(Bvh, EveryTriangleOnceAndBoxesNest) {
+class BvhShape : public ::testing::TestWithParam<int> {};  // BvhConfig::morton_below
+
+TEST_P(BvhShape, EveryTriangleOnceAndBoxesNest) {
   const Mesh mesh = test::soup(20000, 3).mesh();
-  const Bvh bvh = build_bvh(mesh);
+  BvhConfig config;
+  config.morton_below = GetParam();
+  const Bvh bvh = build_bvh(mesh, config);
   std::vector<int> seen(mesh.triangles.size(), 0);
   for (const auto& t : bvh.triangles) ++seen[t.id];
   EXPECT_TRUE(std::all_of(seen.begin(), seen.end(), [](int c) { return c == 1; }));
@@ -135,6 +146,44 @@ TEST(Bvh, EveryTriangleOnceAndBoxesNest) {
   EXPECT_LT(bvh_depth(bvh), SDF_BVH_STACK_SIZE);
 }
 
+TEST_P(BvhShape, MortonSplitsBoxesAreTight) {
+  // Each node's box is exactly its children's (or its triangles') union, as SAH's are.
+  BvhConfig config;
+  config.morton_below = GetParam();
+  const Bvh bvh = build_bvh(test::soup(3000, 8).mesh(), config);
+  for (const auto& node : bvh.nodes) {
+    glm::vec3 lo(INFINITY), hi(-INFINITY);
+    if (node.count == 0) {
+      for (int c = 0; c < 2; ++c) {
+        const auto& child = bvh.nodes[node.first + c];
+        lo = glm::min(lo, glm::vec3(child.lo_x, child.lo_y, child.lo_z));
+        hi = glm::max(hi, glm::vec3(child.hi_x, child.hi_y, child.hi_z));
+      }
+    } else {
+      for (int k = node.first; k < node.first + node.count; ++k) {
+        const auto& t = bvh.triangles[k];
+        const glm::vec3 v0(t.v0_x, t.v0_y, t.v0_z), e1(t.e1_x, t.e1_y, t.e1_z),
+            e2(t.e2_x, t.e2_y, t.e2_z);
+        // The builder's boxes come from the input vertices; v0 + e1 rounds back to them only
+        // approximately, so compare within a float step.
+        for (const glm::vec3 p : {v0, v0 + e1, v0 + e2}) {
+          lo = glm::min(lo, p);
+          hi = glm::max(hi, p);
+        }
+      }
+    }
+    const float slack = 1e-5f;
+    EXPECT_NEAR(node.lo_x, lo.x, slack);
+    EXPECT_NEAR(node.lo_y, lo.y, slack);
+    EXPECT_NEAR(node.lo_z, lo.z, slack);
+    EXPECT_NEAR(node.hi_x, hi.x, slack);
+    EXPECT_NEAR(node.hi_y, hi.y, slack);
+    EXPECT_NEAR(node.hi_z, hi.z, slack);
+  }
+}
+
+INSTANTIATE_TEST_SUITE_P(MortonBelow, BvhShape, ::testing::Values(0, 64, 100000));
+
 TEST(Bvh, LeavesOutZeroAreaTrianglesAndHandlesAllDegenerate) {
   test::Arrays a = test::box(1, 1, 1);
   a.triangles.insert(a.triangles.end(), {0, 0, 0, 0, 1, 1});  // a point and a segment
@@ -147,14 +196,17 @@ TEST(Bvh, LeavesOutZeroAreaTrianglesAndHandlesAllDegenerate) {
   EXPECT_TRUE(build_bvh(flat.mesh()).empty());
 }
 
-TEST(Bvh, IdenticalCentroidsStillGiveSmallLeaves) {
-  // 100 copies of one triangle: no SAH split exists; the builder must still bound leaves.
+TEST_P(BvhShape, IdenticalCentroidsStillGiveSmallLeaves) {
+  // 100 copies of one triangle: no SAH split exists and every Morton code is equal; the
+  // builder must still bound leaves.
   test::Arrays a;
   for (int t = 0; t < 100; ++t) {
     a.vertices.insert(a.vertices.end(), {0, 0, 0, 1, 0, 0, 0, 1, 0});
     a.triangles.insert(a.triangles.end(), {3 * t, 3 * t + 1, 3 * t + 2});
   }
-  const Bvh bvh = build_bvh(a.mesh());
+  BvhConfig config;
+  config.morton_below = GetParam();
+  const Bvh bvh = build_bvh(a.mesh(), config);
   for (const auto& node : bvh.nodes) EXPECT_LE(node.count, BvhConfig().max_leaf_size);
 }
 

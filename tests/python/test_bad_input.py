@@ -203,6 +203,7 @@ def test_empty_mesh(V, F, match):
         ({"engine": "opencl:no-such-device"}, r"no OpenCL device matches 'no-such-device'"),
         ({"accel": "kdtree"}, r"accel must be one of \('bvh', 'octree'\), got 'kdtree'"),
         ({"accel": None}, r"accel must be one of .* got None"),
+        ({"bvh_quality": "best"}, r"bvh_quality must be one of \('auto', 'high', 'fast'\), got 'best'"),
         ({"accel": "octree", "octree_depth": -1}, _DEPTH + r"\[0, 16\], got -1"),
         ({"accel": "octree", "octree_depth": 17}, _DEPTH + r".* got 17"),
         ({"accel": "octree", "octree_depth": 2.5}, _DEPTH + r".* got 2.5"),

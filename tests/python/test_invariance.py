@@ -286,6 +286,18 @@ def test_acceleration_structure_does_not_change_the_result(fandisk, sampling):
     _assert_identical(bvh, octree)
 
 
+@pytest.mark.parametrize("mesh", ["fandisk.obj", "armadillo.off", "bunny00.off", "teapot.obj"])
+@pytest.mark.parametrize("points", ["faces", "vertices"])
+def test_bvh_quality_does_not_change_the_result(mesh, points):
+    # 'fast' splits the bottom of the tree at Morton-code bits instead of by SAH: another tree,
+    # the same nearest hits (bunny00 and armadillo have subtrees of both kinds).
+    loaded = trimesh.load(DATA / mesh, process=False, force="mesh")
+    V, F = np.asarray(loaded.vertices), np.asarray(loaded.faces)
+    high = shape_diameter.compute(V, F, points=points, engine="cpu", bvh_quality="high")
+    fast = shape_diameter.compute(V, F, points=points, engine="cpu", bvh_quality="fast")
+    _assert_identical(high, fast)
+
+
 # --------------------------------------------------------------------------- the ray frame
 
 
