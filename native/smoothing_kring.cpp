@@ -37,8 +37,9 @@ namespace {
 // The region is grown breadth-first from the batch, so it lists its vertices by level (edge
 // distance from the batch), and its faces by the level of their first listed corner. D_d can
 // hold bits only on levels 0..d, and a face only through a corner there: pass d walks that
-// prefix of the region, not all of it (a third less work at k = 6). The prefixes keep the
-// region's order, so each point sums its items in the same order as a walk of it all.
+// prefix of the region, not all of it (40% fewer face and vertex visits at k = 6, 1.5M faces).
+// The prefixes keep the region's order, so each point sums its items in the same order as a
+// walk of it all.
 
 constexpr int kBatch = 64;
 
