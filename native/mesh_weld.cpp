@@ -6,6 +6,8 @@
 #include <cstring>
 #include <limits>
 
+#include "parallel.h"
+
 namespace sdf {
 
 namespace {
@@ -171,25 +173,51 @@ Adjacency faces_of_vertices(const std::vector<glm::uvec3>& triangles, std::uint3
   return a;
 }
 
+namespace {
+
+// The distinct neighbours of vertex v (sorted, without v) appended to `out`.
+void append_neighbours(std::uint32_t v, const std::vector<glm::uvec3>& triangles,
+                       const Adjacency& faces_of_vertices, std::vector<std::uint32_t>& out) {
+  const std::size_t begin = out.size();
+  for (std::uint32_t i = faces_of_vertices.offsets[v]; i < faces_of_vertices.offsets[v + 1]; ++i) {
+    const glm::uvec3 t = triangles[faces_of_vertices.items[i]];
+    for (int k = 0; k < 3; ++k)
+      if (t[k] != v) out.push_back(t[k]);
+  }
+  const auto first = out.begin() + static_cast<std::ptrdiff_t>(begin);
+  std::sort(first, out.end());
+  out.erase(std::unique(first, out.end()), out.end());
+}
+
+}  // namespace
+
 Adjacency vertex_neighbours(const std::vector<glm::uvec3>& triangles,
-                            const Adjacency& faces_of_vertices) {
+                            const Adjacency& faces_of_vertices, unsigned threads) {
   const std::size_t n = faces_of_vertices.size();
   Adjacency a;
   a.offsets.assign(n + 1, 0);
-  a.items.reserve(faces_of_vertices.items.size() * 2);
-  std::vector<std::uint32_t> ring;
-  for (std::size_t v = 0; v < n; ++v) {
-    ring.clear();
-    for (std::uint32_t i = faces_of_vertices.offsets[v]; i < faces_of_vertices.offsets[v + 1]; ++i) {
-      const glm::uvec3 t = triangles[faces_of_vertices.items[i]];
-      for (int k = 0; k < 3; ++k)
-        if (t[k] != v) ring.push_back(t[k]);
+  // Blocks of vertices list their neighbours into their own buffers (counts into offsets),
+  // then copy them into place after the prefix sum: the result does not depend on threads.
+  constexpr std::size_t kBlock = 1 << 14;
+  const std::size_t blocks = (n + kBlock - 1) / kBlock;
+  std::vector<std::vector<std::uint32_t>> lists(blocks);
+  parallel_for(blocks, 1, threads, [&](std::size_t b0, std::size_t b1) {
+    for (std::size_t b = b0; b < b1; ++b) {
+      std::vector<std::uint32_t>& list = lists[b];
+      list.reserve(7 * kBlock);
+      for (std::size_t v = b * kBlock; v < std::min(n, (b + 1) * kBlock); ++v) {
+        const std::size_t before = list.size();
+        append_neighbours(static_cast<std::uint32_t>(v), triangles, faces_of_vertices, list);
+        a.offsets[v + 1] = static_cast<std::uint32_t>(list.size() - before);
+      }
     }
-    std::sort(ring.begin(), ring.end());
-    ring.erase(std::unique(ring.begin(), ring.end()), ring.end());
-    a.items.insert(a.items.end(), ring.begin(), ring.end());
-    a.offsets[v + 1] = static_cast<std::uint32_t>(a.items.size());
-  }
+  });
+  for (std::size_t v = 0; v < n; ++v) a.offsets[v + 1] += a.offsets[v];
+  a.items.resize(a.offsets.back());
+  parallel_for(blocks, 1, threads, [&](std::size_t b0, std::size_t b1) {
+    for (std::size_t b = b0; b < b1; ++b)
+      std::copy(lists[b].begin(), lists[b].end(), a.items.begin() + a.offsets[b * kBlock]);
+  });
   return a;
 }
 

@@ -49,7 +49,8 @@ struct Adjacency {
 Adjacency faces_of_vertices(const std::vector<glm::uvec3>& triangles, std::uint32_t vertex_count);
 
 // Vertices that share an edge with each vertex (each once, increasing; never the vertex itself).
+// On `threads` workers (0 = every core); the result does not depend on it.
 Adjacency vertex_neighbours(const std::vector<glm::uvec3>& triangles,
-                            const Adjacency& faces_of_vertices);
+                            const Adjacency& faces_of_vertices, unsigned threads = 1);
 
 }  // namespace sdf

@@ -190,5 +190,19 @@ TEST(KringSmoothing, SameResultForAnyThreadCount) {
             smooth_kring(mesh, PointKind::Faces, v.data(), many));
 }
 
+TEST(KringSmoothing, SameResultForAnyThreadCountOnSeveralSetupBlocks) {
+  // 81,920 faces and 40,962 vertices: more than one block in each parallel setup stage
+  // (Morton codes and their sort: 64k items; vertex neighbours: 16k vertices).
+  const Mesh mesh = test::icosphere(6).mesh();
+  for (PointKind kind : {PointKind::Faces, PointKind::Vertices}) {
+    const std::size_t n = kind == PointKind::Faces ? mesh.triangles.size() : mesh.vertices.size();
+    const std::vector<float> v = test::noisy(n, 2.0f, 0.5f, 10);
+    KringOptions one = with_k(2), many = with_k(2);
+    one.threads = 1;
+    many.threads = 3;
+    EXPECT_EQ(smooth_kring(mesh, kind, v.data(), one), smooth_kring(mesh, kind, v.data(), many));
+  }
+}
+
 }  // namespace
 }  // namespace sdf

@@ -72,5 +72,25 @@ TEST(Adjacency, FacesAndNeighboursOfAGrid) {
   EXPECT_EQ(n1, (std::vector<std::uint32_t>{0, 2, 4, 5}));
 }
 
+TEST(VertexNeighbours, SameListsForAnyThreadCount) {
+  // 40,962 vertices: three blocks of 16k listed by different workers.
+  const Mesh mesh = test::icosphere(6).mesh();
+  const Weld weld = weld_vertices(mesh.vertices.data(), mesh.vertices.size(), 0.0f);
+  const auto tris = welded_triangles(mesh, weld);
+  const Adjacency vf = faces_of_vertices(tris, weld.count);
+  const Adjacency one = vertex_neighbours(tris, vf, 1), many = vertex_neighbours(tris, vf, 3);
+  EXPECT_EQ(one.offsets, many.offsets);
+  EXPECT_EQ(one.items, many.items);
+  // Each list increasing, without the vertex itself (an icosphere vertex has 5 or 6).
+  for (std::size_t v = 0; v < one.size(); ++v) {
+    const std::uint32_t count = one.offsets[v + 1] - one.offsets[v];
+    ASSERT_TRUE(count == 5 || count == 6) << v;
+    for (std::uint32_t j = one.offsets[v]; j < one.offsets[v + 1]; ++j) {
+      ASSERT_NE(one.items[j], v);
+      if (j > one.offsets[v]) ASSERT_LT(one.items[j - 1], one.items[j]);
+    }
+  }
+}
+
 }  // namespace
 }  // namespace sdf
