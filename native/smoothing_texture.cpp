@@ -2,6 +2,7 @@
 #include "smoothing_texture.h"
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <cstring>
 #include <limits>
@@ -16,6 +17,20 @@ namespace sdf {
 namespace {
 
 constexpr int kMaxSize = 16384;
+
+// Seconds since the previous lap (or construction).
+class Stopwatch {
+ public:
+  double lap() {
+    const auto now = std::chrono::steady_clock::now();
+    const double s = std::chrono::duration<double>(now - last_).count();
+    last_ = now;
+    return s;
+  }
+
+ private:
+  std::chrono::steady_clock::time_point last_ = std::chrono::steady_clock::now();
+};
 
 // Union-find over faces with path halving; the root of a set is its smallest face.
 std::uint32_t find_root(std::vector<std::uint32_t>& parent, std::uint32_t f) {
@@ -251,6 +266,8 @@ TextureSmoothing smooth_texture(const Mesh& mesh, PointKind kind, const float* v
     throw std::invalid_argument("margin must be in [0, " + std::to_string(kMaxSize) + "]");
   if (options.bilateral && !(options.range_sigma > 0.0 && std::isfinite(options.range_sigma)))
     throw std::invalid_argument("range_sigma must be a finite number > 0");
+  Stopwatch clock;
+  std::vector<std::pair<std::string, double>> timings;
   const bool faces = kind == PointKind::Faces;
   const std::size_t m = mesh.triangles.size();
   const std::size_t n = faces ? m : mesh.vertices.size();
@@ -272,7 +289,9 @@ TextureSmoothing smooth_texture(const Mesh& mesh, PointKind kind, const float* v
   };
 
   report(0.0);
+  timings.emplace_back("checks", clock.lap());
   const std::vector<std::int32_t> face_island = uv_islands(mesh, uvs, options.weld_tolerance);
+  timings.emplace_back("islands", clock.lap());
   const std::size_t texels = static_cast<std::size_t>(width) * height;
   std::vector<std::int32_t> island(texels, -1);
   std::vector<float> value(texels, 0.0f);
@@ -313,6 +332,7 @@ TextureSmoothing smooth_texture(const Mesh& mesh, PointKind kind, const float* v
     }
   }
   report(0.1);
+  timings.emplace_back("rasterise", clock.lap());
 
   // Dilate and blur: on the CPU threads, or by `filter` on another device.
   TextureFilter f;
@@ -338,6 +358,7 @@ TextureSmoothing smooth_texture(const Mesh& mesh, PointKind kind, const float* v
   } else {
     blurred = filter_cpu(f, island, value, options.threads, progress, progress_from, progress_to);
   }
+  timings.emplace_back("filter", clock.lap());
 
   // Read back.
   TextureSmoothing out;
@@ -417,6 +438,7 @@ TextureSmoothing smooth_texture(const Mesh& mesh, PointKind kind, const float* v
     }
   }
   report(1.0);
+  timings.emplace_back("read back", clock.lap());
 
   if (keep_image) {
     out.width = width;
@@ -425,6 +447,8 @@ TextureSmoothing smooth_texture(const Mesh& mesh, PointKind kind, const float* v
     for (std::size_t t = 0; t < texels; ++t) out.mask[t] = island[t] >= 0 ? 1 : 0;
     out.image = std::move(blurred);
   }
+  timings.emplace_back("image", clock.lap());
+  out.timings = std::move(timings);
   return out;
 }
 

@@ -26,6 +26,8 @@
 
 #include <cstdint>
 #include <functional>
+#include <string>
+#include <utility>
 #include <vector>
 
 #include "mesh.h"
@@ -54,6 +56,9 @@ struct TextureSmoothing {
   std::vector<float> image;
   std::vector<std::uint8_t> mask;
   int width = 0, height = 0;
+  // Seconds per stage, in order (checks, islands, rasterise, dilate and blur or the device's
+  // filter, read back, image): bench/texture_stages.py prints them.
+  std::vector<std::pair<std::string, double>> timings;
 };
 
 // Steps 3 and 4 (dilate, blur) of one image, as smooth_texture runs them.

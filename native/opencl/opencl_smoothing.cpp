@@ -2,6 +2,7 @@
 #include "opencl_smoothing.h"
 
 #include <algorithm>
+#include <chrono>
 #include <cstdint>
 #include <memory>
 #include <mutex>
@@ -49,6 +50,20 @@ void image_launch(const Device& device, DeviceState& s, const Kernel& kernel, in
     launch(s, kernel, 2, global, nullptr);
   }
 }
+
+// Seconds since the previous lap (or construction).
+class Stopwatch {
+ public:
+  double lap() {
+    const auto now = std::chrono::steady_clock::now();
+    const double s = std::chrono::duration<double>(now - last_).count();
+    last_ = now;
+    return s;
+  }
+
+ private:
+  std::chrono::steady_clock::time_point last_ = std::chrono::steady_clock::now();
+};
 
 }  // namespace
 
@@ -99,8 +114,10 @@ TextureSmoothing smooth_texture_opencl(const Device& device, const Mesh& mesh, P
                                        const TextureOptions& options, bool keep_image,
                                        const ProgressFn& progress) {
   DeviceState& s = state_of(device);
+  std::vector<std::pair<std::string, double>> device_timings;  // the filter's parts
   auto filter = [&](const TextureFilter& f, std::vector<std::int32_t>& island,
                     std::vector<float>& value) {
+    Stopwatch clock;
     const std::size_t texels = island.size();
     const std::size_t image = texels * sizeof(float);
     const bool blur = f.taps >= 1;
@@ -115,6 +132,8 @@ TextureSmoothing smooth_texture_opencl(const Device& device, const Mesh& mesh, P
     std::unique_ptr<Buffer> value_a = std::make_unique<Buffer>(s, image, value.data());
     std::unique_ptr<Buffer> island_b = std::make_unique<Buffer>(s, image, nullptr);
     std::unique_ptr<Buffer> value_b = std::make_unique<Buffer>(s, image, nullptr);
+    check(api()->clFinish(s.queue), "clFinish (upload)");
+    device_timings.emplace_back("filter: upload", clock.lap());
     if (f.margin > 0) {
       Kernel dilate(program, "sdf_texture_dilate");
       dilate.arg(0, static_cast<cl_int>(f.width));
@@ -166,10 +185,16 @@ TextureSmoothing smooth_texture_opencl(const Device& device, const Mesh& mesh, P
       // The buffers above are released at the end of this block: finish with them first.
       check(api()->clFinish(s.queue), "clFinish (blur)");
     }
+    check(api()->clFinish(s.queue), "clFinish (filter)");
+    device_timings.emplace_back("filter: kernels", clock.lap());
     read(s, *island_a, image, island.data());
     read(s, *value_a, image, value.data());
+    device_timings.emplace_back("filter: download", clock.lap());
   };
-  return smooth_texture(mesh, kind, values, uvs, options, keep_image, progress, 0.0, 1.0, filter);
+  TextureSmoothing out =
+      smooth_texture(mesh, kind, values, uvs, options, keep_image, progress, 0.0, 1.0, filter);
+  out.timings.insert(out.timings.end(), device_timings.begin(), device_timings.end());
+  return out;
 }
 
 }  // namespace sdf::cl
