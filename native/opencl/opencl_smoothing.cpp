@@ -121,10 +121,10 @@ TextureSmoothing smooth_texture_opencl(const Device& device, const Mesh& mesh, P
     const std::size_t texels = island.size();
     const std::size_t image = texels * sizeof(float);
     const bool blur = f.taps >= 1;
-    // island and value, their dilation copies, and for the blur: ones, the row pass's two
-    // sums and the taps (the result goes to the second value buffer).
+    // island and value, their dilation copies, and for the blur: the row pass's two sums and
+    // the taps (the result goes to the second value buffer).
     std::vector<std::size_t> sizes = {image, image, image, image};
-    if (blur) sizes.insert(sizes.end(), {image, image, image, bytes_of(f.kernel)});
+    if (blur) sizes.insert(sizes.end(), {image, image, bytes_of(f.kernel)});
     check_fits(device, sizes);
     std::lock_guard<std::mutex> lock(s.mutex);
     cl_program program = smoothing_program(device, s);
@@ -148,33 +148,32 @@ TextureSmoothing smooth_texture_opencl(const Device& device, const Mesh& mesh, P
         std::swap(value_a, value_b);
       }
     }
+    // Alive until the clFinish below.
+    std::unique_ptr<Buffer> row_value, row_weight, taps;
     if (blur) {
-      const std::vector<float> ones(texels, 1.0f);
-      Buffer ones_buffer(s, image, ones.data());
-      Buffer row_value(s, image, nullptr);
-      Buffer row_weight(s, image, nullptr);
-      Buffer taps(s, bytes_of(f.kernel), f.kernel.data());
+      row_value = std::make_unique<Buffer>(s, image, nullptr);
+      row_weight = std::make_unique<Buffer>(s, image, nullptr);
+      taps = std::make_unique<Buffer>(s, bytes_of(f.kernel), f.kernel.data());
       Kernel rows(program, "sdf_texture_blur_rows");
       cl_uint a = 0;
       rows.arg(a++, static_cast<cl_int>(f.width));
       rows.arg(a++, static_cast<cl_int>(f.height));
       rows.arg(a++, island_a->get());
       rows.arg(a++, value_a->get());
-      rows.arg(a++, ones_buffer.get());
-      rows.arg(a++, taps.get());
+      rows.arg(a++, taps->get());
       rows.arg(a++, static_cast<cl_int>(f.taps));
       rows.arg(a++, f.inv_range);
-      rows.arg(a++, row_value.get());
-      rows.arg(a++, row_weight.get());
+      rows.arg(a++, row_value->get());
+      rows.arg(a++, row_weight->get());
       image_launch(device, s, rows, f.width, f.height);
       Kernel columns(program, "sdf_texture_blur_columns");
       a = 0;
       columns.arg(a++, static_cast<cl_int>(f.width));
       columns.arg(a++, static_cast<cl_int>(f.height));
       columns.arg(a++, island_a->get());
-      columns.arg(a++, row_value.get());
-      columns.arg(a++, row_weight.get());
-      columns.arg(a++, taps.get());
+      columns.arg(a++, row_value->get());
+      columns.arg(a++, row_weight->get());
+      columns.arg(a++, taps->get());
       columns.arg(a++, static_cast<cl_int>(f.taps));
       columns.arg(a++, f.inv_range);
       columns.arg(a++, f.lo);
@@ -182,12 +181,13 @@ TextureSmoothing smooth_texture_opencl(const Device& device, const Mesh& mesh, P
       columns.arg(a++, value_b->get());
       image_launch(device, s, columns, f.width, f.height);
       std::swap(value_a, value_b);
-      // The buffers above are released at the end of this block: finish with them first.
-      check(api()->clFinish(s.queue), "clFinish (blur)");
     }
     check(api()->clFinish(s.queue), "clFinish (filter)");
     device_timings.emplace_back("filter: kernels", clock.lap());
-    read(s, *island_a, image, island.data());
+    // Both downloads queued, one wait (the queue runs in order).
+    check(api()->clEnqueueReadBuffer(s.queue, island_a->get(), CL_FALSE, 0, image, island.data(), 0,
+                                     nullptr, nullptr),
+          "clEnqueueReadBuffer");
     read(s, *value_a, image, value.data());
     device_timings.emplace_back("filter: download", clock.lap());
   };
