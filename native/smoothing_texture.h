@@ -33,6 +33,7 @@
 #include "mesh.h"
 #include "parallel.h"
 #include "sampling.h"
+#include "uv_islands.h"
 
 namespace sdf {
 
@@ -86,8 +87,5 @@ TextureSmoothing smooth_texture(const Mesh& mesh, PointKind kind, const float* v
                                 const float* uvs, const TextureOptions& options, bool keep_image,
                                 const ProgressFn& progress = nullptr, double progress_from = 0.0,
                                 double progress_to = 1.0, const TextureFilterFn& filter = nullptr);
-
-// UV islands (step 1): one id per face, 0, 1, 2, ... in order of each island's first face.
-std::vector<std::int32_t> uv_islands(const Mesh& mesh, const float* uvs, double weld_tolerance);
 
 }  // namespace sdf
