@@ -12,6 +12,7 @@
 #include <string>
 
 #include "../kernels/sdf_smooth_texture.h"
+#include "radix_sort.h"
 #include "uninitialized_vector.h"
 
 namespace sdf {
@@ -364,28 +365,45 @@ void read_back_vertices(const Mesh& mesh, const float* uvs, const UvIslands& isl
       }
     }
   });
-  const CornerLists lists = corners_by_vertex(
-      mesh, islands.merged.empty() ? nullptr : islands.merged.data(), islands.merged_count, threads);
-  std::vector<float> mean(islands.merged_count);
-  std::vector<std::uint8_t> has_mean(islands.merged_count);
-  parallel_for(islands.merged_count, kFaceGrain, threads, [&](std::size_t begin, std::size_t end) {
-    for (std::size_t k = begin; k < end; ++k) {
-      double sum = 0.0;
-      std::uint32_t count = 0;
-      for (std::uint32_t i = lists.offsets[k]; i < lists.offsets[k + 1]; ++i) {
-        const std::uint32_t corner = lists.corners[i];
-        if (!sampled[corner]) continue;
-        sum += sample[corner];
-        ++count;
-      }
-      has_mean[k] = count > 0;
-      if (count > 0) mean[k] = std::min(hi, std::max(lo, static_cast<float>(sum / count)));
+  // The sums in face order per merged vertex, in parallel: the sampled corners are
+  // partitioned (stably, one radix pass) into blocks of consecutive keys, and each block sums
+  // its own keys walking its corners in order.
+  const std::uint32_t keys = islands.merged_count;
+  auto key_of = [&](std::size_t corner) {
+    const std::uint32_t v = mesh.triangles[corner / 3][corner % 3];
+    return islands.merged.empty() ? v : islands.merged[v];
+  };
+  int key_bits = 1;
+  while (key_bits < 32 && (std::uint64_t{1} << key_bits) < keys) ++key_bits;
+  const int block_bits = std::min(key_bits, 8);
+  const int shift = key_bits - block_bits;  // block of key k: k >> shift
+  UninitializedVector<std::uint64_t> items(3 * m);
+  parallel_for(m, kFaceGrain, threads, [&](std::size_t begin, std::size_t end) {
+    for (std::size_t corner = 3 * begin; corner < 3 * end; ++corner)
+      items[corner] = (std::uint64_t{key_of(corner)} << 32) | corner;
+  });
+  radix_sort_by_bits(items, 32 + shift, block_bits, threads);
+  std::vector<double> sum(keys, 0.0);
+  std::vector<std::uint32_t> count(keys, 0);
+  const std::size_t blocks = std::size_t{1} << block_bits;
+  parallel_for(blocks, 1, threads, [&](std::size_t b0, std::size_t b1) {
+    auto first_of = [&](std::size_t block) {
+      return std::lower_bound(items.begin(), items.end(), block, [&](std::uint64_t item, std::size_t b) {
+        return (item >> (32 + shift)) < b;
+      });
+    };
+    for (auto it = first_of(b0), end = first_of(b1); it != end; ++it) {
+      const std::uint32_t corner = static_cast<std::uint32_t>(*it);
+      if (!sampled[corner]) continue;
+      const std::uint32_t k = static_cast<std::uint32_t>(*it >> 32);
+      sum[k] += sample[corner];
+      ++count[k];
     }
   });
   parallel_for(mesh.vertices.size(), kFaceGrain, threads, [&](std::size_t begin, std::size_t end) {
     for (std::size_t v = begin; v < end; ++v) {
       const std::uint32_t k = islands.merged.empty() ? static_cast<std::uint32_t>(v) : islands.merged[v];
-      if (has_mean[k]) out[v] = mean[k];
+      if (count[k] > 0) out[v] = std::min(hi, std::max(lo, static_cast<float>(sum[k] / count[k])));
     }
   });
 }

@@ -92,12 +92,6 @@ std::uint32_t hash_uv(float u, float v) {
   return static_cast<std::uint32_t>(x);
 }
 
-int bits_for(std::uint32_t count) {
-  int bits = 1;
-  while (bits < 32 && (std::uint64_t{1} << bits) < count) ++bits;
-  return bits;
-}
-
 // Joins the faces whose corners share a key vertex and a UV. A face with several corners on
 // one key counts once, through its first such corner (as faces_of_vertices lists it).
 // Streaming passes over the faces (no per-vertex lists, whose gathers miss the cache on
@@ -268,39 +262,6 @@ std::vector<std::int32_t> number_islands(const ConcurrentUnionFind& sets, std::s
 }
 
 }  // namespace
-
-CornerLists corners_by_vertex(const Mesh& mesh, const std::uint32_t* key, std::uint32_t key_count,
-                              unsigned threads) {
-  const std::size_t m = mesh.triangles.size();
-  const std::size_t n = 3 * m;
-  if (n > std::numeric_limits<std::uint32_t>::max())
-    throw std::invalid_argument("more than 2^32 - 1 face corners are not supported");
-  UninitializedVector<std::uint64_t> items(n);
-  parallel_for(m, kFaceGrain, threads, [&](std::size_t begin, std::size_t end) {
-    for (std::size_t f = begin; f < end; ++f)
-      for (int c = 0; c < 3; ++c) {
-        const std::uint32_t v = mesh.triangles[f][c];
-        items[3 * f + c] = (std::uint64_t{key ? key[v] : v} << 32) | (3 * f + c);
-      }
-  });
-  radix_sort_by_bits(items, 32, bits_for(key_count), threads);
-  CornerLists lists;
-  lists.corners.resize(n);
-  lists.offsets.resize(std::size_t{key_count} + 1);
-  // offsets[k] = the first position whose key is at least k: written by the position where
-  // the key steps up past k.
-  parallel_for(n, kFaceGrain, threads, [&](std::size_t begin, std::size_t end) {
-    for (std::size_t i = begin; i < end; ++i) {
-      lists.corners[i] = static_cast<std::uint32_t>(items[i]);
-      const std::uint64_t k = items[i] >> 32;
-      const std::uint64_t previous = i > 0 ? (items[i - 1] >> 32) + 1 : 0;
-      for (std::uint64_t j = previous; j <= k; ++j) lists.offsets[j] = static_cast<std::uint32_t>(i);
-    }
-  });
-  const std::uint64_t last = n > 0 ? (items[n - 1] >> 32) + 1 : 0;
-  for (std::uint64_t j = last; j <= key_count; ++j) lists.offsets[j] = static_cast<std::uint32_t>(n);
-  return lists;
-}
 
 UvIslands label_uv_islands(const Mesh& mesh, const float* uvs, double weld_tolerance,
                            bool need_merged, unsigned threads) {

@@ -17,22 +17,8 @@
 #include <vector>
 
 #include "mesh.h"
-#include "uninitialized_vector.h"
 
 namespace sdf {
-
-// Face corners (3 f + c) grouped by a per-vertex key: corners[offsets[k] .. offsets[k + 1])
-// are those whose vertex has key k, in increasing order (so a sum over them runs in face
-// order, whatever the thread count).
-struct CornerLists {
-  std::vector<std::uint32_t> offsets;
-  UninitializedVector<std::uint32_t> corners;
-};
-
-// key: per vertex, in [0, key_count); null for the vertex index itself (key_count: the
-// number of vertices).
-CornerLists corners_by_vertex(const Mesh& mesh, const std::uint32_t* key, std::uint32_t key_count,
-                              unsigned threads);
 
 struct UvIslands {
   std::vector<std::int32_t> face_island;  // per face: 0, 1, 2, ... by each island's first face
