@@ -11,6 +11,7 @@
 #include "mesh_weld.h"
 #include "parallel.h"
 #include "radix_sort.h"
+#include "uninitialized_vector.h"
 
 namespace sdf {
 
