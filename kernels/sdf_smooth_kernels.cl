@@ -26,17 +26,17 @@ __kernel void sdf_texture_dilate(int width, int height, __global const int* isla
   sdf_dilate_texel(x, y, width, height, island, value, island_out, value_out);
 }
 
-/* Texture space, the row pass: value and weight (1 everywhere, as on the CPU) in, the
- * weighted sums out. */
+/* Texture space, the row pass: value in (each texel weighing 1, as on the CPU), the weighted
+ * sums out. */
 __kernel void sdf_texture_blur_rows(int width, int height, __global const int* island,
-                                    __global const float* value, __global const float* ones,
-                                    __global const float* taps, int radius, float inv_range,
-                                    __global float* row_value, __global float* row_weight) {
+                                    __global const float* value, __global const float* taps,
+                                    int radius, float inv_range, __global float* row_value,
+                                    __global float* row_weight) {
   int x = (int)get_global_id(0), y = (int)get_global_id(1);
   if (x >= width || y >= height) return;
   size_t o = (size_t)y * width;
   float sv, sw;
-  sdf_blur_texel(x, width, 1, island + o, value + o, ones + o, taps, radius, inv_range, &sv, &sw);
+  sdf_blur_texel(x, width, 1, island + o, value + o, 0, taps, radius, inv_range, &sv, &sw);
   row_value[o + x] = sv;
   row_weight[o + x] = sw;
 }

@@ -48,7 +48,7 @@ SDF_INLINE void sdf_dilate_texel(int x, int y, int width, int height,
 /* Texel i of a line of `count` texels `stride` apart (island, value_sum, weight_sum point at
  * the line's first texel): the sums over the taps within `radius` of the centre's island, of
  * taps[|j - i|] x value_sum and x weight_sum. In: value_sum / weight_sum per texel (for the
- * first pass, the value and 1). Bilateral (inv_range > 0): taps also weigh
+ * first pass, the value and a null weight_sum: 1 everywhere, with no array to fill). Bilateral (inv_range > 0): taps also weigh
  * exp(-1/2 ((v_tap - v_centre) * inv_range)^2), v = value_sum / weight_sum. An empty centre
  * (island < 0) gives 0 and 0. */
 SDF_INLINE void sdf_blur_texel(int i, int count, size_t stride, SDF_GLOBAL const sdf_int32* island,
@@ -65,15 +65,17 @@ SDF_INLINE void sdf_blur_texel(int i, int count, size_t stride, SDF_GLOBAL const
   int lo = i - radius > 0 ? i - radius : 0;
   int hi = i + radius < count - 1 ? i + radius : count - 1;
   float sv = 0.0f, sw = 0.0f;
+  /* x / 1 and x * 1 are x: the first pass gives the same bits as with an array of ones. */
   if (inv_range > 0.0f) {
-    float centre = value_sum[t] / weight_sum[t];
+    float centre = weight_sum ? value_sum[t] / weight_sum[t] : value_sum[t];
     for (int j = lo; j <= hi; ++j) {
       size_t n = (size_t)j * stride;
       if (island[n] != own) continue;
-      float d = (value_sum[n] / weight_sum[n] - centre) * inv_range;
+      float wn = weight_sum ? weight_sum[n] : 1.0f;
+      float d = (value_sum[n] / wn - centre) * inv_range;
       float w = taps[j > i ? j - i : i - j] * exp(-0.5f * d * d);
       sv += w * value_sum[n];
-      sw += w * weight_sum[n];
+      sw += w * wn;
     }
   } else {
     for (int j = lo; j <= hi; ++j) {
@@ -81,7 +83,7 @@ SDF_INLINE void sdf_blur_texel(int i, int count, size_t stride, SDF_GLOBAL const
       if (island[n] != own) continue;
       float w = taps[j > i ? j - i : i - j];
       sv += w * value_sum[n];
-      sw += w * weight_sum[n];
+      sw += weight_sum ? w * weight_sum[n] : w;
     }
   }
   *value_out = sv;

@@ -172,6 +172,9 @@ py::dict smooth_texture(const Doubles& vertices, const Int64s& triangles, const 
   }
   py::dict result;
   result["values"] = to_array(out.values);
+  py::dict timings;
+  for (const auto& [stage, seconds] : out.timings) timings[py::str(stage)] = seconds;
+  result["timings"] = timings;
   if (return_image) {
     py::array_t<float> image({py::ssize_t(out.height), py::ssize_t(out.width)});
     py::array_t<bool> mask({py::ssize_t(out.height), py::ssize_t(out.width)});

@@ -2,14 +2,18 @@
 #include "smoothing_texture.h"
 
 #include <algorithm>
+#include <atomic>
+#include <chrono>
 #include <cmath>
 #include <cstring>
 #include <limits>
+#include <memory>
 #include <stdexcept>
 #include <string>
 
 #include "../kernels/sdf_smooth_texture.h"
-#include "mesh_weld.h"
+#include "radix_sort.h"
+#include "uninitialized_vector.h"
 
 namespace sdf {
 
@@ -17,33 +21,19 @@ namespace {
 
 constexpr int kMaxSize = 16384;
 
-// Union-find over faces with path halving; the root of a set is its smallest face.
-std::uint32_t find_root(std::vector<std::uint32_t>& parent, std::uint32_t f) {
-  while (parent[f] != f) {
-    parent[f] = parent[parent[f]];
-    f = parent[f];
+// Seconds since the previous lap (or construction).
+class Stopwatch {
+ public:
+  double lap() {
+    const auto now = std::chrono::steady_clock::now();
+    const double s = std::chrono::duration<double>(now - last_).count();
+    last_ = now;
+    return s;
   }
-  return f;
-}
 
-void unite(std::vector<std::uint32_t>& parent, std::uint32_t a, std::uint32_t b) {
-  a = find_root(parent, a);
-  b = find_root(parent, b);
-  if (a == b) return;
-  if (a < b) parent[b] = a;
-  else parent[a] = b;
-}
-
-Weld weld_or_identity(const Mesh& mesh, double relative_tolerance) {
-  if (relative_tolerance >= 0.0)
-    return weld_vertices(mesh.vertices.data(), mesh.vertices.size(),
-                         weld_tolerance(mesh, relative_tolerance));
-  Weld weld;
-  weld.merged.resize(mesh.vertices.size());
-  for (std::size_t v = 0; v < weld.merged.size(); ++v) weld.merged[v] = static_cast<std::uint32_t>(v);
-  weld.count = static_cast<std::uint32_t>(weld.merged.size());
-  return weld;
-}
+ private:
+  std::chrono::steady_clock::time_point last_ = std::chrono::steady_clock::now();
+};
 
 // ---- Per-texel and per-face work: plain loops over flat arrays (kernel style). ----
 
@@ -61,6 +51,20 @@ std::uint32_t for_each_texel(const float* uv, int width, int height, Visit&& vis
     x[c] = uv[2 * c] * double(width);
     y[c] = uv[2 * c + 1] * double(height);
   }
+  // Texels whose centre may lie inside. Most faces of a dense mesh cover no centre at all:
+  // they leave here, before the edge set-up.
+  // (Clamped in double: a UV far outside [0, 1] would overflow an int.)
+  auto first = [](double lowest, int size) {
+    return static_cast<int>(std::max(0.0, std::min(double(size), std::ceil(lowest - 0.5))));
+  };
+  auto last = [](double highest, int size) {
+    return static_cast<int>(std::max(-1.0, std::min(size - 1.0, std::floor(highest - 0.5))));
+  };
+  const int xmin = first(std::min(x[0], std::min(x[1], x[2])), width);
+  const int xmax = last(std::max(x[0], std::max(x[1], x[2])), width);
+  const int ymin = first(std::min(y[0], std::min(y[1], y[2])), height);
+  const int ymax = last(std::max(y[0], std::max(y[1], y[2])), height);
+  if (xmin > xmax || ymin > ymax) return 0;
   double area = (x[1] - x[0]) * (y[2] - y[0]) - (x[2] - x[0]) * (y[1] - y[0]);
   if (!(std::fabs(area) > 0.0)) return 0;
   int order[3] = {0, 1, 2};
@@ -81,10 +85,6 @@ std::uint32_t for_each_texel(const float* uv, int width, int height, Visit&& vis
     claims[i] = dy[i] > 0.0 || (dy[i] == 0.0 && dx[i] < 0.0);
   }
   const double inv = 1.0 / area;
-  const int xmin = std::max(0, static_cast<int>(std::ceil(std::min(x[0], std::min(x[1], x[2])) - 0.5)));
-  const int xmax = std::min(width - 1, static_cast<int>(std::floor(std::max(x[0], std::max(x[1], x[2])) - 0.5)));
-  const int ymin = std::max(0, static_cast<int>(std::ceil(std::min(y[0], std::min(y[1], y[2])) - 0.5)));
-  const int ymax = std::min(height - 1, static_cast<int>(std::floor(std::max(y[0], std::max(y[1], y[2])) - 0.5)));
   std::uint32_t covered = 0;
   for (int py = ymin; py <= ymax; ++py) {
     const double cy = py + 0.5;
@@ -107,6 +107,7 @@ std::uint32_t for_each_texel(const float* uv, int width, int height, Visit&& vis
   return covered;
 }
 
+
 // Texel under a UV point, or -1 outside the image.
 std::int64_t texel_at(float u, float v, int width, int height) {
   const double x = std::floor(u * double(width)), y = std::floor(v * double(height));
@@ -114,23 +115,124 @@ std::int64_t texel_at(float u, float v, int width, int height) {
   return static_cast<std::int64_t>(y) * width + static_cast<std::int64_t>(x);
 }
 
-// One ring of dilation for row y (kernels/sdf_smooth_texture.h, per texel).
-void dilate_row(int y, int width, int height, const std::int32_t* island, const float* value,
-                std::int32_t* island_out, float* value_out) {
-  for (int x = 0; x < width; ++x)
-    kern::sdf_dilate_texel(x, y, width, height, island, value, island_out, value_out);
+constexpr std::size_t kFaceGrain = 1 << 12;
+constexpr std::size_t kTexelGrain = 1 << 16;
+
+// The values' range, after checking that values and UVs are finite (the first bad one named).
+void check_inputs(const float* values, std::size_t n, const float* uvs, std::size_t m,
+                  unsigned threads, float& lo, float& hi) {
+  const std::size_t chunks = (n + kTexelGrain - 1) / kTexelGrain;
+  std::vector<float> chunk_lo(chunks), chunk_hi(chunks);
+  std::vector<std::size_t> chunk_bad(chunks, n);
+  parallel_for(n, kTexelGrain, threads, [&](std::size_t begin, std::size_t end) {
+    float a = std::numeric_limits<float>::infinity(), b = -a;
+    std::size_t bad = n;
+    for (std::size_t i = begin; i < end; ++i) {
+      if (!std::isfinite(values[i]) && bad == n) bad = i;
+      a = std::min(a, values[i]);
+      b = std::max(b, values[i]);
+    }
+    chunk_lo[begin / kTexelGrain] = a;
+    chunk_hi[begin / kTexelGrain] = b;
+    chunk_bad[begin / kTexelGrain] = bad;
+  });
+  lo = std::numeric_limits<float>::infinity();
+  hi = -lo;
+  for (std::size_t c = 0; c < chunks; ++c) {
+    if (chunk_bad[c] < n)
+      throw std::invalid_argument("value " + std::to_string(chunk_bad[c]) + " is not finite");
+    lo = std::min(lo, chunk_lo[c]);
+    hi = std::max(hi, chunk_hi[c]);
+  }
+  const std::size_t floats = 6 * m;
+  const std::size_t uv_chunks = (floats + kTexelGrain - 1) / kTexelGrain;
+  std::vector<std::size_t> uv_bad(uv_chunks, floats);
+  parallel_for(floats, kTexelGrain, threads, [&](std::size_t begin, std::size_t end) {
+    for (std::size_t i = begin; i < end; ++i)
+      if (!std::isfinite(uvs[i])) {
+        uv_bad[begin / kTexelGrain] = i;
+        return;
+      }
+  });
+  for (std::size_t c = 0; c < uv_chunks; ++c)
+    if (uv_bad[c] < floats)
+      throw std::invalid_argument("the UV of face " + std::to_string(uv_bad[c] / 6) + " corner " +
+                                  std::to_string((uv_bad[c] / 2) % 3) + " is not finite");
 }
 
-// One 1-D pass of the island-masked Gaussian over a line of `count` texels `stride` apart
-// (kernels/sdf_smooth_texture.h, per texel).
-void blur_line(int count, std::size_t stride, const std::int32_t* island, const float* value_sum,
-               const float* weight_sum, const float* taps, int radius, float inv_range,
-               float* value_out, float* weight_out) {
-  for (int i = 0; i < count; ++i) {
-    const std::size_t t = i * stride;
-    kern::sdf_blur_texel(i, count, stride, island, value_sum, weight_sum, taps, radius, inv_range,
-                         value_out + t, weight_out + t);
-  }
+// Step 2 on the CPU threads. Every face offers its value to the texels it covers (a face
+// covering none, to the texel under its centroid) as a 64-bit key, kept by atomic maximum:
+// high word the rank, low word the value's bits. Covering faces rank m + 1 + f (above any
+// centroid, the later face winning), centroid faces m - f (the earlier winning, and only
+// where no face covers): the image the serial loop in face order gives, whatever the threads.
+void rasterise(const Mesh& mesh, PointKind kind, const float* values, const float* uvs,
+               const std::vector<std::int32_t>& face_island, int width, int height, float lo,
+               float hi, unsigned threads, std::vector<std::int32_t>& island,
+               std::vector<float>& value) {
+  const bool faces = kind == PointKind::Faces;
+  const std::size_t m = mesh.triangles.size();
+  if (m >= (std::size_t{1} << 31)) throw std::invalid_argument("too many faces for the texture");
+  const std::size_t texels = static_cast<std::size_t>(width) * height;
+  std::unique_ptr<std::atomic<std::uint64_t>[]> owner(new std::atomic<std::uint64_t>[texels]);
+  parallel_for(texels, kTexelGrain, threads, [&](std::size_t begin, std::size_t end) {
+    for (std::size_t t = begin; t < end; ++t) owner[t].store(0, std::memory_order_relaxed);
+  });
+  auto offer = [&](std::size_t t, std::uint64_t rank, float x) {
+    std::uint32_t bits;
+    std::memcpy(&bits, &x, sizeof bits);
+    const std::uint64_t key = (rank << 32) | bits;
+    std::uint64_t seen = owner[t].load(std::memory_order_relaxed);
+    while (seen < key && !owner[t].compare_exchange_weak(seen, key, std::memory_order_relaxed)) {
+    }
+  };
+  parallel_for(m, kFaceGrain, threads, [&](std::size_t begin, std::size_t end) {
+    for (std::size_t f = begin; f < end; ++f) {
+      const float* uv = uvs + 6 * f;
+      const std::uint64_t rank = m + 1 + f;
+      std::uint32_t covered;
+      if (faces) {
+        const float x = values[f];
+        covered = for_each_texel(uv, width, height,
+                                 [&](std::size_t t, double, double, double) { offer(t, rank, x); });
+      } else {
+        const glm::uvec3 tri = mesh.triangles[f];
+        const float a = values[tri.x], b = values[tri.y], c = values[tri.z];
+        const float vmin = std::min(a, std::min(b, c)), vmax = std::max(a, std::max(b, c));
+        covered = for_each_texel(uv, width, height, [&](std::size_t t, double b0, double b1, double b2) {
+          offer(t, rank, std::min(vmax, std::max(vmin, static_cast<float>(b0 * a + b1 * b + b2 * c))));
+        });
+      }
+      if (covered > 0) continue;
+      const std::int64_t t = texel_at((uv[0] + uv[2] + uv[4]) / 3.0f, (uv[1] + uv[3] + uv[5]) / 3.0f,
+                                      width, height);
+      if (t < 0) continue;
+      float x;
+      if (faces) {
+        x = values[f];
+      } else {
+        const glm::uvec3 tri = mesh.triangles[f];
+        x = std::min(hi, std::max(lo, (values[tri.x] + values[tri.y] + values[tri.z]) / 3.0f));
+      }
+      offer(static_cast<std::size_t>(t), m - f, x);
+    }
+  });
+  island.resize(texels);
+  value.resize(texels);
+  parallel_for(texels, kTexelGrain, threads, [&](std::size_t begin, std::size_t end) {
+    for (std::size_t t = begin; t < end; ++t) {
+      const std::uint64_t key = owner[t].load(std::memory_order_relaxed);
+      if (key == 0) {
+        island[t] = -1;
+        value[t] = 0.0f;
+        continue;
+      }
+      const std::uint64_t rank = key >> 32;
+      const std::size_t f = rank > m ? rank - m - 1 : m - rank;
+      const std::uint32_t bits = static_cast<std::uint32_t>(key);
+      island[t] = face_island[f];
+      std::memcpy(&value[t], &bits, sizeof bits);
+    }
+  });
 }
 
 // Steps 3 and 4 on the CPU threads: dilates island and value in place and returns the
@@ -141,100 +243,172 @@ std::vector<float> filter_cpu(const TextureFilter& f, std::vector<std::int32_t>&
                               double progress_to) {
   const int width = f.width, height = f.height, taps = f.taps;
   const std::size_t texels = static_cast<std::size_t>(width) * height;
-  auto report = [&](double fraction) {
-    if (progress && !progress(progress_from + (progress_to - progress_from) * fraction))
-      throw Cancelled();
-  };
-  // Dilate.
-  {
+  auto at = [&](double fraction) { return progress_from + (progress_to - progress_from) * fraction; };
+  // Dilate: one ring a pass, each pass reading the last.
+  if (f.margin > 0) {
     std::vector<std::int32_t> island2(texels);
     std::vector<float> value2(texels);
     for (int ring = 0; ring < f.margin; ++ring) {
       parallel_for(height, 16, threads, [&](std::size_t begin, std::size_t end) {
         for (std::size_t y = begin; y < end; ++y)
-          dilate_row(static_cast<int>(y), width, height, island.data(), value.data(),
-                     island2.data(), value2.data());
+          for (int x = 0; x < width; ++x)
+            kern::sdf_dilate_texel(x, static_cast<int>(y), width, height, island.data(),
+                                   value.data(), island2.data(), value2.data());
       });
       island.swap(island2);
       value.swap(value2);
     }
   }
-  report(0.15);
+  if (progress && !progress(at(0.15))) throw Cancelled();
+  if (taps < 1) return std::move(value);
 
-  // Blur: rows, then columns.
-  std::vector<float> blurred = value;
-  if (taps >= 1) {
-    const float* kernel = f.kernel.data();
-    std::vector<float> ones(texels, 1.0f), row_value(texels), row_weight(texels), col_weight(texels);
-    parallel_for(
-        height, 8, threads,
-        [&](std::size_t begin, std::size_t end) {
-          for (std::size_t y = begin; y < end; ++y) {
-            const std::size_t o = y * width;
-            blur_line(width, 1, island.data() + o, value.data() + o, ones.data() + o,
-                      kernel, taps, f.inv_range, row_value.data() + o, row_weight.data() + o);
+  // Blur: rows (each texel weighing 1), then columns, each texel normalised as it is done.
+  const float* kernel = f.kernel.data();
+  UninitializedVector<float> row_value(texels), row_weight(texels);
+  std::vector<float> blurred(texels);
+  parallel_for(
+      height, 8, threads,
+      [&](std::size_t begin, std::size_t end) {
+        for (std::size_t y = begin; y < end; ++y) {
+          const std::size_t o = y * width;
+          for (int x = 0; x < width; ++x)
+            kern::sdf_blur_texel(x, width, 1, island.data() + o, value.data() + o, nullptr,
+                                 kernel, taps, f.inv_range, &row_value[o + x], &row_weight[o + x]);
+        }
+      },
+      progress, at(0.15), at(0.5));
+  parallel_for(
+      width, 8, threads,
+      [&](std::size_t begin, std::size_t end) {
+        for (std::size_t x = begin; x < end; ++x)
+          for (int y = 0; y < height; ++y) {
+            float sv, sw;
+            kern::sdf_blur_texel(y, height, width, island.data() + x, row_value.data() + x,
+                                 row_weight.data() + x, kernel, taps, f.inv_range, &sv, &sw);
+            const std::size_t t = static_cast<std::size_t>(y) * width + x;
+            blurred[t] = island[t] >= 0 ? kern::sdf_blur_normalize(sv, sw, f.lo, f.hi) : sv;
           }
-        },
-        progress, progress_from + 0.15 * (progress_to - progress_from),
-        progress_from + 0.5 * (progress_to - progress_from));
-    parallel_for(
-        width, 8, threads,
-        [&](std::size_t begin, std::size_t end) {
-          for (std::size_t x = begin; x < end; ++x)
-            blur_line(height, width, island.data() + x, row_value.data() + x,
-                      row_weight.data() + x, kernel, taps, f.inv_range, blurred.data() + x,
-                      col_weight.data() + x);
-        },
-        progress, progress_from + 0.5 * (progress_to - progress_from),
-        progress_from + 0.85 * (progress_to - progress_from));
-    for (std::size_t t = 0; t < texels; ++t)
-      if (island[t] >= 0) blurred[t] = kern::sdf_blur_normalize(blurred[t], col_weight[t], f.lo, f.hi);
-  }
+      },
+      progress, at(0.5), at(0.85));
   return blurred;
 }
 
-}  // namespace
-
-std::vector<std::int32_t> uv_islands(const Mesh& mesh, const float* uvs, double weld_tolerance) {
-  const std::size_t m = mesh.triangles.size();
-  const Weld weld = weld_or_identity(mesh, weld_tolerance);
-  const std::vector<glm::uvec3> tris = welded_triangles(mesh, weld);
-  const Adjacency vf = faces_of_vertices(tris, weld.count);
-  std::vector<std::uint32_t> parent(m);
-  for (std::uint32_t f = 0; f < m; ++f) parent[f] = f;
-
-  // Corners around each merged vertex, sorted by UV: runs of equal UV join their faces.
-  struct Corner {
-    float u, v;
-    std::uint32_t face;
-  };
-  std::vector<Corner> corners;
-  for (std::uint32_t v = 0; v < weld.count; ++v) {
-    corners.clear();
-    for (std::uint32_t i = vf.offsets[v]; i < vf.offsets[v + 1]; ++i) {
-      const std::uint32_t f = vf.items[i];
-      for (int c = 0; c < 3; ++c)
-        if (tris[f][c] == v) {
-          corners.push_back({uvs[6 * f + 2 * c] + 0.0f, uvs[6 * f + 2 * c + 1] + 0.0f, f});
-          break;
-        }
+// Step 5 for face values: the mean of the blurred texels a face covers (of its island), else
+// the texel under its centroid; faces with neither keep their value (out holds the input).
+void read_back_faces(const float* uvs, const std::vector<std::int32_t>& face_island, int width,
+                     int height, const std::vector<std::int32_t>& island,
+                     const std::vector<float>& blurred, float lo, float hi, unsigned threads,
+                     std::vector<float>& out) {
+  parallel_for(face_island.size(), kFaceGrain, threads, [&](std::size_t begin, std::size_t end) {
+    for (std::size_t f = begin; f < end; ++f) {
+      const std::int32_t id = face_island[f];
+      double sum = 0.0;
+      std::uint32_t count = 0;
+      for_each_texel(uvs + 6 * f, width, height, [&](std::size_t t, double, double, double) {
+        if (island[t] != id) return;
+        sum += blurred[t];
+        ++count;
+      });
+      if (count > 0) {
+        out[f] = std::min(hi, std::max(lo, static_cast<float>(sum / count)));
+        continue;
+      }
+      const float* uv = uvs + 6 * f;
+      const std::int64_t t = texel_at((uv[0] + uv[2] + uv[4]) / 3.0f,
+                                      (uv[1] + uv[3] + uv[5]) / 3.0f, width, height);
+      if (t >= 0 && island[t] == id) out[f] = blurred[t];
     }
-    std::sort(corners.begin(), corners.end(), [](const Corner& a, const Corner& b) {
-      return a.u < b.u || (a.u == b.u && a.v < b.v);
-    });
-    for (std::size_t i = 1; i < corners.size(); ++i)
-      if (corners[i].u == corners[i - 1].u && corners[i].v == corners[i - 1].v)
-        unite(parent, corners[i].face, corners[i - 1].face);
-  }
-  std::vector<std::int32_t> island(m), id_of_root(m, -1);
-  std::int32_t next = 0;
-  for (std::uint32_t f = 0; f < m; ++f) {
-    const std::uint32_t root = find_root(parent, f);
-    if (id_of_root[root] < 0) id_of_root[root] = next++;
-    island[f] = id_of_root[root];
-  }
-  return island;
+  });
 }
+
+// Step 5 for vertex values: a bilinear read at every corner (taps of the corner's island),
+// then the mean over each merged vertex's corners, in face order, so the copies of a vertex
+// split at a UV seam agree.
+void read_back_vertices(const Mesh& mesh, const float* uvs, const UvIslands& islands, int width,
+                        int height, const std::vector<std::int32_t>& island,
+                        const std::vector<float>& blurred, float lo, float hi, unsigned threads,
+                        std::vector<float>& out) {
+  const std::size_t m = mesh.triangles.size();
+  UninitializedVector<float> sample(3 * m);
+  UninitializedVector<std::uint8_t> sampled(3 * m);
+  parallel_for(m, kFaceGrain, threads, [&](std::size_t begin, std::size_t end) {
+    for (std::size_t f = begin; f < end; ++f) {
+      const std::int32_t id = islands.face_island[f];
+      for (int c = 0; c < 3; ++c) {
+        sampled[3 * f + c] = 0;
+        const float u = uvs[6 * f + 2 * c], v = uvs[6 * f + 2 * c + 1];
+        const double x = u * double(width) - 0.5, y = v * double(height) - 0.5;
+        const double fx = std::floor(x), fy = std::floor(y);
+        const int x0 = static_cast<int>(std::max(-2.0, std::min(fx, double(width))));
+        const int y0 = static_cast<int>(std::max(-2.0, std::min(fy, double(height))));
+        const double ax = x - fx, ay = y - fy;
+        double sum = 0.0, weight = 0.0;
+        for (int k = 0; k < 4; ++k) {
+          const int tx = x0 + (k & 1), ty = y0 + (k >> 1);
+          if (tx < 0 || ty < 0 || tx >= width || ty >= height) continue;
+          const std::size_t t = static_cast<std::size_t>(ty) * width + tx;
+          if (island[t] != id) continue;
+          const double w = ((k & 1) ? ax : 1.0 - ax) * ((k >> 1) ? ay : 1.0 - ay);
+          sum += w * blurred[t];
+          weight += w;
+        }
+        if (weight > 0.0) {
+          sample[3 * f + c] = static_cast<float>(sum / weight);
+          sampled[3 * f + c] = 1;
+          continue;
+        }
+        const std::int64_t t = texel_at(u, v, width, height);
+        if (t >= 0 && island[t] == id) {
+          sample[3 * f + c] = blurred[t];
+          sampled[3 * f + c] = 1;
+        }
+      }
+    }
+  });
+  // The sums in face order per merged vertex, in parallel: the sampled corners are
+  // partitioned (stably, one radix pass) into blocks of consecutive keys, and each block sums
+  // its own keys walking its corners in order.
+  const std::uint32_t keys = islands.merged_count;
+  auto key_of = [&](std::size_t corner) {
+    const std::uint32_t v = mesh.triangles[corner / 3][corner % 3];
+    return islands.merged.empty() ? v : islands.merged[v];
+  };
+  int key_bits = 1;
+  while (key_bits < 32 && (std::uint64_t{1} << key_bits) < keys) ++key_bits;
+  const int block_bits = std::min(key_bits, 8);
+  const int shift = key_bits - block_bits;  // block of key k: k >> shift
+  UninitializedVector<std::uint64_t> items(3 * m);
+  parallel_for(m, kFaceGrain, threads, [&](std::size_t begin, std::size_t end) {
+    for (std::size_t corner = 3 * begin; corner < 3 * end; ++corner)
+      items[corner] = (std::uint64_t{key_of(corner)} << 32) | corner;
+  });
+  radix_sort_by_bits(items, 32 + shift, block_bits, threads);
+  std::vector<double> sum(keys, 0.0);
+  std::vector<std::uint32_t> count(keys, 0);
+  const std::size_t blocks = std::size_t{1} << block_bits;
+  parallel_for(blocks, 1, threads, [&](std::size_t b0, std::size_t b1) {
+    auto first_of = [&](std::size_t block) {
+      return std::lower_bound(items.begin(), items.end(), block, [&](std::uint64_t item, std::size_t b) {
+        return (item >> (32 + shift)) < b;
+      });
+    };
+    for (auto it = first_of(b0), end = first_of(b1); it != end; ++it) {
+      const std::uint32_t corner = static_cast<std::uint32_t>(*it);
+      if (!sampled[corner]) continue;
+      const std::uint32_t k = static_cast<std::uint32_t>(*it >> 32);
+      sum[k] += sample[corner];
+      ++count[k];
+    }
+  });
+  parallel_for(mesh.vertices.size(), kFaceGrain, threads, [&](std::size_t begin, std::size_t end) {
+    for (std::size_t v = begin; v < end; ++v) {
+      const std::uint32_t k = islands.merged.empty() ? static_cast<std::uint32_t>(v) : islands.merged[v];
+      if (count[k] > 0) out[v] = std::min(hi, std::max(lo, static_cast<float>(sum[k] / count[k])));
+    }
+  });
+}
+
+}  // namespace
 
 TextureSmoothing smooth_texture(const Mesh& mesh, PointKind kind, const float* values,
                                 const float* uvs, const TextureOptions& options, bool keep_image,
@@ -251,20 +425,14 @@ TextureSmoothing smooth_texture(const Mesh& mesh, PointKind kind, const float* v
     throw std::invalid_argument("margin must be in [0, " + std::to_string(kMaxSize) + "]");
   if (options.bilateral && !(options.range_sigma > 0.0 && std::isfinite(options.range_sigma)))
     throw std::invalid_argument("range_sigma must be a finite number > 0");
+  Stopwatch clock;
+  std::vector<std::pair<std::string, double>> timings;
+  const unsigned threads = options.threads;
   const bool faces = kind == PointKind::Faces;
   const std::size_t m = mesh.triangles.size();
   const std::size_t n = faces ? m : mesh.vertices.size();
-  float lo = std::numeric_limits<float>::infinity(), hi = -lo;
-  for (std::size_t i = 0; i < n; ++i) {
-    if (!std::isfinite(values[i]))
-      throw std::invalid_argument("value " + std::to_string(i) + " is not finite");
-    lo = std::min(lo, values[i]);
-    hi = std::max(hi, values[i]);
-  }
-  for (std::size_t i = 0; i < 6 * m; ++i)
-    if (!std::isfinite(uvs[i]))
-      throw std::invalid_argument("the UV of face " + std::to_string(i / 6) + " corner " +
-                                  std::to_string((i / 2) % 3) + " is not finite");
+  float lo, hi;
+  check_inputs(values, n, uvs, m, threads, lo, hi);
   const double radius = options.radius < 0.0 ? 2.0 * std::max(width, height) / 256.0 : options.radius;
   auto report = [&](double fraction) {
     if (progress && !progress(progress_from + (progress_to - progress_from) * fraction))
@@ -272,47 +440,16 @@ TextureSmoothing smooth_texture(const Mesh& mesh, PointKind kind, const float* v
   };
 
   report(0.0);
-  const std::vector<std::int32_t> face_island = uv_islands(mesh, uvs, options.weld_tolerance);
-  const std::size_t texels = static_cast<std::size_t>(width) * height;
-  std::vector<std::int32_t> island(texels, -1);
-  std::vector<float> value(texels, 0.0f);
-
-  // Rasterise, then give faces that covered no texel centre the texel under their centroid.
-  std::vector<std::uint32_t> coverage(m);
-  for (std::size_t f = 0; f < m; ++f) {
-    const float* uv = uvs + 6 * f;
-    const std::int32_t id = face_island[f];
-    if (faces) {
-      const float x = values[f];
-      coverage[f] = for_each_texel(uv, width, height, [&](std::size_t t, double, double, double) {
-        island[t] = id;
-        value[t] = x;
-      });
-    } else {
-      const glm::uvec3 tri = mesh.triangles[f];
-      const float a = values[tri.x], b = values[tri.y], c = values[tri.z];
-      const float vmin = std::min(a, std::min(b, c)), vmax = std::max(a, std::max(b, c));
-      coverage[f] = for_each_texel(uv, width, height, [&](std::size_t t, double b0, double b1, double b2) {
-        island[t] = id;
-        value[t] = std::min(vmax, std::max(vmin, static_cast<float>(b0 * a + b1 * b + b2 * c)));
-      });
-    }
-  }
-  for (std::size_t f = 0; f < m; ++f) {
-    if (coverage[f] > 0) continue;
-    const float* uv = uvs + 6 * f;
-    const std::int64_t t = texel_at((uv[0] + uv[2] + uv[4]) / 3.0f, (uv[1] + uv[3] + uv[5]) / 3.0f,
-                                    width, height);
-    if (t < 0 || island[t] >= 0) continue;
-    island[t] = face_island[f];
-    if (faces) {
-      value[t] = values[f];
-    } else {
-      const glm::uvec3 tri = mesh.triangles[f];
-      value[t] = std::min(hi, std::max(lo, (values[tri.x] + values[tri.y] + values[tri.z]) / 3.0f));
-    }
-  }
+  timings.emplace_back("checks", clock.lap());
+  // Vertex values are averaged over merged vertices: those need the weld whatever the islands.
+  const UvIslands islands = label_uv_islands(mesh, uvs, options.weld_tolerance, !faces, threads);
+  timings.emplace_back(islands.merged.empty() ? "islands" : "islands (welded)", clock.lap());
+  std::vector<std::int32_t> island;
+  std::vector<float> value;
+  rasterise(mesh, kind, values, uvs, islands.face_island, width, height, lo, hi, threads, island,
+            value);
   report(0.1);
+  timings.emplace_back("rasterise", clock.lap());
 
   // Dilate and blur: on the CPU threads, or by `filter` on another device.
   TextureFilter f;
@@ -336,95 +473,33 @@ TextureSmoothing smooth_texture(const Mesh& mesh, PointKind kind, const float* v
     blurred.swap(value);
     report(0.85);
   } else {
-    blurred = filter_cpu(f, island, value, options.threads, progress, progress_from, progress_to);
+    blurred = filter_cpu(f, island, value, threads, progress, progress_from, progress_to);
   }
+  timings.emplace_back("filter", clock.lap());
 
-  // Read back.
   TextureSmoothing out;
   out.values.assign(values, values + n);
-  if (faces) {
-    parallel_for(m, 256, options.threads, [&](std::size_t begin, std::size_t end) {
-      for (std::size_t f = begin; f < end; ++f) {
-        const std::int32_t id = face_island[f];
-        double sum = 0.0;
-        std::uint32_t count = 0;
-        for_each_texel(uvs + 6 * f, width, height, [&](std::size_t t, double, double, double) {
-          if (island[t] != id) return;
-          sum += blurred[t];
-          ++count;
-        });
-        if (count > 0) {
-          out.values[f] = std::min(hi, std::max(lo, static_cast<float>(sum / count)));
-          continue;
-        }
-        const float* uv = uvs + 6 * f;
-        const std::int64_t t = texel_at((uv[0] + uv[2] + uv[4]) / 3.0f,
-                                        (uv[1] + uv[3] + uv[5]) / 3.0f, width, height);
-        if (t >= 0 && island[t] == id) out.values[f] = blurred[t];
-      }
-    });
-  } else {
-    // Bilinear reads at every corner, then the mean over each merged vertex's corners, so the
-    // copies of a vertex split at a UV seam agree.
-    std::vector<float> sample(3 * m);
-    std::vector<std::uint8_t> sampled(3 * m, 0);
-    parallel_for(m, 256, options.threads, [&](std::size_t begin, std::size_t end) {
-      for (std::size_t f = begin; f < end; ++f) {
-        const std::int32_t id = face_island[f];
-        for (int c = 0; c < 3; ++c) {
-          const float u = uvs[6 * f + 2 * c], v = uvs[6 * f + 2 * c + 1];
-          const double x = u * double(width) - 0.5, y = v * double(height) - 0.5;
-          const double fx = std::floor(x), fy = std::floor(y);
-          const int x0 = static_cast<int>(std::max(-2.0, std::min(fx, double(width))));
-          const int y0 = static_cast<int>(std::max(-2.0, std::min(fy, double(height))));
-          const double ax = x - fx, ay = y - fy;
-          double sum = 0.0, weight = 0.0;
-          for (int k = 0; k < 4; ++k) {
-            const int tx = x0 + (k & 1), ty = y0 + (k >> 1);
-            if (tx < 0 || ty < 0 || tx >= width || ty >= height) continue;
-            const std::size_t t = static_cast<std::size_t>(ty) * width + tx;
-            if (island[t] != id) continue;
-            const double w = ((k & 1) ? ax : 1.0 - ax) * ((k >> 1) ? ay : 1.0 - ay);
-            sum += w * blurred[t];
-            weight += w;
-          }
-          if (weight > 0.0) {
-            sample[3 * f + c] = static_cast<float>(sum / weight);
-            sampled[3 * f + c] = 1;
-            continue;
-          }
-          const std::int64_t t = texel_at(u, v, width, height);
-          if (t >= 0 && island[t] == id) {
-            sample[3 * f + c] = blurred[t];
-            sampled[3 * f + c] = 1;
-          }
-        }
-      }
-    });
-    const Weld weld = weld_or_identity(mesh, options.weld_tolerance);
-    std::vector<double> sum(weld.count, 0.0);
-    std::vector<std::uint32_t> count(weld.count, 0);
-    for (std::size_t f = 0; f < m; ++f)
-      for (int c = 0; c < 3; ++c) {
-        if (!sampled[3 * f + c]) continue;
-        const std::uint32_t w = weld.merged[mesh.triangles[f][c]];
-        sum[w] += sample[3 * f + c];
-        ++count[w];
-      }
-    for (std::size_t v = 0; v < n; ++v) {
-      const std::uint32_t w = weld.merged[v];
-      if (count[w] > 0) out.values[v] = std::min(hi, std::max(lo, static_cast<float>(sum[w] / count[w])));
-    }
-  }
+  if (faces)
+    read_back_faces(uvs, islands.face_island, width, height, island, blurred, lo, hi, threads,
+                    out.values);
+  else
+    read_back_vertices(mesh, uvs, islands, width, height, island, blurred, lo, hi, threads,
+                       out.values);
   report(1.0);
+  timings.emplace_back("read back", clock.lap());
 
   if (keep_image) {
+    const std::size_t texels = blurred.size();
     out.width = width;
     out.height = height;
     out.mask.resize(texels);
-    for (std::size_t t = 0; t < texels; ++t) out.mask[t] = island[t] >= 0 ? 1 : 0;
+    parallel_for(texels, kTexelGrain, threads, [&](std::size_t begin, std::size_t end) {
+      for (std::size_t t = begin; t < end; ++t) out.mask[t] = island[t] >= 0 ? 1 : 0;
+    });
     out.image = std::move(blurred);
   }
+  timings.emplace_back("image", clock.lap());
+  out.timings = std::move(timings);
   return out;
 }
 

@@ -26,11 +26,14 @@
 
 #include <cstdint>
 #include <functional>
+#include <string>
+#include <utility>
 #include <vector>
 
 #include "mesh.h"
 #include "parallel.h"
 #include "sampling.h"
+#include "uv_islands.h"
 
 namespace sdf {
 
@@ -54,6 +57,9 @@ struct TextureSmoothing {
   std::vector<float> image;
   std::vector<std::uint8_t> mask;
   int width = 0, height = 0;
+  // Seconds per stage, in order (checks, islands, rasterise, dilate and blur or the device's
+  // filter, read back, image): bench/texture_stages.py prints them.
+  std::vector<std::pair<std::string, double>> timings;
 };
 
 // Steps 3 and 4 (dilate, blur) of one image, as smooth_texture runs them.
@@ -81,8 +87,5 @@ TextureSmoothing smooth_texture(const Mesh& mesh, PointKind kind, const float* v
                                 const float* uvs, const TextureOptions& options, bool keep_image,
                                 const ProgressFn& progress = nullptr, double progress_from = 0.0,
                                 double progress_to = 1.0, const TextureFilterFn& filter = nullptr);
-
-// UV islands (step 1): one id per face, 0, 1, 2, ... in order of each island's first face.
-std::vector<std::int32_t> uv_islands(const Mesh& mesh, const float* uvs, double weld_tolerance);
 
 }  // namespace sdf

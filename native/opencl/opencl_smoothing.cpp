@@ -2,6 +2,7 @@
 #include "opencl_smoothing.h"
 
 #include <algorithm>
+#include <chrono>
 #include <cstdint>
 #include <memory>
 #include <mutex>
@@ -49,6 +50,20 @@ void image_launch(const Device& device, DeviceState& s, const Kernel& kernel, in
     launch(s, kernel, 2, global, nullptr);
   }
 }
+
+// Seconds since the previous lap (or construction).
+class Stopwatch {
+ public:
+  double lap() {
+    const auto now = std::chrono::steady_clock::now();
+    const double s = std::chrono::duration<double>(now - last_).count();
+    last_ = now;
+    return s;
+  }
+
+ private:
+  std::chrono::steady_clock::time_point last_ = std::chrono::steady_clock::now();
+};
 
 }  // namespace
 
@@ -99,15 +114,17 @@ TextureSmoothing smooth_texture_opencl(const Device& device, const Mesh& mesh, P
                                        const TextureOptions& options, bool keep_image,
                                        const ProgressFn& progress) {
   DeviceState& s = state_of(device);
+  std::vector<std::pair<std::string, double>> device_timings;  // the filter's parts
   auto filter = [&](const TextureFilter& f, std::vector<std::int32_t>& island,
                     std::vector<float>& value) {
+    Stopwatch clock;
     const std::size_t texels = island.size();
     const std::size_t image = texels * sizeof(float);
     const bool blur = f.taps >= 1;
-    // island and value, their dilation copies, and for the blur: ones, the row pass's two
-    // sums and the taps (the result goes to the second value buffer).
+    // island and value, their dilation copies, and for the blur: the row pass's two sums and
+    // the taps (the result goes to the second value buffer).
     std::vector<std::size_t> sizes = {image, image, image, image};
-    if (blur) sizes.insert(sizes.end(), {image, image, image, bytes_of(f.kernel)});
+    if (blur) sizes.insert(sizes.end(), {image, image, bytes_of(f.kernel)});
     check_fits(device, sizes);
     std::lock_guard<std::mutex> lock(s.mutex);
     cl_program program = smoothing_program(device, s);
@@ -115,6 +132,8 @@ TextureSmoothing smooth_texture_opencl(const Device& device, const Mesh& mesh, P
     std::unique_ptr<Buffer> value_a = std::make_unique<Buffer>(s, image, value.data());
     std::unique_ptr<Buffer> island_b = std::make_unique<Buffer>(s, image, nullptr);
     std::unique_ptr<Buffer> value_b = std::make_unique<Buffer>(s, image, nullptr);
+    check(api()->clFinish(s.queue), "clFinish (upload)");
+    device_timings.emplace_back("filter: upload", clock.lap());
     if (f.margin > 0) {
       Kernel dilate(program, "sdf_texture_dilate");
       dilate.arg(0, static_cast<cl_int>(f.width));
@@ -129,33 +148,32 @@ TextureSmoothing smooth_texture_opencl(const Device& device, const Mesh& mesh, P
         std::swap(value_a, value_b);
       }
     }
+    // Alive until the clFinish below.
+    std::unique_ptr<Buffer> row_value, row_weight, taps;
     if (blur) {
-      const std::vector<float> ones(texels, 1.0f);
-      Buffer ones_buffer(s, image, ones.data());
-      Buffer row_value(s, image, nullptr);
-      Buffer row_weight(s, image, nullptr);
-      Buffer taps(s, bytes_of(f.kernel), f.kernel.data());
+      row_value = std::make_unique<Buffer>(s, image, nullptr);
+      row_weight = std::make_unique<Buffer>(s, image, nullptr);
+      taps = std::make_unique<Buffer>(s, bytes_of(f.kernel), f.kernel.data());
       Kernel rows(program, "sdf_texture_blur_rows");
       cl_uint a = 0;
       rows.arg(a++, static_cast<cl_int>(f.width));
       rows.arg(a++, static_cast<cl_int>(f.height));
       rows.arg(a++, island_a->get());
       rows.arg(a++, value_a->get());
-      rows.arg(a++, ones_buffer.get());
-      rows.arg(a++, taps.get());
+      rows.arg(a++, taps->get());
       rows.arg(a++, static_cast<cl_int>(f.taps));
       rows.arg(a++, f.inv_range);
-      rows.arg(a++, row_value.get());
-      rows.arg(a++, row_weight.get());
+      rows.arg(a++, row_value->get());
+      rows.arg(a++, row_weight->get());
       image_launch(device, s, rows, f.width, f.height);
       Kernel columns(program, "sdf_texture_blur_columns");
       a = 0;
       columns.arg(a++, static_cast<cl_int>(f.width));
       columns.arg(a++, static_cast<cl_int>(f.height));
       columns.arg(a++, island_a->get());
-      columns.arg(a++, row_value.get());
-      columns.arg(a++, row_weight.get());
-      columns.arg(a++, taps.get());
+      columns.arg(a++, row_value->get());
+      columns.arg(a++, row_weight->get());
+      columns.arg(a++, taps->get());
       columns.arg(a++, static_cast<cl_int>(f.taps));
       columns.arg(a++, f.inv_range);
       columns.arg(a++, f.lo);
@@ -163,13 +181,20 @@ TextureSmoothing smooth_texture_opencl(const Device& device, const Mesh& mesh, P
       columns.arg(a++, value_b->get());
       image_launch(device, s, columns, f.width, f.height);
       std::swap(value_a, value_b);
-      // The buffers above are released at the end of this block: finish with them first.
-      check(api()->clFinish(s.queue), "clFinish (blur)");
     }
-    read(s, *island_a, image, island.data());
+    check(api()->clFinish(s.queue), "clFinish (filter)");
+    device_timings.emplace_back("filter: kernels", clock.lap());
+    // Both downloads queued, one wait (the queue runs in order).
+    check(api()->clEnqueueReadBuffer(s.queue, island_a->get(), CL_FALSE, 0, image, island.data(), 0,
+                                     nullptr, nullptr),
+          "clEnqueueReadBuffer");
     read(s, *value_a, image, value.data());
+    device_timings.emplace_back("filter: download", clock.lap());
   };
-  return smooth_texture(mesh, kind, values, uvs, options, keep_image, progress, 0.0, 1.0, filter);
+  TextureSmoothing out =
+      smooth_texture(mesh, kind, values, uvs, options, keep_image, progress, 0.0, 1.0, filter);
+  out.timings.insert(out.timings.end(), device_timings.begin(), device_timings.end());
+  return out;
 }
 
 }  // namespace sdf::cl

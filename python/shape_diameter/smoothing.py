@@ -236,7 +236,8 @@ def _run(v, t, values, points, method, o, uvs, threads, progress, engine="cpu"):
             v, t, values, points, o["iterations"], o["max_depth"], o["min_points"],
             o["node_size_ratio"], o["branch_on"], threads, progress, engine,
         )
-    corners = _check_uvs(uvs, len(t), len(v), t)
+    # check_smoothing has checked the UVs' values (and the native code checks them again).
+    corners = _check_uvs(uvs, len(t), len(v), t, check_finite=False)
     width, height = o["texture_size"]
     out = _core.smooth_texture(
         v, t, values, points, corners, width, height, o["radius"], o["bilateral"],
@@ -299,7 +300,7 @@ def _check_values(values, points, n, m):
     return a, points
 
 
-def _check_uvs(uvs, m, n, triangles=None):
+def _check_uvs(uvs, m, n, triangles=None, check_finite=True):
     """Per-corner float32 (m, 3, 2). Per-vertex (n, 2) is expanded when triangles are given."""
     a = np.asarray(uvs)
     if a.dtype.kind not in "fiu":
@@ -314,7 +315,7 @@ def _check_uvs(uvs, m, n, triangles=None):
             f"{a.shape}"
         )
     corners = np.ascontiguousarray(corners, dtype=np.float32)
-    if not np.isfinite(corners).all():
+    if check_finite and not np.isfinite(corners).all():
         raise ValueError("uvs must be finite: some are NaN or infinite")
     return corners
 

@@ -3,10 +3,13 @@
 
 #include <algorithm>
 #include <cmath>
+#include <random>
 #include <vector>
 
+#include "mesh_weld.h"
 #include "smoothing_texture.h"
 #include "smoothing_test_meshes.h"
+#include "uv_islands.h"
 
 namespace sdf {
 namespace {
@@ -67,6 +70,219 @@ TEST(UvIslands, SharedCornersJoinAndSeparateSheetsDoNot) {
     }
   const std::vector<std::int32_t> sides = uv_islands(cube, uvs.data(), 1e-6);
   for (std::size_t f = 0; f < sides.size(); ++f) ASSERT_EQ(sides[f], static_cast<std::int32_t>(f / per_side));
+}
+
+// The islands as the first, serial version labelled them: weld every vertex, then around each
+// merged vertex join faces whose first corner there has the same UV; ids by first face.
+std::vector<std::int32_t> reference_islands(const Mesh& mesh, const float* uvs, double tolerance) {
+  const std::size_t m = mesh.triangles.size();
+  Weld weld;
+  if (tolerance >= 0.0) {
+    weld = weld_vertices(mesh.vertices.data(), mesh.vertices.size(), weld_tolerance(mesh, tolerance));
+  } else {
+    for (std::uint32_t v = 0; v < mesh.vertices.size(); ++v) weld.merged.push_back(v);
+    weld.count = static_cast<std::uint32_t>(mesh.vertices.size());
+  }
+  const std::vector<glm::uvec3> tris = welded_triangles(mesh, weld);
+  const Adjacency vf = faces_of_vertices(tris, weld.count);
+  std::vector<std::uint32_t> parent(m);
+  for (std::uint32_t f = 0; f < m; ++f) parent[f] = f;
+  auto find = [&](std::uint32_t f) {
+    while (parent[f] != f) f = parent[f];
+    return f;
+  };
+  for (std::uint32_t v = 0; v < weld.count; ++v)
+    for (std::uint32_t i = vf.offsets[v]; i < vf.offsets[v + 1]; ++i)
+      for (std::uint32_t j = vf.offsets[v]; j < i; ++j) {
+        auto uv = [&](std::uint32_t f) {
+          for (int c = 0; c < 3; ++c)
+            if (tris[f][c] == v) return std::make_pair(uvs[6 * f + 2 * c] + 0.0f, uvs[6 * f + 2 * c + 1] + 0.0f);
+          return std::make_pair(0.0f, 0.0f);
+        };
+        if (uv(vf.items[i]) != uv(vf.items[j])) continue;
+        const std::uint32_t a = find(vf.items[i]), b = find(vf.items[j]);
+        parent[std::max(a, b)] = std::min(a, b);
+      }
+  std::vector<std::int32_t> island(m), id(m, -1);
+  std::int32_t next = 0;
+  for (std::uint32_t f = 0; f < m; ++f) {
+    const std::uint32_t r = find(f);
+    if (id[r] < 0) id[r] = next++;
+    island[f] = id[r];
+  }
+  return island;
+}
+
+// A grid whose vertices on the column x = half are duplicated for the faces right of it (a
+// normal seam, as glTF files split vertices), with continuous UVs.
+struct SplitGrid {
+  Mesh mesh;
+  std::vector<float> uvs;
+};
+
+SplitGrid split_grid(int n) {
+  test::Arrays a = test::grid(n, n, 1.0 / n);
+  const std::int64_t count = static_cast<std::int64_t>(a.vertices.size() / 3);
+  const int half = n / 2;
+  for (int j = 0; j <= n; ++j) {
+    const std::int64_t v = j * (n + 1) + half;
+    a.vertices.insert(a.vertices.end(), {a.vertices[3 * v], a.vertices[3 * v + 1], a.vertices[3 * v + 2]});
+  }
+  for (std::size_t f = 0; f < a.triangles.size() / 3; ++f) {
+    std::int64_t* t = &a.triangles[3 * f];
+    const bool right = (t[0] % (n + 1)) + (t[1] % (n + 1)) + (t[2] % (n + 1)) > 3 * half;
+    for (int c = 0; c < 3; ++c)
+      if (right && t[c] % (n + 1) == half) t[c] = count + t[c] / (n + 1);
+  }
+  SplitGrid g;
+  g.mesh = a.mesh();
+  planar_uvs(g.mesh, 0, 1, 0, 1, 0.1f, 0.9f, 0.1f, 0.9f, g.uvs);
+  return g;
+}
+
+TEST(UvIslands, ASplitSeamWithOneUvJoinsThroughTheWeldOnly) {
+  const SplitGrid g = split_grid(8);
+  const UvIslands welded = label_uv_islands(g.mesh, g.uvs.data(), 1e-6, false, 2);
+  EXPECT_EQ(welded.count, 1);
+  EXPECT_FALSE(welded.merged.empty());  // the shared UVs of the split vertices asked for it
+  const UvIslands apart = label_uv_islands(g.mesh, g.uvs.data(), -1.0, false, 2);
+  EXPECT_EQ(apart.count, 2);
+  EXPECT_EQ(apart.face_island, reference_islands(g.mesh, g.uvs.data(), -1.0));
+}
+
+TEST(UvIslands, OneUvLayoutForTwoSheetsNeedsNoWeld) {
+  // Two sheets far apart with the same UVs (a mirrored model's halves share their layout):
+  // the equal UVs belong to distant vertices, which no weld merges, so none runs.
+  TwoSheets s = two_sheets();
+  for (std::size_t i = 6 * s.half; i < s.uvs.size(); i += 2) s.uvs[i] -= 0.43f;
+  for (std::size_t i = 0; i < 6 * s.half; ++i) s.uvs[6 * s.half + i] = s.uvs[i];
+  const UvIslands islands = label_uv_islands(s.mesh, s.uvs.data(), 1e-6, false, 2);
+  EXPECT_TRUE(islands.merged.empty());
+  EXPECT_EQ(islands.count, 2);
+  EXPECT_EQ(islands.face_island, reference_islands(s.mesh, s.uvs.data(), 1e-6));
+}
+
+TEST(UvIslands, TwoCornersOfOneFaceWithinTheWeldDistance) {
+  // Face 0 has corners on vertices 0 and 1, a hair apart (one merged vertex, where face 0
+  // counts through its first corner, UV (0, 0)); face 1 meets vertex 1 at face 0's second
+  // UV. Merged, they share no UV: two islands. No two vertices share a UV, so only the
+  // face's near corners tell that the weld matters.
+  test::Arrays a;
+  a.vertices = {0, 0, 0, 1e-9, 0, 0, 1, 0, 0, 0, 1, 0, 1, 1, 0};
+  a.triangles = {0, 1, 2, 1, 3, 4};
+  const Mesh mesh = a.mesh();
+  const std::vector<float> uvs = {0.0f, 0.0f, 0.5f, 0.5f, 0.9f, 0.1f,   // face 0
+                                  0.5f, 0.5f, 0.2f, 0.8f, 0.7f, 0.7f};  // face 1
+  const std::vector<std::int32_t> expected = {0, 1};
+  EXPECT_EQ(reference_islands(mesh, uvs.data(), 1e-6), expected);
+  EXPECT_EQ(label_uv_islands(mesh, uvs.data(), 1e-6, false, 2).face_island, expected);
+  // Not merged, vertex 1 joins them.
+  EXPECT_EQ(label_uv_islands(mesh, uvs.data(), -1.0, false, 2).count, 1);
+}
+
+TEST(UvIslands, SameAsTheSerialLabellingOnAMessyMesh) {
+  // Random faces over few vertices, a third of them duplicated at the same position,
+  // corners with UVs from a small set (many equal), repeated corners in some faces, and
+  // two corners of one face within the weld distance: every rule of the labelling at once.
+  std::mt19937 rng(11);
+  test::Arrays a;
+  const int base = 1500;
+  std::uniform_real_distribution<double> x(0.0, 1.0);
+  for (int v = 0; v < base; ++v) a.vertices.insert(a.vertices.end(), {x(rng), x(rng), x(rng)});
+  for (int v = 0; v < base / 3; ++v) {
+    const int of = v * 3;
+    a.vertices.insert(a.vertices.end(), {a.vertices[3 * of], a.vertices[3 * of + 1], a.vertices[3 * of + 2]});
+  }
+  const std::int64_t near = static_cast<std::int64_t>(a.vertices.size() / 3);
+  a.vertices.insert(a.vertices.end(), {a.vertices[0] + 1e-8, a.vertices[1], a.vertices[2]});
+  const std::int64_t count = near + 1;
+  std::uniform_int_distribution<std::int64_t> vertex(0, count - 1);
+  std::uniform_int_distribution<int> uv_index(0, 2);
+  std::vector<float> uvs;
+  for (int f = 0; f < 2000; ++f) {
+    std::int64_t t[3] = {vertex(rng), vertex(rng), vertex(rng)};
+    if (f % 7 == 0) t[2] = t[0];
+    if (f == 5) {
+      t[0] = 0;
+      t[1] = near;
+    }
+    for (int c = 0; c < 3; ++c) {
+      a.triangles.push_back(t[c]);
+      uvs.push_back(0.1f * uv_index(rng));
+      uvs.push_back(f % 13 == 0 ? -0.0f : 0.0f);
+    }
+  }
+  const Mesh mesh = a.mesh();
+  for (double tolerance : {1e-6, -1.0, 0.0}) {
+    const std::vector<std::int32_t> expected = reference_islands(mesh, uvs.data(), tolerance);
+    const std::int32_t islands = *std::max_element(expected.begin(), expected.end()) + 1;
+    ASSERT_GT(islands, 30);  // many islands, many joins: the rules decide
+    ASSERT_LT(islands, 1000);
+    for (unsigned threads : {1u, 2u, 7u})
+      for (bool need_merged : {false, true})
+        ASSERT_EQ(label_uv_islands(mesh, uvs.data(), tolerance, need_merged, threads).face_island,
+                  expected)
+            << tolerance << " " << threads << " " << need_merged;
+  }
+}
+
+TEST(TextureSmoothing, LaterFacesWinOverlapsAndCentroidsFillOnlyEmptyTexels) {
+  // Three copies of one UV triangle (values 1, 2, 3: the last is drawn), then two faces far
+  // smaller than a texel inside it (covered: they draw nothing) and two more at one empty
+  // texel (the first of them draws it). Radius 0, no margin: the image is the rasterisation.
+  test::Arrays a = test::grid(1, 1);
+  a.triangles = {0, 1, 2, 0, 1, 2, 0, 1, 2, 0, 1, 2, 0, 1, 2, 0, 1, 2, 0, 1, 2};
+  const Mesh mesh = a.mesh();
+  const float big[6] = {0.1f, 0.1f, 0.6f, 0.1f, 0.1f, 0.6f};
+  std::vector<float> uvs;
+  for (int k = 0; k < 3; ++k) uvs.insert(uvs.end(), big, big + 6);
+  for (float at : {0.2f, 0.2f, 0.8f, 0.8f})
+    uvs.insert(uvs.end(), {at, at, at + 0.001f, at, at, at + 0.001f});
+  const std::vector<float> v = {1, 2, 3, 4, 5, 6, 7};
+  TextureOptions o;
+  o.width = o.height = 16;
+  o.radius = 0.0;
+  o.margin = 0;
+  for (unsigned threads : {1u, 3u}) {
+    o.threads = threads;
+    const TextureSmoothing out = smooth_texture(mesh, PointKind::Faces, v.data(), uvs.data(), o, true);
+    EXPECT_EQ(out.image[3 * 16 + 3], 3.0f);  // inside the big triangle
+    EXPECT_EQ(out.image[12 * 16 + 12], 6.0f);  // the centroid of faces 5 and 6
+    int drawn = 0;
+    for (std::size_t t = 0; t < out.image.size(); ++t) {
+      if (!out.mask[t]) continue;
+      ++drawn;
+      ASSERT_TRUE(out.image[t] == 3.0f || t == 12 * 16 + 12) << t;
+    }
+    EXPECT_GT(drawn, 10);
+  }
+}
+
+TEST(TextureSmoothing, OverlappingLayoutSameForAnyThreadCount) {
+  // Every face of a fine grid drawn over one quarter of the image twice (two copies of the
+  // layout, shifted by a fraction of a texel): heavy overlaps, faces smaller than a texel,
+  // face and vertex values.
+  const Mesh mesh = test::grid(48, 48, 1.0 / 48).mesh();
+  std::vector<float> uvs;
+  planar_uvs(mesh, 0, 1, 0, 1, 0.1f, 0.5f, 0.1f, 0.5f, uvs);
+  for (std::size_t i = 0; i < uvs.size() / 2; ++i) uvs[i] += 0.003f;
+  const std::vector<float> fv = test::noisy(mesh.triangles.size(), 2.0f, 1.0f, 8);
+  const std::vector<float> vv = test::noisy(mesh.vertices.size(), 2.0f, 1.0f, 9);
+  for (PointKind kind : {PointKind::Faces, PointKind::Vertices}) {
+    const float* v = kind == PointKind::Faces ? fv.data() : vv.data();
+    TextureOptions o;
+    o.width = o.height = 80;
+    o.radius = 3.0;
+    o.threads = 1;
+    const TextureSmoothing one = smooth_texture(mesh, kind, v, uvs.data(), o, true);
+    for (unsigned threads : {2u, 5u}) {
+      o.threads = threads;
+      const TextureSmoothing many = smooth_texture(mesh, kind, v, uvs.data(), o, true);
+      EXPECT_EQ(one.image, many.image);
+      EXPECT_EQ(one.mask, many.mask);
+      EXPECT_EQ(one.values, many.values);
+    }
+  }
 }
 
 TEST(TextureSmoothing, NothingCrossesBetweenIslands) {
