@@ -39,6 +39,12 @@ constexpr std::size_t kGrain = 1 << 14;
 
 }  // namespace
 
+void face_point(const Mesh& mesh, std::size_t face, glm::vec3* origin, glm::vec3* axis) {
+  const glm::uvec3 t = mesh.triangles[face];
+  *origin = (mesh.vertices[t.x] + mesh.vertices[t.y] + mesh.vertices[t.z]) * (1.0f / 3.0f);
+  *axis = -unit_or_zero(face_area_normal(mesh, face));
+}
+
 SamplePoints sample_points(const Mesh& mesh, PointKind kind, unsigned threads) {
   SamplePoints points;
   if (kind == PointKind::Faces) {
@@ -50,9 +56,7 @@ SamplePoints sample_points(const Mesh& mesh, PointKind kind, unsigned threads) {
     parallel_for(n, kGrain, threads, [&](std::size_t begin, std::size_t end) {
       for (std::size_t f = begin; f < end; ++f) {
         const glm::uvec3 t = mesh.triangles[f];
-        points.origins[f] =
-            (mesh.vertices[t.x] + mesh.vertices[t.y] + mesh.vertices[t.z]) * (1.0f / 3.0f);
-        points.axes[f] = -unit_or_zero(face_area_normal(mesh, f));
+        face_point(mesh, f, &points.origins[f], &points.axes[f]);
         points.own_face[f] = static_cast<std::int32_t>(f);
         points.tangents[f] =
             tangent_from_edge(points.axes[f], mesh.vertices[t.y] - mesh.vertices[t.x]);

@@ -34,6 +34,11 @@ struct SamplePoints {
 // `threads` as in Options (0 = every core); the result does not depend on it.
 SamplePoints sample_points(const Mesh& mesh, PointKind kind, unsigned threads = 0);
 
+// One face's point as sample_points() makes it, bit for bit: the centroid, and the unit inward
+// axis (zero for a zero-area face). For callers that need no tangent and no stored arrays
+// (projected smoothing recomputes them on the fly each iteration).
+void face_point(const Mesh& mesh, std::size_t face, glm::vec3* origin, glm::vec3* axis);
+
 // Point indices in Morton (Z-curve) order of their origins. Neighbouring points cast similar
 // rays through the same nodes, so working through them in space order keeps the tree in
 // cache (measured 20-30% faster than file order on the bunny) and keeps GPU work items that
