@@ -23,6 +23,8 @@ constexpr std::size_t kGrain = 1 << 14;
 // every point of every tested node cost points x depth).
 constexpr std::size_t kMinBlock = 256;
 static_assert(kGrain % kMinBlock == 0, "a chunk holds whole minimum blocks");
+// Faces ahead whose corners the projection pass prefetches (8 to 32 measured alike).
+constexpr std::size_t kPrefetchAhead = 16;
 
 std::size_t chunk_count(std::size_t n) { return (n + kGrain - 1) / kGrain; }
 
@@ -262,46 +264,81 @@ std::vector<PointOctreeNode> grow_nodes(const MortonOrder& order, const RunValue
   return nodes;
 }
 
-template <class Points>
-std::vector<PointOctreeNode> build_octree(const Points& points, const ProjectedOptions& options) {
-  check_options(options);
-  const std::size_t n = points.size();
-  if (n == 0) return {};
-  const unsigned threads = options.threads;
-  // Members and their box, per chunk; first_member[c]: members before chunk c.
-  const std::size_t chunks = chunk_count(n);
-  std::vector<std::size_t> first_member(chunks + 1, 0);
-  std::vector<glm::vec3> chunk_lo(chunks), chunk_hi(chunks);
-  parallel_for(n, kGrain, threads, [&](std::size_t begin, std::size_t end) {
-    glm::vec3 lo(std::numeric_limits<float>::infinity()), hi(-std::numeric_limits<float>::infinity());
+// Per chunk of kGrain points: how many are members, and their box. The projection pass of
+// the smoothing makes it as it writes the points (one pass less over them);
+// build_point_octree() makes it with summarize().
+struct ChunkSummary {
+  // What one chunk's thread gathers in registers (writing to the shared arrays for every point
+  // would bounce their cache lines between threads), then stores once.
+  struct Chunk {
     std::size_t members = 0;
-    for (std::size_t i = begin; i < end; ++i)
-      if (points.member(i)) {
-        ++members;
-        lo = glm::min(lo, points.point(i));
-        hi = glm::max(hi, points.point(i));
-      }
-    first_member[begin / kGrain + 1] = members;
-    chunk_lo[begin / kGrain] = lo;
-    chunk_hi[begin / kGrain] = hi;
-  });
-  glm::vec3 lo(std::numeric_limits<float>::infinity()), hi(-std::numeric_limits<float>::infinity());
-  for (std::size_t c = 0; c < chunks; ++c) {
-    first_member[c + 1] += first_member[c];
-    lo = glm::min(lo, chunk_lo[c]);  // min and max are exact: any order gives the same box
-    hi = glm::max(hi, chunk_hi[c]);
+    glm::vec3 lo{std::numeric_limits<float>::infinity()};
+    glm::vec3 hi{-std::numeric_limits<float>::infinity()};
+    void add(glm::vec3 p) {
+      ++members;
+      lo = glm::min(lo, p);
+      hi = glm::max(hi, p);
+    }
+  };
+  std::vector<std::size_t> first_member;  // members before chunk c, for c <= chunks
+  std::vector<glm::vec3> lo, hi;
+
+  explicit ChunkSummary(std::size_t n)
+      : first_member(chunk_count(n) + 1, 0), lo(chunk_count(n)), hi(chunk_count(n)) {}
+  // By the thread that handled the chunk starting at point `begin`.
+  void store(std::size_t begin, const Chunk& chunk) {
+    first_member[begin / kGrain + 1] = chunk.members;
+    lo[begin / kGrain] = chunk.lo;
+    hi[begin / kGrain] = chunk.hi;
   }
-  const std::size_t members = first_member[chunks];
+  void finish() {
+    for (std::size_t c = 1; c < first_member.size(); ++c) first_member[c] += first_member[c - 1];
+  }
+};
+
+template <class Points>
+ChunkSummary summarize(const Points& points, unsigned threads) {
+  ChunkSummary summary(points.size());
+  parallel_for(points.size(), kGrain, threads, [&](std::size_t begin, std::size_t end) {
+    ChunkSummary::Chunk chunk;
+    for (std::size_t i = begin; i < end; ++i)
+      if (points.member(i)) chunk.add(points.point(i));
+    summary.store(begin, chunk);
+  });
+  summary.finish();
+  return summary;
+}
+
+// The nodes, and the members in the Morton order they were built from (the CPU gather walks
+// the points in that order).
+struct PointOctree {
+  std::vector<PointOctreeNode> nodes;
+  MortonOrder order;
+};
+
+// Options must have been checked.
+template <class Points>
+PointOctree build_octree(const Points& points, const ChunkSummary& summary,
+                         const ProjectedOptions& options) {
+  const std::size_t members = summary.first_member.back();
   if (members == 0) return {};
   if (members > std::numeric_limits<std::uint32_t>::max())
     throw std::invalid_argument("too many points for the octree");
-
+  // min and max are exact: the chunks' boxes merge to the same box in any order.
+  glm::vec3 lo(std::numeric_limits<float>::infinity()), hi(-std::numeric_limits<float>::infinity());
+  for (std::size_t c = 0; c < summary.lo.size(); ++c) {
+    lo = glm::min(lo, summary.lo[c]);
+    hi = glm::max(hi, summary.hi[c]);
+  }
   const RootCube cube(lo, hi, options.max_depth);
-  const MortonOrder order =
-      morton_order(points, cube, 3 * options.max_depth, first_member, members, threads);
-  const RunValues runs =
-      run_values(points, order, options.branch_on == ProjectedOptions::Branch::Min, threads);
-  return grow_nodes(order, runs, cube, options);
+  PointOctree tree;
+  tree.order = morton_order(points, cube, 3 * options.max_depth, summary.first_member, members,
+                            options.threads);
+  const RunValues runs = run_values(points, tree.order,
+                                    options.branch_on == ProjectedOptions::Branch::Min,
+                                    options.threads);
+  tree.nodes = grow_nodes(tree.order, runs, cube, options);
+  return tree;
 }
 
 // Where each point starts and which way is inward: recomputed from the mesh for faces (no
@@ -312,6 +349,20 @@ class PointFrames {
   PointFrames(const Mesh& mesh, PointKind kind, unsigned threads)
       : mesh_(mesh), faces_(kind == PointKind::Faces) {
     if (!faces_) samples_ = sample_points(mesh, kind, threads);
+  }
+  // Asks for face i's corners ahead of use: the corners of consecutive faces lie anywhere in
+  // the vertex array, and the axis's divisions and square root leave the core too little
+  // room to overlap those cache misses by itself (measured: 1.5x faster with, 1.5M faces).
+  void prefetch(std::size_t i) const {
+#if defined(__GNUC__)
+    if (!faces_ || i >= mesh_.triangles.size()) return;
+    const glm::uvec3 t = mesh_.triangles[i];
+    __builtin_prefetch(&mesh_.vertices[t.x]);
+    __builtin_prefetch(&mesh_.vertices[t.y]);
+    __builtin_prefetch(&mesh_.vertices[t.z]);
+#else
+    (void)i;
+#endif
   }
   void frame(std::size_t i, glm::vec3* origin, glm::vec3* axis) const {
     if (faces_) {
@@ -327,6 +378,10 @@ class PointFrames {
   bool faces_;
   SamplePoints samples_;
 };
+
+std::size_t point_count(const Mesh& mesh, PointKind kind) {
+  return kind == PointKind::Faces ? mesh.triangles.size() : mesh.vertices.size();
+}
 
 struct ValueRange {
   float lo, hi;
@@ -362,7 +417,9 @@ ValueRange value_range(const float* values, std::size_t n, unsigned threads) {
 std::vector<PointOctreeNode> build_point_octree(const glm::vec3* points, const float* values,
                                                 std::size_t count,
                                                 const ProjectedOptions& options) {
-  return build_octree(ArrayPoints{points, values, count}, options);
+  check_options(options);
+  const ArrayPoints input{points, values, count};
+  return build_octree(input, summarize(input, options.threads), options).nodes;
 }
 
 // ---- Per-point work: kernels/sdf_smooth_projected.h (shared with the OpenCL kernels). ----
@@ -374,22 +431,22 @@ bool gather_sphere(const PointOctreeNode* nodes, glm::vec3 center, float radius,
   return kern::sdf_gather_sphere(nodes, center, radius, mean) != 0;
 }
 
-std::vector<float> smooth_projected(const Mesh& mesh, PointKind kind, const float* values,
-                                    const ProjectedOptions& options, const ProgressFn& progress,
-                                    double progress_from, double progress_to,
-                                    const ProjectedGatherFn& gather) {
+void smooth_projected_into(const Mesh& mesh, PointKind kind, const float* values,
+                           const ProjectedOptions& options, float* out,
+                           const ProgressFn& progress, double progress_from, double progress_to,
+                           const ProjectedGatherFn& gather) {
   if (options.iterations < 0)
     throw std::invalid_argument("iterations must be >= 0, got " +
                                 std::to_string(options.iterations));
-  const std::size_t n = kind == PointKind::Faces ? mesh.triangles.size() : mesh.vertices.size();
+  const std::size_t n = point_count(mesh, kind);
   const ValueRange range = value_range(values, n, options.threads);
   if (range.first_bad < n)
     throw std::invalid_argument("value " + std::to_string(range.first_bad) +
                                 " is negative or not finite (projected smoothing needs the "
                                 "SDF, a length >= 0)");
   check_options(options);  // even when there is nothing to do
-  std::vector<float> current(values, values + n);
-  if (n == 0 || range.lo == range.hi || options.iterations == 0) return current;
+  auto unchanged = [&] { std::copy(values, values + n, out); };
+  if (n == 0 || range.lo == range.hi || options.iterations == 0) return unchanged();
 
   if (progress && !progress(progress_from)) throw Cancelled();
   const PointFrames frames(mesh, kind, options.threads);
@@ -400,34 +457,63 @@ std::vector<float> smooth_projected(const Mesh& mesh, PointKind kind, const floa
   UninitializedVector<std::uint8_t> member(n);
   const double span = (progress_to - progress_from) / options.iterations;
   for (int it = 0; it < options.iterations; ++it) {
+    // Each iteration smooths the last one's result, in `out` (read here only: from here on
+    // the values travel in points[i].w, and the gather overwrites `out`).
+    const float* current = it == 0 ? values : out;
+    ChunkSummary summary(n);
     parallel_for(n, kGrain, options.threads, [&](std::size_t begin, std::size_t end) {
+      ChunkSummary::Chunk chunk;
       for (std::size_t i = begin; i < end; ++i) {
+        frames.prefetch(i + kPrefetchAhead);
         glm::vec3 origin, axis;
         frames.frame(i, &origin, &axis);
-        points[i] = glm::vec4(origin + axis * (0.5f * current[i]), current[i]);
+        const glm::vec3 p = origin + axis * (0.5f * current[i]);
+        points[i] = glm::vec4(p, current[i]);
         member[i] = axis != glm::vec3(0.0f);
+        if (member[i]) chunk.add(p);
       }
+      summary.store(begin, chunk);
     });
-    const std::vector<PointOctreeNode> nodes =
-        build_octree(PackedPoints{points.data(), member.data(), n}, options);
-    if (nodes.empty()) return current;  // no point has an axis (then on the first iteration)
-    // `current` is read only through points[i].w from here on: the result overwrites it.
+    summary.finish();
+    const PointOctree tree = build_octree(PackedPoints{points.data(), member.data(), n}, summary, options);
+    const std::vector<PointOctreeNode>& nodes = tree.nodes;
+    if (nodes.empty()) return unchanged();  // no point has an axis (then on the first iteration)
     if (gather) {
-      gather(nodes, points.data(), n, range.lo, range.hi, current.data());
+      gather(nodes, points.data(), n, range.lo, range.hi, out);
       if (progress && !progress(progress_from + (it + 1) * span)) throw Cancelled();
       continue;
     }
+    auto smooth_point = [&](std::size_t i) {
+      out[i] = kern::sdf_smooth_projected_point(nodes.data(), glm::vec3(points[i]), points[i].w,
+                                                range.lo, range.hi);
+    };
+    // Members in Morton order: consecutive points take nearly the same path through the
+    // tree, which the branch predictor learns (measured 12-17% faster than mesh order at
+    // 1.5M faces, the scattered reads and writes included). The same values either way.
+    const std::size_t members = tree.order.items.size();
     parallel_for(
-        n, 1024, options.threads,
+        members, 1024, options.threads,
         [&](std::size_t begin, std::size_t end) {
-          for (std::size_t i = begin; i < end; ++i)
-            current[i] = kern::sdf_smooth_projected_point(nodes.data(), glm::vec3(points[i]),
-                                                          points[i].w, range.lo, range.hi);
+          for (std::size_t k = begin; k < end; ++k) smooth_point(tree.order.index(k));
         },
         progress, progress_from + it * span, progress_from + (it + 1) * span);
+    if (members < n)  // the points with no axis (few: zero-area faces, lone vertices)
+      parallel_for(n, kGrain, options.threads, [&](std::size_t begin, std::size_t end) {
+        for (std::size_t i = begin; i < end; ++i)
+          if (!member[i]) smooth_point(i);
+      });
   }
   if (progress && !progress(progress_to)) throw Cancelled();
-  return current;
+}
+
+std::vector<float> smooth_projected(const Mesh& mesh, PointKind kind, const float* values,
+                                    const ProjectedOptions& options, const ProgressFn& progress,
+                                    double progress_from, double progress_to,
+                                    const ProjectedGatherFn& gather) {
+  std::vector<float> out(point_count(mesh, kind));
+  smooth_projected_into(mesh, kind, values, options, out.data(), progress, progress_from,
+                        progress_to, gather);
+  return out;
 }
 
 }  // namespace sdf

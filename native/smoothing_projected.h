@@ -84,4 +84,11 @@ std::vector<float> smooth_projected(const Mesh& mesh, PointKind kind, const floa
                                     double progress_from = 0.0, double progress_to = 1.0,
                                     const ProjectedGatherFn& gather = nullptr);
 
+// The same, writing the result into out[0, point count) (which may be the caller's final
+// array, e.g. a NumPy one: no copy of the result is made). out must not overlap values.
+void smooth_projected_into(const Mesh& mesh, PointKind kind, const float* values,
+                           const ProjectedOptions& options, float* out,
+                           const ProgressFn& progress = nullptr, double progress_from = 0.0,
+                           double progress_to = 1.0, const ProjectedGatherFn& gather = nullptr);
+
 }  // namespace sdf

@@ -52,9 +52,9 @@ void image_launch(const Device& device, DeviceState& s, const Kernel& kernel, in
 
 }  // namespace
 
-std::vector<float> smooth_projected_opencl(const Device& device, const Mesh& mesh, PointKind kind,
-                                           const float* values, const ProjectedOptions& options,
-                                           const ProgressFn& progress) {
+void smooth_projected_opencl(const Device& device, const Mesh& mesh, PointKind kind,
+                             const float* values, const ProjectedOptions& options, float* out,
+                             const ProgressFn& progress) {
   DeviceState& s = state_of(device);
   // The points' and results' buffers are made on the first iteration and kept for the others.
   // Per iteration: one upload of the packed points (xyz and value, 16 bytes a point), one of
@@ -97,7 +97,7 @@ std::vector<float> smooth_projected_opencl(const Device& device, const Mesh& mes
     }
     read(s, *next_buffer, next_bytes, next);
   };
-  return smooth_projected(mesh, kind, values, options, progress, 0.0, 1.0, gather);
+  smooth_projected_into(mesh, kind, values, options, out, progress, 0.0, 1.0, gather);
 }
 
 TextureSmoothing smooth_texture_opencl(const Device& device, const Mesh& mesh, PointKind kind,
