@@ -8,6 +8,7 @@
 #include <string>
 
 #include "radix_sort.h"
+#include "smoothing_projected_avx2.h"
 #include "uninitialized_vector.h"
 
 namespace sdf {
@@ -456,6 +457,7 @@ void smooth_projected_into(const Mesh& mesh, PointKind kind, const float* values
   UninitializedVector<glm::vec4> points(n);
   UninitializedVector<std::uint8_t> member(n);
   const double span = (progress_to - progress_from) / options.iterations;
+  const bool packets = projected_avx2_supported();
   for (int it = 0; it < options.iterations; ++it) {
     // Each iteration smooths the last one's result, in `out` (read here only: from here on
     // the values travel in points[i].w, and the gather overwrites `out`).
@@ -490,11 +492,21 @@ void smooth_projected_into(const Mesh& mesh, PointKind kind, const float* values
     // Members in Morton order: consecutive points take nearly the same path through the
     // tree, which the branch predictor learns (measured 12-17% faster than mesh order at
     // 1.5M faces, the scattered reads and writes included). The same values either way.
+    // On AVX2, eight of them at a time (smoothing_projected_avx2.h): the same bits.
     const std::size_t members = tree.order.items.size();
     parallel_for(
         members, 1024, options.threads,
         [&](std::size_t begin, std::size_t end) {
-          for (std::size_t k = begin; k < end; ++k) smooth_point(tree.order.index(k));
+          if (!packets) {
+            for (std::size_t k = begin; k < end; ++k) smooth_point(tree.order.index(k));
+            return;
+          }
+          std::uint32_t index[8];
+          for (std::size_t k = begin; k < end; k += 8) {
+            const int lanes = static_cast<int>(std::min<std::size_t>(8, end - k));
+            for (int l = 0; l < lanes; ++l) index[l] = tree.order.index(k + l);
+            smooth_packet_avx2(nodes.data(), points.data(), index, lanes, range.lo, range.hi, out);
+          }
         },
         progress, progress_from + it * span, progress_from + (it + 1) * span);
     if (members < n)  // the points with no axis (few: zero-area faces, lone vertices)
