@@ -6,8 +6,10 @@
 // inward axis.
 #include <gtest/gtest.h>
 
+#include <cstdlib>
 #include <cstring>
 #include <random>
+#include <string>
 #include <vector>
 
 #include "point_octree_reference.h"
@@ -118,6 +120,26 @@ TEST(PointOctreePaths, BranchingOnTheMinimumFindsARareThinPoint) {
   EXPECT_GT(expected.size(), 100u);
 }
 
+// Sets an environment variable for its lifetime, then puts back what was there.
+class ScopedEnv {
+ public:
+  ScopedEnv(const char* name, const char* value) : name_(name) {
+    const char* old = std::getenv(name);
+    had_ = old != nullptr;
+    if (had_) old_ = old;
+    setenv(name, value, 1);
+  }
+  ~ScopedEnv() {
+    if (had_) setenv(name_, old_.c_str(), 1);
+    else unsetenv(name_);
+  }
+
+ private:
+  const char* name_;
+  bool had_ = false;
+  std::string old_;
+};
+
 // An icosphere with five zero-area faces (a repeated corner: no inward axis) and a vertex no
 // face uses, so that some points stay out of the tree.
 Mesh sphere_with_degenerate_points() {
@@ -138,17 +160,24 @@ TEST(ProjectedSmoothingPaths, SameValuesAsTheSerialVersion) {
         ProjectedOptions o = options_of(c, 1);
         o.iterations = iterations;
         const std::vector<float> expected = test::reference_smooth_projected(mesh, kind, v.data(), o);
-        for (unsigned threads : {1u, 2u}) {
-          SCOPED_TRACE(std::string(c.name) + (kind == PointKind::Faces ? ", faces" : ", vertices") +
-                       ", " + std::to_string(iterations) + " iterations, " +
-                       std::to_string(threads) + " threads");
-          o.threads = threads;
-          const std::vector<float> got = smooth_projected(mesh, kind, v.data(), o);
-          ASSERT_EQ(got.size(), expected.size());
-          std::size_t differ = 0;
-          for (std::size_t i = 0; i < n; ++i) differ += got[i] != expected[i];
-          EXPECT_EQ(differ, 0u);
-        }
+        // The gather eight points at a time (AVX2), and the scalar one (as without AVX2).
+        for (const char* no_avx2 : {"0", "1"})
+          for (unsigned threads : {1u, 2u}) {
+            SCOPED_TRACE(std::string(c.name) +
+                         (kind == PointKind::Faces ? ", faces" : ", vertices") + ", " +
+                         std::to_string(iterations) + " iterations, " + std::to_string(threads) +
+                         " threads, SDF_CPU_NO_AVX2=" + no_avx2);
+            o.threads = threads;
+            std::vector<float> got;
+            {
+              const ScopedEnv env("SDF_CPU_NO_AVX2", no_avx2);
+              got = smooth_projected(mesh, kind, v.data(), o);
+            }
+            ASSERT_EQ(got.size(), expected.size());
+            std::size_t differ = 0;
+            for (std::size_t i = 0; i < n; ++i) differ += got[i] != expected[i];
+            EXPECT_EQ(differ, 0u);
+          }
         if (c.max_depth > 0) EXPECT_NE(expected, v) << "the case smooths something";
       }
     }
