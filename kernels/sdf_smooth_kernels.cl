@@ -6,15 +6,15 @@
 #include "sdf_smooth_texture.h"
 
 /* Projected points, one iteration: one work item per point of [first, first + count).
- * projected: 3 floats a point. */
+ * points: the projected point (xyz) and its value (w), one aligned 16-byte load a point. */
 __kernel void sdf_smooth_projected(__global const SdfPointNode* nodes,
-                                   __global const float* projected, __global const float* current,
-                                   float lo, float hi, uint first, uint count,
-                                   __global float* next) {
+                                   __global const float4* points, float lo, float hi,
+                                   uint first, uint count, __global float* next) {
   uint gid = get_global_id(0);
   if (gid >= count) return;
   uint i = first + gid;
-  next[i] = sdf_smooth_projected_point(nodes, vload3(i, projected), current[i], lo, hi);
+  float4 p = points[i];
+  next[i] = sdf_smooth_projected_point(nodes, p.xyz, p.w, lo, hi);
 }
 
 /* Texture space, one ring of dilation: one work item per texel. */

@@ -108,12 +108,6 @@ Mesh make_mesh(const double* vertices, std::size_t vertex_count, const std::int6
   return mesh;
 }
 
-glm::vec3 face_area_normal(const Mesh& mesh, std::size_t face) {
-  const glm::uvec3 t = mesh.triangles[face];
-  const glm::vec3 v0 = mesh.vertices[t.x];
-  return glm::cross(mesh.vertices[t.y] - v0, mesh.vertices[t.z] - v0);
-}
-
 float minimum_closeness(const Mesh& mesh) { return static_cast<float>(2e-5 * mesh.max_extent); }
 
 }  // namespace sdf

@@ -26,8 +26,13 @@ struct Mesh {
 Mesh make_mesh(const double* vertices, std::size_t vertex_count, const std::int64_t* triangles,
                std::size_t triangle_count, unsigned threads = 0);
 
-// Outward face normal scaled by twice the area (cross(v1 - v0, v2 - v0)).
-glm::vec3 face_area_normal(const Mesh& mesh, std::size_t face);
+// Outward face normal scaled by twice the area (cross(v1 - v0, v2 - v0)). Inline: per-face
+// loops over millions of faces call it (a call per face cost as much as its arithmetic).
+inline glm::vec3 face_area_normal(const Mesh& mesh, std::size_t face) {
+  const glm::uvec3 t = mesh.triangles[face];
+  const glm::vec3 v0 = mesh.vertices[t.x];
+  return glm::cross(mesh.vertices[t.y] - v0, mesh.vertices[t.z] - v0);
+}
 
 // The shortest ray hit kept, 2e-5 of the largest bounding-box side (paper 4.2): it stops a ray
 // from hitting the surface it starts on, and lets self-intersecting and non-manifold meshes

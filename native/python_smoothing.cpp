@@ -124,16 +124,18 @@ py::array_t<float> smooth_projected(const Doubles& vertices, const Int64s& trian
   const auto* device = device_for(engine);
   (void)device;  // unused without OpenCL
   const sdf::ProgressFn report = progress_from(progress);
-  std::vector<float> out;
+  // Written in place by the native code: no copy of the result.
+  py::array_t<float> out(values.shape(0));
+  float* o = out.mutable_data();
   {
     py::gil_scoped_release release;
 #ifdef SDF_HAVE_OPENCL
-    if (device) out = sdf::cl::smooth_projected_opencl(*device, mesh, kind, v, options, report);
+    if (device) sdf::cl::smooth_projected_opencl(*device, mesh, kind, v, options, o, report);
     else
 #endif
-      out = sdf::smooth_projected(mesh, kind, v, options, report);
+      sdf::smooth_projected_into(mesh, kind, v, options, o, report);
   }
-  return to_array(out);
+  return out;
 }
 
 py::dict smooth_texture(const Doubles& vertices, const Int64s& triangles, const Floats& values,

@@ -13,21 +13,11 @@ namespace sdf {
 
 namespace {
 
-// Unit vector, or zero when the direction is undefined (zero or not finite). Divided by its
-// largest component first: squaring a cross product (edge length to the fourth) would
-// overflow or underflow float for edges past ~4e9 or below ~5e-12 (found by fuzzing).
-glm::vec3 unit_or_zero(glm::vec3 v) {
-  const float big = std::max(std::fabs(v.x), std::max(std::fabs(v.y), std::fabs(v.z)));
-  if (!(big > 0.0f) || !std::isfinite(big)) return glm::vec3(0.0f);
-  v /= big;
-  return v / glm::length(v);
-}
-
 // The part of `edge` perpendicular to unit `axis`, normalised; fallback_tangent() when that
 // part vanishes (or the axis is zero).
 glm::vec3 tangent_from_edge(glm::vec3 axis, glm::vec3 edge) {
   if (axis.x == 0.0f && axis.y == 0.0f && axis.z == 0.0f) return glm::vec3(0.0f);
-  const glm::vec3 unit_edge = unit_or_zero(edge);
+  const glm::vec3 unit_edge = detail::unit_or_zero(edge);
   const glm::vec3 t = unit_edge - glm::dot(unit_edge, axis) * axis;
   if (glm::length(t) > 1e-6f) return glm::normalize(t);
   return fallback_tangent(axis);
@@ -50,9 +40,7 @@ SamplePoints sample_points(const Mesh& mesh, PointKind kind, unsigned threads) {
     parallel_for(n, kGrain, threads, [&](std::size_t begin, std::size_t end) {
       for (std::size_t f = begin; f < end; ++f) {
         const glm::uvec3 t = mesh.triangles[f];
-        points.origins[f] =
-            (mesh.vertices[t.x] + mesh.vertices[t.y] + mesh.vertices[t.z]) * (1.0f / 3.0f);
-        points.axes[f] = -unit_or_zero(face_area_normal(mesh, f));
+        face_point(mesh, f, &points.origins[f], &points.axes[f]);
         points.own_face[f] = static_cast<std::int32_t>(f);
         points.tangents[f] =
             tangent_from_edge(points.axes[f], mesh.vertices[t.y] - mesh.vertices[t.x]);
@@ -79,7 +67,7 @@ SamplePoints sample_points(const Mesh& mesh, PointKind kind, unsigned threads) {
     points.own_face.assign(n, -1);
     parallel_for(n, kGrain, threads, [&](std::size_t begin, std::size_t end) {
       for (std::size_t v = begin; v < end; ++v) {
-        points.axes[v] = -unit_or_zero(normal_sum[v]);
+        points.axes[v] = -detail::unit_or_zero(normal_sum[v]);
         const glm::vec3 edge = next_corner[v] == kNone
                                    ? glm::vec3(0.0f)
                                    : mesh.vertices[next_corner[v]] - mesh.vertices[v];

@@ -56,7 +56,10 @@ using PointOctreeNode = kern::SdfPointNode;
 float cube_fraction_in_sphere(float side, float distance, float radius);
 
 // Octree over points with values; nodes[0] is the root. Throws std::invalid_argument for bad
-// options (max_depth outside [0, 20], min_points outside [0, 1], node_size_ratio < 0).
+// options (max_depth outside [0, 20], min_points outside [0, 1], node_size_ratio < 0). Built on
+// options.threads from the points in Morton order (a parallel radix sort; every node is then a
+// run of that order, its sum a difference of two prefix sums); the nodes do not depend on the
+// thread count.
 std::vector<PointOctreeNode> build_point_octree(const glm::vec3* points, const float* values,
                                                 std::size_t count, const ProjectedOptions& options);
 
@@ -69,15 +72,23 @@ bool gather_sphere(const PointOctreeNode* nodes, glm::vec3 center, float radius,
 // Throws std::invalid_argument for negative or non-finite values or bad options.
 //
 // gather: runs one iteration's per-point step on another device (the OpenCL engine); null:
-// on the CPU threads. It must set next[i] = kern::sdf_smooth_projected_point(nodes,
-// projected[i], current[i], lo, hi) for every point.
-using ProjectedGatherFn = std::function<void(
-    const std::vector<PointOctreeNode>& nodes, const std::vector<glm::vec3>& projected,
-    const std::vector<float>& current, float lo, float hi, std::vector<float>& next)>;
+// on the CPU threads. points[i] holds point i's projected position (xyz) and its value (w), the
+// layout a device reads in one 16-byte load; the gather must set next[i] =
+// kern::sdf_smooth_projected_point(nodes, points[i].xyz, points[i].w, lo, hi) for i < count.
+using ProjectedGatherFn =
+    std::function<void(const std::vector<PointOctreeNode>& nodes, const glm::vec4* points,
+                       std::size_t count, float lo, float hi, float* next)>;
 std::vector<float> smooth_projected(const Mesh& mesh, PointKind kind, const float* values,
                                     const ProjectedOptions& options,
                                     const ProgressFn& progress = nullptr,
                                     double progress_from = 0.0, double progress_to = 1.0,
                                     const ProjectedGatherFn& gather = nullptr);
+
+// The same, writing the result into out[0, point count) (which may be the caller's final
+// array, e.g. a NumPy one: no copy of the result is made). out must not overlap values.
+void smooth_projected_into(const Mesh& mesh, PointKind kind, const float* values,
+                           const ProjectedOptions& options, float* out,
+                           const ProgressFn& progress = nullptr, double progress_from = 0.0,
+                           double progress_to = 1.0, const ProjectedGatherFn& gather = nullptr);
 
 }  // namespace sdf

@@ -67,31 +67,37 @@ class Stopwatch {
 
 }  // namespace
 
-std::vector<float> smooth_projected_opencl(const Device& device, const Mesh& mesh, PointKind kind,
-                                           const float* values, const ProjectedOptions& options,
-                                           const ProgressFn& progress) {
+void smooth_projected_opencl(const Device& device, const Mesh& mesh, PointKind kind,
+                             const float* values, const ProjectedOptions& options, float* out,
+                             const ProgressFn& progress) {
   DeviceState& s = state_of(device);
-  auto gather = [&](const std::vector<PointOctreeNode>& nodes,
-                    const std::vector<glm::vec3>& projected, const std::vector<float>& current,
-                    float lo, float hi, std::vector<float>& next) {
-    static_assert(sizeof(glm::vec3) == 3 * sizeof(float), "vec3 is 3 packed floats");
-    const std::size_t n = current.size();
-    const std::vector<std::size_t> sizes = {bytes_of(nodes), bytes_of(projected), bytes_of(current),
-                                            bytes_of(next)};
-    check_fits(device, sizes);
+  // The points' and results' buffers are made on the first iteration and kept for the others.
+  // Per iteration: one upload of the packed points (xyz and value, 16 bytes a point), one of
+  // the nodes (a few KiB), one download of the results.
+  std::unique_ptr<Buffer> points_buffer, next_buffer;
+  auto gather = [&](const std::vector<PointOctreeNode>& nodes, const glm::vec4* points,
+                    std::size_t n, float lo, float hi, float* next) {
+    static_assert(sizeof(glm::vec4) == 4 * sizeof(float), "vec4 is 4 packed floats (a float4)");
+    const std::size_t point_bytes = n * sizeof(glm::vec4), next_bytes = n * sizeof(float);
+    check_fits(device, {bytes_of(nodes), point_bytes, next_bytes});
     std::lock_guard<std::mutex> lock(s.mutex);
     cl_program program = smoothing_program(device, s);
-    Buffer node_buffer(s, sizes[0], nodes.data());
-    Buffer projected_buffer(s, sizes[1], projected.data());
-    Buffer current_buffer(s, sizes[2], current.data());
-    Buffer next_buffer(s, sizes[3], nullptr);
+    if (!points_buffer) {
+      points_buffer = std::make_unique<Buffer>(s, point_bytes, nullptr);
+      next_buffer = std::make_unique<Buffer>(s, next_bytes, nullptr);
+    }
+    // Both writes are non-blocking: nodes and points stay unchanged until the blocking read
+    // below returns, and by then the in-order queue has run everything before it.
+    Buffer node_buffer(s, bytes_of(nodes), nodes.data());
+    check(api()->clEnqueueWriteBuffer(s.queue, points_buffer->get(), CL_FALSE, 0, point_bytes,
+                                      points, 0, nullptr, nullptr),
+          "clEnqueueWriteBuffer");
     Kernel kernel(program, "sdf_smooth_projected");
     kernel.arg(0, node_buffer.get());
-    kernel.arg(1, projected_buffer.get());
-    kernel.arg(2, current_buffer.get());
-    kernel.arg(3, lo);
-    kernel.arg(4, hi);
-    kernel.arg(7, next_buffer.get());
+    kernel.arg(1, points_buffer->get());
+    kernel.arg(2, lo);
+    kernel.arg(3, hi);
+    kernel.arg(6, next_buffer->get());
     // Launches of at most 2^18 points keep each one short (display watchdogs). Work-group
     // size as for casting: 64 on GPUs, 1 on CPUs (PoCL vectorises a group as a loop, which
     // divergent traversals defeat).
@@ -99,14 +105,14 @@ std::vector<float> smooth_projected_opencl(const Device& device, const Mesh& mes
     constexpr std::size_t kChunk = std::size_t(1) << 18;
     for (std::size_t first = 0; first < n; first += kChunk) {
       const std::size_t count = std::min(kChunk, n - first);
-      kernel.arg(5, static_cast<cl_uint>(first));
-      kernel.arg(6, static_cast<cl_uint>(count));
+      kernel.arg(4, static_cast<cl_uint>(first));
+      kernel.arg(5, static_cast<cl_uint>(count));
       const std::size_t global = (count + local - 1) / local * local;
       launch(s, kernel, 1, &global, &local);
     }
-    read(s, next_buffer, sizes[3], next.data());
+    read(s, *next_buffer, next_bytes, next);
   };
-  return smooth_projected(mesh, kind, values, options, progress, 0.0, 1.0, gather);
+  smooth_projected_into(mesh, kind, values, options, out, progress, 0.0, 1.0, gather);
 }
 
 TextureSmoothing smooth_texture_opencl(const Device& device, const Mesh& mesh, PointKind kind,

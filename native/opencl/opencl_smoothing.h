@@ -15,11 +15,11 @@
 
 namespace sdf::cl {
 
-// As sdf::smooth_projected, on `device`. Throws Error for OpenCL failures and
+// As sdf::smooth_projected_into, on `device`. Throws Error for OpenCL failures and
 // std::runtime_error when the octree and points do not fit the device.
-std::vector<float> smooth_projected_opencl(const Device& device, const Mesh& mesh, PointKind kind,
-                                           const float* values, const ProjectedOptions& options,
-                                           const ProgressFn& progress = nullptr);
+void smooth_projected_opencl(const Device& device, const Mesh& mesh, PointKind kind,
+                             const float* values, const ProjectedOptions& options, float* out,
+                             const ProgressFn& progress = nullptr);
 
 // As sdf::smooth_texture, on `device` (the same errors as smooth_projected_opencl).
 TextureSmoothing smooth_texture_opencl(const Device& device, const Mesh& mesh, PointKind kind,

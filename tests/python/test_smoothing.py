@@ -289,6 +289,21 @@ def test_projected_iterations(spot):
     assert np.var(three) < np.var(one) < np.var(noisy)
 
 
+@pytest.mark.parametrize("points", ["faces", "vertices"])
+def test_projected_same_result_for_any_thread_count_over_many_chunks(points):
+    # 81,920 faces, 40,962 vertices: several of the native code's 16k-point chunks, whose
+    # counts, boxes and sort blocks are merged in an order that must not depend on threads.
+    v, t = _icosphere(6)
+    n = len(t) if points == "faces" else len(v)
+    values = _noisy(np.full(n, 1.8, np.float32), 0.3, seed=3)
+    for options in ({}, {"iterations": 2, "branch_on": "min"}):
+        one = smooth(v, t, values, "projected", points=points, threads=1, **options)
+        np.testing.assert_array_equal(
+            one, smooth(v, t, values, "projected", points=points, threads=2, **options)
+        )
+        assert np.var(one) < 0.5 * np.var(values)
+
+
 def test_projected_needs_lengths(spot):
     v, t, _, faces, _ = spot
     values = faces.copy()
