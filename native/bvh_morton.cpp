@@ -4,22 +4,9 @@
 #include <algorithm>
 
 #include "bvh_subtree.h"
+#include "morton.h"
 
 namespace sdf::bvh_build {
-
-namespace {
-
-// 10 bits of x spread to every third bit.
-std::uint32_t spread10(std::uint32_t x) {
-  x &= 0x3ffu;
-  x = (x | x << 16) & 0x030000ffu;
-  x = (x | x << 8) & 0x0300f00fu;
-  x = (x | x << 4) & 0x030c30c3u;
-  x = (x | x << 2) & 0x09249249u;
-  return x;
-}
-
-}  // namespace
 
 void MortonSubtrees::sort_by_code(PrimRef* refs, const Range& range) {
   const std::size_t n = range.count();
@@ -39,7 +26,7 @@ void MortonSubtrees::sort_by_code(PrimRef* refs, const Range& range) {
     std::uint32_t code = 0;
     for (int a = 0; a < 3; ++a) {
       const float q = std::min(1023.0f, std::max(0.0f, (r.lo[a] + r.hi[a] - lo[a]) * scale[a]));
-      code |= spread10(static_cast<std::uint32_t>(q)) << a;
+      code |= spread_bits_10(static_cast<std::uint32_t>(q)) << a;
     }
     codes_[i] = code;
   }

@@ -5,6 +5,7 @@
 #include <atomic>
 #include <cstring>
 
+#include "concurrent_union_find.h"
 #include "parallel.h"
 
 namespace sdf {
@@ -89,49 +90,12 @@ UninitializedVector<std::uint32_t> weld_exact(const Mesh& mesh, unsigned threads
   return rep;
 }
 
-// Disjoint sets that threads join concurrently: a root is linked under a smaller root by a
-// compare-and-swap, finds halve paths (parents only ever move up, so no cycle can form).
-class ConcurrentSets {
- public:
-  // Starts from `parent`: each item's parent must be a root (its own parent).
-  explicit ConcurrentSets(const UninitializedVector<std::uint32_t>& parent, unsigned threads)
-      : parent_(parent.size()) {
-    parallel_for(parent.size(), kGrain, threads, [&](std::size_t begin, std::size_t end) {
-      for (std::size_t i = begin; i < end; ++i)
-        parent_[i].store(parent[i], std::memory_order_relaxed);
-    });
-  }
-  void prefetch_parent(std::uint32_t x) const { prefetch(&parent_[x]); }
-  std::uint32_t find(std::uint32_t x) {
-    for (;;) {
-      const std::uint32_t p = parent_[x].load(std::memory_order_relaxed);
-      if (p == x) return x;
-      const std::uint32_t grand = parent_[p].load(std::memory_order_relaxed);
-      if (grand != p) parent_[x].store(grand, std::memory_order_relaxed);
-      x = grand;
-    }
-  }
-  void unite(std::uint32_t a, std::uint32_t b) {
-    for (;;) {
-      a = find(a);
-      b = find(b);
-      if (a == b) return;
-      if (a < b) std::swap(a, b);
-      std::uint32_t expected = a;
-      if (parent_[a].compare_exchange_weak(expected, b, std::memory_order_acq_rel)) return;
-    }
-  }
-
- private:
-  UninitializedVector<std::atomic<std::uint32_t>> parent_;
-};
-
 }  // namespace
 
 Parts find_parts(const Mesh& mesh, unsigned threads) {
   const std::size_t n = mesh.triangles.size(), nv = mesh.vertices.size();
   // Vertices at one position start in one set (each points at the one standing for them).
-  ConcurrentSets sets(weld_exact(mesh, threads), threads);
+  ConcurrentUnionFind sets(weld_exact(mesh, threads), threads);
   parallel_for(n, kGrain, threads, [&](std::size_t begin, std::size_t end) {
     for (std::size_t first = begin; first < end; first += kBatch) {
       const std::size_t last = std::min(end, first + kBatch);

@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
 #include "sampling.h"
 
+#include "morton.h"
 #include "parallel.h"
 #include "radix_sort.h"
 #include "rays.h"
@@ -78,19 +79,6 @@ SamplePoints sample_points(const Mesh& mesh, PointKind kind, unsigned threads) {
   return points;
 }
 
-namespace {
-
-// Spreads the low 10 bits of v to every third bit (Morton code helper).
-std::uint32_t spread_bits(std::uint32_t v) {
-  v = (v | (v << 16)) & 0x030000FFu;
-  v = (v | (v << 8)) & 0x0300F00Fu;
-  v = (v | (v << 4)) & 0x030C30C3u;
-  v = (v | (v << 2)) & 0x09249249u;
-  return v;
-}
-
-}  // namespace
-
 std::vector<std::uint32_t> spatial_order(const SamplePoints& points, unsigned threads) {
   const std::size_t n = points.size();
   // Bounding box: per-chunk boxes, then merged (min and max are exact in any order).
@@ -118,7 +106,7 @@ std::vector<std::uint32_t> spatial_order(const SamplePoints& points, unsigned th
     for (std::size_t i = begin; i < end; ++i) {
       const glm::uvec3 c = glm::uvec3((points.origins[i] - lo) * scale);
       const std::uint64_t code =
-          spread_bits(c.x) | (spread_bits(c.y) << 1) | (spread_bits(c.z) << 2);
+          spread_bits_10(c.x) | (spread_bits_10(c.y) << 1) | (spread_bits_10(c.z) << 2);
       keyed[i] = (code << 32) | i;
     }
   });

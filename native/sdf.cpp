@@ -1,7 +1,6 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
 #include "sdf.h"
 
-#include <chrono>
 #include <stdexcept>
 
 #include "bvh.h"
@@ -9,6 +8,7 @@
 #include "bvh8.h"
 #include "bvh_margin.h"
 #include "cpu_engine.h"
+#include "stopwatch.h"
 #ifdef SDF_HAVE_OPENCL
 #include "opencl/opencl_engine.h"
 #endif
@@ -16,19 +16,6 @@
 namespace sdf {
 
 namespace {
-
-class Stopwatch {
- public:
-  double lap() {
-    const auto now = std::chrono::steady_clock::now();
-    const double s = std::chrono::duration<double>(now - last_).count();
-    last_ = now;
-    return s;
-  }
-
- private:
-  std::chrono::steady_clock::time_point last_ = std::chrono::steady_clock::now();
-};
 
 void report(const ProgressFn& progress, double fraction) {
   if (progress && !progress(fraction)) throw Cancelled();

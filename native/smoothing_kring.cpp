@@ -11,6 +11,7 @@
 #include <string>
 
 #include "mesh_weld.h"
+#include "morton.h"
 #include "radix_sort.h"
 #include "smoothing_kring_sums.h"
 #include "uninitialized_vector.h"
@@ -257,22 +258,14 @@ std::vector<std::uint32_t> morton_order(const std::vector<glm::vec3>& positions,
   const glm::vec3 extent = hi - lo;
   const float side = std::max(extent.x, std::max(extent.y, extent.z));
   const float scale = side > 0.0f ? 1023.0f / side : 0.0f;
-  auto spread10 = [](std::uint32_t x) {
-    x &= 0x3ffu;
-    x = (x | x << 16) & 0x030000ffu;
-    x = (x | x << 8) & 0x0300f00fu;
-    x = (x | x << 4) & 0x030c30c3u;
-    x = (x | x << 2) & 0x09249249u;
-    return x;
-  };
   // (code << 32) | index: sorting by the code's 30 bits keeps equal codes in index order.
   UninitializedVector<std::uint64_t> keyed(n);
   parallel_for(n, kBlock, threads, [&](std::size_t begin, std::size_t end) {
     for (std::size_t i = begin; i < end; ++i) {
       const glm::vec3 q = (positions[i] - lo) * scale;
-      const std::uint64_t code = spread10(static_cast<std::uint32_t>(q.x)) |
-                                 spread10(static_cast<std::uint32_t>(q.y)) << 1 |
-                                 spread10(static_cast<std::uint32_t>(q.z)) << 2;
+      const std::uint64_t code = spread_bits_10(static_cast<std::uint32_t>(q.x)) |
+                                 spread_bits_10(static_cast<std::uint32_t>(q.y)) << 1 |
+                                 spread_bits_10(static_cast<std::uint32_t>(q.z)) << 2;
       keyed[i] = code << 32 | i;
     }
   });

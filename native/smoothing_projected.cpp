@@ -7,6 +7,7 @@
 #include <stdexcept>
 #include <string>
 
+#include "morton.h"
 #include "radix_sort.h"
 #include "smoothing_projected_avx2.h"
 #include "uninitialized_vector.h"
@@ -28,17 +29,6 @@ static_assert(kGrain % kMinBlock == 0, "a chunk holds whole minimum blocks");
 constexpr std::size_t kPrefetchAhead = 16;
 
 std::size_t chunk_count(std::size_t n) { return (n + kGrain - 1) / kGrain; }
-
-// Spreads the low 21 bits of x three apart (bit i goes to bit 3i).
-std::uint64_t spread3(std::uint64_t x) {
-  x &= 0x1fffffull;
-  x = (x | x << 32) & 0x1f00000000ffffull;
-  x = (x | x << 16) & 0x1f0000ff0000ffull;
-  x = (x | x << 8) & 0x100f00f00f00f00full;
-  x = (x | x << 4) & 0x10c30c30c30c30c3ull;
-  x = (x | x << 2) & 0x1249249249249249ull;
-  return x;
-}
 
 void check_options(const ProjectedOptions& options) {
   if (options.max_depth < 0 || options.max_depth > kMaxDepth)
@@ -96,7 +86,7 @@ struct RootCube {
     for (int a = 0; a < 3; ++a) {
       const double c = std::floor((p[a] - corner[a]) / side * cells);
       const std::uint64_t cell = static_cast<std::uint64_t>(std::min(cells - 1.0, std::max(0.0, c)));
-      key |= spread3(cell) << a;
+      key |= spread_bits_21(cell) << a;
     }
     return key;
   }

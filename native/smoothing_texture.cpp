@@ -3,7 +3,6 @@
 
 #include <algorithm>
 #include <atomic>
-#include <chrono>
 #include <cmath>
 #include <cstring>
 #include <limits>
@@ -13,6 +12,7 @@
 
 #include "../kernels/sdf_smooth_texture.h"
 #include "radix_sort.h"
+#include "stopwatch.h"
 #include "uninitialized_vector.h"
 
 namespace sdf {
@@ -22,19 +22,6 @@ namespace {
 constexpr int kMaxSize = 16384;
 
 // Seconds since the previous lap (or construction).
-class Stopwatch {
- public:
-  double lap() {
-    const auto now = std::chrono::steady_clock::now();
-    const double s = std::chrono::duration<double>(now - last_).count();
-    last_ = now;
-    return s;
-  }
-
- private:
-  std::chrono::steady_clock::time_point last_ = std::chrono::steady_clock::now();
-};
-
 // ---- Per-texel and per-face work: plain loops over flat arrays (kernel style). ----
 
 // A face's UV triangle in texel units (u * width, v * height) and its covered texels: those

@@ -9,6 +9,7 @@
 #include <stdexcept>
 
 #include "mesh_weld.h"
+#include "concurrent_union_find.h"
 #include "parallel.h"
 #include "radix_sort.h"
 #include "uninitialized_vector.h"
@@ -18,44 +19,6 @@ namespace sdf {
 namespace {
 
 constexpr std::size_t kFaceGrain = 1 << 14;
-
-// Union-find over faces, shared by the threads. A set's root is its smallest face: links only
-// ever point from a larger root to a smaller one, so every parent is at most its child, a
-// parent read late is still an ancestor, and the final sets and roots do not depend on the
-// order of the unions.
-class ConcurrentUnionFind {
- public:
-  ConcurrentUnionFind(std::size_t n, unsigned threads) : parent_(new std::atomic<std::uint32_t>[n]) {
-    parallel_for(n, kFaceGrain, threads, [&](std::size_t begin, std::size_t end) {
-      for (std::size_t f = begin; f < end; ++f)
-        parent_[f].store(static_cast<std::uint32_t>(f), std::memory_order_relaxed);
-    });
-  }
-  std::uint32_t find(std::uint32_t f) const {
-    for (;;) {
-      std::uint32_t p = parent_[f].load(std::memory_order_relaxed);
-      if (p == f) return f;
-      // Path halving. A plain store: f is no root, so no link writes parent_[f], and a
-      // grandparent stays an ancestor even when another thread's halving lands later.
-      const std::uint32_t g = parent_[p].load(std::memory_order_relaxed);
-      if (g != p) parent_[f].store(g, std::memory_order_relaxed);
-      f = g;
-    }
-  }
-  void unite(std::uint32_t a, std::uint32_t b) {
-    for (;;) {
-      a = find(a);
-      b = find(b);
-      if (a == b) return;
-      if (a < b) std::swap(a, b);
-      std::uint32_t expected = a;  // a is still a root: hang it under b
-      if (parent_[a].compare_exchange_strong(expected, b, std::memory_order_relaxed)) return;
-    }
-  }
-
- private:
-  std::unique_ptr<std::atomic<std::uint32_t>[]> parent_;
-};
 
 // A distinct (key vertex, UV) pair, the UV's -0 folded into +0 (equal as floats, so the
 // same UV).

@@ -2,12 +2,12 @@
 #include "opencl_smoothing.h"
 
 #include <algorithm>
-#include <chrono>
 #include <cstdint>
 #include <memory>
 #include <mutex>
 #include <string>
 
+#include "../stopwatch.h"
 #include "device_state.h"
 
 namespace sdf::cl {
@@ -52,19 +52,6 @@ void image_launch(const Device& device, DeviceState& s, const Kernel& kernel, in
 }
 
 // Seconds since the previous lap (or construction).
-class Stopwatch {
- public:
-  double lap() {
-    const auto now = std::chrono::steady_clock::now();
-    const double s = std::chrono::duration<double>(now - last_).count();
-    last_ = now;
-    return s;
-  }
-
- private:
-  std::chrono::steady_clock::time_point last_ = std::chrono::steady_clock::now();
-};
-
 }  // namespace
 
 void smooth_projected_opencl(const Device& device, const Mesh& mesh, PointKind kind,
