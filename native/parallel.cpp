@@ -10,7 +10,89 @@
 #include <thread>
 #include <vector>
 
+#if defined(__unix__) || defined(__APPLE__)
+#include <pthread.h>
+#endif
+
 namespace sdf {
+
+namespace {
+
+// Worker threads kept between calls. Starting a thread costs tens of microseconds, and one
+// compute() makes dozens of parallel_for calls of up to a thread per core: 0.55 ms per call
+// at 16 threads (measured on 2 cores), several percent of a GPU run on a million faces.
+// A call gets all the threads it asks for at once: idle ones, and new ones when too few are
+// idle (so calls from several threads, or from inside a body, never wait on each other).
+class WorkerPool {
+ public:
+  // A task for `count` workers: each runs *work once.
+  struct Job {
+    const std::function<void()>* work = nullptr;
+    unsigned unclaimed = 0;  // guarded by the pool's mutex
+    unsigned running = 0;    // guarded by finished_mutex
+    std::mutex finished_mutex;
+    std::condition_variable finished;
+  };
+
+  void start(Job& job, unsigned count) {
+    job.running = count;
+    std::lock_guard<std::mutex> lock(mutex_);
+    job.unclaimed = count;
+    queue_.push_back(&job);
+    unclaimed_ += count;
+    // Threads waiting or about to wait: each takes one claim.
+    while (available_ < unclaimed_) {
+      ++available_;
+      std::thread(&WorkerPool::serve, this).detach();
+    }
+    for (unsigned i = 0; i < count; ++i) wake_.notify_one();
+  }
+
+  // Returns once every worker of `job` has finished its run.
+  static void wait(Job& job) {
+    std::unique_lock<std::mutex> lock(job.finished_mutex);
+    job.finished.wait(lock, [&] { return job.running == 0; });
+  }
+
+ private:
+  void serve() {
+    std::unique_lock<std::mutex> lock(mutex_);
+    for (;;) {
+      wake_.wait(lock, [&] { return !queue_.empty(); });
+      Job* job = queue_.front();
+      if (--job->unclaimed == 0) queue_.erase(queue_.begin());
+      --unclaimed_;
+      --available_;
+      lock.unlock();
+      (*job->work)();
+      {
+        std::lock_guard<std::mutex> done(job->finished_mutex);
+        if (--job->running == 0) job->finished.notify_all();
+      }
+      lock.lock();
+      ++available_;
+    }
+  }
+
+  std::mutex mutex_;
+  std::condition_variable wake_;
+  std::vector<Job*> queue_;  // jobs with claims left, oldest first
+  unsigned unclaimed_ = 0;   // claims left over all queued jobs
+  unsigned available_ = 0;   // threads waiting for a claim or on their way to wait
+};
+
+// Never destroyed: its threads may still be waiting when the process exits. A child process
+// made by fork() has none of them, so it starts a pool of its own.
+WorkerPool* pool = new WorkerPool();
+
+#if defined(__unix__) || defined(__APPLE__)
+const bool fork_handler_set = [] {
+  pthread_atfork(nullptr, nullptr, [] { pool = new WorkerPool(); });
+  return true;
+}();
+#endif
+
+}  // namespace
 
 unsigned resolve_threads(unsigned requested) {
   if (requested > 0) return requested;
@@ -33,7 +115,7 @@ void parallel_for(std::size_t n, std::size_t grain, unsigned threads,
   std::mutex mutex;
   std::condition_variable changed;
 
-  auto worker = [&]() {
+  const std::function<void()> worker = [&]() {
     for (;;) {
       if (stop.load(std::memory_order_relaxed)) break;
       const std::size_t chunk = next_chunk.fetch_add(1);
@@ -52,9 +134,9 @@ void parallel_for(std::size_t n, std::size_t grain, unsigned threads,
     changed.notify_one();
   };
 
-  std::vector<std::thread> pool;
-  pool.reserve(threads);
-  for (unsigned i = 0; i < threads; ++i) pool.emplace_back(worker);
+  WorkerPool::Job job;
+  job.work = &worker;
+  pool->start(job, threads);
 
   bool cancelled = false;
   if (progress) {
@@ -79,7 +161,7 @@ void parallel_for(std::size_t n, std::size_t grain, unsigned threads,
       }
     }
   }
-  for (auto& t : pool) t.join();
+  WorkerPool::wait(job);
   if (failure) std::rethrow_exception(failure);
   if (cancelled) throw Cancelled();
 }

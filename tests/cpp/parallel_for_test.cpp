@@ -7,6 +7,12 @@
 #include <thread>
 #include <vector>
 
+#if defined(__unix__)
+#include <signal.h>
+#include <sys/wait.h>
+#include <unistd.h>
+#endif
+
 #include "parallel.h"
 
 namespace sdf {
@@ -56,6 +62,54 @@ TEST(ParallelFor, WorkerExceptionReachesTheCaller) {
                             }),
                std::runtime_error);
 }
+
+// The workers are kept between calls (a pool): calls made from inside a body, and calls from
+// several threads at once, must each get their threads without waiting on one another.
+TEST(ParallelFor, NestedAndConcurrentCallsAllFinish) {
+  std::atomic<long> total{0};
+  std::vector<std::thread> callers;
+  for (int c = 0; c < 4; ++c)
+    callers.emplace_back([&] {
+      for (int round = 0; round < 20; ++round)
+        parallel_for(64, 1, 8, [&](std::size_t b, std::size_t e) {
+          parallel_for(100, 7, 3, [&](std::size_t ib, std::size_t ie) {
+            total += static_cast<long>((e - b) * (ie - ib));
+          });
+        });
+    });
+  for (std::thread& t : callers) t.join();
+  EXPECT_EQ(total.load(), 4L * 20 * 64 * 100);
+}
+
+#if defined(__unix__)
+// A process forked after the pool has threads (Python's multiprocessing does this) has none
+// of them: its own calls must still run, not wait forever for workers that do not exist.
+TEST(ParallelFor, WorksInAForkedChild) {
+  std::atomic<long> sum{0};
+  parallel_for(1000, 10, 4, [&](std::size_t b, std::size_t e) { sum += static_cast<long>(e - b); });
+  ASSERT_EQ(sum.load(), 1000);
+  const pid_t child = fork();
+  ASSERT_GE(child, 0);
+  if (child == 0) {
+    std::atomic<long> in_child{0};
+    parallel_for(1000, 10, 4, [&](std::size_t b, std::size_t e) {
+      in_child += static_cast<long>(e - b);
+    });
+    _exit(in_child.load() == 1000 ? 0 : 1);
+  }
+  // The child is given 20 s; a child stuck waiting for workers is killed and fails the test.
+  int status = 0;
+  for (int waited = 0; waited < 200 && waitpid(child, &status, WNOHANG) == 0; ++waited)
+    std::this_thread::sleep_for(std::chrono::milliseconds(100));
+  if (waitpid(child, &status, WNOHANG) == 0) {
+    kill(child, SIGKILL);
+    waitpid(child, &status, 0);
+    FAIL() << "the forked child did not finish its parallel_for";
+  }
+  ASSERT_TRUE(WIFEXITED(status));
+  EXPECT_EQ(WEXITSTATUS(status), 0);
+}
+#endif
 
 }  // namespace
 }  // namespace sdf
