@@ -5,8 +5,11 @@
 #include <cmath>
 #include <cstring>
 #include <limits>
+#include <mutex>
 
 #include "parallel.h"
+#include "radix_sort.h"
+#include "uninitialized_vector.h"
 
 namespace sdf {
 
@@ -68,77 +71,173 @@ std::int64_t float_bits(float f) {
   return bits;
 }
 
-}  // namespace
+// Vertices per chunk of the parallel passes.
+constexpr std::size_t kWeldGrain = 1 << 14;
 
-Weld weld_vertices(const glm::vec3* positions, std::size_t count, float tolerance) {
-  Weld weld;
-  weld.merged.resize(count);
-  if (count == 0) return weld;
+// The cell grid of a weld: cells at least twice the tolerance wide, so the ball of radius
+// `tolerance` around a point meets at most 2 cells per axis; up to 64 times wider while that
+// keeps about one vertex per cell on a surface (side extent / sqrt(count)): then most balls
+// lie in one cell and a query looks up one cell, not 8. Coordinates too large for the grid
+// fall back to exact merging (a tolerance below float resolution merges only equal positions
+// anyway), where a cell is one exact position.
+struct WeldGrid {
+  bool exact = true;
+  double cell = 0.0;
+  // The ball's cell range per axis, from p - reach to p + reach: a hair wider than the
+  // tolerance, so that rounding in the division cannot drop a cell holding a point at
+  // exactly the tolerance.
+  double reach = 0.0;
 
-  // Cells at least twice the tolerance wide, so the ball of radius `tolerance` around a point
-  // meets at most 2 cells per axis; up to 64 times wider while that keeps about one vertex per
-  // cell on a surface (side extent / sqrt(count)): then most balls lie in one cell and a query
-  // looks up one cell, not 8. Coordinates too large for the grid fall back to exact merging
-  // (a tolerance below float resolution merges only equal positions anyway).
-  bool exact = !(tolerance > 0.0f);
-  double cell = 2.0 * static_cast<double>(tolerance);
-  if (!exact) {
+  WeldGrid(const glm::vec3* positions, std::size_t count, float tolerance, unsigned threads) {
+    exact = !(tolerance > 0.0f);
+    cell = 2.0 * static_cast<double>(tolerance);
+    reach = static_cast<double>(tolerance) * (1.0 + 1e-6);
+    if (exact) return;
     glm::vec3 lo(std::numeric_limits<float>::infinity()), hi(-lo);
-    for (std::size_t i = 0; i < count; ++i) {
-      lo = glm::min(lo, positions[i]);
-      hi = glm::max(hi, positions[i]);
-    }
+    std::mutex merge;
+    parallel_for(count, kWeldGrain, threads, [&](std::size_t begin, std::size_t end) {
+      glm::vec3 l(std::numeric_limits<float>::infinity()), h(-l);
+      for (std::size_t i = begin; i < end; ++i) {
+        l = glm::min(l, positions[i]);
+        h = glm::max(h, positions[i]);
+      }
+      std::lock_guard<std::mutex> lock(merge);
+      lo = glm::min(lo, l);
+      hi = glm::max(hi, h);
+    });
     const glm::vec3 size = hi - lo;
     const double extent = std::max(size.x, std::max(size.y, size.z));
     cell = std::max(cell, std::min(64.0 * tolerance, extent / std::sqrt(double(count))));
     const double largest = std::max(glm::length(lo), glm::length(hi));
     exact = !(largest / cell < 1e15) || !std::isfinite(cell);
   }
-  const float tolerance2 = tolerance * tolerance;
-  // The ball's cell range per axis, from p - reach to p + reach: a hair wider than the
-  // tolerance, so that rounding in the division cannot drop a cell holding a point at
-  // exactly the tolerance.
-  const double reach = static_cast<double>(tolerance) * (1.0 + 1e-6);
-
-  CellTable table(count);
-  std::vector<std::uint32_t> next;  // per kept vertex: the next kept vertex in its cell
-  std::vector<std::uint32_t> kept;  // merged id -> input vertex
-  for (std::size_t i = 0; i < count; ++i) {
-    const glm::vec3 p = positions[i];
-    std::uint32_t found = CellTable::kEmpty;
-    CellKey home;
-    if (exact) {
-      home = {float_bits(p.x), float_bits(p.y), float_bits(p.z)};
-      found = table.find(home);  // every position in a cell is equal to p
-    } else {
-      std::int64_t k[3], first[3], last[3];
-      for (int a = 0; a < 3; ++a) {
-        k[a] = static_cast<std::int64_t>(std::floor(p[a] / cell));
-        first[a] = static_cast<std::int64_t>(std::floor((p[a] - reach) / cell));
-        last[a] = static_cast<std::int64_t>(std::floor((p[a] + reach) / cell));
-      }
-      home = {k[0], k[1], k[2]};
-      for (std::int64_t x = first[0]; x <= last[0]; ++x)
-        for (std::int64_t y = first[1]; y <= last[1]; ++y)
-          for (std::int64_t z = first[2]; z <= last[2]; ++z)
-            for (std::uint32_t m = table.find({x, y, z}); m != CellTable::kEmpty; m = next[m]) {
-              const glm::vec3 d = positions[kept[m]] - p;
-              // The lowest merged id wins, whatever order the cells were searched in.
-              if (glm::dot(d, d) <= tolerance2 && m < found) found = m;
-            }
-    }
-    if (found != CellTable::kEmpty) {
-      weld.merged[i] = found;
-      continue;
-    }
-    const std::uint32_t id = static_cast<std::uint32_t>(kept.size());
-    kept.push_back(static_cast<std::uint32_t>(i));
-    std::uint32_t& head = table.slot(home);
-    next.push_back(head);
-    head = id;
-    weld.merged[i] = id;
+  CellKey home(glm::vec3 p) const {
+    if (exact) return {float_bits(p.x), float_bits(p.y), float_bits(p.z)};
+    return {static_cast<std::int64_t>(std::floor(p.x / cell)),
+            static_cast<std::int64_t>(std::floor(p.y / cell)),
+            static_cast<std::int64_t>(std::floor(p.z / cell))};
   }
-  weld.count = static_cast<std::uint32_t>(kept.size());
+  // Calls visit(key) for every cell the ball around p meets (only the home cell when exact).
+  template <class Visit>
+  void for_each_cell(glm::vec3 p, Visit&& visit) const {
+    if (exact) {
+      visit(home(p));
+      return;
+    }
+    std::int64_t first[3], last[3];
+    for (int a = 0; a < 3; ++a) {
+      first[a] = static_cast<std::int64_t>(std::floor((p[a] - reach) / cell));
+      last[a] = static_cast<std::int64_t>(std::floor((p[a] + reach) / cell));
+    }
+    for (std::int64_t x = first[0]; x <= last[0]; ++x)
+      for (std::int64_t y = first[1]; y <= last[1]; ++y)
+        for (std::int64_t z = first[2]; z <= last[2]; ++z) visit(CellKey{x, y, z});
+  }
+};
+
+// Whether two positions merge: equal (+0 and -0 alike) when exact, else within tolerance.
+bool close(glm::vec3 a, glm::vec3 b, bool exact, float tolerance2) {
+  if (exact) return a == b;
+  const glm::vec3 d = a - b;
+  return glm::dot(d, d) <= tolerance2;
+}
+
+// Per vertex, whether any other vertex merges with it (it has a neighbour in the ball).
+// Vertices sorted by the hash of their home cell: a cell's vertices are one run (with those
+// of cells sharing the hash), found by binary search.
+std::vector<char> has_neighbour(const glm::vec3* positions, std::size_t count,
+                                const WeldGrid& grid, float tolerance2, unsigned threads) {
+  UninitializedVector<std::uint64_t> by_cell(count);
+  parallel_for(count, kWeldGrain, threads, [&](std::size_t begin, std::size_t end) {
+    for (std::size_t i = begin; i < end; ++i)
+      by_cell[i] = (hash_key(grid.home(positions[i])) & 0xffffffffull) << 32 | i;
+  });
+  radix_sort_by_bits(by_cell, 32, 32, threads);
+  std::vector<char> found(count, 0);
+  parallel_for(count, kWeldGrain, threads, [&](std::size_t begin, std::size_t end) {
+    for (std::size_t i = begin; i < end; ++i) {
+      const glm::vec3 p = positions[i];
+      grid.for_each_cell(p, [&](const CellKey& key) {
+        if (found[i]) return;
+        const std::uint64_t h = (hash_key(key) & 0xffffffffull) << 32;
+        for (auto it = std::lower_bound(by_cell.begin(), by_cell.end(), h);
+             it != by_cell.end() && (*it >> 32) == (h >> 32); ++it) {
+          const std::size_t j = static_cast<std::uint32_t>(*it);
+          if (j != i && close(positions[j], p, grid.exact, tolerance2)) {
+            found[i] = 1;
+            return;
+          }
+        }
+      });
+    }
+  });
+  return found;
+}
+
+}  // namespace
+
+Weld weld_vertices(const glm::vec3* positions, std::size_t count, float tolerance,
+                   unsigned threads) {
+  Weld weld;
+  weld.merged.resize(count);
+  if (count == 0) return weld;
+  const WeldGrid grid(positions, count, tolerance, threads);
+  const float tolerance2 = tolerance * tolerance;
+
+  // A vertex with no other vertex in its ball is kept whatever happens to the others, and is
+  // in no one else's ball: the greedy pass in index order needs only the vertices that have
+  // a neighbour (usually a few percent: seams, duplicated corners), and the rest is parallel.
+  const std::vector<char> crowded = has_neighbour(positions, count, grid, tolerance2, threads);
+  constexpr std::uint32_t kKept = std::numeric_limits<std::uint32_t>::max();
+  std::vector<std::uint32_t> target(count, kKept);  // input index of the vertex it joins
+  {
+    CellTable table(static_cast<std::size_t>(std::count(crowded.begin(), crowded.end(), 1)));
+    std::vector<std::uint32_t> next;  // per kept crowded vertex: the next one in its cell
+    std::vector<std::uint32_t> kept;  // kept crowded vertices, in index order
+    for (std::size_t i = 0; i < count; ++i) {
+      if (!crowded[i]) continue;
+      const glm::vec3 p = positions[i];
+      std::uint32_t best = CellTable::kEmpty;  // among kept: the lowest, so the first kept
+      grid.for_each_cell(p, [&](const CellKey& key) {
+        for (std::uint32_t m = table.find(key); m != CellTable::kEmpty; m = next[m])
+          if (close(positions[kept[m]], p, grid.exact, tolerance2) && m < best) best = m;
+      });
+      if (best != CellTable::kEmpty) {
+        target[i] = kept[best];
+        continue;
+      }
+      const std::uint32_t id = static_cast<std::uint32_t>(kept.size());
+      kept.push_back(static_cast<std::uint32_t>(i));
+      std::uint32_t& head = table.slot(grid.home(p));
+      next.push_back(head);
+      head = id;
+    }
+  }
+  // Merged ids: kept vertices numbered in index order, a block of vertices at a time.
+  const std::size_t blocks = (count + kWeldGrain - 1) / kWeldGrain;
+  std::vector<std::uint32_t> block_first(blocks + 1, 0);
+  parallel_for(blocks, 1, threads, [&](std::size_t b0, std::size_t b1) {
+    for (std::size_t b = b0; b < b1; ++b) {
+      std::uint32_t n = 0;
+      for (std::size_t i = b * kWeldGrain; i < std::min(count, (b + 1) * kWeldGrain); ++i)
+        n += target[i] == kKept;
+      block_first[b + 1] = n;
+    }
+  });
+  for (std::size_t b = 0; b < blocks; ++b) block_first[b + 1] += block_first[b];
+  parallel_for(blocks, 1, threads, [&](std::size_t b0, std::size_t b1) {
+    for (std::size_t b = b0; b < b1; ++b) {
+      std::uint32_t id = block_first[b];
+      for (std::size_t i = b * kWeldGrain; i < std::min(count, (b + 1) * kWeldGrain); ++i)
+        if (target[i] == kKept) weld.merged[i] = id++;
+    }
+  });
+  // A target is kept and earlier than its vertex: its id is final.
+  parallel_for(count, kWeldGrain, threads, [&](std::size_t begin, std::size_t end) {
+    for (std::size_t i = begin; i < end; ++i)
+      if (target[i] != kKept) weld.merged[i] = weld.merged[target[i]];
+  });
+  weld.count = block_first[blocks];
   return weld;
 }
 

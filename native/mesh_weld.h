@@ -25,8 +25,10 @@ struct Weld {
 // count as equal). Greedy in index order, so the result does not depend on threads; chains
 // (a near b near c, a far from c) are cut where the distance to the kept vertex exceeds the
 // tolerance. Linear expected time: a hash grid of cells 2 to 64 tolerances wide, 1 to 8
-// cells per query.
-Weld weld_vertices(const glm::vec3* positions, std::size_t count, float tolerance);
+// cells per query. On `threads` threads (0: every core) but for the greedy pass over the
+// vertices that have a neighbour within the tolerance; the same result for any count.
+Weld weld_vertices(const glm::vec3* positions, std::size_t count, float tolerance,
+                   unsigned threads = 1);
 
 // Merging tolerance for a mesh: `relative` times its largest bounding-box side. The default,
 // 1e-6, is about 16 float ulps at the box's edge: it merges what an exporter duplicated

@@ -443,7 +443,7 @@ std::vector<float> smooth_kring(const Mesh& mesh, PointKind kind, const float* v
   Weld weld;
   if (options.weld_tolerance >= 0.0) {
     weld = weld_vertices(mesh.vertices.data(), mesh.vertices.size(),
-                         weld_tolerance(mesh, options.weld_tolerance));
+                         weld_tolerance(mesh, options.weld_tolerance), options.threads);
   } else {
     weld.merged.resize(mesh.vertices.size());
     for (std::size_t v = 0; v < weld.merged.size(); ++v) weld.merged[v] = static_cast<std::uint32_t>(v);

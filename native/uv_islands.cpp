@@ -245,7 +245,7 @@ UvIslands label_uv_islands(const Mesh& mesh, const float* uvs, double weld_toler
     }
     sets = ConcurrentUnionFind(m, threads);  // start again on merged vertices
   }
-  Weld weld = weld_vertices(mesh.vertices.data(), mesh.vertices.size(), tolerance);
+  Weld weld = weld_vertices(mesh.vertices.data(), mesh.vertices.size(), tolerance, threads);
   out.merged = std::move(weld.merged);
   out.merged_count = weld.count;
   join_corners(mesh, uvs, out.merged.data(), weld.count, sets, threads, nullptr);

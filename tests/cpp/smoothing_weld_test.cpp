@@ -1,11 +1,13 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
 #include <gtest/gtest.h>
 
+#include <random>
 #include <set>
 #include <vector>
 
 #include "mesh_weld.h"
 #include "smoothing_test_meshes.h"
+#include "weld_reference.h"
 
 namespace sdf {
 namespace {
@@ -88,6 +90,45 @@ TEST(VertexNeighbours, SameListsForAnyThreadCount) {
     for (std::uint32_t j = one.offsets[v]; j < one.offsets[v + 1]; ++j) {
       ASSERT_NE(one.items[j], v);
       if (j > one.offsets[v]) ASSERT_LT(one.items[j - 1], one.items[j]);
+    }
+  }
+}
+
+// The parallel weld against the serial greedy it replaced: clusters of near copies (some in
+// chains longer than the tolerance, some across cell borders), exact duplicates with +0 and
+// -0, and lone points; tolerance 0 (exact), small and large; any thread count.
+TEST(WeldVertices, SameAsTheSerialGreedyForAnyThreadCount) {
+  std::mt19937 rng(17);
+  std::uniform_real_distribution<float> unit(-1.0f, 1.0f);
+  std::vector<glm::vec3> p;
+  for (int c = 0; c < 30000; ++c) {
+    const glm::vec3 centre(unit(rng), unit(rng), unit(rng));
+    p.push_back(centre);
+    switch (c % 5) {
+      case 0:  // a chain: each step within 1e-3 of the last, the ends farther apart
+        for (int k = 1; k < 5; ++k) p.push_back(centre + glm::vec3(0.0007f * k, 0.0f, 0.0f));
+        break;
+      case 1:  // exact copies, one with -0 where the centre has +0
+        p.push_back(centre);
+        p.push_back(glm::vec3(centre.x, 0.0f, centre.z));
+        p.push_back(glm::vec3(centre.x, -0.0f, centre.z));
+        break;
+      case 2:  // a cloud
+        for (int k = 0; k < 3; ++k)
+          p.push_back(centre + 0.0004f * glm::vec3(unit(rng), unit(rng), unit(rng)));
+        break;
+      default:  // alone
+        break;
+    }
+  }
+  std::shuffle(p.begin() + p.size() / 2, p.end(), rng);  // later copies before their originals
+  for (float tolerance : {0.0f, 1e-6f, 1e-3f, 5e-3f}) {
+    const Weld expected = test_reference::reference_weld_vertices(p.data(), p.size(), tolerance);
+    EXPECT_LT(expected.count, p.size());  // something merged
+    for (unsigned threads : {1u, 3u}) {
+      const Weld got = weld_vertices(p.data(), p.size(), tolerance, threads);
+      ASSERT_EQ(got.count, expected.count) << "tolerance " << tolerance << ", threads " << threads;
+      ASSERT_EQ(got.merged, expected.merged) << "tolerance " << tolerance << ", threads " << threads;
     }
   }
 }
