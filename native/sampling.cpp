@@ -40,6 +40,7 @@ SamplePoints sample_points(const Mesh& mesh, PointKind kind, unsigned threads) {
     points.tangents.resize(n);
     parallel_for(n, kGrain, threads, [&](std::size_t begin, std::size_t end) {
       for (std::size_t f = begin; f < end; ++f) {
+        prefetch_corners(mesh, f + kPrefetchFacesAhead);
         const glm::uvec3 t = mesh.triangles[f];
         face_point(mesh, f, &points.origins[f], &points.axes[f]);
         points.own_face[f] = static_cast<std::int32_t>(f);
