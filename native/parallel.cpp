@@ -5,8 +5,10 @@
 #include <atomic>
 #include <chrono>
 #include <condition_variable>
+#include <cfenv>
 #include <exception>
 #include <mutex>
+#include <system_error>
 #include <thread>
 #include <vector>
 
@@ -23,48 +25,74 @@ namespace {
 // at 16 threads (measured on 2 cores), several percent of a GPU run on a million faces.
 // A call gets all the threads it asks for at once: idle ones, and new ones when too few are
 // idle (so calls from several threads, or from inside a body, never wait on each other).
+// A thread idle for kIdleSeconds ends, so a burst of calls (or one asking for thousands of
+// threads) leaves nothing behind for long.
 class WorkerPool {
  public:
-  // A task for `count` workers: each runs *work once.
+  // A task for up to `count` workers: each runs *work once, in the caller's floating-point
+  // environment (rounding, flush-to-zero), as a thread started by the caller would.
   struct Job {
     const std::function<void()>* work = nullptr;
+    std::fenv_t environment;
     unsigned unclaimed = 0;  // guarded by the pool's mutex
     unsigned running = 0;    // guarded by finished_mutex
     std::mutex finished_mutex;
     std::condition_variable finished;
   };
 
-  void start(Job& job, unsigned count) {
-    job.running = count;
+  // Hands `job` to up to `count` threads and returns how many took it: fewer (down to 0) only
+  // when the system refuses new threads, and the caller then does the rest of the work.
+  unsigned start(Job& job, unsigned count) {
+    std::fegetenv(&job.environment);
     std::lock_guard<std::mutex> lock(mutex_);
+    try {
+      while (available_ < unclaimed_ + count) {
+        std::thread(&WorkerPool::serve, this).detach();
+        ++available_;
+      }
+    } catch (const std::system_error&) {
+      count = available_ > unclaimed_ ? std::min(count, available_ - unclaimed_) : 0;
+    }
+    if (count == 0) return 0;
+    job.running = count;  // no worker sees the job before it is queued below
     job.unclaimed = count;
     queue_.push_back(&job);
     unclaimed_ += count;
-    // Threads waiting or about to wait: each takes one claim.
-    while (available_ < unclaimed_) {
-      ++available_;
-      std::thread(&WorkerPool::serve, this).detach();
-    }
     for (unsigned i = 0; i < count; ++i) wake_.notify_one();
+    return count;
   }
 
-  // Returns once every worker of `job` has finished its run.
+  // Returns once every worker that took `job` has finished its run.
   static void wait(Job& job) {
     std::unique_lock<std::mutex> lock(job.finished_mutex);
     job.finished.wait(lock, [&] { return job.running == 0; });
   }
 
  private:
+  static constexpr int kIdleSeconds = 10;
+
   void serve() {
     std::unique_lock<std::mutex> lock(mutex_);
     for (;;) {
-      wake_.wait(lock, [&] { return !queue_.empty(); });
+      if (!wake_.wait_for(lock, std::chrono::seconds(kIdleSeconds),
+                          [&] { return !queue_.empty(); })) {
+        // Idle too long; a claim left now still has a thread for it (available_ counts it).
+        if (available_ > unclaimed_) {
+          --available_;
+          return;
+        }
+        continue;
+      }
       Job* job = queue_.front();
       if (--job->unclaimed == 0) queue_.erase(queue_.begin());
       --unclaimed_;
       --available_;
       lock.unlock();
+      std::fenv_t own;
+      std::fegetenv(&own);
+      std::fesetenv(&job->environment);
       (*job->work)();
+      std::fesetenv(&own);
       {
         std::lock_guard<std::mutex> done(job->finished_mutex);
         if (--job->running == 0) job->finished.notify_all();
@@ -136,7 +164,8 @@ void parallel_for(std::size_t n, std::size_t grain, unsigned threads,
 
   WorkerPool::Job job;
   job.work = &worker;
-  pool->start(job, threads);
+  // Without a thread to take it (the system refusing threads), the caller works instead.
+  if (pool->start(job, threads) == 0) worker();
 
   bool cancelled = false;
   if (progress) {

@@ -2,6 +2,7 @@
 #include <gtest/gtest.h>
 
 #include <atomic>
+#include <cfenv>
 #include <chrono>
 #include <stdexcept>
 #include <thread>
@@ -79,6 +80,25 @@ TEST(ParallelFor, NestedAndConcurrentCallsAllFinish) {
     });
   for (std::thread& t : callers) t.join();
   EXPECT_EQ(total.load(), 4L * 20 * 64 * 100);
+}
+
+// Workers run in the caller's floating-point environment, as threads the caller started
+// would (the pool's threads were started by whichever call came first).
+TEST(ParallelFor, WorkersUseTheCallersRoundingMode) {
+  parallel_for(64, 1, 4, [](std::size_t, std::size_t) {});  // the pool's threads exist now
+  const int before = std::fegetround();
+  ASSERT_EQ(std::fesetround(FE_UPWARD), 0);
+  std::atomic<int> other{0};
+  parallel_for(64, 1, 4, [&](std::size_t, std::size_t) {
+    if (std::fegetround() != FE_UPWARD) ++other;
+  });
+  std::fesetround(before);
+  EXPECT_EQ(other.load(), 0);
+  // And the workers' own environment is back to what it was.
+  parallel_for(64, 1, 4, [&](std::size_t, std::size_t) {
+    if (std::fegetround() != before) ++other;
+  });
+  EXPECT_EQ(other.load(), 0);
 }
 
 #if defined(__unix__)
