@@ -2,9 +2,11 @@
 #include "mesh_weld.h"
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <cstring>
 #include <limits>
+#include <memory>
 #include <mutex>
 
 #include "parallel.h"
@@ -144,7 +146,9 @@ bool close(glm::vec3 a, glm::vec3 b, bool exact, float tolerance2) {
 
 // Per vertex, whether any other vertex merges with it (it has a neighbour in the ball).
 // Vertices sorted by the hash of their home cell: a cell's vertices are one run (with those
-// of cells sharing the hash), found by binary search.
+// of cells sharing the hash), found by binary search. Both vertices of a close pair are
+// marked: when the tolerance's square underflows, `close` can accept a pair one of whose
+// cell ranges misses the other, which the serial greedy still merges from the later side.
 std::vector<char> has_neighbour(const glm::vec3* positions, std::size_t count,
                                 const WeldGrid& grid, float tolerance2, unsigned threads) {
   UninitializedVector<std::uint64_t> by_cell(count);
@@ -153,23 +157,29 @@ std::vector<char> has_neighbour(const glm::vec3* positions, std::size_t count,
       by_cell[i] = (hash_key(grid.home(positions[i])) & 0xffffffffull) << 32 | i;
   });
   radix_sort_by_bits(by_cell, 32, 32, threads);
-  std::vector<char> found(count, 0);
+  std::unique_ptr<std::atomic<char>[]> marked(new std::atomic<char>[count]);
+  parallel_for(count, kWeldGrain, threads, [&](std::size_t begin, std::size_t end) {
+    for (std::size_t i = begin; i < end; ++i) marked[i].store(0, std::memory_order_relaxed);
+  });
   parallel_for(count, kWeldGrain, threads, [&](std::size_t begin, std::size_t end) {
     for (std::size_t i = begin; i < end; ++i) {
       const glm::vec3 p = positions[i];
       grid.for_each_cell(p, [&](const CellKey& key) {
-        if (found[i]) return;
         const std::uint64_t h = (hash_key(key) & 0xffffffffull) << 32;
         for (auto it = std::lower_bound(by_cell.begin(), by_cell.end(), h);
              it != by_cell.end() && (*it >> 32) == (h >> 32); ++it) {
           const std::size_t j = static_cast<std::uint32_t>(*it);
           if (j != i && close(positions[j], p, grid.exact, tolerance2)) {
-            found[i] = 1;
-            return;
+            marked[i].store(1, std::memory_order_relaxed);
+            marked[j].store(1, std::memory_order_relaxed);
           }
         }
       });
     }
+  });
+  std::vector<char> found(count);
+  parallel_for(count, kWeldGrain, threads, [&](std::size_t begin, std::size_t end) {
+    for (std::size_t i = begin; i < end; ++i) found[i] = marked[i].load(std::memory_order_relaxed);
   });
   return found;
 }

@@ -133,5 +133,16 @@ TEST(WeldVertices, SameAsTheSerialGreedyForAnyThreadCount) {
   }
 }
 
+// A tolerance whose square underflows: two points 2e-26 apart, tolerance 1e-26. The float
+// distance test accepts the pair although one point's cell range misses the other's cell;
+// the serial greedy merges them from the later side, and so must the parallel weld.
+TEST(WeldVertices, UnderflowingToleranceSameAsTheSerialGreedy) {
+  const std::vector<glm::vec3> p = {{1.5e-26f, 0, 0}, {-0.5e-26f, 0, 0}};
+  const Weld expected = test_reference::reference_weld_vertices(p.data(), p.size(), 1e-26f);
+  const Weld got = weld_vertices(p.data(), p.size(), 1e-26f, 2);
+  EXPECT_EQ(got.count, expected.count);
+  EXPECT_EQ(got.merged, expected.merged);
+}
+
 }  // namespace
 }  // namespace sdf
