@@ -51,7 +51,8 @@ void normalize(const T* values, std::size_t n, Normalization method, unsigned th
     for (std::size_t i = begin; i < end; ++i) {
       double x = (static_cast<double>(values[i]) - lo) / range;
       if (method == Normalization::Log) x = std::log1p(x * kLogStrength) / log_scale;
-      out[i] = static_cast<float>(std::min(1.0, std::max(0.0, x)));
+      // np.clip's order: a NaN (an infinite value over an infinite range) stays NaN.
+      out[i] = static_cast<float>(x < 0.0 ? 0.0 : (x > 1.0 ? 1.0 : x));
     }
   });
 }

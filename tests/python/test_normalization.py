@@ -41,3 +41,13 @@ def test_constant_and_nan_map_to_zero():
 def test_unknown_method():
     with pytest.raises(ValueError, match="normalize must be one of"):
         sd.normalize(np.ones(3), "cubic")
+
+
+def test_infinite_values_as_numpy_had_them():
+    # An infinite value makes the range infinite: numpy gave 0 for the finite values and NaN
+    # for the infinite one (inf / inf), and so does the native version.
+    for values in ([0.0, 1.0, np.inf], [-np.inf, 0.0], [np.inf, np.inf]):
+        v = np.array(values)
+        with np.errstate(invalid="ignore"):
+            expected = numpy_normalize(v, "linear")
+        np.testing.assert_array_equal(sd.normalize(v, "linear"), expected)
