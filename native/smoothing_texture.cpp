@@ -418,6 +418,11 @@ TextureSmoothing smooth_texture(const Mesh& mesh, PointKind kind, const float* v
   const bool faces = kind == PointKind::Faces;
   const std::size_t m = mesh.triangles.size();
   const std::size_t n = faces ? m : mesh.vertices.size();
+  // Corners are numbered 3 f + c in 32 bits (UV islands, read-back), one value kept free.
+  if (m >= (std::size_t{1} << 32) / 3)
+    throw std::invalid_argument("texture smoothing takes at most " +
+                                std::to_string((std::size_t{1} << 32) / 3 - 1) + " faces, got " +
+                                std::to_string(m));
   float lo, hi;
   check_inputs(values, n, uvs, m, threads, lo, hi);
   const double radius = options.radius < 0.0 ? 2.0 * std::max(width, height) / 256.0 : options.radius;

@@ -42,13 +42,16 @@ inline bool wanted(std::size_t bytes) {
 // Memory for `bytes` (>= kThreshold) on a 2 MiB boundary, advised into huge pages; the
 // advice is a hint the kernel may ignore. Freed with std::free.
 inline void* allocate(std::size_t bytes) {
+#if defined(__linux__)
   const std::size_t rounded = (bytes + kPage - 1) / kPage * kPage;
   void* p = std::aligned_alloc(kPage, rounded);
   if (!p) throw std::bad_alloc();
-#if defined(__linux__)
   madvise(p, rounded, MADV_HUGEPAGE);
-#endif
   return p;
+#else
+  (void)bytes;  // never called: wanted() is false
+  throw std::bad_alloc();
+#endif
 }
 
 }  // namespace huge_pages

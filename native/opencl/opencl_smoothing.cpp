@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cstdint>
+#include <exception>
 #include <memory>
 #include <mutex>
 #include <string>
@@ -52,6 +53,23 @@ void image_launch(const Device& device, DeviceState& s, const Kernel& kernel, in
 }
 
 // Seconds since the previous lap (or construction).
+// Waits for the queue when an exception leaves the scope it guards: transfers queued there
+// without blocking still read or write host memory that the unwinding is about to free.
+class FinishOnUnwind {
+ public:
+  explicit FinishOnUnwind(cl_command_queue queue)
+      : queue_(queue), exceptions_(std::uncaught_exceptions()) {}
+  ~FinishOnUnwind() {
+    if (std::uncaught_exceptions() > exceptions_) api()->clFinish(queue_);  // errors ignored
+  }
+  FinishOnUnwind(const FinishOnUnwind&) = delete;
+  FinishOnUnwind& operator=(const FinishOnUnwind&) = delete;
+
+ private:
+  cl_command_queue queue_;
+  int exceptions_;
+};
+
 }  // namespace
 
 void smooth_projected_opencl(const Device& device, const Mesh& mesh, PointKind kind,
@@ -68,6 +86,7 @@ void smooth_projected_opencl(const Device& device, const Mesh& mesh, PointKind k
     const std::size_t point_bytes = n * sizeof(glm::vec4), next_bytes = n * sizeof(float);
     check_fits(device, {bytes_of(nodes), point_bytes, next_bytes});
     std::lock_guard<std::mutex> lock(s.mutex);
+    const FinishOnUnwind finish_on_unwind(s.queue);
     cl_program program = smoothing_program(device, s);
     if (!points_buffer) {
       points_buffer = std::make_unique<Buffer>(s, point_bytes, nullptr);
@@ -120,6 +139,7 @@ TextureSmoothing smooth_texture_opencl(const Device& device, const Mesh& mesh, P
     if (blur) sizes.insert(sizes.end(), {image, image, bytes_of(f.kernel)});
     check_fits(device, sizes);
     std::lock_guard<std::mutex> lock(s.mutex);
+    const FinishOnUnwind finish_on_unwind(s.queue);
     cl_program program = smoothing_program(device, s);
     std::unique_ptr<Buffer> island_a = std::make_unique<Buffer>(s, image, island.data());
     std::unique_ptr<Buffer> value_a = std::make_unique<Buffer>(s, image, value.data());
