@@ -205,6 +205,7 @@ IN_PROCESS_FAILURES = {
     "too many rays": lambda folder: [DATA / "spot.obj", "--rays", "100000"],
     "cone too wide": lambda folder: [DATA / "spot.obj", "--cone", "180"],
     "unknown sampling": lambda folder: [DATA / "spot.obj", "--sampling", "grid"],
+    "unknown bvh quality": lambda folder: [DATA / "spot.obj", "--bvh-quality", "best"],
     "unknown option": lambda folder: [DATA / "spot.obj", "--fast"],
     "unknown output format": lambda folder: [DATA / "spot.obj", "-o", folder / "out.fbx"],
     "output folder missing": lambda folder: [DATA / "spot.obj", "-o", folder / "no/out.ply"],
@@ -332,3 +333,24 @@ def test_an_unknown_device_is_one_line_and_status_2(tmp_path):
     assert done.returncode == 2
     lines = done.stderr.strip().splitlines()
     assert len(lines) == 1 and "no OpenCL device 99" in lines[0], done.stderr
+
+
+@pytest.mark.parametrize("quality", ["high", "fast"])
+def test_bvh_quality_reaches_compute_and_keeps_the_values(tmp_path, monkeypatch, quality):
+    # The tree changes the speed, never the values: check the option arrives, and the result.
+    seen = {}
+
+    def recording(*args, **kwargs):
+        seen.update(kwargs)
+        return shape_diameter.compute(*args, **kwargs)
+
+    monkeypatch.setattr(cli, "compute", recording)
+    values = tmp_path / "values.npy"
+    argv = [str(DATA / "cow.obj"), "-o", str(tmp_path / "out.ply"), "--values", str(values),
+            "--engine", "cpu", "--bvh-quality", quality]
+    assert cli.main(argv) == 0
+    assert seen["bvh_quality"] == quality
+    vertices, triangles = load_mesh(DATA / "cow.obj")
+    expected = shape_diameter.compute(vertices, triangles, engine="cpu")
+    np.testing.assert_array_equal(np.load(values), expected.raw)
+

@@ -2,7 +2,6 @@
 """shape_diameter.normalize (native, parallel) against the numpy expression it replaced."""
 import numpy as np
 import pytest
-
 import shape_diameter as sd
 
 
