@@ -727,7 +727,9 @@ def test_gil_is_released_while_computing():
     try:
         time.sleep(0.05)
         start = time.perf_counter()
-        result = shape_diameter.compute(V, F, rays=8, threads=1)
+        # 24 rays: about 0.6 s of casting on one thread here, well above the 0.2 s needed
+        # to tell (8 rays fell to 0.2 s once the CPU engine got faster).
+        result = shape_diameter.compute(V, F, rays=24, threads=1)
         end = time.perf_counter()
     finally:
         stop.set()
