@@ -10,21 +10,12 @@
 #include <limits>
 #include <vector>
 
+#include "morton.h"
 #include "smoothing_projected.h"
 
 namespace sdf::test {
 
 namespace reference_detail {
-
-inline std::uint64_t spread3(std::uint64_t x) {
-  x &= 0x1fffffull;
-  x = (x | x << 32) & 0x1f00000000ffffull;
-  x = (x | x << 16) & 0x1f0000ff0000ffull;
-  x = (x | x << 8) & 0x100f00f00f00f00full;
-  x = (x | x << 4) & 0x10c30c30c30c30c3ull;
-  x = (x | x << 2) & 0x1249249249249249ull;
-  return x;
-}
 
 // Stable LSD radix sort of (key, index) pairs, 8 bits a pass.
 inline void radix_sort(std::vector<std::uint64_t>& keys, std::vector<std::uint32_t>& index,
@@ -76,7 +67,7 @@ inline std::vector<PointOctreeNode> reference_point_octree(const glm::vec3* poin
     for (int a = 0; a < 3; ++a) {
       const double c = std::floor((points[i][a] - corner[a]) / side * cells);
       const std::uint64_t cell = static_cast<std::uint64_t>(std::min(cells - 1.0, std::max(0.0, c)));
-      key |= spread3(cell) << a;
+      key |= spread_bits_21(cell) << a;
     }
     keys[i] = key;
     order[i] = static_cast<std::uint32_t>(i);
