@@ -141,7 +141,8 @@ def smooth(
     """
     v, t = _check_mesh(vertices, triangles)
     values, points = _check_values(values, points, len(v), len(t))
-    resolved = check_smoothing(method, options, uvs=uvs, face_count=len(t), vertex_count=len(v))
+    resolved = check_smoothing(method, options, uvs=uvs, face_count=len(t), vertex_count=len(v),
+                               triangles=t)  # fmt: skip
     threads = _check_threads(threads)
     if progress is not None and not callable(progress):
         raise ValueError("progress must be a callable taking a fraction in [0, 1], or None")
@@ -153,7 +154,7 @@ def smooth(
         )
     chosen = _resolve_engine(engine) if method in ("projected", "texture") else "cpu"
     try:
-        return _run(v, t, values, points, method, resolved, uvs, threads, progress, chosen)
+        return _run(v, t, values, points, method, resolved, threads, progress, chosen)
     except RuntimeError as error:
         if engine != "auto" or chosen == "cpu":
             raise
@@ -162,12 +163,16 @@ def smooth(
             RuntimeWarning,
             stacklevel=2,
         )
-        return _run(v, t, values, points, method, resolved, uvs, threads, progress, "cpu")
+        return _run(v, t, values, points, method, resolved, threads, progress, "cpu")
 
 
-def check_smoothing(method, options, *, uvs=None, face_count=None, vertex_count=None) -> dict:
+def check_smoothing(
+    method, options, *, uvs=None, face_count=None, vertex_count=None, triangles=None
+) -> dict:
     """Checks a method name and its options (and that 'texture' has UVs of the right shape);
-    returns the options with every default filled in. Raises ValueError."""
+    returns the options with every default filled in, and for 'texture' with the mesh's sizes
+    given, 'uvs': the checked UVs (per corner, float32, when the triangles are given too).
+    Raises ValueError."""
     if not isinstance(method, str) or method not in METHODS:
         raise ValueError(f"smoothing method must be one of {METHODS}, got {method!r}")
     if options is None:
@@ -215,11 +220,11 @@ def check_smoothing(method, options, *, uvs=None, face_count=None, vertex_count=
                 "(n, 2) texture coordinates (the mesh file had none, or they were not read)"
             )
         if face_count is not None:
-            _check_uvs(uvs, face_count, vertex_count)
+            o["uvs"] = _check_uvs(uvs, face_count, vertex_count, triangles)
     return o
 
 
-def _run(v, t, values, points, method, o, uvs, threads, progress, engine="cpu"):
+def _run(v, t, values, points, method, o, threads, progress, engine="cpu"):
     if method == "none":
         return values.copy()
     if method == "kring":
@@ -236,11 +241,9 @@ def _run(v, t, values, points, method, o, uvs, threads, progress, engine="cpu"):
             v, t, values, points, o["iterations"], o["max_depth"], o["min_points"],
             o["node_size_ratio"], o["branch_on"], threads, progress, engine,
         )
-    # check_smoothing has checked the UVs' values (and the native code checks them again).
-    corners = _check_uvs(uvs, len(t), len(v), t, check_finite=False)
     width, height = o["texture_size"]
     out = _core.smooth_texture(
-        v, t, values, points, corners, width, height, o["radius"], o["bilateral"],
+        v, t, values, points, o["uvs"], width, height, o["radius"], o["bilateral"],
         o["range_sigma"], o["margin"],
         -1.0 if o["weld_tolerance"] is None else o["weld_tolerance"],
         o["return_image"], threads, progress, engine,
@@ -300,7 +303,7 @@ def _check_values(values, points, n, m):
     return a, points
 
 
-def _check_uvs(uvs, m, n, triangles=None, check_finite=True):
+def _check_uvs(uvs, m, n, triangles=None):
     """Per-corner float32 (m, 3, 2). Per-vertex (n, 2) is expanded when triangles are given."""
     a = np.asarray(uvs)
     if a.dtype.kind not in "fiu":
@@ -315,7 +318,7 @@ def _check_uvs(uvs, m, n, triangles=None, check_finite=True):
             f"{a.shape}"
         )
     corners = np.ascontiguousarray(corners, dtype=np.float32)
-    if check_finite and not np.isfinite(corners).all():
+    if not np.isfinite(corners).all():
         raise ValueError("uvs must be finite: some are NaN or infinite")
     return corners
 
