@@ -46,7 +46,10 @@ SDF_INLINE float sdf_reduce_paper(float* lengths, float* angles, int n, float an
   float sum_w = 0.0f, sum_wl = 0.0f;
   for (int i = 0; i < n; ++i) {
     if (fabs(lengths[i] - median) <= bound) {
-      float w = 1.0f / fmax(angles[i], angle_floor);
+      /* The paper's weight 1 / angle, taken relative to 1 / angle_floor (the same weighted
+       * mean): in (0, 1], so w * length never overflows where 1 / angle (up to 1e30 for
+       * the narrowest cones) times a long length did. */
+      float w = angle_floor / fmax(angles[i], angle_floor);
       sum_w += w;
       sum_wl += w * lengths[i];
     }
