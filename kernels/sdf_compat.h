@@ -22,6 +22,7 @@
 #define SDF_STATIC_ASSERT(cond, msg)
 typedef int sdf_int32;
 typedef uint sdf_uint32;
+typedef long sdf_int64;
 #define make_float3(x, y, z) ((float3)((x), (y), (z)))
 #define sdf_vmin(a, b) fmin((a), (b))
 #define sdf_vmax(a, b) fmax((a), (b))
@@ -31,6 +32,9 @@ typedef uint sdf_uint32;
 #ifdef cl_khr_fp64
 #pragma OPENCL EXTENSION cl_khr_fp64 : enable
 typedef double sdf_wide;
+/* Code that must compute in double to give the host's bits (texture rasterisation) exists
+ * only where this is defined; the host always has it. */
+#define SDF_HAVE_DOUBLE 1
 #else
 typedef float sdf_wide;
 #endif
@@ -58,7 +62,9 @@ namespace kern {
 typedef glm::vec3 float3;
 typedef std::int32_t sdf_int32;
 typedef std::uint32_t sdf_uint32;
+typedef std::int64_t sdf_int64;
 typedef double sdf_wide;
+#define SDF_HAVE_DOUBLE 1
 inline float3 make_float3(float x, float y, float z) { return float3(x, y, z); }
 inline float3 sdf_vmin(float3 a, float3 b) { return glm::min(a, b); }
 inline float3 sdf_vmax(float3 a, float3 b) { return glm::max(a, b); }
@@ -69,6 +75,7 @@ inline float sdf_max(float a, float b) { return a > b ? a : b; }
 using std::acos;
 using std::asin;
 using std::atan2;
+using std::ceil;
 using std::copysign;
 using std::cos;
 using std::exp;

@@ -56,3 +56,64 @@ __kernel void sdf_texture_blur_columns(int width, int height, __global const int
   size_t t = (size_t)y * width + x;
   blurred[t] = island[t] >= 0 ? sdf_blur_normalize(sv, sw, lo, hi) : sv;
 }
+
+#ifdef SDF_HAVE_DOUBLE
+/* Texture space, drawing (where the device has double precision: texel coverage is computed
+ * in double, as on the host). Before it: every texel empty and owned by no face. */
+__kernel void sdf_texture_clear(uint texels, __global uint* owner, __global int* island,
+                                __global float* value) {
+  uint t = get_global_id(0);
+  if (t >= texels) return;
+  owner[t] = 0;
+  island[t] = -1;
+  value[t] = 0.0f;
+}
+
+/* The first drawing pass, one work item per face of [first, first + count) of m: each face's
+ * rank to the texels it covers (else to the one under its centroid), the largest kept. */
+__kernel void sdf_texture_rank(uint first, uint count, uint m, int width, int height,
+                               __global const float* uvs, __global uint* owner) {
+  uint gid = get_global_id(0);
+  if (gid >= count) return;
+  uint f = first + gid;
+  __global const float* uv = uvs + 6 * (size_t)f;
+  SdfTexelWalk w;
+  sdf_texel_walk_start(uv, width, height, &w);
+  int covered = 0;
+  while (sdf_texel_walk_next(&w)) {
+    atomic_max(owner + w.texel, sdf_cover_rank(m, f));
+    covered = 1;
+  }
+  if (covered) return;
+  long t = sdf_texel_of_centroid(uv, width, height);
+  if (t >= 0) atomic_max(owner + t, sdf_centroid_rank(m, f));
+}
+
+/* The second pass: each face writes its value and island where its rank won. triangles:
+ * null for face values. */
+__kernel void sdf_texture_draw(uint first, uint count, uint m, int width, int height,
+                               __global const float* uvs, __global const float* values,
+                               __global const uint* triangles, float lo, float hi,
+                               __global const int* face_island, __global const uint* owner,
+                               __global int* island, __global float* value) {
+  uint gid = get_global_id(0);
+  if (gid >= count) return;
+  uint f = first + gid;
+  sdf_texture_draw_face(f, m, uvs, width, height, values, triangles, lo, hi, face_island[f],
+                        owner, island, value);
+}
+
+/* Read back, face values: out[f] from the blurred texels face f covers (values: the input,
+ * kept where there is nothing to read). */
+__kernel void sdf_texture_read_faces(uint first, uint count, int width, int height,
+                                     __global const float* uvs, __global const int* face_island,
+                                     __global const int* island, __global const float* blurred,
+                                     float lo, float hi, __global const float* values,
+                                     __global float* out) {
+  uint gid = get_global_id(0);
+  if (gid >= count) return;
+  uint f = first + gid;
+  out[f] = sdf_texture_read_face(f, uvs, width, height, face_island[f], island, blurred, lo, hi,
+                                 values[f]);
+}
+#endif

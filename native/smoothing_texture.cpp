@@ -21,86 +21,7 @@ namespace {
 
 constexpr int kMaxSize = 16384;
 
-// Seconds since the previous lap (or construction).
-// ---- Per-texel and per-face work: plain loops over flat arrays (kernel style). ----
-
-// A face's UV triangle in texel units (u * width, v * height) and its covered texels: those
-// whose centre (x + 0.5, y + 0.5) lies inside. A centre on an edge belongs to one side only:
-// the triangle is turned counter-clockwise, and an edge claims its points when its direction
-// (dx, dy) has dy > 0, or dy == 0 and dx < 0; the neighbour across it sees (-dx, -dy). The
-// edge functions are evaluated the same way from both sides, so the tie is exact, and a texel
-// is never written by two faces of one island. Calls visit(texel index, b0, b1, b2) with the
-// barycentric coordinates; returns how many texels.
-template <class Visit>
-std::uint32_t for_each_texel(const float* uv, int width, int height, Visit&& visit) {
-  double x[3], y[3];
-  for (int c = 0; c < 3; ++c) {
-    x[c] = uv[2 * c] * double(width);
-    y[c] = uv[2 * c + 1] * double(height);
-  }
-  // Texels whose centre may lie inside. Most faces of a dense mesh cover no centre at all:
-  // they leave here, before the edge set-up.
-  // (Clamped in double: a UV far outside [0, 1] would overflow an int.)
-  auto first = [](double lowest, int size) {
-    return static_cast<int>(std::max(0.0, std::min(double(size), std::ceil(lowest - 0.5))));
-  };
-  auto last = [](double highest, int size) {
-    return static_cast<int>(std::max(-1.0, std::min(size - 1.0, std::floor(highest - 0.5))));
-  };
-  const int xmin = first(std::min(x[0], std::min(x[1], x[2])), width);
-  const int xmax = last(std::max(x[0], std::max(x[1], x[2])), width);
-  const int ymin = first(std::min(y[0], std::min(y[1], y[2])), height);
-  const int ymax = last(std::max(y[0], std::max(y[1], y[2])), height);
-  if (xmin > xmax || ymin > ymax) return 0;
-  double area = (x[1] - x[0]) * (y[2] - y[0]) - (x[2] - x[0]) * (y[1] - y[0]);
-  if (!(std::fabs(area) > 0.0)) return 0;
-  int order[3] = {0, 1, 2};
-  if (area < 0.0) {  // clockwise (a mirrored island): walk it the other way round
-    order[1] = 2;
-    order[2] = 1;
-    area = -area;
-  }
-  // Edge i runs from corner order[i + 1] to order[i + 2] and is opposite corner order[i].
-  double ax[3], ay[3], dx[3], dy[3];
-  bool claims[3];
-  for (int i = 0; i < 3; ++i) {
-    const int a = order[(i + 1) % 3], b = order[(i + 2) % 3];
-    ax[i] = x[a];
-    ay[i] = y[a];
-    dx[i] = x[b] - x[a];
-    dy[i] = y[b] - y[a];
-    claims[i] = dy[i] > 0.0 || (dy[i] == 0.0 && dx[i] < 0.0);
-  }
-  const double inv = 1.0 / area;
-  std::uint32_t covered = 0;
-  for (int py = ymin; py <= ymax; ++py) {
-    const double cy = py + 0.5;
-    for (int px = xmin; px <= xmax; ++px) {
-      const double cx = px + 0.5;
-      double e[3];
-      bool inside = true;
-      for (int i = 0; i < 3 && inside; ++i) {
-        // Twice the area of (edge start, edge end, centre): > 0 on the inner side.
-        e[i] = dx[i] * (cy - ay[i]) - dy[i] * (cx - ax[i]);
-        inside = e[i] > 0.0 || (e[i] == 0.0 && claims[i]);
-      }
-      if (!inside) continue;
-      double b[3];
-      for (int i = 0; i < 3; ++i) b[order[i]] = e[i] * inv;
-      visit(static_cast<std::size_t>(py) * width + px, b[0], b[1], b[2]);
-      ++covered;
-    }
-  }
-  return covered;
-}
-
-
-// Texel under a UV point, or -1 outside the image.
-std::int64_t texel_at(float u, float v, int width, int height) {
-  const double x = std::floor(u * double(width)), y = std::floor(v * double(height));
-  if (!(x >= 0.0 && x < width && y >= 0.0 && y < height)) return -1;
-  return static_cast<std::int64_t>(y) * width + static_cast<std::int64_t>(x);
-}
+// ---- Per-face and per-texel work: loops over kernels/sdf_smooth_texture.h (kernel style). ----
 
 constexpr std::size_t kFaceGrain = 1 << 12;
 constexpr std::size_t kTexelGrain = 1 << 16;
@@ -147,60 +68,48 @@ void check_inputs(const float* values, std::size_t n, const float* uvs, std::siz
                                   std::to_string((uv_bad[c] / 2) % 3) + " is not finite");
 }
 
-// Step 2 on the CPU threads. Every face offers its value to the texels it covers (a face
-// covering none, to the texel under its centroid) as a 64-bit key, kept by atomic maximum:
-// high word the rank, low word the value's bits. Covering faces rank m + 1 + f (above any
-// centroid, the later face winning), centroid faces m - f (the earlier winning, and only
-// where no face covers): the image the serial loop in face order gives, whatever the threads.
+// Step 2 on the CPU threads, in one pass: every face offers (rank, value) to its texels as a
+// 64-bit key, high word the rank (kernels/sdf_smooth_texture.h), low word the value's bits,
+// and each texel keeps the largest by atomic maximum; ranks are unique per texel, so the
+// image is the one a serial loop in face order gives, whatever the threads (a device does
+// the same in two passes of 32-bit maxima).
 void rasterise(const Mesh& mesh, PointKind kind, const float* values, const float* uvs,
                const std::vector<std::int32_t>& face_island, int width, int height, float lo,
                float hi, unsigned threads, std::vector<std::int32_t>& island,
                std::vector<float>& value) {
-  const bool faces = kind == PointKind::Faces;
-  const std::size_t m = mesh.triangles.size();
-  if (m >= (std::size_t{1} << 31)) throw std::invalid_argument("too many faces for the texture");
+  static_assert(sizeof(glm::uvec3) == 3 * sizeof(std::uint32_t), "uvec3 is 3 packed uint32");
+  const std::uint32_t m = static_cast<std::uint32_t>(mesh.triangles.size());
   const std::size_t texels = static_cast<std::size_t>(width) * height;
   std::unique_ptr<std::atomic<std::uint64_t>[]> owner(new std::atomic<std::uint64_t>[texels]);
   parallel_for(texels, kTexelGrain, threads, [&](std::size_t begin, std::size_t end) {
     for (std::size_t t = begin; t < end; ++t) owner[t].store(0, std::memory_order_relaxed);
   });
-  auto offer = [&](std::size_t t, std::uint64_t rank, float x) {
+  auto offer = [&](std::size_t t, std::uint32_t rank, float x) {
     std::uint32_t bits;
     std::memcpy(&bits, &x, sizeof bits);
-    const std::uint64_t key = (rank << 32) | bits;
+    const std::uint64_t key = (std::uint64_t{rank} << 32) | bits;
     std::uint64_t seen = owner[t].load(std::memory_order_relaxed);
     while (seen < key && !owner[t].compare_exchange_weak(seen, key, std::memory_order_relaxed)) {
     }
   };
+  const std::uint32_t* corners =
+      kind == PointKind::Faces ? nullptr : reinterpret_cast<const std::uint32_t*>(mesh.triangles.data());
   parallel_for(m, kFaceGrain, threads, [&](std::size_t begin, std::size_t end) {
-    for (std::size_t f = begin; f < end; ++f) {
-      const float* uv = uvs + 6 * f;
-      const std::uint64_t rank = m + 1 + f;
-      std::uint32_t covered;
-      if (faces) {
-        const float x = values[f];
-        covered = for_each_texel(uv, width, height,
-                                 [&](std::size_t t, double, double, double) { offer(t, rank, x); });
-      } else {
-        const glm::uvec3 tri = mesh.triangles[f];
-        const float a = values[tri.x], b = values[tri.y], c = values[tri.z];
-        const float vmin = std::min(a, std::min(b, c)), vmax = std::max(a, std::max(b, c));
-        covered = for_each_texel(uv, width, height, [&](std::size_t t, double b0, double b1, double b2) {
-          offer(t, rank, std::min(vmax, std::max(vmin, static_cast<float>(b0 * a + b1 * b + b2 * c))));
-        });
+    for (std::uint32_t f = static_cast<std::uint32_t>(begin); f < end; ++f) {
+      const float* uv = uvs + 6 * std::size_t{f};
+      const kern::SdfFaceDraw d = kern::sdf_face_draw(f, values, corners);
+      kern::SdfTexelWalk walk;
+      kern::sdf_texel_walk_start(uv, width, height, &walk);
+      bool covered = false;
+      while (kern::sdf_texel_walk_next(&walk)) {
+        offer(walk.texel, kern::sdf_cover_rank(m, f), kern::sdf_face_draw_at(&d, walk.b));
+        covered = true;
       }
-      if (covered > 0) continue;
-      const std::int64_t t = texel_at((uv[0] + uv[2] + uv[4]) / 3.0f, (uv[1] + uv[3] + uv[5]) / 3.0f,
-                                      width, height);
-      if (t < 0) continue;
-      float x;
-      if (faces) {
-        x = values[f];
-      } else {
-        const glm::uvec3 tri = mesh.triangles[f];
-        x = std::min(hi, std::max(lo, (values[tri.x] + values[tri.y] + values[tri.z]) / 3.0f));
-      }
-      offer(static_cast<std::size_t>(t), m - f, x);
+      if (covered) continue;
+      const std::int64_t t = kern::sdf_texel_of_centroid(uv, width, height);
+      if (t >= 0)
+        offer(static_cast<std::size_t>(t), kern::sdf_centroid_rank(m, f),
+              kern::sdf_face_draw_centroid(&d, lo, hi));
     }
   });
   island.resize(texels);
@@ -213,8 +122,8 @@ void rasterise(const Mesh& mesh, PointKind kind, const float* values, const floa
         value[t] = 0.0f;
         continue;
       }
-      const std::uint64_t rank = key >> 32;
-      const std::size_t f = rank > m ? rank - m - 1 : m - rank;
+      const std::uint32_t rank = static_cast<std::uint32_t>(key >> 32);
+      const std::uint32_t f = rank > m ? rank - m - 1 : m - rank;
       const std::uint32_t bits = static_cast<std::uint32_t>(key);
       island[t] = face_island[f];
       std::memcpy(&value[t], &bits, sizeof bits);
@@ -280,31 +189,16 @@ std::vector<float> filter_cpu(const TextureFilter& f, std::vector<std::int32_t>&
   return blurred;
 }
 
-// Step 5 for face values: the mean of the blurred texels a face covers (of its island), else
-// the texel under its centroid; faces with neither keep their value (out holds the input).
+// Step 5 for face values (kernels/sdf_smooth_texture.h: sdf_texture_read_face); out holds
+// the input, which faces with nothing to read keep.
 void read_back_faces(const float* uvs, const std::vector<std::int32_t>& face_island, int width,
                      int height, const std::vector<std::int32_t>& island,
                      const std::vector<float>& blurred, float lo, float hi, unsigned threads,
                      std::vector<float>& out) {
   parallel_for(face_island.size(), kFaceGrain, threads, [&](std::size_t begin, std::size_t end) {
-    for (std::size_t f = begin; f < end; ++f) {
-      const std::int32_t id = face_island[f];
-      double sum = 0.0;
-      std::uint32_t count = 0;
-      for_each_texel(uvs + 6 * f, width, height, [&](std::size_t t, double, double, double) {
-        if (island[t] != id) return;
-        sum += blurred[t];
-        ++count;
-      });
-      if (count > 0) {
-        out[f] = std::min(hi, std::max(lo, static_cast<float>(sum / count)));
-        continue;
-      }
-      const float* uv = uvs + 6 * f;
-      const std::int64_t t = texel_at((uv[0] + uv[2] + uv[4]) / 3.0f,
-                                      (uv[1] + uv[3] + uv[5]) / 3.0f, width, height);
-      if (t >= 0 && island[t] == id) out[f] = blurred[t];
-    }
+    for (std::uint32_t f = static_cast<std::uint32_t>(begin); f < end; ++f)
+      out[f] = kern::sdf_texture_read_face(f, uvs, width, height, face_island[f], island.data(),
+                                           blurred.data(), lo, hi, out[f]);
   });
 }
 
@@ -344,7 +238,7 @@ void read_back_vertices(const Mesh& mesh, const float* uvs, const UvIslands& isl
           sampled[3 * f + c] = 1;
           continue;
         }
-        const std::int64_t t = texel_at(u, v, width, height);
+        const std::int64_t t = kern::sdf_texel_at(u, v, width, height);
         if (t >= 0 && island[t] == id) {
           sample[3 * f + c] = blurred[t];
           sampled[3 * f + c] = 1;
@@ -400,7 +294,7 @@ void read_back_vertices(const Mesh& mesh, const float* uvs, const UvIslands& isl
 TextureSmoothing smooth_texture(const Mesh& mesh, PointKind kind, const float* values,
                                 const float* uvs, const TextureOptions& options, bool keep_image,
                                 const ProgressFn& progress, double progress_from,
-                                double progress_to, const TextureFilterFn& filter) {
+                                double progress_to, const TextureDeviceFn& device) {
   const int width = options.width, height = options.height;
   if (width < 1 || height < 1 || width > kMaxSize || height > kMaxSize)
     throw std::invalid_argument("the texture size must be in [1, " + std::to_string(kMaxSize) +
@@ -436,14 +330,7 @@ TextureSmoothing smooth_texture(const Mesh& mesh, PointKind kind, const float* v
   // Vertex values are averaged over merged vertices: those need the weld whatever the islands.
   const UvIslands islands = label_uv_islands(mesh, uvs, options.weld_tolerance, !faces, threads);
   timings.emplace_back(islands.merged.empty() ? "islands" : "islands (welded)", clock.lap());
-  std::vector<std::int32_t> island;
-  std::vector<float> value;
-  rasterise(mesh, kind, values, uvs, islands.face_island, width, height, lo, hi, threads, island,
-            value);
-  report(0.1);
-  timings.emplace_back("rasterise", clock.lap());
-
-  // Dilate and blur: on the CPU threads, or by `filter` on another device.
+  // Dilate and blur as a TextureFilter says.
   TextureFilter f;
   f.width = width;
   f.height = height;
@@ -459,26 +346,39 @@ TextureSmoothing smooth_texture(const Mesh& mesh, PointKind kind, const float* v
     f.inv_range =
         options.bilateral && hi > lo ? static_cast<float>(1.0 / (options.range_sigma * (hi - lo))) : 0.0f;
   }
-  std::vector<float> blurred;
-  if (filter) {
-    filter(f, island, value);
-    blurred.swap(value);
-    report(0.85);
-  } else {
-    blurred = filter_cpu(f, island, value, threads, progress, progress_from, progress_to);
-  }
-  timings.emplace_back("filter", clock.lap());
 
   TextureSmoothing out;
   out.values.assign(values, values + n);
-  if (faces)
-    read_back_faces(uvs, islands.face_island, width, height, island, blurred, lo, hi, threads,
-                    out.values);
-  else
+  std::vector<std::int32_t> island;
+  std::vector<float> blurred;
+  if (device) {
+    TextureJob job;
+    job.mesh = &mesh;
+    job.kind = kind;
+    job.values = values;
+    job.uvs = uvs;
+    job.face_island = islands.face_island.data();
+    job.filter = f;
+    device(job, !faces || keep_image, out.values, island, blurred, timings);
+    report(0.85);
+    clock.lap();
+  } else {
+    std::vector<float> value;
+    rasterise(mesh, kind, values, uvs, islands.face_island, width, height, lo, hi, threads, island,
+              value);
+    report(0.1);
+    timings.emplace_back("rasterise", clock.lap());
+    blurred = filter_cpu(f, island, value, threads, progress, progress_from, progress_to);
+    timings.emplace_back("filter", clock.lap());
+    if (faces)
+      read_back_faces(uvs, islands.face_island, width, height, island, blurred, lo, hi, threads,
+                      out.values);
+  }
+  if (!faces)
     read_back_vertices(mesh, uvs, islands, width, height, island, blurred, lo, hi, threads,
                        out.values);
   report(1.0);
-  timings.emplace_back("read back", clock.lap());
+  if (!device || !faces) timings.emplace_back("read back", clock.lap());
 
   if (keep_image) {
     const std::size_t texels = blurred.size();

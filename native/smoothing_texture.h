@@ -57,8 +57,9 @@ struct TextureSmoothing {
   std::vector<float> image;
   std::vector<std::uint8_t> mask;
   int width = 0, height = 0;
-  // Seconds per stage, in order (checks, islands, rasterise, dilate and blur or the device's
-  // filter, read back, image): bench/texture_stages.py prints them.
+  // Seconds per stage, in order (checks, islands, rasterise, dilate and blur, read back, image;
+  // on a device, its own stages in place of the middle three): bench/texture_stages.py
+  // prints them.
   std::vector<std::pair<std::string, double>> timings;
 };
 
@@ -71,21 +72,32 @@ struct TextureFilter {
   float inv_range = 0.0f;      // bilateral: 1 / the value deviation; 0: plain Gaussian
   float lo = 0.0f, hi = 0.0f;  // the input's range: blurred texels are clamped to it
 };
-// Runs steps 3 and 4 on another device (the OpenCL engine). island and value come in as
-// rasterised (row-major, -1 and 0 where empty); island must leave dilated and value blurred
-// (sdf_blur_normalize where island >= 0), as the CPU's loops over
-// kernels/sdf_smooth_texture.h leave them.
-using TextureFilterFn = std::function<void(const TextureFilter& filter,
-                                           std::vector<std::int32_t>& island,
-                                           std::vector<float>& value)>;
+// Steps 2 to 5 on another device (the OpenCL engine), after the host's step 1.
+struct TextureJob {
+  const Mesh* mesh = nullptr;
+  PointKind kind = PointKind::Faces;
+  const float* values = nullptr;       // per face or vertex, as given to smooth_texture
+  const float* uvs = nullptr;          // 6 floats a face
+  const std::int32_t* face_island = nullptr;
+  TextureFilter filter;                // sizes, dilation, blur, the values' range
+};
+// Draws, dilates, blurs and, for face values, reads back into `values` (which comes in
+// holding the input), with the CPU's code (kernels/sdf_smooth_texture.h) and bits. Where
+// `images` is true it also fills `island` (dilated) and `blurred`, row-major: vertex values
+// are read back on the host from those, and a kept image is that one. Appends its stages'
+// seconds to `timings`.
+using TextureDeviceFn = std::function<void(
+    const TextureJob& job, bool images, std::vector<float>& values,
+    std::vector<std::int32_t>& island, std::vector<float>& blurred,
+    std::vector<std::pair<std::string, double>>& timings)>;
 
 // uvs: per face corner, (u, v) for corners 0, 1, 2 of face 0, then face 1, ... (6 floats a
 // face), finite. keep_image: fill image and mask (else they stay empty). Throws
-// std::invalid_argument for bad options, non-finite values or UVs. filter: null runs
-// steps 3 and 4 on the CPU threads.
+// std::invalid_argument for bad options, non-finite values or UVs. device: null runs
+// steps 2 to 5 on the CPU threads.
 TextureSmoothing smooth_texture(const Mesh& mesh, PointKind kind, const float* values,
                                 const float* uvs, const TextureOptions& options, bool keep_image,
                                 const ProgressFn& progress = nullptr, double progress_from = 0.0,
-                                double progress_to = 1.0, const TextureFilterFn& filter = nullptr);
+                                double progress_to = 1.0, const TextureDeviceFn& device = nullptr);
 
 }  // namespace sdf

@@ -16,6 +16,7 @@ struct Device {
   int index = 0;  // position in devices(): "opencl:<index>"
   std::string name, platform_name, vendor, driver_version, device_version, platform_version;
   bool gpu = false;
+  bool fp64 = false;  // double precision (cl_khr_fp64): texture smoothing's drawing needs it
   std::uint64_t global_memory = 0, max_allocation = 0;
   std::uint32_t compute_units = 0, clock_mhz = 0;
   // A rough throughput score to pick "the best" device: GPUs first, then units x clock.

@@ -121,93 +121,194 @@ void smooth_projected_opencl(const Device& device, const Mesh& mesh, PointKind k
   smooth_projected_into(mesh, kind, values, options, out, progress, 0.0, 1.0, gather);
 }
 
+namespace {
+
+// Launches `kernel` over [0, count) items in chunks of at most 2^20 (display watchdogs), with
+// arguments 0 and 1 set to each chunk's first item and size.
+void launch_chunks(const Device& device, DeviceState& s, Kernel& kernel, std::size_t count) {
+  const std::size_t local = device.gpu ? 64 : 1;
+  constexpr std::size_t kChunk = std::size_t(1) << 20;
+  for (std::size_t first = 0; first < count; first += kChunk) {
+    const std::size_t n = std::min(kChunk, count - first);
+    kernel.arg(0, static_cast<cl_uint>(first));
+    kernel.arg(1, static_cast<cl_uint>(n));
+    const std::size_t global = (n + local - 1) / local * local;
+    launch(s, kernel, 1, &global, &local);
+  }
+}
+
+// Steps 3 and 4 on the device: dilates island/value and blurs value, swapping each pair so
+// that island and value hold the results (the blurred image in value).
+void filter_on_device(const Device& device, DeviceState& s, cl_program program,
+                      const TextureFilter& f, std::unique_ptr<Buffer>& island,
+                      std::unique_ptr<Buffer>& value, std::vector<std::unique_ptr<Buffer>>& keep) {
+  const std::size_t image = static_cast<std::size_t>(f.width) * f.height * sizeof(float);
+  auto island_b = std::make_unique<Buffer>(s, image, nullptr);
+  auto value_b = std::make_unique<Buffer>(s, image, nullptr);
+  if (f.margin > 0) {
+    Kernel dilate(program, "sdf_texture_dilate");
+    dilate.arg(0, static_cast<cl_int>(f.width));
+    dilate.arg(1, static_cast<cl_int>(f.height));
+    for (int ring = 0; ring < f.margin; ++ring) {
+      dilate.arg(2, island->get());
+      dilate.arg(3, value->get());
+      dilate.arg(4, island_b->get());
+      dilate.arg(5, value_b->get());
+      image_launch(device, s, dilate, f.width, f.height);
+      std::swap(island, island_b);
+      std::swap(value, value_b);
+    }
+  }
+  keep.push_back(std::move(island_b));  // alive until the queue has run
+  if (f.taps < 1) {
+    keep.push_back(std::move(value_b));
+    return;
+  }
+  auto row_value = std::make_unique<Buffer>(s, image, nullptr);
+  auto row_weight = std::make_unique<Buffer>(s, image, nullptr);
+  auto taps = std::make_unique<Buffer>(s, bytes_of(f.kernel), f.kernel.data());
+  Kernel rows(program, "sdf_texture_blur_rows");
+  cl_uint a = 0;
+  rows.arg(a++, static_cast<cl_int>(f.width));
+  rows.arg(a++, static_cast<cl_int>(f.height));
+  rows.arg(a++, island->get());
+  rows.arg(a++, value->get());
+  rows.arg(a++, taps->get());
+  rows.arg(a++, static_cast<cl_int>(f.taps));
+  rows.arg(a++, f.inv_range);
+  rows.arg(a++, row_value->get());
+  rows.arg(a++, row_weight->get());
+  image_launch(device, s, rows, f.width, f.height);
+  Kernel columns(program, "sdf_texture_blur_columns");
+  a = 0;
+  columns.arg(a++, static_cast<cl_int>(f.width));
+  columns.arg(a++, static_cast<cl_int>(f.height));
+  columns.arg(a++, island->get());
+  columns.arg(a++, row_value->get());
+  columns.arg(a++, row_weight->get());
+  columns.arg(a++, taps->get());
+  columns.arg(a++, static_cast<cl_int>(f.taps));
+  columns.arg(a++, f.inv_range);
+  columns.arg(a++, f.lo);
+  columns.arg(a++, f.hi);
+  columns.arg(a++, value_b->get());
+  image_launch(device, s, columns, f.width, f.height);
+  std::swap(value, value_b);
+  for (auto* b : {&value_b, &row_value, &row_weight, &taps}) keep.push_back(std::move(*b));
+}
+
+}  // namespace
+
 TextureSmoothing smooth_texture_opencl(const Device& device, const Mesh& mesh, PointKind kind,
                                        const float* values, const float* uvs,
                                        const TextureOptions& options, bool keep_image,
                                        const ProgressFn& progress) {
+  // Drawing and reading back compute texel coverage in double: a device without it would
+  // cover other texels than the CPU, so there the CPU threads do it all.
+  if (!device.fp64)
+    return smooth_texture(mesh, kind, values, uvs, options, keep_image, progress);
   DeviceState& s = state_of(device);
-  std::vector<std::pair<std::string, double>> device_timings;  // the filter's parts
-  auto filter = [&](const TextureFilter& f, std::vector<std::int32_t>& island,
-                    std::vector<float>& value) {
+  auto on_device = [&](const TextureJob& job, bool images, std::vector<float>& out,
+                       std::vector<std::int32_t>& island, std::vector<float>& blurred,
+                       std::vector<std::pair<std::string, double>>& timings) {
     Stopwatch clock;
-    const std::size_t texels = island.size();
+    const TextureFilter& f = job.filter;
+    const bool faces = job.kind == PointKind::Faces;
+    const std::size_t m = job.mesh->triangles.size();
+    const std::size_t n = faces ? m : job.mesh->vertices.size();
+    const std::size_t texels = static_cast<std::size_t>(f.width) * f.height;
     const std::size_t image = texels * sizeof(float);
-    const bool blur = f.taps >= 1;
-    // island and value, their dilation copies, and for the blur: the row pass's two sums and
-    // the taps (the result goes to the second value buffer).
-    std::vector<std::size_t> sizes = {image, image, image, image};
-    if (blur) sizes.insert(sizes.end(), {image, image, bytes_of(f.kernel)});
+    // uvs, values, face islands, triangles (vertex values) or read-back values (face values);
+    // owner, island, value and their dilation copies; the blur's two sums and taps.
+    std::vector<std::size_t> sizes = {6 * m * sizeof(float), n * sizeof(float),
+                                      m * sizeof(std::int32_t), faces ? m * sizeof(float)
+                                                                      : bytes_of(job.mesh->triangles),
+                                      image, image, image, image, image};
+    if (f.taps >= 1) sizes.insert(sizes.end(), {image, image, bytes_of(f.kernel)});
     check_fits(device, sizes);
     std::lock_guard<std::mutex> lock(s.mutex);
     const FinishOnUnwind finish_on_unwind(s.queue);
     cl_program program = smoothing_program(device, s);
-    std::unique_ptr<Buffer> island_a = std::make_unique<Buffer>(s, image, island.data());
-    std::unique_ptr<Buffer> value_a = std::make_unique<Buffer>(s, image, value.data());
-    std::unique_ptr<Buffer> island_b = std::make_unique<Buffer>(s, image, nullptr);
-    std::unique_ptr<Buffer> value_b = std::make_unique<Buffer>(s, image, nullptr);
+    // Non-blocking uploads: the host arrays stay unchanged until the blocking reads below.
+    Buffer uv_buffer(s, 6 * m * sizeof(float), job.uvs);
+    Buffer value_buffer(s, n * sizeof(float), job.values);
+    Buffer face_island(s, m * sizeof(std::int32_t), job.face_island);
+    std::unique_ptr<Buffer> triangles, read_values;
+    if (faces) read_values = std::make_unique<Buffer>(s, m * sizeof(float), nullptr);
+    else triangles = std::make_unique<Buffer>(s, bytes_of(job.mesh->triangles), job.mesh->triangles.data());
+    Buffer owner(s, texels * sizeof(std::uint32_t), nullptr);
+    auto island_a = std::make_unique<Buffer>(s, image, nullptr);
+    auto value_a = std::make_unique<Buffer>(s, image, nullptr);
     check(api()->clFinish(s.queue), "clFinish (upload)");
-    device_timings.emplace_back("filter: upload", clock.lap());
-    if (f.margin > 0) {
-      Kernel dilate(program, "sdf_texture_dilate");
-      dilate.arg(0, static_cast<cl_int>(f.width));
-      dilate.arg(1, static_cast<cl_int>(f.height));
-      for (int ring = 0; ring < f.margin; ++ring) {
-        dilate.arg(2, island_a->get());
-        dilate.arg(3, value_a->get());
-        dilate.arg(4, island_b->get());
-        dilate.arg(5, value_b->get());
-        image_launch(device, s, dilate, f.width, f.height);
-        std::swap(island_a, island_b);
-        std::swap(value_a, value_b);
-      }
+    timings.emplace_back("device: upload", clock.lap());
+
+    Kernel clear(program, "sdf_texture_clear");
+    clear.arg(0, static_cast<cl_uint>(texels));
+    clear.arg(1, owner.get());
+    clear.arg(2, island_a->get());
+    clear.arg(3, value_a->get());
+    const std::size_t local = device.gpu ? 64 : 1;
+    const std::size_t global = (texels + local - 1) / local * local;
+    launch(s, clear, 1, &global, &local);
+    const cl_uint faces_count = static_cast<cl_uint>(m);
+    Kernel rank(program, "sdf_texture_rank");
+    rank.arg(2, faces_count);
+    rank.arg(3, static_cast<cl_int>(f.width));
+    rank.arg(4, static_cast<cl_int>(f.height));
+    rank.arg(5, uv_buffer.get());
+    rank.arg(6, owner.get());
+    launch_chunks(device, s, rank, m);
+    Kernel draw(program, "sdf_texture_draw");
+    cl_uint a = 2;
+    draw.arg(a++, faces_count);
+    draw.arg(a++, static_cast<cl_int>(f.width));
+    draw.arg(a++, static_cast<cl_int>(f.height));
+    draw.arg(a++, uv_buffer.get());
+    draw.arg(a++, value_buffer.get());
+    draw.arg(a++, triangles ? triangles->get() : cl_mem{nullptr});  // null: face values
+    draw.arg(a++, f.lo);
+    draw.arg(a++, f.hi);
+    draw.arg(a++, face_island.get());
+    draw.arg(a++, owner.get());
+    draw.arg(a++, island_a->get());
+    draw.arg(a++, value_a->get());
+    launch_chunks(device, s, draw, m);
+    std::vector<std::unique_ptr<Buffer>> keep;
+    filter_on_device(device, s, program, f, island_a, value_a, keep);
+    if (faces) {
+      Kernel read_faces(program, "sdf_texture_read_faces");
+      a = 2;
+      read_faces.arg(a++, static_cast<cl_int>(f.width));
+      read_faces.arg(a++, static_cast<cl_int>(f.height));
+      read_faces.arg(a++, uv_buffer.get());
+      read_faces.arg(a++, face_island.get());
+      read_faces.arg(a++, island_a->get());
+      read_faces.arg(a++, value_a->get());
+      read_faces.arg(a++, f.lo);
+      read_faces.arg(a++, f.hi);
+      read_faces.arg(a++, value_buffer.get());
+      read_faces.arg(a++, read_values->get());
+      launch_chunks(device, s, read_faces, m);
     }
-    // Alive until the clFinish below.
-    std::unique_ptr<Buffer> row_value, row_weight, taps;
-    if (blur) {
-      row_value = std::make_unique<Buffer>(s, image, nullptr);
-      row_weight = std::make_unique<Buffer>(s, image, nullptr);
-      taps = std::make_unique<Buffer>(s, bytes_of(f.kernel), f.kernel.data());
-      Kernel rows(program, "sdf_texture_blur_rows");
-      cl_uint a = 0;
-      rows.arg(a++, static_cast<cl_int>(f.width));
-      rows.arg(a++, static_cast<cl_int>(f.height));
-      rows.arg(a++, island_a->get());
-      rows.arg(a++, value_a->get());
-      rows.arg(a++, taps->get());
-      rows.arg(a++, static_cast<cl_int>(f.taps));
-      rows.arg(a++, f.inv_range);
-      rows.arg(a++, row_value->get());
-      rows.arg(a++, row_weight->get());
-      image_launch(device, s, rows, f.width, f.height);
-      Kernel columns(program, "sdf_texture_blur_columns");
-      a = 0;
-      columns.arg(a++, static_cast<cl_int>(f.width));
-      columns.arg(a++, static_cast<cl_int>(f.height));
-      columns.arg(a++, island_a->get());
-      columns.arg(a++, row_value->get());
-      columns.arg(a++, row_weight->get());
-      columns.arg(a++, taps->get());
-      columns.arg(a++, static_cast<cl_int>(f.taps));
-      columns.arg(a++, f.inv_range);
-      columns.arg(a++, f.lo);
-      columns.arg(a++, f.hi);
-      columns.arg(a++, value_b->get());
-      image_launch(device, s, columns, f.width, f.height);
-      std::swap(value_a, value_b);
+    check(api()->clFinish(s.queue), "clFinish (texture)");
+    timings.emplace_back("device: kernels", clock.lap());
+    // The downloads queued, one wait (the queue runs in order).
+    if (images) {
+      island.resize(texels);
+      blurred.resize(texels);
+      check(api()->clEnqueueReadBuffer(s.queue, island_a->get(), CL_FALSE, 0, image,
+                                       island.data(), 0, nullptr, nullptr),
+            "clEnqueueReadBuffer");
+      check(api()->clEnqueueReadBuffer(s.queue, value_a->get(), CL_FALSE, 0, image,
+                                       blurred.data(), 0, nullptr, nullptr),
+            "clEnqueueReadBuffer");
     }
-    check(api()->clFinish(s.queue), "clFinish (filter)");
-    device_timings.emplace_back("filter: kernels", clock.lap());
-    // Both downloads queued, one wait (the queue runs in order).
-    check(api()->clEnqueueReadBuffer(s.queue, island_a->get(), CL_FALSE, 0, image, island.data(), 0,
-                                     nullptr, nullptr),
-          "clEnqueueReadBuffer");
-    read(s, *value_a, image, value.data());
-    device_timings.emplace_back("filter: download", clock.lap());
+    if (faces) read(s, *read_values, m * sizeof(float), out.data());
+    check(api()->clFinish(s.queue), "clFinish (download)");
+    timings.emplace_back("device: download", clock.lap());
   };
-  TextureSmoothing out =
-      smooth_texture(mesh, kind, values, uvs, options, keep_image, progress, 0.0, 1.0, filter);
-  out.timings.insert(out.timings.end(), device_timings.begin(), device_timings.end());
-  return out;
+  return smooth_texture(mesh, kind, values, uvs, options, keep_image, progress, 0.0, 1.0,
+                        on_device);
 }
 
 }  // namespace sdf::cl

@@ -1,10 +1,11 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
 // The OpenCL versions of two smoothing methods (paper 4.4): projected points (the octree is
 // built on the host each iteration and uploaded; the per-point gather runs on the device) and
-// texture space (rasterisation and read-back on the host; dilation and both blur passes on
-// the device). The device code is kernels/sdf_smooth_*.h, which the CPU versions run as C++,
-// so the results agree with the CPU's to float rounding (exp, and float sums where a device
-// has no double).
+// texture space (the UV islands are found on the host; drawing, dilation, both blur passes and
+// reading face values back run on the device; vertex values are read back on the host). The
+// device code is kernels/sdf_smooth_*.h, which the CPU versions run as C++, so the results
+// agree with the CPU's to float rounding (exp, and float sums where a device has no double;
+// texture smoothing runs on the CPU threads on such a device, since drawing needs double).
 #pragma once
 
 #include <vector>
