@@ -20,6 +20,7 @@
 #include "bvh_stats.h"
 #include "normalize.h"
 #include "parallel.h"
+#include "python_timings.h"
 #include "sdf.h"
 #ifdef SDF_HAVE_OPENCL
 #include "opencl/devices.h"
@@ -96,7 +97,8 @@ py::dict compute(const Doubles& vertices, const Int64s& triangles, int rays, dou
                  const std::string& sampling, std::uint32_t seed, const std::string& points,
                  unsigned threads, const py::object& progress, const std::string& engine,
                  const std::string& accel, int octree_max_depth, int octree_leaf_size,
-                 const std::string& orientation, const std::string& bvh_quality) {
+                 const std::string& orientation, const std::string& bvh_quality,
+                 const py::object& beside_cast) {
   sdf::Options options;
   options.rays = rays;
   options.cone_angle = cone_angle;
@@ -121,18 +123,24 @@ py::dict compute(const Doubles& vertices, const Int64s& triangles, int rays, dou
       return true;
     };
   }
+  // Also on the calling thread, taking the GIL for its Python code.
+  sdf::BesideCast beside;
+  if (!beside_cast.is_none()) {
+    beside = [&beside_cast] {
+      py::gil_scoped_acquire gil;
+      beside_cast();
+    };
+  }
   sdf::Output out;
   {
     sdf::Mesh mesh = to_mesh(vertices, triangles, threads);
     py::gil_scoped_release release;
-    out = sdf::compute(std::move(mesh), options, report);  // moved: no copy of a large mesh
+    out = sdf::compute(std::move(mesh), options, report, beside);  // moved: no copy of a large mesh
   }
   py::dict result;
   result["raw"] = py::array_t<float>(out.raw.size(), out.raw.data());
   result["valid_rays"] = py::array_t<std::int32_t>(out.valid_rays.size(), out.valid_rays.data());
-  py::dict timings;
-  for (const auto& [stage, seconds] : out.timings) timings[py::str(stage)] = seconds;
-  result["timings"] = timings;
+  result["timings"] = sdf::timings_dict(out.timings);
   result["fill"] = fill_name(out.fill);
   result["engine"] = out.engine;
   result["device_bytes"] = out.device_bytes;
@@ -324,7 +332,8 @@ PYBIND11_MODULE(_core, m) {
         py::arg("cone_angle"), py::arg("sampling"), py::arg("seed"), py::arg("points"),
         py::arg("threads"), py::arg("progress"), py::arg("engine") = "cpu",
         py::arg("accel") = "bvh", py::arg("octree_max_depth") = 10,
-        py::arg("octree_leaf_size") = 8, py::arg("orientation") = "auto", py::arg("bvh_quality") = "auto");
+        py::arg("octree_leaf_size") = 8, py::arg("orientation") = "auto", py::arg("bvh_quality") = "auto",
+        py::arg("beside_cast") = py::none());
   m.def("opencl_devices", &opencl_devices);
   m.def("octree_stats", &octree_stats, py::arg("vertices"), py::arg("triangles"),
         py::arg("max_depth") = 10, py::arg("leaf_size") = 8);

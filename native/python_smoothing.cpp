@@ -9,6 +9,7 @@
 
 #include "mesh_weld.h"
 #include "parallel.h"
+#include "python_timings.h"
 #include "smoothing_kring.h"
 #include "smoothing_projected.h"
 #include "smoothing_texture.h"
@@ -77,6 +78,12 @@ const void* device_for(const std::string& engine) {
 }
 #endif
 
+void require_corner_uvs(const Floats& uvs, const sdf::Mesh& mesh) {
+  if (uvs.ndim() != 3 || static_cast<std::size_t>(uvs.shape(0)) != mesh.triangles.size() ||
+      uvs.shape(1) != 3 || uvs.shape(2) != 2)
+    throw std::invalid_argument("uvs must have shape (m, 3, 2)");
+}
+
 py::array_t<float> to_array(const std::vector<float>& v) {
   return py::array_t<float>(static_cast<py::ssize_t>(v.size()), v.data());
 }
@@ -108,7 +115,7 @@ py::array_t<float> smooth_projected(const Doubles& vertices, const Int64s& trian
                                     int iterations, int max_depth, double min_points,
                                     double node_size_ratio, const std::string& branch_on,
                                     unsigned threads, const py::object& progress,
-                                    const std::string& engine) {
+                                    const std::string& engine, const py::object& timings) {
   const sdf::Mesh mesh = mesh_from(vertices, triangles);
   const sdf::PointKind kind = kind_from(points);
   const float* v = point_values(mesh, kind, values);
@@ -127,14 +134,16 @@ py::array_t<float> smooth_projected(const Doubles& vertices, const Int64s& trian
   // Written in place by the native code: no copy of the result.
   py::array_t<float> out(values.shape(0));
   float* o = out.mutable_data();
+  sdf::StageTimes stages;
   {
     py::gil_scoped_release release;
 #ifdef SDF_HAVE_OPENCL
-    if (device) sdf::cl::smooth_projected_opencl(*device, mesh, kind, v, options, o, report);
+    if (device) sdf::cl::smooth_projected_opencl(*device, mesh, kind, v, options, o, report, &stages);
     else
 #endif
-      sdf::smooth_projected_into(mesh, kind, v, options, o, report);
+      sdf::smooth_projected_into(mesh, kind, v, options, o, report, 0.0, 1.0, nullptr, &stages);
   }
+  if (!timings.is_none()) timings.attr("update")(sdf::timings_dict(stages));
   return out;
 }
 
@@ -142,13 +151,12 @@ py::dict smooth_texture(const Doubles& vertices, const Int64s& triangles, const 
                         const std::string& points, const Floats& uvs, int width, int height,
                         double radius, bool bilateral, double range_sigma, int margin,
                         double weld_tolerance, bool return_image, unsigned threads,
-                        const py::object& progress, const std::string& engine) {
+                        const py::object& progress, const std::string& engine,
+                        const sdf::UvIslands* islands) {
   const sdf::Mesh mesh = mesh_from(vertices, triangles);
   const sdf::PointKind kind = kind_from(points);
   const float* v = point_values(mesh, kind, values);
-  if (uvs.ndim() != 3 || static_cast<std::size_t>(uvs.shape(0)) != mesh.triangles.size() ||
-      uvs.shape(1) != 3 || uvs.shape(2) != 2)
-    throw std::invalid_argument("uvs must have shape (m, 3, 2)");
+  require_corner_uvs(uvs, mesh);
   sdf::TextureOptions options;
   options.width = width;
   options.height = height;
@@ -167,16 +175,15 @@ py::dict smooth_texture(const Doubles& vertices, const Int64s& triangles, const 
 #ifdef SDF_HAVE_OPENCL
     if (device)
       out = sdf::cl::smooth_texture_opencl(*device, mesh, kind, v, uvs.data(), options,
-                                           return_image, report);
+                                           return_image, report, islands);
     else
 #endif
-      out = sdf::smooth_texture(mesh, kind, v, uvs.data(), options, return_image, report);
+      out = sdf::smooth_texture(mesh, kind, v, uvs.data(), options, return_image, report, 0.0,
+                                1.0, nullptr, islands);
   }
   py::dict result;
   result["values"] = to_array(out.values);
-  py::dict timings;
-  for (const auto& [stage, seconds] : out.timings) timings[py::str(stage)] = seconds;
-  result["timings"] = timings;
+  result["timings"] = sdf::timings_dict(out.timings);
   if (return_image) {
     py::array_t<float> image({py::ssize_t(out.height), py::ssize_t(out.width)});
     py::array_t<bool> mask({py::ssize_t(out.height), py::ssize_t(out.width)});
@@ -202,12 +209,21 @@ py::tuple weld_vertices(const Doubles& vertices, const Int64s& triangles, double
   return py::make_tuple(merged, weld.count);
 }
 
+// Step 1 of texture smoothing on its own, for smooth_texture(islands=...): compute() finds
+// them while a device casts.
+sdf::UvIslands label_uv_islands(const Doubles& vertices, const Int64s& triangles,
+                                const Floats& uvs, double weld_tolerance, bool need_merged,
+                                unsigned threads) {
+  const sdf::Mesh mesh = mesh_from(vertices, triangles);
+  require_corner_uvs(uvs, mesh);
+  py::gil_scoped_release release;
+  return sdf::label_uv_islands(mesh, uvs.data(), weld_tolerance, need_merged, threads);
+}
+
 py::array_t<std::int32_t> uv_islands(const Doubles& vertices, const Int64s& triangles,
                                      const Floats& uvs, double weld_tolerance) {
   const sdf::Mesh mesh = mesh_from(vertices, triangles);
-  if (uvs.ndim() != 3 || static_cast<std::size_t>(uvs.shape(0)) != mesh.triangles.size() ||
-      uvs.shape(1) != 3 || uvs.shape(2) != 2)
-    throw std::invalid_argument("uvs must have shape (m, 3, 2)");
+  require_corner_uvs(uvs, mesh);
   std::vector<std::int32_t> islands;
   {
     py::gil_scoped_release release;
@@ -226,12 +242,17 @@ void bind_smoothing(py::module_& m) {
   m.def("smooth_projected", &smooth_projected, py::arg("vertices"), py::arg("triangles"),
         py::arg("values"), py::arg("points"), py::arg("iterations"), py::arg("max_depth"),
         py::arg("min_points"), py::arg("node_size_ratio"), py::arg("branch_on"), py::arg("threads"),
-        py::arg("progress"), py::arg("engine") = "cpu");
+        py::arg("progress"), py::arg("engine") = "cpu", py::arg("timings") = py::none());
   m.def("smooth_texture", &smooth_texture, py::arg("vertices"), py::arg("triangles"),
         py::arg("values"), py::arg("points"), py::arg("uvs"), py::arg("width"),
         py::arg("height"), py::arg("radius"), py::arg("bilateral"), py::arg("range_sigma"),
         py::arg("margin"), py::arg("weld_tolerance"), py::arg("return_image"),
-        py::arg("threads"), py::arg("progress"), py::arg("engine") = "cpu");
+        py::arg("threads"), py::arg("progress"), py::arg("engine") = "cpu",
+        py::arg("islands") = nullptr);
+  py::class_<sdf::UvIslands>(m, "UvIslands",
+                             "Texture smoothing's UV islands (label_uv_islands), opaque");
+  m.def("label_uv_islands", &label_uv_islands, py::arg("vertices"), py::arg("triangles"),
+        py::arg("uvs"), py::arg("weld_tolerance"), py::arg("need_merged"), py::arg("threads"));
   m.def("default_kring_k", [](std::size_t faces) { return sdf::default_kring_k(faces); },
         py::arg("faces"));
   m.def("weld_vertices", &weld_vertices, py::arg("vertices"), py::arg("triangles"),

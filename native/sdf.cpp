@@ -87,7 +87,7 @@ void cast_on_cpu(const Mesh& mesh, const Options& options, const SamplePoints& p
 #ifdef SDF_HAVE_OPENCL
 void cast_on_opencl(const Mesh& mesh, const Options& options, const SamplePoints& points,
                     const std::vector<std::uint32_t>& order, const Cone& cone, Output& out,
-                    Stopwatch& clock, const ProgressFn& progress) {
+                    Stopwatch& clock, const ProgressFn& progress, const BesideCast& beside_cast) {
   const std::vector<const cl::Device*> devices = cl::select_devices(options.engine);
   const BvhWidths wanted = cl::wanted_bvhs(devices);
   bool fast_build = options.bvh_quality == BvhQuality::Fast;
@@ -107,15 +107,25 @@ void cast_on_opencl(const Mesh& mesh, const Options& options, const SamplePoints
   }
   out.timings.emplace_back("build", clock.lap());
   report(progress, 0.05);
-  const cl::CastTimings t =
-      cl::cast_opencl(devices, scene, points, order, cone, minimum_closeness(mesh), options.threads,
-                      out.raw.data(), out.valid_rays.data(), progress, 0.05, 0.99);
+  double beside_seconds = 0.0;
+  std::function<void()> timed_beside_cast;
+  if (beside_cast)
+    timed_beside_cast = [&] {
+      Stopwatch beside;
+      beside_cast();
+      beside_seconds = beside.lap();
+    };
+  const cl::CastTimings t = cl::cast_opencl(
+      devices, scene, points, order, cone, minimum_closeness(mesh), options.threads,
+      out.raw.data(), out.valid_rays.data(), progress, 0.05, 0.99, timed_beside_cast);
   const double total = clock.lap();
   // Compile (or cache load) and set-up are what the three device stages leave of the total.
   out.timings.emplace_back("setup", std::max(0.0, total - t.upload - t.cast - t.download));
   out.timings.emplace_back("upload", t.upload);
   out.timings.emplace_back("cast", t.cast);
   out.timings.emplace_back("download", t.download);
+  // Overlapped with the cast: part of no other stage's time.
+  if (beside_cast) out.timings.emplace_back("beside cast", beside_seconds);
   out.device_bytes = t.device_bytes;
   out.engine.clear();
   for (const cl::Device* d : devices)
@@ -135,7 +145,8 @@ bool opencl_built() {
 #endif
 }
 
-Output compute(Mesh mesh, const Options& options, const ProgressFn& progress) {
+Output compute(Mesh mesh, const Options& options, const ProgressFn& progress,
+               const BesideCast& beside_cast) {
   const Cone cone = make_cone(options.rays, options.cone_angle, options.sampling, options.seed);
   const bool cpu = options.engine == "cpu";
   if (!cpu && options.engine.compare(0, 6, "opencl") != 0)
@@ -156,9 +167,13 @@ Output compute(Mesh mesh, const Options& options, const ProgressFn& progress) {
 
   if (cpu) {
     cast_on_cpu(mesh, options, points, order, cone, out, clock, progress);
+    if (beside_cast) {
+      beside_cast();
+      out.timings.emplace_back("beside cast", clock.lap());
+    }
   } else {
 #ifdef SDF_HAVE_OPENCL
-    cast_on_opencl(mesh, options, points, order, cone, out, clock, progress);
+    cast_on_opencl(mesh, options, points, order, cone, out, clock, progress, beside_cast);
 #endif
   }
 

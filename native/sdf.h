@@ -3,6 +3,7 @@
 // Each stage is also callable on its own (sampling.h, bvh.h, octree.h, cpu_engine.h, fill.h).
 #pragma once
 
+#include <functional>
 #include <string>
 #include <utility>
 #include <vector>
@@ -52,9 +53,16 @@ struct Output {
   OrientationReport orientation;           // faces the computation reversed
 };
 
+// Host work that needs no result of the computation, run once on the calling thread: while
+// an OpenCL device casts (when the host would only wait), or after the CPU engine's cast.
+// compute(smoothing='texture') finds the UV islands there. An exception it throws ends the
+// computation and propagates.
+using BesideCast = std::function<void()>;
+
 // Takes the mesh by value: the computation reorients its own copy, and a caller that has no
 // further use for its mesh moves it in and saves the copy (~10 ms per million faces).
-Output compute(Mesh mesh, const Options& options, const ProgressFn& progress = nullptr);
+Output compute(Mesh mesh, const Options& options, const ProgressFn& progress = nullptr,
+               const BesideCast& beside_cast = nullptr);
 
 // Whether this build has the OpenCL engine (it still needs a driver at run time).
 bool opencl_built();

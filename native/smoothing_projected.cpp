@@ -413,7 +413,8 @@ bool gather_sphere(const PointOctreeNode* nodes, glm::vec3 center, float radius,
 void smooth_projected_into(const Mesh& mesh, PointKind kind, const float* values,
                            const ProjectedOptions& options, float* out,
                            const ProgressFn& progress, double progress_from, double progress_to,
-                           const ProjectedGatherFn& gather) {
+                           const ProjectedGatherFn& gather, StageTimes* timings) {
+  Stopwatch clock;
   if (options.iterations < 0)
     throw std::invalid_argument("iterations must be >= 0, got " +
                                 std::to_string(options.iterations));
@@ -427,8 +428,10 @@ void smooth_projected_into(const Mesh& mesh, PointKind kind, const float* values
   auto unchanged = [&] { std::copy(values, values + n, out); };
   if (n == 0 || range.lo == range.hi || options.iterations == 0) return unchanged();
 
+  add_time(timings, "checks", clock.lap());
   if (progress && !progress(progress_from)) throw Cancelled();
   const PointFrames frames(mesh, kind, options.threads);
+  add_time(timings, "frames", clock.lap());
   // points[i]: point i moved inward by half its value (xyz) and that value (w). Points with no
   // inward axis (zero-area faces, lone vertices) are not moved: they stay out of the tree
   // (member 0), but still gather around their own position.
@@ -455,11 +458,14 @@ void smooth_projected_into(const Mesh& mesh, PointKind kind, const float* values
       summary.store(begin, chunk);
     });
     summary.finish();
+    add_time(timings, "points", clock.lap());
     const PointOctree tree = build_octree(PackedPoints{points.data(), member.data(), n}, summary, options);
     const std::vector<PointOctreeNode>& nodes = tree.nodes;
+    add_time(timings, "octree", clock.lap());
     if (nodes.empty()) return unchanged();  // no point has an axis (then on the first iteration)
-    if (gather) {
+    if (gather) {  // it adds its own stages
       gather(nodes, points.data(), n, range.lo, range.hi, out);
+      clock.lap();
       if (progress && !progress(progress_from + (it + 1) * span)) throw Cancelled();
       continue;
     }
@@ -492,6 +498,7 @@ void smooth_projected_into(const Mesh& mesh, PointKind kind, const float* values
         for (std::size_t i = begin; i < end; ++i)
           if (!member[i]) smooth_point(i);
       });
+    add_time(timings, "gather", clock.lap());
   }
   if (progress && !progress(progress_to)) throw Cancelled();
 }

@@ -19,6 +19,7 @@
 #include "mesh.h"
 #include "parallel.h"
 #include "sampling.h"
+#include "stopwatch.h"
 
 namespace sdf {
 
@@ -86,9 +87,12 @@ std::vector<float> smooth_projected(const Mesh& mesh, PointKind kind, const floa
 
 // The same, writing the result into out[0, point count) (which may be the caller's final
 // array, e.g. a NumPy one: no copy of the result is made). out must not overlap values.
+// timings: where given, seconds per stage are added (checks, frames, points, octree, gather;
+// bench/smoothing_stages.py prints them).
 void smooth_projected_into(const Mesh& mesh, PointKind kind, const float* values,
                            const ProjectedOptions& options, float* out,
                            const ProgressFn& progress = nullptr, double progress_from = 0.0,
-                           double progress_to = 1.0, const ProjectedGatherFn& gather = nullptr);
+                           double progress_to = 1.0, const ProjectedGatherFn& gather = nullptr,
+                           StageTimes* timings = nullptr);
 
 }  // namespace sdf

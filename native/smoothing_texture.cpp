@@ -294,7 +294,8 @@ void read_back_vertices(const Mesh& mesh, const float* uvs, const UvIslands& isl
 TextureSmoothing smooth_texture(const Mesh& mesh, PointKind kind, const float* values,
                                 const float* uvs, const TextureOptions& options, bool keep_image,
                                 const ProgressFn& progress, double progress_from,
-                                double progress_to, const TextureDeviceFn& device) {
+                                double progress_to, const TextureDeviceFn& device,
+                                const UvIslands* given_islands) {
   const int width = options.width, height = options.height;
   if (width < 1 || height < 1 || width > kMaxSize || height > kMaxSize)
     throw std::invalid_argument("the texture size must be in [1, " + std::to_string(kMaxSize) +
@@ -328,8 +329,15 @@ TextureSmoothing smooth_texture(const Mesh& mesh, PointKind kind, const float* v
   report(0.0);
   timings.emplace_back("checks", clock.lap());
   // Vertex values are averaged over merged vertices: those need the weld whatever the islands.
-  const UvIslands islands = label_uv_islands(mesh, uvs, options.weld_tolerance, !faces, threads);
-  timings.emplace_back(islands.merged.empty() ? "islands" : "islands (welded)", clock.lap());
+  UvIslands found;
+  if (given_islands) {
+    if (given_islands->face_island.size() != m)
+      throw std::invalid_argument("the UV islands given are of another mesh");
+  } else {
+    found = label_uv_islands(mesh, uvs, options.weld_tolerance, !faces, threads);
+    timings.emplace_back(found.merged.empty() ? "islands" : "islands (welded)", clock.lap());
+  }
+  const UvIslands& islands = given_islands ? *given_islands : found;
   // Dilate and blur as a TextureFilter says.
   TextureFilter f;
   f.width = width;

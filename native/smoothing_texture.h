@@ -58,7 +58,7 @@ struct TextureSmoothing {
   std::vector<std::uint8_t> mask;
   int width = 0, height = 0;
   // Seconds per stage, in order (checks, islands, rasterise, dilate and blur, read back, image;
-  // on a device, its own stages in place of the middle three): bench/texture_stages.py
+  // on a device, its own stages in place of the middle three): bench/smoothing_stages.py
   // prints them.
   std::vector<std::pair<std::string, double>> timings;
 };
@@ -94,10 +94,13 @@ using TextureDeviceFn = std::function<void(
 // uvs: per face corner, (u, v) for corners 0, 1, 2 of face 0, then face 1, ... (6 floats a
 // face), finite. keep_image: fill image and mask (else they stay empty). Throws
 // std::invalid_argument for bad options, non-finite values or UVs. device: null runs
-// steps 2 to 5 on the CPU threads.
+// steps 2 to 5 on the CPU threads. islands: step 1 done already, by label_uv_islands on this
+// mesh and these UVs with options.weld_tolerance and need_merged for vertex values (null:
+// found here).
 TextureSmoothing smooth_texture(const Mesh& mesh, PointKind kind, const float* values,
                                 const float* uvs, const TextureOptions& options, bool keep_image,
                                 const ProgressFn& progress = nullptr, double progress_from = 0.0,
-                                double progress_to = 1.0, const TextureDeviceFn& device = nullptr);
+                                double progress_to = 1.0, const TextureDeviceFn& device = nullptr,
+                                const UvIslands* islands = nullptr);
 
 }  // namespace sdf

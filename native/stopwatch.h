@@ -3,8 +3,26 @@
 #pragma once
 
 #include <chrono>
+#include <string>
+#include <utility>
+#include <vector>
 
 namespace sdf {
+
+// Seconds per stage, in the order the stages first ran.
+using StageTimes = std::vector<std::pair<std::string, double>>;
+
+// Adds seconds to `stage` (a stage run again, e.g. per iteration, sums); nothing when times
+// is null.
+inline void add_time(StageTimes* times, const std::string& stage, double seconds) {
+  if (!times) return;
+  for (auto& [name, total] : *times)
+    if (name == stage) {
+      total += seconds;
+      return;
+    }
+  times->emplace_back(stage, seconds);
+}
 
 class Stopwatch {
  public:

@@ -280,7 +280,8 @@ CastTimings cast_opencl(const std::vector<const Device*>& devices, const Scene& 
                         const SamplePoints& points, const std::vector<std::uint32_t>& order,
                         const Cone& cone, float min_closeness, unsigned host_threads, float* raw,
                         std::int32_t* valid_rays, const ProgressFn& progress,
-                        double progress_from, double progress_to) {
+                        double progress_from, double progress_to,
+                        const std::function<void()>& beside_cast) {
   const std::size_t n = points.size();
   if ((scene.bvh && scene.bvh->empty()) || (scene.bvh8 && scene.bvh8->empty())) {
     // Every triangle has zero area: nothing can be hit, and an empty tree has no root to read.
@@ -315,7 +316,15 @@ CastTimings cast_opencl(const std::vector<const Device*>& devices, const Scene& 
     });
   }
   bool cancelled = false;
-  std::exception_ptr progress_failure;
+  std::exception_ptr caller_failure;
+  if (beside_cast) {
+    try {
+      beside_cast();
+    } catch (...) {
+      caller_failure = std::current_exception();  // rethrown once the devices have stopped
+      work.stop = true;
+    }
+  }
   {
     std::unique_lock<std::mutex> lock(done_mutex);
     while (work.done.load() < n && !work.stop.load()) {
@@ -327,7 +336,7 @@ CastTimings cast_opencl(const std::vector<const Device*>& devices, const Scene& 
       try {
         keep_going = progress(progress_from + (progress_to - progress_from) * fraction);
       } catch (...) {
-        progress_failure = std::current_exception();
+        caller_failure = std::current_exception();
         keep_going = false;
       }
       lock.lock();
@@ -338,7 +347,7 @@ CastTimings cast_opencl(const std::vector<const Device*>& devices, const Scene& 
     }
   }
   for (std::thread& t : threads) t.join();
-  if (progress_failure) std::rethrow_exception(progress_failure);
+  if (caller_failure) std::rethrow_exception(caller_failure);
   if (cancelled) throw Cancelled();
   CastTimings timings;
   for (const DeviceResult& r : results) {

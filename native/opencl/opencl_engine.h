@@ -4,6 +4,7 @@
 #pragma once
 
 #include <cstdint>
+#include <functional>
 #include <string>
 #include <utility>
 #include <vector>
@@ -50,11 +51,13 @@ struct CastTimings {
 // Writes raw[i] (-1 when no ray was kept) and valid_rays[i].
 // Throws Error for OpenCL failures (naming the call and code) and std::runtime_error when
 // the scene does not fit a device's memory. Progress covers [progress_from, progress_to].
+// beside_cast (sdf.h's BesideCast) runs on the calling thread once the devices have started.
 CastTimings cast_opencl(const std::vector<const Device*>& devices, const Scene& scene,
                         const SamplePoints& points, const std::vector<std::uint32_t>& order,
                         const Cone& cone, float min_closeness, unsigned host_threads, float* raw,
                         std::int32_t* valid_rays, const ProgressFn& progress,
-                        double progress_from, double progress_to);
+                        double progress_from, double progress_to,
+                        const std::function<void()>& beside_cast = nullptr);
 
 // Test hooks: build `source` for device `index` (the build log comes back in the Error), and
 // run the layout probe kernel, returning what it wrote.

@@ -74,7 +74,7 @@ class FinishOnUnwind {
 
 void smooth_projected_opencl(const Device& device, const Mesh& mesh, PointKind kind,
                              const float* values, const ProjectedOptions& options, float* out,
-                             const ProgressFn& progress) {
+                             const ProgressFn& progress, StageTimes* timings) {
   DeviceState& s = state_of(device);
   // The points' and results' buffers are made on the first iteration and kept for the others.
   // Per iteration: one upload of the packed points (xyz and value, 16 bytes a point), one of
@@ -83,6 +83,7 @@ void smooth_projected_opencl(const Device& device, const Mesh& mesh, PointKind k
   auto gather = [&](const std::vector<PointOctreeNode>& nodes, const glm::vec4* points,
                     std::size_t n, float lo, float hi, float* next) {
     static_assert(sizeof(glm::vec4) == 4 * sizeof(float), "vec4 is 4 packed floats (a float4)");
+    Stopwatch clock;
     const std::size_t point_bytes = n * sizeof(glm::vec4), next_bytes = n * sizeof(float);
     check_fits(device, {bytes_of(nodes), point_bytes, next_bytes});
     std::lock_guard<std::mutex> lock(s.mutex);
@@ -116,9 +117,12 @@ void smooth_projected_opencl(const Device& device, const Mesh& mesh, PointKind k
       const std::size_t global = (count + local - 1) / local * local;
       launch(s, kernel, 1, &global, &local);
     }
+    check(api()->clFinish(s.queue), "clFinish (gather)");
+    add_time(timings, "device: upload and gather", clock.lap());
     read(s, *next_buffer, next_bytes, next);
+    add_time(timings, "device: download", clock.lap());
   };
-  smooth_projected_into(mesh, kind, values, options, out, progress, 0.0, 1.0, gather);
+  smooth_projected_into(mesh, kind, values, options, out, progress, 0.0, 1.0, gather, timings);
 }
 
 namespace {
@@ -202,11 +206,12 @@ void filter_on_device(const Device& device, DeviceState& s, cl_program program,
 TextureSmoothing smooth_texture_opencl(const Device& device, const Mesh& mesh, PointKind kind,
                                        const float* values, const float* uvs,
                                        const TextureOptions& options, bool keep_image,
-                                       const ProgressFn& progress) {
+                                       const ProgressFn& progress, const UvIslands* islands) {
   // Drawing and reading back compute texel coverage in double: a device without it would
   // cover other texels than the CPU, so there the CPU threads do it all.
   if (!device.fp64)
-    return smooth_texture(mesh, kind, values, uvs, options, keep_image, progress);
+    return smooth_texture(mesh, kind, values, uvs, options, keep_image, progress, 0.0, 1.0,
+                          nullptr, islands);
   DeviceState& s = state_of(device);
   auto on_device = [&](const TextureJob& job, bool images, std::vector<float>& out,
                        std::vector<std::int32_t>& island, std::vector<float>& blurred,
@@ -308,7 +313,7 @@ TextureSmoothing smooth_texture_opencl(const Device& device, const Mesh& mesh, P
     timings.emplace_back("device: download", clock.lap());
   };
   return smooth_texture(mesh, kind, values, uvs, options, keep_image, progress, 0.0, 1.0,
-                        on_device);
+                        on_device, islands);
 }
 
 }  // namespace sdf::cl

@@ -20,12 +20,13 @@ namespace sdf::cl {
 // std::runtime_error when the octree and points do not fit the device.
 void smooth_projected_opencl(const Device& device, const Mesh& mesh, PointKind kind,
                              const float* values, const ProjectedOptions& options, float* out,
-                             const ProgressFn& progress = nullptr);
+                             const ProgressFn& progress = nullptr, StageTimes* timings = nullptr);
 
 // As sdf::smooth_texture, on `device` (the same errors as smooth_projected_opencl).
 TextureSmoothing smooth_texture_opencl(const Device& device, const Mesh& mesh, PointKind kind,
                                        const float* values, const float* uvs,
                                        const TextureOptions& options, bool keep_image,
-                                       const ProgressFn& progress = nullptr);
+                                       const ProgressFn& progress = nullptr,
+                                       const UvIslands* islands = nullptr);
 
 }  // namespace sdf::cl

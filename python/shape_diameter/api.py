@@ -12,7 +12,8 @@ import numpy as np
 
 from . import _core
 from .normalization import NORMALIZATIONS, normalize_values
-from .smoothing import check_smoothing, smooth
+from .smoothing import _run as run_smoothing_checked
+from .smoothing import check_smoothing, uv_islands_for
 
 SAMPLINGS = ("fibonacci", "random", "cgal")
 POINTS = ("faces", "vertices")
@@ -238,8 +239,8 @@ def compute(
     _check_choice("bvh_quality", bvh_quality, BVH_QUALITIES)
     _check_integer("octree_depth", octree_depth, 0, 16)
     _check_integer("octree_leaf_size", octree_leaf_size, 1, 2**31 - 1)
-    check_smoothing(smoothing, smoothing_options, uvs=uvs, face_count=len(t),
-                    vertex_count=len(v))  # fmt: skip
+    smoothing_resolved = check_smoothing(smoothing, smoothing_options, uvs=uvs,
+                                         face_count=len(t), vertex_count=len(v), triangles=t)
     if smoothing_options and smoothing_options.get("return_image"):
         raise ValueError("return_image is an option of shape_diameter.smooth(), not compute()")
     chosen = _resolve_engine(engine)
@@ -248,11 +249,19 @@ def compute(
     if progress is not None and smoothing != "none":
         cast_progress = lambda fraction: progress(0.9 * fraction)  # noqa: E731
 
+    # Texture smoothing's UV islands depend on the mesh and UVs alone: found while a device
+    # casts, when the host would only wait (for the CPU engine, after its cast).
+    islands = []
+
+    def find_islands():
+        islands.append(uv_islands_for(v, t, points, smoothing_resolved, int(threads)))
+
     def run(engine_name):
+        islands.clear()
         return _core.compute(
             v, t, int(rays), float(cone_angle), sampling, int(seed), points, int(threads),
             cast_progress, engine_name, accel, int(octree_depth), int(octree_leaf_size),
-            orientation, bvh_quality,
+            orientation, bvh_quality, find_islands if smoothing == "texture" else None,
         )
 
     out, fallback = _run_with_fallback(run, chosen, engine, "")
@@ -271,10 +280,12 @@ def compute(
         smooth_engine = "cpu" if fallback else chosen
 
         def run_smoothing(engine_name):
-            return smooth(
-                v, t, raw, smoothing, uvs=uvs, points=points, threads=int(threads),
-                progress=None if progress is None else lambda f: progress(0.9 + 0.1 * f),
-                engine=engine_name, **(smoothing_options or {}),
+            # compute()'s own checked mesh, options and SDF (raw: finite, >= 0): no second
+            # round of checks.
+            return run_smoothing_checked(
+                v, t, raw, points, smoothing, smoothing_resolved, int(threads),
+                None if progress is None else lambda f: progress(0.9 + 0.1 * f),
+                engine_name, islands[0] if islands else None,
             )
 
         values, smoothing_fallback = _run_with_fallback(

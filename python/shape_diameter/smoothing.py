@@ -106,8 +106,10 @@ def smooth(
         as the CPU (kernels/sdf_smooth_*.h): results agree within 1e-4 relative, and are
         usually the CPU's bits (the bilateral weights' exp, and sums on a device without
         double precision, can differ in the last bits). 'projected' builds its octree on the
-        host and gathers on the device; 'texture' rasterises and reads back on the host and
-        dilates and blurs on the device. 'kring' and 'none' always run on the CPU. A device
+        host and gathers on the device; 'texture' finds the UV islands on the host and draws,
+        dilates, blurs and reads face values back on the device (vertex values are read back
+        on the host; a device without double precision leaves 'texture' to the CPU threads).
+        'kring' and 'none' always run on the CPU. A device
         name that matches nothing raises ValueError listing the devices.
 
     Options of 'kring' (Gaussian over ring index on the mesh, duplicate positions merged):
@@ -224,7 +226,17 @@ def check_smoothing(
     return o
 
 
-def _run(v, t, values, points, method, o, threads, progress, engine="cpu"):
+def uv_islands_for(v, t, points, o, threads):
+    """Texture smoothing's first step alone (the UV islands), for _run(islands=...): v, t and
+    the options `o` as check_smoothing returns them (with 'uvs')."""
+    return _core.label_uv_islands(
+        v, t, o["uvs"], -1.0 if o["weld_tolerance"] is None else o["weld_tolerance"],
+        points == "vertices", threads,
+    )
+
+
+def _run(v, t, values, points, method, o, threads, progress, engine="cpu", islands=None):
+    # v, t, values and the options o are checked already (compute() and smooth() check them).
     if method == "none":
         return values.copy()
     if method == "kring":
@@ -246,7 +258,7 @@ def _run(v, t, values, points, method, o, threads, progress, engine="cpu"):
         v, t, values, points, o["uvs"], width, height, o["radius"], o["bilateral"],
         o["range_sigma"], o["margin"],
         -1.0 if o["weld_tolerance"] is None else o["weld_tolerance"],
-        o["return_image"], threads, progress, engine,
+        o["return_image"], threads, progress, engine, islands,
     )
     if o["return_image"]:
         return TextureResult(out["values"], out["image"], out["mask"])

@@ -133,6 +133,32 @@ def test_compute_smooths_on_the_engine_that_cast(spot, method):
         cpu.values, sd.smooth(v, t, cpu.raw, method, uvs=uvs, engine="cpu", **options))
 
 
+@pytest.mark.parametrize("engine", ["cpu", DEVICE])
+def test_work_beside_the_cast_runs_once_and_its_error_ends_the_computation(spot, engine):
+    """compute() finds texture smoothing's UV islands while a device casts (_core.compute's
+    beside_cast hook): it runs once; an exception raised there stops the devices and
+    propagates, and the next computation runs normally."""
+    from shape_diameter import _core
+
+    v, t, _, _, _ = spot
+    calls = []
+
+    def args(hook):
+        return (v.astype(np.float64), t.astype(np.int64), 30, 120.0, "fibonacci", 0, "faces",
+                0, None, engine, "bvh", 10, 8, "auto", "auto", hook)  # fmt: skip
+
+    out = _core.compute(*args(lambda: calls.append(1)))
+    assert calls == [1] and "beside cast" in out["timings"]
+
+    def fail():
+        raise KeyError("beside the cast")
+
+    with pytest.raises(KeyError, match="beside the cast"):
+        _core.compute(*args(fail))
+    again = _core.compute(*args(None))
+    np.testing.assert_array_equal(again["raw"], out["raw"])
+
+
 def test_kring_runs_on_the_cpu_whatever_the_engine(spot):
     v, t, _, faces, _ = spot
     np.testing.assert_array_equal(sd.smooth(v, t, faces, "kring", engine=DEVICE),
