@@ -7,9 +7,9 @@
 
 /* Projected points, one iteration: one work item per point of [first, first + count).
  * points: the projected point (xyz) and its value (w), one aligned 16-byte load a point. */
-__kernel void sdf_smooth_projected(__global const SdfPointNode* nodes,
+__kernel void sdf_smooth_projected(uint first, uint count, __global const SdfPointNode* nodes,
                                    __global const float4* points, float lo, float hi,
-                                   uint first, uint count, __global float* next) {
+                                   __global float* next) {
   uint gid = get_global_id(0);
   if (gid >= count) return;
   uint i = first + gid;

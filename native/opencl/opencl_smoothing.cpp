@@ -37,6 +37,22 @@ void read(DeviceState& s, const Buffer& buffer, std::size_t bytes, void* out) {
         "clEnqueueReadBuffer");
 }
 
+// Launches `kernel` over [0, count) items, one work item each, in launches of at most
+// `chunk` items (short ones: display watchdogs), with arguments 0 and 1 set to each launch's
+// first item and size. Work-group size as for casting: 64 on GPUs, 1 on CPUs (PoCL
+// vectorises a group as a loop, which divergent loops defeat).
+void launch_chunks(const Device& device, DeviceState& s, Kernel& kernel, std::size_t count,
+                   std::size_t chunk) {
+  const std::size_t local = device.gpu ? 64 : 1;
+  for (std::size_t first = 0; first < count; first += chunk) {
+    const std::size_t n = std::min(chunk, count - first);
+    kernel.arg(0, static_cast<cl_uint>(first));
+    kernel.arg(1, static_cast<cl_uint>(n));
+    const std::size_t global = (n + local - 1) / local * local;
+    launch(s, kernel, 1, &global, &local);
+  }
+}
+
 // 2-D global size rounded up to the local size (8 x 8 on GPUs; the driver's choice on CPUs).
 void image_launch(const Device& device, DeviceState& s, const Kernel& kernel, int width,
                   int height) {
@@ -100,23 +116,12 @@ void smooth_projected_opencl(const Device& device, const Mesh& mesh, PointKind k
                                       points, 0, nullptr, nullptr),
           "clEnqueueWriteBuffer");
     Kernel kernel(program, "sdf_smooth_projected");
-    kernel.arg(0, node_buffer.get());
-    kernel.arg(1, points_buffer->get());
-    kernel.arg(2, lo);
-    kernel.arg(3, hi);
+    kernel.arg(2, node_buffer.get());
+    kernel.arg(3, points_buffer->get());
+    kernel.arg(4, lo);
+    kernel.arg(5, hi);
     kernel.arg(6, next_buffer->get());
-    // Launches of at most 2^18 points keep each one short (display watchdogs). Work-group
-    // size as for casting: 64 on GPUs, 1 on CPUs (PoCL vectorises a group as a loop, which
-    // divergent traversals defeat).
-    const std::size_t local = device.gpu ? 64 : 1;
-    constexpr std::size_t kChunk = std::size_t(1) << 18;
-    for (std::size_t first = 0; first < n; first += kChunk) {
-      const std::size_t count = std::min(kChunk, n - first);
-      kernel.arg(4, static_cast<cl_uint>(first));
-      kernel.arg(5, static_cast<cl_uint>(count));
-      const std::size_t global = (count + local - 1) / local * local;
-      launch(s, kernel, 1, &global, &local);
-    }
+    launch_chunks(device, s, kernel, n, std::size_t{1} << 18);
     check(api()->clFinish(s.queue), "clFinish (gather)");
     add_time(timings, "device: upload and gather", clock.lap());
     read(s, *next_buffer, next_bytes, next);
@@ -126,20 +131,6 @@ void smooth_projected_opencl(const Device& device, const Mesh& mesh, PointKind k
 }
 
 namespace {
-
-// Launches `kernel` over [0, count) items in chunks of at most 2^20 (display watchdogs), with
-// arguments 0 and 1 set to each chunk's first item and size.
-void launch_chunks(const Device& device, DeviceState& s, Kernel& kernel, std::size_t count) {
-  const std::size_t local = device.gpu ? 64 : 1;
-  constexpr std::size_t kChunk = std::size_t(1) << 20;
-  for (std::size_t first = 0; first < count; first += kChunk) {
-    const std::size_t n = std::min(kChunk, count - first);
-    kernel.arg(0, static_cast<cl_uint>(first));
-    kernel.arg(1, static_cast<cl_uint>(n));
-    const std::size_t global = (n + local - 1) / local * local;
-    launch(s, kernel, 1, &global, &local);
-  }
-}
 
 // Steps 3 and 4 on the device: dilates island/value and blurs value, swapping each pair so
 // that island and value hold the results (the blurred image in value).
@@ -213,6 +204,7 @@ TextureSmoothing smooth_texture_opencl(const Device& device, const Mesh& mesh, P
     return smooth_texture(mesh, kind, values, uvs, options, keep_image, progress, 0.0, 1.0,
                           nullptr, islands);
   DeviceState& s = state_of(device);
+  constexpr std::size_t kFaceChunk = std::size_t{1} << 20;  // faces per launch
   auto on_device = [&](const TextureJob& job, bool images, std::vector<float>& out,
                        std::vector<std::int32_t>& island, std::vector<float>& blurred,
                        std::vector<std::pair<std::string, double>>& timings) {
@@ -262,7 +254,7 @@ TextureSmoothing smooth_texture_opencl(const Device& device, const Mesh& mesh, P
     rank.arg(4, static_cast<cl_int>(f.height));
     rank.arg(5, uv_buffer.get());
     rank.arg(6, owner.get());
-    launch_chunks(device, s, rank, m);
+    launch_chunks(device, s, rank, m, kFaceChunk);
     Kernel draw(program, "sdf_texture_draw");
     cl_uint a = 2;
     draw.arg(a++, faces_count);
@@ -277,7 +269,7 @@ TextureSmoothing smooth_texture_opencl(const Device& device, const Mesh& mesh, P
     draw.arg(a++, owner.get());
     draw.arg(a++, island_a->get());
     draw.arg(a++, value_a->get());
-    launch_chunks(device, s, draw, m);
+    launch_chunks(device, s, draw, m, kFaceChunk);
     std::vector<std::unique_ptr<Buffer>> keep;
     filter_on_device(device, s, program, f, island_a, value_a, keep);
     if (faces) {
@@ -293,7 +285,7 @@ TextureSmoothing smooth_texture_opencl(const Device& device, const Mesh& mesh, P
       read_faces.arg(a++, f.hi);
       read_faces.arg(a++, value_buffer.get());
       read_faces.arg(a++, read_values->get());
-      launch_chunks(device, s, read_faces, m);
+      launch_chunks(device, s, read_faces, m, kFaceChunk);
     }
     check(api()->clFinish(s.queue), "clFinish (texture)");
     timings.emplace_back("device: kernels", clock.lap());
