@@ -26,14 +26,14 @@
 
 namespace {
 
-constexpr int kPointsPerGroup = 4;  // as opencl_engine.cpp
 
 // Traversal counters (variant "count"): per ray.
 struct Counters {
   unsigned long long inner, leaves, tris, pushes, rays;
 };
 
-// sdf_bvh_closest_hit (kernels/sdf_bvh_traverse.h) with a choice of where the stack lives:
+// The binary BVH traversal as kernels/sdf_bvh_traverse.h had it before 16-byte loads
+// (commit 579c5e9), with a choice of where the stack lives:
 // SHS > 0 keeps its first SHS entries in shared memory (entry k of this thread at
 // sh[k * stride]), deeper ones in the local-memory arrays; COUNT adds traversal counters.
 // LDG4: node boxes read as two 16-byte loads each. The visiting order is the header's.
@@ -125,9 +125,10 @@ __device__ __forceinline__ SdfHit trav(const SdfBvhNode* __restrict__ nodes,
 }
 
 // SDF_CAST_PER_RAY_BODY of kernels/sdf_kernels.cl, line for line. V: 0 = the header's
-// traversal; 1 = trav<...> with the template arguments below.
-template <int V, int SHS, bool COUNT, bool LDG4, int MINB>
-__global__ void __launch_bounds__(kPointsPerGroup * 32, MINB)
+// traversal; 1 = trav<...> with the template arguments below. PPG points per block (the
+// OpenCL engine: 4), MINB the blocks per SM asked of the register allocator (1: no cap).
+template <int V, int SHS, bool COUNT, bool LDG4, int MINB, int PPG>
+__global__ void __launch_bounds__(PPG * 32, MINB)
     cast_per_ray(const SdfBvhNode* __restrict__ nodes, const SdfTriangle* __restrict__ tris,
                  const float* __restrict__ origins, const float* __restrict__ axes,
                  const float* __restrict__ tangents, const int* __restrict__ own_face,
@@ -204,24 +205,25 @@ struct VariantDef {
   const char* name;
   const void* fn;
   int shs;
+  int ppg;
 };
 
-#define VAR(NAME, V, SHS, COUNT, LDG4, MINB) \
-  {NAME, reinterpret_cast<const void*>(&cast_per_ray<V, SHS, COUNT, LDG4, MINB>), SHS}
+#define VARP(NAME, V, SHS, COUNT, LDG4, MINB, PPG) \
+  {NAME, reinterpret_cast<const void*>(&cast_per_ray<V, SHS, COUNT, LDG4, MINB, PPG>), SHS, PPG}
+#define VAR(NAME, V, SHS, COUNT, LDG4, MINB) VARP(NAME, V, SHS, COUNT, LDG4, MINB, 4)
 
 const VariantDef kVariants[] = {
-    VAR("base", 0, 0, false, false, 1),          // the header's traversal, as OpenCL runs it
-    VAR("copy", 1, 0, false, false, 1),          // trav<> with the header's choices
-    VAR("count", 1, 0, true, false, 1),          // + traversal counters
-    VAR("ldg4", 1, 0, false, true, 1),           // nodes as 16-byte loads
-    VAR("sh8", 1, 8, false, false, 1),           // first 8 stack entries in shared memory
-    VAR("sh16", 1, 16, false, false, 1),         // first 16
-    VAR("sh8_ldg4", 1, 8, false, true, 1),
-    VAR("minb8", 0, 0, false, false, 8),         // <= 64 registers
-    VAR("minb12", 0, 0, false, false, 12),       // <= 40
-    VAR("minb16", 0, 0, false, false, 16),       // <= 32
-    VAR("sh8_minb12", 1, 8, false, false, 12),
-    VAR("sh8_minb16", 1, 8, false, false, 16),
+    VAR("new", 0, 0, false, false, 1),           // the header's traversal (16-byte loads)
+    VAR("old", 1, 0, false, false, 1),           // the traversal before (commit 579c5e9)
+    VAR("count", 1, 0, true, false, 1),          // old + traversal counters
+    VAR("old_ldg4", 1, 0, false, true, 1),       // old with node boxes as 16-byte loads
+    VAR("old_sh8", 1, 8, false, false, 1),       // old, first 8 stack entries in shared memory
+    VAR("new_minb8", 0, 0, false, false, 8),     // <= 64 registers
+    VAR("new_minb12", 0, 0, false, false, 12),   // <= 40
+    VAR("new_minb16", 0, 0, false, false, 16),   // <= 32
+    VARP("new_ppg2", 0, 0, false, false, 1, 2),  // 2 points (60 items) per block
+    VARP("new_ppg8", 0, 0, false, false, 1, 8),  // 8 points (240 items) per block
+    VARP("new_ppg2_minb24", 0, 0, false, false, 24, 2),  // 2 points, <= 40 registers
 };
 
 }  // namespace
@@ -282,8 +284,8 @@ CudaResult cuda_cast(const CudaScene& s, const std::string& variant, int reps) {
   params.tmin = s.tmin;
   params.first = 0;
   params.count = static_cast<unsigned>(n);
-  const unsigned block = kPointsPerGroup * s.rays;
-  const unsigned grid = static_cast<unsigned>((n + kPointsPerGroup - 1) / kPointsPerGroup);
+  const unsigned block = def->ppg * s.rays;
+  const unsigned grid = static_cast<unsigned>((n + def->ppg - 1) / def->ppg);
   const std::size_t shared =
       (2 * block + (block & 1)) * sizeof(float) + def->shs * block * sizeof(int2);
   if (shared > 48 * 1024)

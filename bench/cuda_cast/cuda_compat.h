@@ -35,6 +35,14 @@ static __device__ __forceinline__ float3 operator*(float s, float3 a) {
 static __device__ __forceinline__ float3 operator*(float3 a, float s) {
   return make_float3(a.x * s, a.y * s, a.z * s);
 }
+/* 16-byte loads through the read-only cache (the OpenCL kernels' arguments are const
+ * restrict, which gives NVIDIA's OpenCL compiler the same LDG.E.128.CONSTANT). */
+typedef float4 sdf_float4;
+typedef int4 sdf_int4;
+#define sdf_load_float4(p) __ldg(reinterpret_cast<const float4*>(p))
+#define sdf_make_int4(a, b, c, d) make_int4((a), (b), (c), (d))
+#define sdf_as_int(x) __float_as_int(x)
+#define sdf_as_float(x) __int_as_float(x)
 #define sdf_min(a, b) fminf((a), (b))
 #define sdf_max(a, b) fmaxf((a), (b))
 
