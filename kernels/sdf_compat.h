@@ -27,10 +27,12 @@ typedef uint sdf_uint32;
 #define sdf_vmax(a, b) fmax((a), (b))
 #define sdf_min(a, b) fmin((a), (b))
 #define sdf_max(a, b) fmax((a), (b))
-/* Four floats from 16-byte aligned global memory in one load (BVH nodes and triangles: see
- * sdf_bvh_traverse.h), and reinterpretations between int and float bits. */
+/* Element i of an array of 16-byte units (BVH nodes and triangles, see sdf_bvh_traverse.h): one
+ * 16-byte load where the array is typed float4 from the kernel argument on (NVIDIA's compiler
+ * split a float4 load through a cast float pointer into four), and reinterpretations between
+ * int and float bits. */
 typedef float4 sdf_float4;
-#define sdf_load_float4(p) (*(__global const float4*)(p))
+#define sdf_load4(p, i) ((p)[i])
 typedef int4 sdf_int4;
 #define sdf_make_int4(a, b, c, d) ((int4)((a), (b), (c), (d)))
 #define sdf_as_int(x) as_int(x)
@@ -47,6 +49,7 @@ typedef float sdf_wide;
 
 #include <cmath>
 #include <cstdint>
+#include <cstddef>
 #include <cstring>
 
 #define GLM_FORCE_XYZW_ONLY
@@ -76,9 +79,9 @@ inline float3 sdf_vmax(float3 a, float3 b) { return glm::max(a, b); }
 inline float sdf_min(float a, float b) { return a < b ? a : b; }
 inline float sdf_max(float a, float b) { return a > b ? a : b; }
 typedef glm::vec4 sdf_float4;
-inline sdf_float4 sdf_load_float4(const void* p) {
+inline sdf_float4 sdf_load4(const sdf_float4* p, std::ptrdiff_t i) {
   sdf_float4 v;
-  std::memcpy(&v, p, sizeof v);
+  std::memcpy(&v, reinterpret_cast<const char*>(p) + 16 * i, sizeof v);
   return v;
 }
 typedef glm::ivec4 sdf_int4;

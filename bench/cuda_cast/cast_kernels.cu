@@ -127,7 +127,8 @@ __device__ __forceinline__ SdfHit trav(const SdfBvhNode* __restrict__ nodes,
 // SDF_CAST_PER_RAY_BODY of kernels/sdf_kernels.cl, line for line. V: 0 = the header's
 // traversal; 1 = trav<...> with the template arguments below. PPG points per block (the
 // OpenCL engine: 4), MINB the blocks per SM asked of the register allocator (1: no cap).
-template <int V, int SHS, bool COUNT, bool LDG4, int MINB, int PPG>
+// PSORT: the kept rays ranked in parallel before the reduction (sdf_kernels.cl since 5c4e0b6+1).
+template <int V, int SHS, bool COUNT, bool LDG4, int MINB, int PPG, bool PSORT>
 __global__ void __launch_bounds__(PPG * 32, MINB)
     cast_per_ray(const SdfBvhNode* __restrict__ nodes, const SdfTriangle* __restrict__ tris,
                  const float* __restrict__ origins, const float* __restrict__ axes,
@@ -137,8 +138,9 @@ __global__ void __launch_bounds__(PPG * 32, MINB)
                  unsigned long long* __restrict__ counters) {
   extern __shared__ float smem[];
   float* ray_t = smem;
-  float* ray_angle = smem + blockDim.x;
-  int2* sh_stack = reinterpret_cast<int2*>(smem + 2 * blockDim.x + (blockDim.x & 1));
+  const unsigned arrays = PSORT ? 2 * blockDim.x : blockDim.x;  // each array's floats
+  float* ray_angle = smem + arrays;
+  int2* sh_stack = reinterpret_cast<int2*>(smem + 2 * arrays);
   unsigned lid = threadIdx.x;
   unsigned group_points = blockDim.x / params.rays;
   unsigned slot = lid / params.rays;
@@ -164,7 +166,9 @@ __global__ void __launch_bounds__(PPG * 32, MINB)
     float3 d = sdf_to_world(make_float3(table.x, table.y, table.z), b1, b2, axis);
     SdfHit hit;
     if (V == 0) {
-      hit = sdf_bvh_closest_hit(nodes, tris, origin, d, params.tmin, own);
+      hit = sdf_bvh_closest_hit_units(reinterpret_cast<const float4*>(nodes),
+                                      reinterpret_cast<const float4*>(tris), origin, d,
+                                      params.tmin, own);
     } else {
       hit = trav<SHS, COUNT, LDG4>(nodes, tris, origin, d, params.tmin, own, sh_stack + lid,
                                    blockDim.x, cnt);
@@ -181,19 +185,42 @@ __global__ void __launch_bounds__(PPG * 32, MINB)
   ray_t[lid] = t_kept;
   ray_angle[lid] = angle;
   __syncthreads();
+  if (PSORT) {
+    unsigned group_size = blockDim.x;
+    if (t_kept >= 0.0f) {
+      unsigned base = slot * params.rays;
+      int rank = 0;
+      for (int k = 0; k < params.rays; ++k) {
+        float t = ray_t[base + k];
+        rank += t >= 0.0f && (t < t_kept || (t == t_kept && k < r));
+      }
+      ray_t[group_size + base + rank] = t_kept;
+      ray_angle[group_size + base + rank] = angle;
+    }
+    __syncthreads();
+  }
   slot = lid;
   gid = blockIdx.x * group_points + slot;
   if (lid >= group_points || gid >= params.count) return;
   float lengths[SDF_MAX_RAYS];
   float angles[SDF_MAX_RAYS];
   int kept = 0;
-  for (int k = 0; k < params.rays; ++k) {
-    unsigned at = slot * params.rays + k;
-    float t = ray_t[at];
-    if (t >= 0.0f) {
-      lengths[kept] = t;
-      angles[kept] = ray_angle[at];
-      ++kept;
+  if (PSORT) {
+    for (int k = 0; k < params.rays; ++k) kept += ray_t[slot * params.rays + k] >= 0.0f;
+    for (int k = 0; k < kept; ++k) {
+      unsigned at = blockDim.x + slot * params.rays + k;
+      lengths[k] = ray_t[at];
+      angles[k] = ray_angle[at];
+    }
+  } else {
+    for (int k = 0; k < params.rays; ++k) {
+      unsigned at = slot * params.rays + k;
+      float t = ray_t[at];
+      if (t >= 0.0f) {
+        lengths[kept] = t;
+        angles[kept] = ray_angle[at];
+        ++kept;
+      }
     }
   }
   unsigned out = params.first + gid;
@@ -206,24 +233,27 @@ struct VariantDef {
   const void* fn;
   int shs;
   int ppg;
+  bool psort;
 };
 
-#define VARP(NAME, V, SHS, COUNT, LDG4, MINB, PPG) \
-  {NAME, reinterpret_cast<const void*>(&cast_per_ray<V, SHS, COUNT, LDG4, MINB, PPG>), SHS, PPG}
+#define VARS(NAME, V, SHS, COUNT, LDG4, MINB, PPG, PSORT)                                   \
+  {NAME, reinterpret_cast<const void*>(&cast_per_ray<V, SHS, COUNT, LDG4, MINB, PPG, PSORT>), \
+   SHS, PPG, PSORT}
+#define VARP(NAME, V, SHS, COUNT, LDG4, MINB, PPG) VARS(NAME, V, SHS, COUNT, LDG4, MINB, PPG, false)
 #define VAR(NAME, V, SHS, COUNT, LDG4, MINB) VARP(NAME, V, SHS, COUNT, LDG4, MINB, 4)
 
 const VariantDef kVariants[] = {
     VAR("new", 0, 0, false, false, 1),           // the header's traversal (16-byte loads)
+    VARS("new_psort", 0, 0, false, false, 1, 4, true),  // + rays ranked before the reduction
     VAR("old", 1, 0, false, false, 1),           // the traversal before (commit 579c5e9)
+    VARS("old_psort", 1, 0, false, false, 1, 4, true),
     VAR("count", 1, 0, true, false, 1),          // old + traversal counters
     VAR("old_ldg4", 1, 0, false, true, 1),       // old with node boxes as 16-byte loads
-    VAR("old_sh8", 1, 8, false, false, 1),       // old, first 8 stack entries in shared memory
+    VARS("old_ldg4_psort", 1, 0, false, true, 1, 4, true),
     VAR("new_minb8", 0, 0, false, false, 8),     // <= 64 registers
-    VAR("new_minb12", 0, 0, false, false, 12),   // <= 40
-    VAR("new_minb16", 0, 0, false, false, 16),   // <= 32
-    VARP("new_ppg2", 0, 0, false, false, 1, 2),  // 2 points (60 items) per block
-    VARP("new_ppg8", 0, 0, false, false, 1, 8),  // 8 points (240 items) per block
-    VARP("new_ppg2_minb24", 0, 0, false, false, 24, 2),  // 2 points, <= 40 registers
+    VARS("new_psort_minb10", 0, 0, false, false, 10, 4, true),  // <= 48 registers
+    VARS("new_psort_ppg8", 0, 0, false, false, 1, 8, true),  // 8 points (240 items) per block
+    VARS("new_psort_ppg2", 0, 0, false, false, 1, 2, true),  // 2 points (60 items) per block
 };
 
 }  // namespace
@@ -286,8 +316,8 @@ CudaResult cuda_cast(const CudaScene& s, const std::string& variant, int reps) {
   params.count = static_cast<unsigned>(n);
   const unsigned block = def->ppg * s.rays;
   const unsigned grid = static_cast<unsigned>((n + def->ppg - 1) / def->ppg);
-  const std::size_t shared =
-      (2 * block + (block & 1)) * sizeof(float) + def->shs * block * sizeof(int2);
+  const std::size_t shared = 2 * (def->psort ? 2 : 1) * block * sizeof(float) +
+                             def->shs * block * sizeof(int2);
   if (shared > 48 * 1024)
     CK(cudaFuncSetAttribute(def->fn, cudaFuncAttributeMaxDynamicSharedMemorySize, (int)shared));
   void* args[] = {&nodes, &tris, &origins, &axes, &tangents, &own, &order, &table,

@@ -39,7 +39,7 @@ static __device__ __forceinline__ float3 operator*(float3 a, float s) {
  * restrict, which gives NVIDIA's OpenCL compiler the same LDG.E.128.CONSTANT). */
 typedef float4 sdf_float4;
 typedef int4 sdf_int4;
-#define sdf_load_float4(p) __ldg(reinterpret_cast<const float4*>(p))
+#define sdf_load4(p, i) __ldg((p) + (i))
 #define sdf_make_int4(a, b, c, d) make_int4((a), (b), (c), (d))
 #define sdf_as_int(x) __float_as_int(x)
 #define sdf_as_float(x) __int_as_float(x)
