@@ -28,6 +28,16 @@ typedef long sdf_int64;
 #define sdf_vmax(a, b) fmax((a), (b))
 #define sdf_min(a, b) fmin((a), (b))
 #define sdf_max(a, b) fmax((a), (b))
+/* Element i of an array of 16-byte units (BVH nodes and triangles, see sdf_bvh_traverse.h): one
+ * 16-byte load where the array is typed float4 from the kernel argument on (NVIDIA's compiler
+ * split a float4 load through a cast float pointer into four), and reinterpretations between
+ * int and float bits. */
+typedef float4 sdf_float4;
+#define sdf_load4(p, i) ((p)[i])
+typedef int4 sdf_int4;
+#define sdf_make_int4(a, b, c, d) ((int4)((a), (b), (c), (d)))
+#define sdf_as_int(x) as_int(x)
+#define sdf_as_float(x) as_float(x)
 /* Wide accumulators (sums over many terms): double where the device has it, as on the host. */
 #ifdef cl_khr_fp64
 #pragma OPENCL EXTENSION cl_khr_fp64 : enable
@@ -43,6 +53,8 @@ typedef float sdf_wide;
 
 #include <cmath>
 #include <cstdint>
+#include <cstddef>
+#include <cstring>
 
 #define GLM_FORCE_XYZW_ONLY
 #include <glm/glm.hpp>
@@ -72,6 +84,26 @@ inline float3 sdf_vmax(float3 a, float3 b) { return glm::max(a, b); }
 // the box test runs these a dozen times per node. NaN-free inputs give the same result.
 inline float sdf_min(float a, float b) { return a < b ? a : b; }
 inline float sdf_max(float a, float b) { return a > b ? a : b; }
+typedef glm::vec4 sdf_float4;
+inline sdf_float4 sdf_load4(const sdf_float4* p, std::ptrdiff_t i) {
+  sdf_float4 v;
+  std::memcpy(&v, reinterpret_cast<const char*>(p) + 16 * i, sizeof v);
+  return v;
+}
+typedef glm::ivec4 sdf_int4;
+inline sdf_int4 sdf_make_int4(sdf_int32 a, sdf_int32 b, sdf_int32 c, sdf_int32 d) {
+  return sdf_int4(a, b, c, d);
+}
+inline sdf_int32 sdf_as_int(float x) {
+  sdf_int32 i;
+  std::memcpy(&i, &x, sizeof i);
+  return i;
+}
+inline float sdf_as_float(sdf_int32 i) {
+  float x;
+  std::memcpy(&x, &i, sizeof x);
+  return x;
+}
 using std::acos;
 using std::asin;
 using std::atan2;

@@ -48,15 +48,13 @@ SDF_INLINE float3 sdf_tri_e2(SDF_GLOBAL const SdfTriangle* tri) {
  * (u + v = 1 + 2.4e-6 on one, v = -1.7e-7 on the other), losing the ray. 1e-5 of a triangle's
  * size is far below any thickness the SDF resolves. */
 #define SDF_BARYCENTRIC_SLACK 1e-5f
-SDF_INLINE void sdf_intersect_triangle(float3 o, float3 d, float tmin,
-                                       SDF_GLOBAL const SdfTriangle* tri, SdfHit* hit) {
-  float3 e1 = sdf_tri_e1(tri);
-  float3 e2 = sdf_tri_e2(tri);
+SDF_INLINE void sdf_intersect_values(float3 o, float3 d, float tmin, float3 v0, float3 e1,
+                                     float3 e2, sdf_int32 id, SdfHit* hit) {
   float3 p = sdf_cross(d, e2);
   float det = sdf_dot(e1, p);
   if (det == 0.0f) return;
   float inv_det = 1.0f / det;
-  float3 s = o - sdf_tri_v0(tri);
+  float3 s = o - v0;
   float u = sdf_dot(s, p) * inv_det;
   if (u < -SDF_BARYCENTRIC_SLACK || u > 1.0f + SDF_BARYCENTRIC_SLACK) return;
   float3 q = sdf_cross(s, e1);
@@ -65,24 +63,38 @@ SDF_INLINE void sdf_intersect_triangle(float3 o, float3 d, float tmin,
   float t = sdf_dot(e2, q) * inv_det;
   /* !(t > tmin) also turns away a NaN t (1 / det overflowing on a vanishingly small
    * triangle), which every other comparison here would let through. */
-  if (!(t > tmin) || t > hit->t || (t == hit->t && tri->id >= hit->id)) return;
+  if (!(t > tmin) || t > hit->t || (t == hit->t && id >= hit->id)) return;
   hit->t = t;
   hit->det = det;
-  hit->id = tri->id;
+  hit->id = id;
+}
+
+/* The same on a triangle in memory. */
+SDF_INLINE void sdf_intersect_triangle(float3 o, float3 d, float tmin,
+                                       SDF_GLOBAL const SdfTriangle* tri, SdfHit* hit) {
+  sdf_intersect_values(o, d, tmin, sdf_tri_v0(tri), sdf_tri_e1(tri), sdf_tri_e2(tri), tri->id,
+                       hit);
 }
 
 /* Entry distance of the ray into a node's box, or INFINITY when it misses the box or enters
  * beyond tmax. inv_d holds 1/d with zero components replaced by a huge finite value. */
-SDF_INLINE float sdf_box_entry(SDF_GLOBAL const SdfBvhNode* node, float3 o, float3 inv_d,
-                               float tmax) {
-  float tx0 = (node->lo_x - o.x) * inv_d.x, tx1 = (node->hi_x - o.x) * inv_d.x;
-  float ty0 = (node->lo_y - o.y) * inv_d.y, ty1 = (node->hi_y - o.y) * inv_d.y;
-  float tz0 = (node->lo_z - o.z) * inv_d.z, tz1 = (node->hi_z - o.z) * inv_d.z;
+SDF_INLINE float sdf_box_entry_values(float3 lo, float3 hi, float3 o, float3 inv_d,
+                                      float tmax) {
+  float tx0 = (lo.x - o.x) * inv_d.x, tx1 = (hi.x - o.x) * inv_d.x;
+  float ty0 = (lo.y - o.y) * inv_d.y, ty1 = (hi.y - o.y) * inv_d.y;
+  float tz0 = (lo.z - o.z) * inv_d.z, tz1 = (hi.z - o.z) * inv_d.z;
   float t_near = sdf_max(sdf_max(sdf_min(tx0, tx1), sdf_min(ty0, ty1)),
                          sdf_max(sdf_min(tz0, tz1), 0.0f));
   float t_far = sdf_min(sdf_min(sdf_max(tx0, tx1), sdf_max(ty0, ty1)),
                         sdf_min(sdf_max(tz0, tz1), tmax));
   return t_near <= t_far ? t_near : INFINITY;
+}
+
+/* The same on a node in memory. */
+SDF_INLINE float sdf_box_entry(SDF_GLOBAL const SdfBvhNode* node, float3 o, float3 inv_d,
+                               float tmax) {
+  return sdf_box_entry_values(make_float3(node->lo_x, node->lo_y, node->lo_z),
+                              make_float3(node->hi_x, node->hi_y, node->hi_z), o, inv_d, tmax);
 }
 
 SDF_INLINE float3 sdf_safe_inverse(float3 d) {

@@ -2,6 +2,7 @@
 #include "device_state.h"
 
 #include <algorithm>
+#include <cstdlib>
 #include <memory>
 #include <vector>
 #include <stdexcept>
@@ -40,6 +41,10 @@ std::string build_options(const Device& device, int rays) {
   cl_device_fp_config fp = 0;
   api()->clGetDeviceInfo(device.id, CL_DEVICE_SINGLE_FP_CONFIG, sizeof fp, &fp, nullptr);
   if (fp & CL_FP_CORRECTLY_ROUNDED_DIVIDE_SQRT) options += " -cl-fp32-correctly-rounded-divide-sqrt";
+  // Benchmark hook: more options for the device's compiler, e.g. "-cl-nv-maxrregcount=40" or
+  // "-cl-nv-verbose" (the options are part of the program cache's key).
+  if (const char* extra = std::getenv("SDF_OPENCL_EXTRA_OPTIONS"))
+    if (*extra) options += std::string(" ") + extra;
   return options;
 }
 

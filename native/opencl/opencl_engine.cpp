@@ -205,8 +205,9 @@ void run_device(const Device& device, const Scene& scene, const SamplePoints& po
   kernel->arg(a++, raw.get());
   kernel->arg(a++, valid.get());
   if (points_per_group) {
-    kernel->local_arg(a++, points_per_group * cone.rays * sizeof(float));  // lengths
-    kernel->local_arg(a++, points_per_group * cone.rays * sizeof(float));  // angles
+    // Lengths and angles, each as cast and sorted per point (sdf_kernels.cl).
+    kernel->local_arg(a++, 2 * points_per_group * cone.rays * sizeof(float));
+    kernel->local_arg(a++, 2 * points_per_group * cone.rays * sizeof(float));
   }
   check(cl.clFinish(s.queue), "clFinish (upload)");
   result.timings.upload = seconds_since(upload_start);
