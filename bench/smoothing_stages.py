@@ -70,8 +70,12 @@ def measure(args):
                     radius, False, 0.1, 2, 1e-6, False, args.threads, None, args.engine,
                 )["timings"]
             timings = {}
-            _core.smooth_projected(v, t, field, args.points, 1, 8, 0.002, 1.0, "mean",
-                                   args.threads, None, args.engine, timings)  # fmt: skip
+            arguments = (v, t, field, args.points, 1, 8, 0.002, 1.0, "mean", args.threads, None,
+                         args.engine)  # fmt: skip
+            try:
+                _core.smooth_projected(*arguments, timings)
+            except TypeError:  # a build from before projected smoothing reported its stages
+                _core.smooth_projected(*arguments)
             return timings
 
         def inside_compute():
