@@ -70,23 +70,14 @@ __kernel void sdf_texture_clear(uint texels, __global uint* owner, __global int*
 }
 
 /* The first drawing pass, one work item per face of [first, first + count) of m: each face's
- * rank to the texels it covers (else to the one under its centroid), the largest kept. */
+ * rank to the texels it offers (sdf_face_offers_next), the largest kept. */
 __kernel void sdf_texture_rank(uint first, uint count, uint m, int width, int height,
                                __global const float* uvs, __global uint* owner) {
   uint gid = get_global_id(0);
   if (gid >= count) return;
-  uint f = first + gid;
-  __global const float* uv = uvs + 6 * (size_t)f;
-  SdfTexelWalk w;
-  sdf_texel_walk_start(uv, width, height, &w);
-  int covered = 0;
-  while (sdf_texel_walk_next(&w)) {
-    atomic_max(owner + w.texel, sdf_cover_rank(m, f));
-    covered = 1;
-  }
-  if (covered) return;
-  long t = sdf_texel_of_centroid(uv, width, height);
-  if (t >= 0) atomic_max(owner + t, sdf_centroid_rank(m, f));
+  SdfFaceOffers o;
+  sdf_face_offers_start(first + gid, m, uvs, width, height, &o);
+  while (sdf_face_offers_next(&o)) atomic_max(owner + o.texel, o.rank);
 }
 
 /* The second pass: each face writes its value and island where its rank won. triangles:

@@ -156,38 +156,78 @@ SDF_INLINE float sdf_face_draw_centroid(const SdfFaceDraw* d, float lo, float hi
   return sdf_min(hi, sdf_max(lo, (d->a + d->b + d->c) / 3.0f));
 }
 
-/* Drawing ranks: where UV triangles overlap, the texel takes the face of the largest rank.
- * Covering faces rank m + 1 + f, above any centroid (the later face winning), centroid faces
- * m - f (the earlier winning, and only where no face covers): the image a serial loop in face
- * order gives, whatever order the faces run in. 0: no face. The host draws in one pass (rank
- * and value in one 64-bit atomic maximum); a device in two: every face offers its rank to
- * its texels (atomic maximum), then sdf_texture_draw_face writes where its rank won. */
-SDF_INLINE sdf_uint32 sdf_cover_rank(sdf_uint32 m, sdf_uint32 f) { return m + 1 + f; }
-SDF_INLINE sdf_uint32 sdf_centroid_rank(sdf_uint32 m, sdf_uint32 f) { return m - f; }
+/* Drawing: where UV triangles overlap, a texel takes the face of the largest rank. A face
+ * offers its rank to the texels it covers, rank m + 1 + f (above any centroid: the later
+ * face wins), or, covering no texel centre, to the texel under its UV centroid, rank m - f
+ * (the earlier wins, and only where no face covers): the image a serial loop in face order
+ * gives, whatever order the faces run in. Rank 0: no face. The host draws in one pass (rank
+ * and value in one 64-bit atomic maximum); a device in two: ranks by 32-bit atomic maximum,
+ * then sdf_texture_draw_face writes where a face's rank won. All three walk a face's offers
+ * with this iterator: sdf_face_offers_start, then while (sdf_face_offers_next(&o)) { o.texel,
+ * o.rank, o.at_centroid, and at a covered texel o.walk.b }. */
+typedef struct {
+  SdfTexelWalk walk;
+  SDF_GLOBAL const float* uv;
+  int height;
+  int covered;     /* texels offered so far */
+  int done;
+  size_t texel;    /* the texel offered ... */
+  sdf_uint32 rank; /* ... with this rank */
+  int at_centroid; /* the centroid texel (else a covered one, barycentrics in walk.b) */
+  sdf_uint32 cover_rank, centroid_rank;
+} SdfFaceOffers;
 
-/* The second pass for face f of m: its value and island go where owner holds its rank. */
+SDF_INLINE void sdf_face_offers_start(sdf_uint32 f, sdf_uint32 m, SDF_GLOBAL const float* uvs,
+                                      int width, int height, SdfFaceOffers* o) {
+  o->uv = uvs + 6 * (size_t)f;
+  o->height = height;
+  o->covered = 0;
+  o->done = 0;
+  o->cover_rank = m + 1 + f;
+  o->centroid_rank = m - f;
+  sdf_texel_walk_start(o->uv, width, height, &o->walk);
+}
+
+SDF_INLINE int sdf_face_offers_next(SdfFaceOffers* o) {
+  if (o->done) return 0;
+  if (sdf_texel_walk_next(&o->walk)) {
+    ++o->covered;
+    o->texel = o->walk.texel;
+    o->rank = o->cover_rank;
+    o->at_centroid = 0;
+    return 1;
+  }
+  o->done = 1;
+  if (o->covered) return 0;
+  sdf_int64 t = sdf_texel_of_centroid(o->uv, o->walk.width, o->height);
+  if (t < 0) return 0;
+  o->texel = (size_t)t;
+  o->rank = o->centroid_rank;
+  o->at_centroid = 1;
+  return 1;
+}
+
+/* The value a face draws at an offer. */
+SDF_INLINE float sdf_face_draw_offer(const SdfFaceDraw* d, const SdfFaceOffers* o, float lo,
+                                     float hi) {
+  return o->at_centroid ? sdf_face_draw_centroid(d, lo, hi) : sdf_face_draw_at(d, o->walk.b);
+}
+
+/* A device's second pass for face f of m: its value and island go where owner holds its
+ * rank. */
 SDF_INLINE void sdf_texture_draw_face(sdf_uint32 f, sdf_uint32 m, SDF_GLOBAL const float* uvs,
                                       int width, int height, SDF_GLOBAL const float* values,
                                       SDF_GLOBAL const sdf_uint32* triangles, float lo, float hi,
                                       sdf_int32 face_island, SDF_GLOBAL const sdf_uint32* owner,
                                       SDF_GLOBAL sdf_int32* island, SDF_GLOBAL float* value) {
-  SDF_GLOBAL const float* uv = uvs + 6 * (size_t)f;
   const SdfFaceDraw d = sdf_face_draw(f, values, triangles);
-  const sdf_uint32 rank = sdf_cover_rank(m, f);
-  int covered = 0;
-  SdfTexelWalk w;
-  sdf_texel_walk_start(uv, width, height, &w);
-  while (sdf_texel_walk_next(&w)) {
-    covered = 1;
-    if (owner[w.texel] != rank) continue;
-    island[w.texel] = face_island;
-    value[w.texel] = sdf_face_draw_at(&d, w.b);
+  SdfFaceOffers o;
+  sdf_face_offers_start(f, m, uvs, width, height, &o);
+  while (sdf_face_offers_next(&o)) {
+    if (owner[o.texel] != o.rank) continue;
+    island[o.texel] = face_island;
+    value[o.texel] = sdf_face_draw_offer(&d, &o, lo, hi);
   }
-  if (covered) return;
-  sdf_int64 t = sdf_texel_of_centroid(uv, width, height);
-  if (t < 0 || owner[t] != sdf_centroid_rank(m, f)) return;
-  island[t] = face_island;
-  value[t] = sdf_face_draw_centroid(&d, lo, hi);
 }
 
 /* Step 5 for face f: the mean of the blurred texels it covers that belong to its island,

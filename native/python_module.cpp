@@ -166,6 +166,7 @@ py::list opencl_devices() {
     e["max_allocation"] = d.max_allocation;
     e["compute_units"] = d.compute_units;
     e["clock_mhz"] = d.clock_mhz;
+    e["double"] = d.fp64;
     list.append(e);
   }
 #endif

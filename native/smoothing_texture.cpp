@@ -68,11 +68,11 @@ void check_inputs(const float* values, std::size_t n, const float* uvs, std::siz
                                   std::to_string((uv_bad[c] / 2) % 3) + " is not finite");
 }
 
-// Step 2 on the CPU threads, in one pass: every face offers (rank, value) to its texels as a
-// 64-bit key, high word the rank (kernels/sdf_smooth_texture.h), low word the value's bits,
-// and each texel keeps the largest by atomic maximum; ranks are unique per texel, so the
-// image is the one a serial loop in face order gives, whatever the threads (a device does
-// the same in two passes of 32-bit maxima).
+// Step 2 on the CPU threads, in one pass: every face offers (rank, value) to its texels
+// (kernels/sdf_smooth_texture.h: sdf_face_offers_next) as a 64-bit key, high word the rank,
+// low word the value's bits, and each texel keeps the largest by atomic maximum; a texel gets
+// one offer per face, so the image is the one a serial loop in face order gives, whatever the
+// threads (a device does the same in two passes of 32-bit maxima).
 void rasterise(const Mesh& mesh, PointKind kind, const float* values, const float* uvs,
                const std::vector<std::int32_t>& face_island, int width, int height, float lo,
                float hi, unsigned threads, std::vector<std::int32_t>& island,
@@ -96,20 +96,11 @@ void rasterise(const Mesh& mesh, PointKind kind, const float* values, const floa
       kind == PointKind::Faces ? nullptr : reinterpret_cast<const std::uint32_t*>(mesh.triangles.data());
   parallel_for(m, kFaceGrain, threads, [&](std::size_t begin, std::size_t end) {
     for (std::uint32_t f = static_cast<std::uint32_t>(begin); f < end; ++f) {
-      const float* uv = uvs + 6 * std::size_t{f};
       const kern::SdfFaceDraw d = kern::sdf_face_draw(f, values, corners);
-      kern::SdfTexelWalk walk;
-      kern::sdf_texel_walk_start(uv, width, height, &walk);
-      bool covered = false;
-      while (kern::sdf_texel_walk_next(&walk)) {
-        offer(walk.texel, kern::sdf_cover_rank(m, f), kern::sdf_face_draw_at(&d, walk.b));
-        covered = true;
-      }
-      if (covered) continue;
-      const std::int64_t t = kern::sdf_texel_of_centroid(uv, width, height);
-      if (t >= 0)
-        offer(static_cast<std::size_t>(t), kern::sdf_centroid_rank(m, f),
-              kern::sdf_face_draw_centroid(&d, lo, hi));
+      kern::SdfFaceOffers o;
+      kern::sdf_face_offers_start(f, m, uvs, width, height, &o);
+      while (kern::sdf_face_offers_next(&o))
+        offer(o.texel, o.rank, kern::sdf_face_draw_offer(&d, &o, lo, hi));
     }
   });
   island.resize(texels);
@@ -331,8 +322,12 @@ TextureSmoothing smooth_texture(const Mesh& mesh, PointKind kind, const float* v
   // Vertex values are averaged over merged vertices: those need the weld whatever the islands.
   UvIslands found;
   if (given_islands) {
-    if (given_islands->face_island.size() != m)
-      throw std::invalid_argument("the UV islands given are of another mesh");
+    const UvIslands& g = *given_islands;
+    if (g.face_island.size() != m || g.vertex_count != mesh.vertices.size() ||
+        g.weld_tolerance != options.weld_tolerance || (!faces && !g.need_merged))
+      throw std::invalid_argument(
+          "the UV islands given were found for another mesh or other options (weld "
+          "tolerance, vertex values)");
   } else {
     found = label_uv_islands(mesh, uvs, options.weld_tolerance, !faces, threads);
     timings.emplace_back(found.merged.empty() ? "islands" : "islands (welded)", clock.lap());

@@ -7,6 +7,7 @@
 #include <limits>
 #include <memory>
 #include <stdexcept>
+#include <string>
 
 #include "mesh_weld.h"
 #include "concurrent_union_find.h"
@@ -231,9 +232,17 @@ UvIslands label_uv_islands(const Mesh& mesh, const float* uvs, double weld_toler
                            bool need_merged, unsigned threads) {
   const std::size_t m = mesh.triangles.size();
   const std::uint32_t vertex_count = static_cast<std::uint32_t>(mesh.vertices.size());
+  // Corners are numbered 3 f + c in 32 bits, one value kept free.
+  if (m >= (std::size_t{1} << 32) / 3)
+    throw std::invalid_argument("UV islands take at most " +
+                                std::to_string((std::size_t{1} << 32) / 3 - 1) + " faces, got " +
+                                std::to_string(m));
   const bool may_merge = weld_tolerance >= 0.0;
   const float tolerance = may_merge ? sdf::weld_tolerance(mesh, weld_tolerance) : 0.0f;
   UvIslands out;
+  out.vertex_count = mesh.vertices.size();
+  out.weld_tolerance = weld_tolerance;
+  out.need_merged = need_merged;
   ConcurrentUnionFind sets(m, threads);
   if (!need_merged || !may_merge) {
     out.merged_count = vertex_count;

@@ -27,6 +27,10 @@ struct UvIslands {
   // merged), else empty (the vertex index: no merging was asked for, or needed).
   std::vector<std::uint32_t> merged;
   std::uint32_t merged_count = 0;  // keys: merged vertices, or vertices
+  // What they were found for (smooth_texture checks islands given to it against these).
+  std::size_t vertex_count = 0;
+  double weld_tolerance = -1.0;
+  bool need_merged = false;
 };
 
 // weld_tolerance: relative to the largest bounding-box side, as for weld_vertices; < 0: no

@@ -288,6 +288,7 @@ CastTimings cast_opencl(const std::vector<const Device*>& devices, const Scene& 
     // Every triangle has zero area: nothing can be hit, and an empty tree has no root to read.
     std::fill(raw, raw + n, -1.0f);
     std::fill(valid_rays, valid_rays + n, 0);
+    if (beside_cast) beside_cast();
     return CastTimings{};
   }
   // The kernels write results in Morton order (contiguous per launch); scattered back below.

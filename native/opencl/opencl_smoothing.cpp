@@ -7,7 +7,9 @@
 #include <memory>
 #include <mutex>
 #include <string>
+#include <vector>
 
+#include "../parallel.h"
 #include "../stopwatch.h"
 #include "device_state.h"
 
@@ -192,6 +194,27 @@ void filter_on_device(const Device& device, DeviceState& s, cl_program program,
   for (auto* b : {&value_b, &row_value, &row_weight, &taps}) keep.push_back(std::move(*b));
 }
 
+// The most texels any face's UV bounding box spans (clipped to the image): a device walks a
+// face's box in one work item.
+double largest_face_box(const float* uvs, std::size_t m, int width, int height, unsigned threads) {
+  constexpr std::size_t kGrain = 1 << 14;
+  std::vector<double> largest((m + kGrain - 1) / kGrain, 0.0);
+  parallel_for(m, kGrain, threads, [&](std::size_t begin, std::size_t end) {
+    double most = 0.0;
+    for (std::size_t f = begin; f < end; ++f) {
+      const float* uv = uvs + 6 * f;
+      auto span = [&](int axis, int size) {
+        const double lo = std::min(uv[axis], std::min(uv[axis + 2], uv[axis + 4]));
+        const double hi = std::max(uv[axis], std::max(uv[axis + 2], uv[axis + 4]));
+        return std::min(double(size), std::max(0.0, (std::min(hi, 1.0) - std::max(lo, 0.0)) * size) + 1.0);
+      };
+      most = std::max(most, span(0, width) * span(1, height));
+    }
+    largest[begin / kGrain] = most;
+  });
+  return largest.empty() ? 0.0 : *std::max_element(largest.begin(), largest.end());
+}
+
 }  // namespace
 
 TextureSmoothing smooth_texture_opencl(const Device& device, const Mesh& mesh, PointKind kind,
@@ -199,8 +222,12 @@ TextureSmoothing smooth_texture_opencl(const Device& device, const Mesh& mesh, P
                                        const TextureOptions& options, bool keep_image,
                                        const ProgressFn& progress, const UvIslands* islands) {
   // Drawing and reading back compute texel coverage in double: a device without it would
-  // cover other texels than the CPU, so there the CPU threads do it all.
-  if (!device.fp64)
+  // cover other texels than the CPU, so there the CPU threads do it all. So they do where a
+  // face spans more than 2^16 texels (a low-poly mesh on a large texture): a device walks each
+  // face in one work item, in double, which consumer GPUs run at 1/32 to 1/64 of float speed.
+  constexpr double kMostTexelsPerFace = 65536.0;
+  if (!device.fp64 || largest_face_box(uvs, mesh.triangles.size(), options.width, options.height,
+                                       options.threads) > kMostTexelsPerFace)
     return smooth_texture(mesh, kind, values, uvs, options, keep_image, progress, 0.0, 1.0,
                           nullptr, islands);
   DeviceState& s = state_of(device);
@@ -300,7 +327,7 @@ TextureSmoothing smooth_texture_opencl(const Device& device, const Mesh& mesh, P
                                        blurred.data(), 0, nullptr, nullptr),
             "clEnqueueReadBuffer");
     }
-    if (faces) read(s, *read_values, m * sizeof(float), out.data());
+    if (faces && m > 0) read(s, *read_values, m * sizeof(float), out.data());
     check(api()->clFinish(s.queue), "clFinish (download)");
     timings.emplace_back("device: download", clock.lap());
   };

@@ -48,7 +48,8 @@ class Result:
 def engines() -> list:
     """The engines that can run here. Each is a dict with 'name' (what `engine=` takes),
     'type' ('CPU' or 'GPU') and 'description'; OpenCL devices add 'device', 'platform',
-    'driver', 'memory' (bytes) and 'compute_units'. "cpu" is always there; OpenCL devices are
+    'driver', 'memory' (bytes), 'compute_units' and 'double' (double precision: texture
+    smoothing runs on a device only with it). "cpu" is always there; OpenCL devices are
     listed when an OpenCL driver is installed (none is needed otherwise)."""
     threads = _core.hardware_threads()
     found = [
@@ -251,13 +252,17 @@ def compute(
 
     # Texture smoothing's UV islands depend on the mesh and UVs alone: found while a device
     # casts, when the host would only wait (for the CPU engine, after its cast).
-    islands = []
+    islands, islands_failure = [], []
 
     def find_islands():
-        islands.append(uv_islands_for(v, t, points, smoothing_resolved, int(threads)))
+        try:
+            islands.append(uv_islands_for(v, t, points, smoothing_resolved, int(threads)))
+        except Exception as error:  # raised after the cast: no device failure to fall back from
+            islands_failure.append(error)
 
     def run(engine_name):
         islands.clear()
+        islands_failure.clear()
         return _core.compute(
             v, t, int(rays), float(cone_angle), sampling, int(seed), points, int(threads),
             cast_progress, engine_name, accel, int(octree_depth), int(octree_leaf_size),
@@ -265,6 +270,8 @@ def compute(
         )
 
     out, fallback = _run_with_fallback(run, chosen, engine, "")
+    if islands_failure:
+        raise islands_failure[0]
     if out["fill"] == "no-value-anywhere":
         warnings.warn(
             "no ray of any point found the other side of the mesh (is it open, flat or inside "

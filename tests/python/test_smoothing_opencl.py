@@ -159,6 +159,88 @@ def test_work_beside_the_cast_runs_once_and_its_error_ends_the_computation(spot,
     np.testing.assert_array_equal(again["raw"], out["raw"])
 
 
+def test_work_beside_the_cast_runs_on_a_mesh_with_nothing_to_cast():
+    """Every face of zero area: no tree to cast against, and the hook still runs once."""
+    from shape_diameter import _core
+
+    calls = []
+    v = np.array([[0.0, 0, 0], [1, 0, 0], [2, 0, 0]])
+    t = np.array([[0, 1, 2]])
+    _core.compute(v, t, 30, 120.0, "fibonacci", 0, "faces", 0, None, DEVICE, "bvh", 10, 8,
+                  "auto", "auto", lambda: calls.append(1))  # fmt: skip
+    assert calls == [1]
+
+
+def test_a_failure_finding_uv_islands_is_not_taken_for_a_device_failure(spot, monkeypatch):
+    """With engine='auto', an OpenCL failure casts again on the CPU; an error while finding the
+    UV islands beside the cast is not one: it propagates, after one cast."""
+    import shape_diameter.api as api
+
+    v, t, uvs, _, _ = spot
+    casts = []
+    compute = api._core.compute
+
+    def counting(*args, **kwargs):
+        casts.append(args[9])
+        return compute(*args, **kwargs)
+
+    def failing(*args):
+        raise RuntimeError("no islands today")
+
+    monkeypatch.setattr(api._core, "compute", counting)
+    monkeypatch.setattr(api, "uv_islands_for", failing)
+    with pytest.raises(RuntimeError, match="no islands today"):
+        sd.compute(v, t, engine="auto", smoothing="texture", uvs=uvs,
+                   smoothing_options={"texture_size": 64})  # fmt: skip
+    assert len(casts) == 1
+
+
+def test_uv_islands_of_another_mesh_or_other_options_are_refused(spot):
+    from shape_diameter import _core
+
+    v, t, uvs, faces, vertices = spot
+    corner_uvs = np.ascontiguousarray(uvs, dtype=np.float32)
+    v64, t64 = v.astype(np.float64), t.astype(np.int64)
+
+    def smooth(values, points, islands, weld=1e-6, vertices=v64, triangles=t64):
+        return _core.smooth_texture(vertices, triangles, values, points, corner_uvs, 64, 64, 2.0,
+                                    False, 0.1, 2, weld, False, 0, None, DEVICE, islands)  # fmt: skip
+
+    for_faces = _core.label_uv_islands(v64, t64, corner_uvs, 1e-6, False, 0)
+    for_vertices = _core.label_uv_islands(v64, t64, corner_uvs, 1e-6, True, 0)
+    np.testing.assert_array_equal(smooth(faces, "faces", for_faces)["values"],
+                                  smooth(faces, "faces", None)["values"])  # fmt: skip
+    np.testing.assert_array_equal(smooth(vertices, "vertices", for_vertices)["values"],
+                                  smooth(vertices, "vertices", None)["values"])  # fmt: skip
+    with pytest.raises(ValueError, match="another mesh or other options"):
+        smooth(vertices, "vertices", for_faces)  # not merged for vertex values
+    with pytest.raises(ValueError, match="another mesh or other options"):
+        smooth(faces, "faces", for_faces, weld=1e-3)
+    more = np.vstack([v64, v64[:1]])  # one vertex more: merged[] would be too short
+    with pytest.raises(ValueError, match="another mesh or other options"):
+        smooth(np.append(vertices, vertices[:1]), "vertices", for_vertices, vertices=more)
+
+
+def test_faces_spanning_many_texels_are_drawn_on_the_cpu():
+    """A device walks each face in one work item: a face spanning more than 2^16 texels (two
+    triangles over a 512 x 512 texture) leaves the method to the CPU threads, same values."""
+    from shape_diameter import _core
+
+    v = np.array([[0.0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0]])
+    t = np.array([[0, 1, 2], [0, 2, 3]])
+    uvs = np.ascontiguousarray(v[t][:, :, :2], dtype=np.float32)
+    values = np.array([1.0, 2.0], dtype=np.float32)
+
+    def stages(size):
+        out = _core.smooth_texture(v, t, values, "faces", uvs, size, size, 4.0, False, 0.1, 2,
+                                   1e-6, False, 0, None, DEVICE)  # fmt: skip
+        return set(out["timings"])
+
+    assert "rasterise" in stages(512)
+    has_double = next(e for e in sd.engines() if e["name"] == DEVICE)["double"]
+    assert ("device: kernels" in stages(128)) == has_double
+
+
 def test_kring_runs_on_the_cpu_whatever_the_engine(spot):
     v, t, _, faces, _ = spot
     np.testing.assert_array_equal(sd.smooth(v, t, faces, "kring", engine=DEVICE),
