@@ -136,17 +136,20 @@ std::vector<char> has_neighbour(const glm::vec3* positions, std::size_t count,
 }  // namespace
 
 Weld weld_vertices(const glm::vec3* positions, std::size_t count, float tolerance,
-                   unsigned threads) {
+                   unsigned threads, StageTimings* timings) {
+  StageClock clock(timings);
   Weld weld;
   weld.merged.resize(count);
   if (count == 0) return weld;
   const WeldGrid grid(positions, count, tolerance, threads);
   const float tolerance2 = tolerance * tolerance;
+  clock.lap("weld: grid");
 
   // A vertex with no other vertex in its ball is kept whatever happens to the others, and is
   // in no one else's ball: the greedy pass in index order needs only the vertices that have
   // a neighbour (usually a few percent: seams, duplicated corners), and the rest is parallel.
   const std::vector<char> crowded = has_neighbour(positions, count, grid, tolerance2, threads);
+  clock.lap("weld: neighbour test");
   constexpr std::uint32_t kKept = std::numeric_limits<std::uint32_t>::max();
   std::vector<std::uint32_t> target(count, kKept);  // input index of the vertex it joins
   {
@@ -172,6 +175,7 @@ Weld weld_vertices(const glm::vec3* positions, std::size_t count, float toleranc
       head = id;
     }
   }
+  clock.lap("weld: greedy");
   // Merged ids: kept vertices numbered in index order, a block of vertices at a time.
   const std::size_t blocks = (count + kWeldGrain - 1) / kWeldGrain;
   std::vector<std::uint32_t> block_first(blocks + 1, 0);
@@ -197,6 +201,7 @@ Weld weld_vertices(const glm::vec3* positions, std::size_t count, float toleranc
       if (target[i] != kKept) weld.merged[i] = weld.merged[target[i]];
   });
   weld.count = block_first[blocks];
+  clock.lap("weld: numbering");
   return weld;
 }
 

@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "mesh.h"
+#include "stopwatch.h"
 
 namespace sdf {
 
@@ -27,8 +28,9 @@ struct Weld {
 // tolerance. Linear expected time: a hash grid of cells 2 to 64 tolerances wide, 1 to 8
 // cells per query. On `threads` threads (0: every core) but for the greedy pass over the
 // vertices that have a neighbour within the tolerance; the same result for any count.
+// With `timings`, appends the seconds of its stages ("weld: ...").
 Weld weld_vertices(const glm::vec3* positions, std::size_t count, float tolerance,
-                   unsigned threads = 1);
+                   unsigned threads = 1, StageTimings* timings = nullptr);
 
 // Merging tolerance for a mesh: `relative` times its largest bounding-box side. The default,
 // 1e-6, is about 16 float ulps at the box's edge: it merges what an exporter duplicated

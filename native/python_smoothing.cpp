@@ -77,15 +77,24 @@ const void* device_for(const std::string& engine) {
 }
 #endif
 
+py::dict timings_dict(const sdf::StageTimings& timings) {
+  py::dict out;
+  for (const auto& [stage, seconds] : timings) out[py::str(stage)] = seconds;
+  return out;
+}
+
 py::array_t<float> to_array(const std::vector<float>& v) {
   return py::array_t<float>(static_cast<py::ssize_t>(v.size()), v.data());
 }
 
-py::array_t<float> smooth_kring(const Doubles& vertices, const Int64s& triangles,
-                                const Floats& values, const std::string& points, int k,
-                                double sigma, double corner_angle, double weld_tolerance,
-                                unsigned threads, const py::object& progress) {
+// Returns {"values": the smoothed values, "timings": seconds per stage}.
+py::dict smooth_kring(const Doubles& vertices, const Int64s& triangles, const Floats& values,
+                      const std::string& points, int k, double sigma, double corner_angle,
+                      double weld_tolerance, unsigned threads, const py::object& progress) {
+  sdf::StageTimings stages;
+  sdf::StageClock clock(&stages);
   const sdf::Mesh mesh = mesh_from(vertices, triangles);
+  clock.lap("mesh");
   const sdf::PointKind kind = kind_from(points);
   const float* v = point_values(mesh, kind, values);
   sdf::KringOptions options;
@@ -98,9 +107,12 @@ py::array_t<float> smooth_kring(const Doubles& vertices, const Int64s& triangles
   std::vector<float> out;
   {
     py::gil_scoped_release release;
-    out = sdf::smooth_kring(mesh, kind, v, options, report);
+    out = sdf::smooth_kring(mesh, kind, v, options, report, 0.0, 1.0, &stages);
   }
-  return to_array(out);
+  py::dict result;
+  result["values"] = to_array(out);
+  result["timings"] = timings_dict(stages);
+  return result;
 }
 
 py::array_t<float> smooth_projected(const Doubles& vertices, const Int64s& triangles,
@@ -174,9 +186,7 @@ py::dict smooth_texture(const Doubles& vertices, const Int64s& triangles, const 
   }
   py::dict result;
   result["values"] = to_array(out.values);
-  py::dict timings;
-  for (const auto& [stage, seconds] : out.timings) timings[py::str(stage)] = seconds;
-  result["timings"] = timings;
+  result["timings"] = timings_dict(out.timings);
   if (return_image) {
     py::array_t<float> image({py::ssize_t(out.height), py::ssize_t(out.width)});
     py::array_t<bool> mask({py::ssize_t(out.height), py::ssize_t(out.width)});

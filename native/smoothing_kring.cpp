@@ -417,7 +417,8 @@ int default_kring_k(std::size_t face_count) {
 
 std::vector<float> smooth_kring(const Mesh& mesh, PointKind kind, const float* values,
                                 const KringOptions& options, const ProgressFn& progress,
-                                double progress_from, double progress_to) {
+                                double progress_from, double progress_to, StageTimings* timings) {
+  StageClock clock(timings);
   const bool faces = kind == PointKind::Faces;
   const std::size_t n = faces ? mesh.triangles.size() : mesh.vertices.size();
   const int k = options.k < 0 ? default_kring_k(mesh.triangles.size()) : options.k;
@@ -437,24 +438,27 @@ std::vector<float> smooth_kring(const Mesh& mesh, PointKind kind, const float* v
     hi = std::max(hi, values[i]);
   }
   if (lo == hi) return out;  // constant: exactly unchanged
+  clock.lap("checks");
 
   if (progress && !progress(progress_from)) throw Cancelled();
   // Merged mesh and its adjacency.
   Weld weld;
   if (options.weld_tolerance >= 0.0) {
     weld = weld_vertices(mesh.vertices.data(), mesh.vertices.size(),
-                         weld_tolerance(mesh, options.weld_tolerance), options.threads);
+                         weld_tolerance(mesh, options.weld_tolerance), options.threads, timings);
   } else {
     weld.merged.resize(mesh.vertices.size());
     for (std::size_t v = 0; v < weld.merged.size(); ++v) weld.merged[v] = static_cast<std::uint32_t>(v);
     weld.count = static_cast<std::uint32_t>(weld.merged.size());
   }
+  clock.lap("weld");
   // Merged vertices, and faces, renumbered in Morton order of their positions: a batch of
   // consecutive points is then a compact patch, and its walk reads nearby memory whatever the
   // input's order (a subdivided mesh scatters neighbours all over its arrays).
   const std::size_t m = mesh.triangles.size();
   std::vector<glm::vec3> merged_position(weld.count);
   for (std::size_t v = mesh.vertices.size(); v-- > 0;) merged_position[weld.merged[v]] = mesh.vertices[v];
+  clock.lap("merged positions");
   const unsigned threads = options.threads;
   constexpr std::size_t kGrain = 1 << 15;  // items per chunk of the setup loops
   const std::vector<std::uint32_t> vertex_order = morton_order(merged_position, threads);  // new -> merged
@@ -462,6 +466,7 @@ std::vector<float> smooth_kring(const Mesh& mesh, PointKind kind, const float* v
   parallel_for(weld.count, kGrain, threads, [&](std::size_t begin, std::size_t end) {
     for (std::size_t i = begin; i < end; ++i) vertex_rank[vertex_order[i]] = static_cast<std::uint32_t>(i);
   });
+  clock.lap("vertex order");
   std::vector<std::uint32_t> face_order(m);  // new -> input face
   if (faces) {
     std::vector<glm::vec3> centroid(m);
@@ -475,6 +480,7 @@ std::vector<float> smooth_kring(const Mesh& mesh, PointKind kind, const float* v
   } else {
     for (std::uint32_t f = 0; f < m; ++f) face_order[f] = f;  // faces only link vertices
   }
+  clock.lap("face order");
   std::vector<glm::uvec3> tris(m);
   parallel_for(m, kGrain, threads, [&](std::size_t begin, std::size_t end) {
     for (std::size_t f = begin; f < end; ++f) {
@@ -483,8 +489,11 @@ std::vector<float> smooth_kring(const Mesh& mesh, PointKind kind, const float* v
                            vertex_rank[weld.merged[t.z]]);
     }
   });
+  clock.lap("triangles");
   const Adjacency vf = faces_of_vertices(tris, weld.count);
+  clock.lap("faces of vertices");
   const Adjacency vv = vertex_neighbours(tris, vf, threads);
+  clock.lap("vertex neighbours");
 
   // Values in the new numbering; a merged vertex takes the mean of its duplicates' values.
   const std::size_t points = faces ? n : weld.count;
@@ -528,6 +537,7 @@ std::vector<float> smooth_kring(const Mesh& mesh, PointKind kind, const float* v
   const CornerWalk walk = {reinterpret_cast<const std::uint32_t*>(tris.data()),
                            faces ? vf.offsets.data() : vv.offsets.data(),
                            faces ? vf.items.data() : vv.items.data(), normals.data(), faces};
+  clock.lap("point values");
 
   std::vector<float> smoothed(points);
   if (corner) {
@@ -592,6 +602,7 @@ std::vector<float> smooth_kring(const Mesh& mesh, PointKind kind, const float* v
         progress, progress_from, progress_to);
   }
   if (progress && !progress(progress_to)) throw Cancelled();
+  clock.lap("rings");
 
   if (faces) {
     parallel_for(n, kGrain, threads, [&](std::size_t begin, std::size_t end) {
@@ -602,6 +613,7 @@ std::vector<float> smooth_kring(const Mesh& mesh, PointKind kind, const float* v
       for (std::size_t v = begin; v < end; ++v) out[v] = smoothed[vertex_rank[weld.merged[v]]];
     });
   }
+  clock.lap("write back");
   return out;
 }
 

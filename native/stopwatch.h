@@ -3,6 +3,9 @@
 #pragma once
 
 #include <chrono>
+#include <string>
+#include <utility>
+#include <vector>
 
 namespace sdf {
 
@@ -18,6 +21,23 @@ class Stopwatch {
 
  private:
   std::chrono::steady_clock::time_point last_ = std::chrono::steady_clock::now();
+};
+
+// Seconds per named stage, in the order they ran.
+using StageTimings = std::vector<std::pair<std::string, double>>;
+
+// Appends each lap to `timings` under a name; does nothing without `timings` (the stages of a
+// call that reports none cost nothing).
+class StageClock {
+ public:
+  explicit StageClock(StageTimings* timings) : timings_(timings) {}
+  void lap(const char* stage) {
+    if (timings_) timings_->emplace_back(stage, watch_.lap());
+  }
+
+ private:
+  StageTimings* timings_;
+  Stopwatch watch_;
 };
 
 }  // namespace sdf
