@@ -11,6 +11,7 @@
 
 #include "mesh.h"
 #include "stopwatch.h"
+#include "uninitialized_vector.h"
 
 namespace sdf {
 
@@ -19,7 +20,12 @@ struct Weld {
   // (so a mesh without duplicates maps every vertex to itself).
   std::vector<std::uint32_t> merged;
   std::uint32_t count = 0;  // number of merged vertices
+  // Per merged vertex: its first input vertex (the kept one, which the others joined).
+  UninitializedVector<std::uint32_t> first;
 };
+
+// Each vertex its own merged vertex (no merging), on `threads` workers.
+Weld identity_weld(std::size_t count, unsigned threads);
 
 // A vertex joins the first earlier kept vertex within `tolerance` (Euclidean distance, mesh
 // units); otherwise it is kept. tolerance 0 merges exactly equal positions only (+0 and -0
@@ -42,19 +48,21 @@ float weld_tolerance(const Mesh& mesh, double relative = kDefaultWeldTolerance);
 std::vector<glm::uvec3> welded_triangles(const Mesh& mesh, const Weld& weld);
 
 // Compressed lists: the items of key k are items[offsets[k] .. offsets[k + 1]). Flat arrays,
-// so that a kernel can walk them as they are.
+// so that a kernel can walk them as they are; filled in parallel, never zeroed first.
 struct Adjacency {
-  std::vector<std::uint32_t> offsets, items;
+  UninitializedVector<std::uint32_t> offsets, items;
   std::size_t size() const { return offsets.empty() ? 0 : offsets.size() - 1; }
 };
 
 // Faces around each vertex, in increasing face order. A face whose corners merged into one
-// vertex is listed once per distinct corner.
-Adjacency faces_of_vertices(const std::vector<glm::uvec3>& triangles, std::uint32_t vertex_count);
+// vertex is listed once per distinct corner. On `threads` workers (0 = every core); the
+// result does not depend on it.
+Adjacency faces_of_vertices(const glm::uvec3* triangles, std::size_t count,
+                            std::uint32_t vertex_count, unsigned threads = 1);
 
 // Vertices that share an edge with each vertex (each once, increasing; never the vertex itself).
 // On `threads` workers (0 = every core); the result does not depend on it.
-Adjacency vertex_neighbours(const std::vector<glm::uvec3>& triangles,
-                            const Adjacency& faces_of_vertices, unsigned threads = 1);
+Adjacency vertex_neighbours(const glm::uvec3* triangles, const Adjacency& faces_of_vertices,
+                            unsigned threads = 1);
 
 }  // namespace sdf
