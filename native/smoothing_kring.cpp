@@ -331,6 +331,55 @@ UninitializedVector<glm::vec3> centroids(const Mesh& mesh, unsigned threads) {
   return centroid;
 }
 
+// The mesh the rings walk: vertices merged (mesh_weld.h), merged vertices and faces
+// renumbered in Morton order of their positions (a batch of consecutive points is then a
+// compact patch, and its walk reads nearby memory whatever the input's order: a subdivided
+// mesh scatters neighbours all over its arrays), and its adjacency.
+struct RingMesh {
+  Weld weld;
+  UninitializedVector<std::uint32_t> new_vertex;  // input vertex -> new merged vertex
+  UninitializedVector<std::uint32_t> face_order;  // new -> input face
+  UninitializedVector<glm::uvec3> triangles;      // new faces, new vertices
+  Adjacency faces_of_vertices, vertex_neighbours;
+};
+
+// Faces are ordered only for face values; for vertex values they only link vertices.
+RingMesh ring_mesh(const Mesh& mesh, bool faces, double weld_tolerance_relative,
+                   unsigned threads, StageClock& clock, StageTimings* timings) {
+  RingMesh r;
+  r.weld = weld_tolerance_relative >= 0.0
+               ? weld_vertices(mesh.vertices.data(), mesh.vertices.size(),
+                               weld_tolerance(mesh, weld_tolerance_relative), threads, timings)
+               : identity_weld(mesh.vertices.size(), threads);
+  clock.lap("weld");
+  const UninitializedVector<glm::vec3> merged_position = merged_positions(mesh, r.weld, threads);
+  clock.lap("merged positions");
+  const UninitializedVector<std::uint32_t> vertex_rank =  // merged -> new
+      inverse(morton_order(merged_position, threads), threads);
+  // Composed once: one look-up per corner below instead of two dependent ones.
+  r.new_vertex.resize(mesh.vertices.size());
+  parallel_for(r.new_vertex.size(), kGrain, threads, [&](std::size_t begin, std::size_t end) {
+    for (std::size_t v = begin; v < end; ++v) r.new_vertex[v] = vertex_rank[r.weld.merged[v]];
+  });
+  clock.lap("vertex order");
+  const std::size_t m = mesh.triangles.size();
+  r.face_order = faces ? morton_order(centroids(mesh, threads), threads) : identity_order(m, threads);
+  clock.lap("face order");
+  r.triangles.resize(m);
+  parallel_for(m, kGrain, threads, [&](std::size_t begin, std::size_t end) {
+    for (std::size_t f = begin; f < end; ++f) {
+      const glm::uvec3 t = mesh.triangles[r.face_order[f]];
+      r.triangles[f] = glm::uvec3(r.new_vertex[t.x], r.new_vertex[t.y], r.new_vertex[t.z]);
+    }
+  });
+  clock.lap("triangles");
+  r.faces_of_vertices = faces_of_vertices(r.triangles.data(), m, r.weld.count, threads);
+  clock.lap("faces of vertices");
+  r.vertex_neighbours = vertex_neighbours(r.triangles.data(), r.faces_of_vertices, threads);
+  clock.lap("vertex neighbours");
+  return r;
+}
+
 // Per merged vertex (new_vertex: input vertex -> its merged vertex in the new numbering), the
 // mean of its input vertices' values within [lo, hi], summed in double in index order. The
 // first input vertex of each starts its sum in parallel; the others (a few percent: seams) are
@@ -554,43 +603,13 @@ std::vector<float> smooth_kring(const Mesh& mesh, PointKind kind, const float* v
 
   if (progress && !progress(progress_from)) throw Cancelled();
   const unsigned threads = options.threads;
-  // Merged mesh and its adjacency.
-  const Weld weld = options.weld_tolerance >= 0.0
-                        ? weld_vertices(mesh.vertices.data(), mesh.vertices.size(),
-                                        weld_tolerance(mesh, options.weld_tolerance), threads,
-                                        timings)
-                        : identity_weld(mesh.vertices.size(), threads);
-  clock.lap("weld");
-  // Merged vertices, and faces, renumbered in Morton order of their positions: a batch of
-  // consecutive points is then a compact patch, and its walk reads nearby memory whatever the
-  // input's order (a subdivided mesh scatters neighbours all over its arrays).
-  const std::size_t m = mesh.triangles.size();
-  const UninitializedVector<glm::vec3> merged_position = merged_positions(mesh, weld, threads);
-  clock.lap("merged positions");
-  const UninitializedVector<std::uint32_t> vertex_rank =  // merged -> new
-      inverse(morton_order(merged_position, threads), threads);
-  // input vertex -> new: one look-up per corner below instead of two dependent ones
-  UninitializedVector<std::uint32_t> new_vertex(mesh.vertices.size());
-  parallel_for(new_vertex.size(), kGrain, threads, [&](std::size_t begin, std::size_t end) {
-    for (std::size_t v = begin; v < end; ++v) new_vertex[v] = vertex_rank[weld.merged[v]];
-  });
-  clock.lap("vertex order");
-  // new -> input face (for vertex values, faces only link vertices: any order)
-  const UninitializedVector<std::uint32_t> face_order =
-      faces ? morton_order(centroids(mesh, threads), threads) : identity_order(m, threads);
-  clock.lap("face order");
-  UninitializedVector<glm::uvec3> tris(m);
-  parallel_for(m, kGrain, threads, [&](std::size_t begin, std::size_t end) {
-    for (std::size_t f = begin; f < end; ++f) {
-      const glm::uvec3 t = mesh.triangles[face_order[f]];
-      tris[f] = glm::uvec3(new_vertex[t.x], new_vertex[t.y], new_vertex[t.z]);
-    }
-  });
-  clock.lap("triangles");
-  const Adjacency vf = faces_of_vertices(tris.data(), m, weld.count, threads);
-  clock.lap("faces of vertices");
-  const Adjacency vv = vertex_neighbours(tris.data(), vf, threads);
-  clock.lap("vertex neighbours");
+  const RingMesh ring = ring_mesh(mesh, faces, options.weld_tolerance, threads, clock, timings);
+  const Weld& weld = ring.weld;
+  const UninitializedVector<std::uint32_t>& face_order = ring.face_order;
+  const UninitializedVector<std::uint32_t>& new_vertex = ring.new_vertex;
+  const UninitializedVector<glm::uvec3>& tris = ring.triangles;
+  const Adjacency& vf = ring.faces_of_vertices;
+  const Adjacency& vv = ring.vertex_neighbours;
 
   // Values in the new numbering; a merged vertex takes the mean of its duplicates' values.
   const std::size_t points = faces ? n : weld.count;
