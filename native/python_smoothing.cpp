@@ -25,13 +25,14 @@ using Doubles = py::array_t<double, py::array::c_style | py::array::forcecast>;
 using Int64s = py::array_t<std::int64_t, py::array::c_style | py::array::forcecast>;
 using Floats = py::array_t<float, py::array::c_style | py::array::forcecast>;
 
-sdf::Mesh mesh_from(const Doubles& vertices, const Int64s& triangles) {
+// Converted on `threads` workers (0 = every core): the smoothing calls pass theirs.
+sdf::Mesh mesh_from(const Doubles& vertices, const Int64s& triangles, unsigned threads = 0) {
   if (vertices.ndim() != 2 || vertices.shape(1) != 3)
     throw std::invalid_argument("vertices must have shape (n, 3)");
   if (triangles.ndim() != 2 || triangles.shape(1) != 3)
     throw std::invalid_argument("triangles must have shape (m, 3)");
   return sdf::make_mesh(vertices.data(), static_cast<std::size_t>(vertices.shape(0)),
-                        triangles.data(), static_cast<std::size_t>(triangles.shape(0)));
+                        triangles.data(), static_cast<std::size_t>(triangles.shape(0)), threads);
 }
 
 sdf::PointKind kind_from(const std::string& points) {
@@ -93,7 +94,7 @@ py::dict smooth_kring(const Doubles& vertices, const Int64s& triangles, const Fl
                       double weld_tolerance, unsigned threads, const py::object& progress) {
   sdf::StageTimings stages;
   sdf::StageClock clock(&stages);
-  const sdf::Mesh mesh = mesh_from(vertices, triangles);
+  const sdf::Mesh mesh = mesh_from(vertices, triangles, threads);
   clock.lap("mesh");
   const sdf::PointKind kind = kind_from(points);
   const float* v = point_values(mesh, kind, values);
@@ -121,7 +122,7 @@ py::array_t<float> smooth_projected(const Doubles& vertices, const Int64s& trian
                                     double node_size_ratio, const std::string& branch_on,
                                     unsigned threads, const py::object& progress,
                                     const std::string& engine) {
-  const sdf::Mesh mesh = mesh_from(vertices, triangles);
+  const sdf::Mesh mesh = mesh_from(vertices, triangles, threads);
   const sdf::PointKind kind = kind_from(points);
   const float* v = point_values(mesh, kind, values);
   sdf::ProjectedOptions options;
@@ -155,7 +156,7 @@ py::dict smooth_texture(const Doubles& vertices, const Int64s& triangles, const 
                         double radius, bool bilateral, double range_sigma, int margin,
                         double weld_tolerance, bool return_image, unsigned threads,
                         const py::object& progress, const std::string& engine) {
-  const sdf::Mesh mesh = mesh_from(vertices, triangles);
+  const sdf::Mesh mesh = mesh_from(vertices, triangles, threads);
   const sdf::PointKind kind = kind_from(points);
   const float* v = point_values(mesh, kind, values);
   if (uvs.ndim() != 3 || static_cast<std::size_t>(uvs.shape(0)) != mesh.triangles.size() ||
