@@ -105,13 +105,15 @@ py::dict smooth_kring(const Doubles& vertices, const Int64s& triangles, const Fl
   options.weld_tolerance = weld_tolerance;
   options.threads = threads;
   const sdf::ProgressFn report = progress_from(progress);
-  std::vector<float> out;
+  // Written in place by the native code: no copy of the result.
+  py::array_t<float> out(values.shape(0));
+  float* o = out.mutable_data();
   {
     py::gil_scoped_release release;
-    out = sdf::smooth_kring(mesh, kind, v, options, report, 0.0, 1.0, &stages);
+    sdf::smooth_kring_into(mesh, kind, v, options, o, report, 0.0, 1.0, &stages);
   }
   py::dict result;
-  result["values"] = to_array(out);
+  result["values"] = out;
   result["timings"] = timings_dict(stages);
   return result;
 }

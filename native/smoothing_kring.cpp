@@ -580,9 +580,9 @@ int default_kring_k(std::size_t face_count) {
   return static_cast<int>(std::min(16.0, std::max(1.0, k)));
 }
 
-std::vector<float> smooth_kring(const Mesh& mesh, PointKind kind, const float* values,
-                                const KringOptions& options, const ProgressFn& progress,
-                                double progress_from, double progress_to, StageTimings* timings) {
+void smooth_kring_into(const Mesh& mesh, PointKind kind, const float* values,
+                       const KringOptions& options, float* out, const ProgressFn& progress,
+                       double progress_from, double progress_to, StageTimings* timings) {
   StageClock clock(timings);
   const bool faces = kind == PointKind::Faces;
   const std::size_t n = faces ? mesh.triangles.size() : mesh.vertices.size();
@@ -593,12 +593,13 @@ std::vector<float> smooth_kring(const Mesh& mesh, PointKind kind, const float* v
   if (!(options.corner_angle >= 0.0) || !std::isfinite(options.corner_angle))
     throw std::invalid_argument("corner_angle must be a finite number of degrees >= 0");
 
-  if (k == 0 || n == 0) return std::vector<float>(values, values + n);
+  auto unchanged = [&] { std::copy(values, values + n, out); };
+  if (k == 0 || n == 0) return unchanged();
   const ValueRange range = value_range(values, n, options.threads, not_finite);
   if (range.first_bad < n)
     throw std::invalid_argument("value " + std::to_string(range.first_bad) + " is not finite");
   const float lo = range.lo, hi = range.hi;
-  if (lo == hi) return std::vector<float>(values, values + n);  // constant: exactly unchanged
+  if (lo == hi) return unchanged();  // constant: exactly unchanged
   clock.lap("checks");
 
   if (progress && !progress(progress_from)) throw Cancelled();
@@ -702,7 +703,6 @@ std::vector<float> smooth_kring(const Mesh& mesh, PointKind kind, const float* v
   if (progress && !progress(progress_to)) throw Cancelled();
   clock.lap("rings");
 
-  std::vector<float> out(n);
   if (faces) {
     parallel_for(n, kGrain, threads, [&](std::size_t begin, std::size_t end) {
       for (std::size_t f = begin; f < end; ++f) out[face_order[f]] = smoothed[f];
@@ -713,6 +713,14 @@ std::vector<float> smooth_kring(const Mesh& mesh, PointKind kind, const float* v
     });
   }
   clock.lap("write back");
+}
+
+std::vector<float> smooth_kring(const Mesh& mesh, PointKind kind, const float* values,
+                                const KringOptions& options, const ProgressFn& progress,
+                                double progress_from, double progress_to) {
+  std::vector<float> out(kind == PointKind::Faces ? mesh.triangles.size() : mesh.vertices.size());
+  smooth_kring_into(mesh, kind, values, options, out.data(), progress, progress_from,
+                    progress_to);
   return out;
 }
 

@@ -46,11 +46,17 @@ int default_kring_k(std::size_t face_count);
 // each clamped to the input's [min, max] (so rounding can neither leave the range nor move a
 // constant field). k = 0 returns the values unchanged. Throws std::invalid_argument for bad
 // options. Progress covers [progress_from, progress_to] and can cancel (throws Cancelled).
-// With `timings`, appends the seconds of each stage, in order (bench/kring_stages.py prints
-// them).
 std::vector<float> smooth_kring(const Mesh& mesh, PointKind kind, const float* values,
                                 const KringOptions& options, const ProgressFn& progress = nullptr,
-                                double progress_from = 0.0, double progress_to = 1.0,
-                                StageTimings* timings = nullptr);
+                                double progress_from = 0.0, double progress_to = 1.0);
+
+// The same, writing the result into out[0, point count) (which may be the caller's final
+// array, e.g. a NumPy one: no serial zeroing and copy of 4 bytes a point). out must not
+// overlap values. With `timings`, appends the seconds of each stage, in order
+// (bench/kring_stages.py prints them).
+void smooth_kring_into(const Mesh& mesh, PointKind kind, const float* values,
+                       const KringOptions& options, float* out,
+                       const ProgressFn& progress = nullptr, double progress_from = 0.0,
+                       double progress_to = 1.0, StageTimings* timings = nullptr);
 
 }  // namespace sdf
