@@ -47,7 +47,10 @@ namespace {
 constexpr int kBatch = 64;
 
 struct BatchScratch {
-  std::vector<std::uint32_t> vertex_stamp, vertex_local, face_stamp;
+  std::vector<std::uint32_t> vertex_stamp, face_stamp;
+  // Read only where vertex_stamp holds the current epoch, so never zeroed (one array fewer to
+  // write per thread before its first batch).
+  UninitializedVector<std::uint32_t> vertex_local;
   std::vector<std::uint32_t> region_vertices, region_faces;     // global ids, walk order
   std::vector<std::uint32_t> vertex_level_end, face_level_end;  // prefix ends by level
   std::vector<std::uint32_t> local_offsets, local_items;        // region vertex adjacency, local
