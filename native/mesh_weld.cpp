@@ -306,15 +306,21 @@ Adjacency faces_of_vertices(const glm::uvec3* triangles, std::size_t m,
   const std::size_t blocks = face_blocks(m, threads);
   auto block_begin = [&](std::size_t b) { return m * b / blocks; };
   // at[r * blocks + b]: block b's corners in range r; then where block b writes them.
-  std::vector<std::uint32_t> at(ranges * blocks + 1, 0u);
+  std::vector<std::uint32_t> at(ranges * blocks + 1, 0u);  // the last entry: the total
   parallel_for(blocks, 1, threads, [&](std::size_t b0, std::size_t b1) {
-    for (std::size_t b = b0; b < b1; ++b)
+    // Counted apart, then stored: the blocks' counts of a range share cache lines in `at`,
+    // which counting there made threads fight over.
+    std::vector<std::uint32_t> count(ranges);
+    for (std::size_t b = b0; b < b1; ++b) {
+      std::fill(count.begin(), count.end(), 0u);
       for (std::size_t f = block_begin(b); f < block_begin(b + 1); ++f)
         for (int k = 0; k < 3; ++k)
-          if (distinct_corner(triangles[f], k)) ++at[(triangles[f][k] >> kRangeBits) * blocks + b];
+          if (distinct_corner(triangles[f], k)) ++count[triangles[f][k] >> kRangeBits];
+      for (std::size_t r = 0; r < ranges; ++r) at[r * blocks + b] = count[r];
+    }
   });
   std::uint32_t total = 0;
-  for (std::uint32_t& c : at) total += std::exchange(c, total);  // the last entry: the total
+  for (std::uint32_t& c : at) total += std::exchange(c, total);
   UninitializedVector<std::uint64_t> pairs(total);  // vertex << 32 | face
   parallel_for(blocks, 1, threads, [&](std::size_t b0, std::size_t b1) {
     std::vector<std::uint32_t> next(ranges);
