@@ -283,6 +283,7 @@ bool distinct_corner(const glm::uvec3& t, int k) {
 // Vertices per range of faces_of_vertices' second level: a range's counters (16 KiB) stay in
 // L1.
 constexpr int kRangeBits = 12;
+constexpr std::uint32_t kRangeMask = (1u << kRangeBits) - 1;
 
 // Blocks of faces of faces_of_vertices' first level: a few per thread (for balance), and not
 // so many that the table of counts per block and range grows large.
@@ -295,10 +296,9 @@ std::size_t face_blocks(std::size_t faces, unsigned threads) {
 }  // namespace
 
 // A counting sort of the corners by vertex in two levels, so that both run in parallel: each
-// block of faces counts its corners per range of 4096 vertices, then copies them as (vertex,
-// face) pairs to its place among the range's corners (ranges in order, within a range blocks
-// in order, within a block faces in order); then each range sorts its pairs by vertex with
-// counters in L1. The sorts are stable, so each list comes out in increasing face order, as
+// block of faces counts its corners per range of 4096 vertices, then copies them to its place
+// among the range's corners (ranges in order, within a range blocks in order, within a block
+// faces in order); then each range sorts its corners by vertex with counters in L1. The sorts are stable, so each list comes out in increasing face order, as
 // from the serial counting sort this replaced (tests/cpp/adjacency_reference.h).
 Adjacency faces_of_vertices(const glm::uvec3* triangles, std::size_t m,
                             std::uint32_t vertex_count, unsigned threads) {
@@ -321,7 +321,13 @@ Adjacency faces_of_vertices(const glm::uvec3* triangles, std::size_t m,
   });
   std::uint32_t total = 0;
   for (std::uint32_t& c : at) total += std::exchange(c, total);
-  UninitializedVector<std::uint64_t> pairs(total);  // vertex << 32 | face
+  // A range's corners take the same slots of `items` before and after its sort: the first
+  // level writes each corner's face there, and its vertex's place in the range beside it (2
+  // bytes: fresh memory costs its zeroing by the kernel, which 8-byte pairs made most of the
+  // time); the second sorts each range's slots through a copy that stays in cache.
+  Adjacency a;
+  a.items.resize(total);
+  UninitializedVector<std::uint16_t> local_vertex(total);
   parallel_for(blocks, 1, threads, [&](std::size_t b0, std::size_t b1) {
     std::vector<std::uint32_t> next(ranges);
     for (std::size_t b = b0; b < b1; ++b) {
@@ -330,29 +336,29 @@ Adjacency faces_of_vertices(const glm::uvec3* triangles, std::size_t m,
         for (int k = 0; k < 3; ++k)
           if (distinct_corner(triangles[f], k)) {
             const std::uint32_t v = triangles[f][k];
-            pairs[next[v >> kRangeBits]++] = std::uint64_t(v) << 32 | f;
+            const std::uint32_t i = next[v >> kRangeBits]++;
+            a.items[i] = static_cast<std::uint32_t>(f);
+            local_vertex[i] = static_cast<std::uint16_t>(v & kRangeMask);
           }
     }
   });
-  Adjacency a;
   a.offsets.resize(std::size_t(vertex_count) + 1);
-  a.items.resize(total);
   a.offsets[vertex_count] = total;
   parallel_for(ranges, 1, threads, [&](std::size_t r0, std::size_t r1) {
-    std::vector<std::uint32_t> next(std::size_t(1) << kRangeBits);
+    std::vector<std::uint32_t> next(kRangeMask + 1), faces;
     for (std::size_t r = r0; r < r1; ++r) {
       const std::uint32_t first = at[r * blocks], last = at[(r + 1) * blocks];
       const std::size_t lo = r << kRangeBits;
       const std::size_t count = std::min<std::size_t>(vertex_count - lo, next.size());
+      faces.assign(a.items.begin() + first, a.items.begin() + last);
       std::fill(next.begin(), next.end(), 0u);
-      for (std::uint32_t i = first; i < last; ++i) ++next[(pairs[i] >> 32) - lo];
+      for (std::uint32_t i = first; i < last; ++i) ++next[local_vertex[i]];
       std::uint32_t offset = first;
       for (std::size_t v = 0; v < count; ++v) {
         a.offsets[lo + v] = offset;
         offset += std::exchange(next[v], offset);
       }
-      for (std::uint32_t i = first; i < last; ++i)
-        a.items[next[(pairs[i] >> 32) - lo]++] = static_cast<std::uint32_t>(pairs[i]);
+      for (std::uint32_t i = first; i < last; ++i) a.items[next[local_vertex[i]]++] = faces[i - first];
     }
   });
   return a;
