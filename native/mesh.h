@@ -9,11 +9,13 @@
 
 #include <glm/glm.hpp>
 
+#include "uninitialized_vector.h"
+
 namespace sdf {
 
 struct Mesh {
-  std::vector<glm::vec3> vertices;    // positions minus `center`
-  std::vector<glm::uvec3> triangles;  // counter-clockwise seen from outside
+  UninitializedVector<glm::vec3> vertices;    // positions minus `center`
+  UninitializedVector<glm::uvec3> triangles;  // counter-clockwise seen from outside
   glm::dvec3 center{0.0};             // bounding-box centre of the input, in input units
   double max_extent = 0.0;            // largest bounding-box side, in input units
 };

@@ -10,6 +10,8 @@
 #include <vector>
 
 #include "mesh.h"
+#include "stopwatch.h"
+#include "uninitialized_vector.h"
 
 namespace sdf {
 
@@ -18,7 +20,12 @@ struct Weld {
   // (so a mesh without duplicates maps every vertex to itself).
   std::vector<std::uint32_t> merged;
   std::uint32_t count = 0;  // number of merged vertices
+  // Per merged vertex: its first input vertex (the kept one, which the others joined).
+  UninitializedVector<std::uint32_t> first;
 };
+
+// Each vertex its own merged vertex (no merging), on `threads` workers.
+Weld identity_weld(std::size_t count, unsigned threads);
 
 // A vertex joins the first earlier kept vertex within `tolerance` (Euclidean distance, mesh
 // units); otherwise it is kept. tolerance 0 merges exactly equal positions only (+0 and -0
@@ -27,8 +34,9 @@ struct Weld {
 // tolerance. Linear expected time: a hash grid of cells 2 to 64 tolerances wide, 1 to 8
 // cells per query. On `threads` threads (0: every core) but for the greedy pass over the
 // vertices that have a neighbour within the tolerance; the same result for any count.
+// With `timings`, appends the seconds of its stages ("weld: ...").
 Weld weld_vertices(const glm::vec3* positions, std::size_t count, float tolerance,
-                   unsigned threads = 1);
+                   unsigned threads = 1, StageTimings* timings = nullptr);
 
 // Merging tolerance for a mesh: `relative` times its largest bounding-box side. The default,
 // 1e-6, is about 16 float ulps at the box's edge: it merges what an exporter duplicated
@@ -40,19 +48,21 @@ float weld_tolerance(const Mesh& mesh, double relative = kDefaultWeldTolerance);
 std::vector<glm::uvec3> welded_triangles(const Mesh& mesh, const Weld& weld);
 
 // Compressed lists: the items of key k are items[offsets[k] .. offsets[k + 1]). Flat arrays,
-// so that a kernel can walk them as they are.
+// so that a kernel can walk them as they are; filled in parallel, never zeroed first.
 struct Adjacency {
-  std::vector<std::uint32_t> offsets, items;
+  UninitializedVector<std::uint32_t> offsets, items;
   std::size_t size() const { return offsets.empty() ? 0 : offsets.size() - 1; }
 };
 
 // Faces around each vertex, in increasing face order. A face whose corners merged into one
-// vertex is listed once per distinct corner.
-Adjacency faces_of_vertices(const std::vector<glm::uvec3>& triangles, std::uint32_t vertex_count);
+// vertex is listed once per distinct corner. On `threads` workers (0 = every core); the
+// result does not depend on it.
+Adjacency faces_of_vertices(const glm::uvec3* triangles, std::size_t count,
+                            std::uint32_t vertex_count, unsigned threads = 1);
 
 // Vertices that share an edge with each vertex (each once, increasing; never the vertex itself).
 // On `threads` workers (0 = every core); the result does not depend on it.
-Adjacency vertex_neighbours(const std::vector<glm::uvec3>& triangles,
-                            const Adjacency& faces_of_vertices, unsigned threads = 1);
+Adjacency vertex_neighbours(const glm::uvec3* triangles, const Adjacency& faces_of_vertices,
+                            unsigned threads = 1);
 
 }  // namespace sdf

@@ -26,13 +26,14 @@ using Doubles = py::array_t<double, py::array::c_style | py::array::forcecast>;
 using Int64s = py::array_t<std::int64_t, py::array::c_style | py::array::forcecast>;
 using Floats = py::array_t<float, py::array::c_style | py::array::forcecast>;
 
-sdf::Mesh mesh_from(const Doubles& vertices, const Int64s& triangles) {
+// Converted on `threads` workers (0 = every core): the smoothing calls pass theirs.
+sdf::Mesh mesh_from(const Doubles& vertices, const Int64s& triangles, unsigned threads = 0) {
   if (vertices.ndim() != 2 || vertices.shape(1) != 3)
     throw std::invalid_argument("vertices must have shape (n, 3)");
   if (triangles.ndim() != 2 || triangles.shape(1) != 3)
     throw std::invalid_argument("triangles must have shape (m, 3)");
   return sdf::make_mesh(vertices.data(), static_cast<std::size_t>(vertices.shape(0)),
-                        triangles.data(), static_cast<std::size_t>(triangles.shape(0)));
+                        triangles.data(), static_cast<std::size_t>(triangles.shape(0)), threads);
 }
 
 sdf::PointKind kind_from(const std::string& points) {
@@ -88,11 +89,14 @@ py::array_t<float> to_array(const std::vector<float>& v) {
   return py::array_t<float>(static_cast<py::ssize_t>(v.size()), v.data());
 }
 
-py::array_t<float> smooth_kring(const Doubles& vertices, const Int64s& triangles,
-                                const Floats& values, const std::string& points, int k,
-                                double sigma, double corner_angle, double weld_tolerance,
-                                unsigned threads, const py::object& progress) {
-  const sdf::Mesh mesh = mesh_from(vertices, triangles);
+// Returns {"values": the smoothed values, "timings": seconds per stage}.
+py::dict smooth_kring(const Doubles& vertices, const Int64s& triangles, const Floats& values,
+                      const std::string& points, int k, double sigma, double corner_angle,
+                      double weld_tolerance, unsigned threads, const py::object& progress) {
+  sdf::StageTimings stages;
+  sdf::StageClock clock(&stages);
+  const sdf::Mesh mesh = mesh_from(vertices, triangles, threads);
+  clock.lap("mesh");
   const sdf::PointKind kind = kind_from(points);
   const float* v = point_values(mesh, kind, values);
   sdf::KringOptions options;
@@ -102,12 +106,17 @@ py::array_t<float> smooth_kring(const Doubles& vertices, const Int64s& triangles
   options.weld_tolerance = weld_tolerance;
   options.threads = threads;
   const sdf::ProgressFn report = progress_from(progress);
-  std::vector<float> out;
+  // Written in place by the native code: no copy of the result.
+  py::array_t<float> out(values.shape(0));
+  float* o = out.mutable_data();
   {
     py::gil_scoped_release release;
-    out = sdf::smooth_kring(mesh, kind, v, options, report);
+    sdf::smooth_kring_into(mesh, kind, v, options, o, report, 0.0, 1.0, &stages);
   }
-  return to_array(out);
+  py::dict result;
+  result["values"] = out;
+  result["timings"] = sdf::timings_dict(stages);
+  return result;
 }
 
 py::array_t<float> smooth_projected(const Doubles& vertices, const Int64s& triangles,
@@ -116,7 +125,7 @@ py::array_t<float> smooth_projected(const Doubles& vertices, const Int64s& trian
                                     double node_size_ratio, const std::string& branch_on,
                                     unsigned threads, const py::object& progress,
                                     const std::string& engine, const py::object& timings) {
-  const sdf::Mesh mesh = mesh_from(vertices, triangles);
+  const sdf::Mesh mesh = mesh_from(vertices, triangles, threads);
   const sdf::PointKind kind = kind_from(points);
   const float* v = point_values(mesh, kind, values);
   sdf::ProjectedOptions options;
@@ -134,7 +143,7 @@ py::array_t<float> smooth_projected(const Doubles& vertices, const Int64s& trian
   // Written in place by the native code: no copy of the result.
   py::array_t<float> out(values.shape(0));
   float* o = out.mutable_data();
-  sdf::StageTimes stages;
+  sdf::StageTimings stages;
   {
     py::gil_scoped_release release;
 #ifdef SDF_HAVE_OPENCL
@@ -153,7 +162,7 @@ py::dict smooth_texture(const Doubles& vertices, const Int64s& triangles, const 
                         double weld_tolerance, bool return_image, unsigned threads,
                         const py::object& progress, const std::string& engine,
                         const sdf::UvIslands* islands) {
-  const sdf::Mesh mesh = mesh_from(vertices, triangles);
+  const sdf::Mesh mesh = mesh_from(vertices, triangles, threads);
   const sdf::PointKind kind = kind_from(points);
   const float* v = point_values(mesh, kind, values);
   require_corner_uvs(uvs, mesh);
@@ -214,7 +223,7 @@ py::tuple weld_vertices(const Doubles& vertices, const Int64s& triangles, double
 sdf::UvIslands label_uv_islands(const Doubles& vertices, const Int64s& triangles,
                                 const Floats& uvs, double weld_tolerance, bool need_merged,
                                 unsigned threads) {
-  const sdf::Mesh mesh = mesh_from(vertices, triangles);
+  const sdf::Mesh mesh = mesh_from(vertices, triangles, threads);
   require_corner_uvs(uvs, mesh);
   py::gil_scoped_release release;
   return sdf::label_uv_islands(mesh, uvs.data(), weld_tolerance, need_merged, threads);

@@ -8,7 +8,7 @@
 
 namespace sdf {
 
-inline pybind11::dict timings_dict(const StageTimes& times) {
+inline pybind11::dict timings_dict(const StageTimings& times) {
   pybind11::dict out;
   for (const auto& [stage, seconds] : times) out[pybind11::str(stage)] = seconds;
   return out;

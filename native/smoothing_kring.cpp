@@ -12,9 +12,11 @@
 
 #include "mesh_weld.h"
 #include "morton.h"
+#include "parallel_scan.h"
 #include "radix_sort.h"
 #include "smoothing_kring_sums.h"
 #include "uninitialized_vector.h"
+#include "value_range.h"
 
 namespace sdf {
 
@@ -45,7 +47,10 @@ namespace {
 constexpr int kBatch = 64;
 
 struct BatchScratch {
-  std::vector<std::uint32_t> vertex_stamp, vertex_local, face_stamp;
+  std::vector<std::uint32_t> vertex_stamp, face_stamp;
+  // Read only where vertex_stamp holds the current epoch, so never zeroed (one array fewer to
+  // write per thread before its first batch).
+  UninitializedVector<std::uint32_t> vertex_local;
   std::vector<std::uint32_t> region_vertices, region_faces;     // global ids, walk order
   std::vector<std::uint32_t> vertex_level_end, face_level_end;  // prefix ends by level
   std::vector<std::uint32_t> local_offsets, local_items;        // region vertex adjacency, local
@@ -167,7 +172,7 @@ void kring_vertex_batch(const std::uint32_t* points, int count, int k, const flo
 
 // Face rings for the batch points[0 .. count).
 void kring_face_batch(const std::uint32_t* points, int count, int k, const float* ring_weight,
-                      const std::vector<glm::uvec3>& triangles, const Adjacency& vf,
+                      const glm::uvec3* triangles, const Adjacency& vf,
                       const Adjacency& vv, const float* values, BatchScratch& s, double* sum,
                       double* weight) {
   const std::uint32_t epoch = s.next_epoch();
@@ -236,19 +241,25 @@ void kring_face_batch(const std::uint32_t* points, int count, int k, const float
 // Points in Morton order of their positions, so that a batch of consecutive points is a
 // compact patch and the region it walks stays small. Ties keep index order (a stable sort of
 // the 30-bit codes), so the batches depend on nothing but the mesh.
-std::vector<std::uint32_t> morton_order(const std::vector<glm::vec3>& positions,
-                                        unsigned threads) {
+UninitializedVector<std::uint32_t> morton_order(const UninitializedVector<glm::vec3>& positions,
+                                                unsigned threads) {
   const std::size_t n = positions.size();
   constexpr std::size_t kBlock = 1 << 16;
   const std::size_t blocks = std::max<std::size_t>(1, (n + kBlock - 1) / kBlock);
   std::vector<glm::vec3> block_lo(blocks, glm::vec3(std::numeric_limits<float>::infinity()));
   std::vector<glm::vec3> block_hi(blocks, -block_lo[0]);
   parallel_for(blocks, 1, threads, [&](std::size_t b0, std::size_t b1) {
-    for (std::size_t b = b0; b < b1; ++b)
+    // In registers: stores into the shared arrays on every point made the blocks of two
+    // threads fight over cache lines (slower on 2 threads than on 1).
+    for (std::size_t b = b0; b < b1; ++b) {
+      glm::vec3 l = block_lo[b], h = block_hi[b];
       for (std::size_t i = b * kBlock; i < std::min(n, (b + 1) * kBlock); ++i) {
-        block_lo[b] = glm::min(block_lo[b], positions[i]);
-        block_hi[b] = glm::max(block_hi[b], positions[i]);
+        l = glm::min(l, positions[i]);
+        h = glm::max(h, positions[i]);
       }
+      block_lo[b] = l;
+      block_hi[b] = h;
+    }
   });
   glm::vec3 lo = block_lo[0], hi = block_hi[0];
   for (std::size_t b = 1; b < blocks; ++b) {
@@ -270,11 +281,136 @@ std::vector<std::uint32_t> morton_order(const std::vector<glm::vec3>& positions,
     }
   });
   radix_sort_by_bits(keyed, 32, 30, threads);
-  std::vector<std::uint32_t> order(n);
+  UninitializedVector<std::uint32_t> order(n);
   parallel_for(n, kBlock, threads, [&](std::size_t begin, std::size_t end) {
     for (std::size_t i = begin; i < end; ++i) order[i] = static_cast<std::uint32_t>(keyed[i]);
   });
   return order;
+}
+
+// ---- Setup: the merged mesh renumbered, on parallel_for (no serial pass over the mesh: at
+// 16 threads those took most of the time of k = 1). ----
+
+constexpr std::size_t kGrain = 1 << 15;  // items per chunk of the setup loops
+
+// The inverse of a permutation: order[i] -> i.
+UninitializedVector<std::uint32_t> inverse(const UninitializedVector<std::uint32_t>& order,
+                                           unsigned threads) {
+  UninitializedVector<std::uint32_t> rank(order.size());
+  parallel_for(order.size(), kGrain, threads, [&](std::size_t begin, std::size_t end) {
+    for (std::size_t i = begin; i < end; ++i) rank[order[i]] = static_cast<std::uint32_t>(i);
+  });
+  return rank;
+}
+
+// 0, 1, ..., n - 1.
+UninitializedVector<std::uint32_t> identity_order(std::size_t n, unsigned threads) {
+  UninitializedVector<std::uint32_t> order(n);
+  parallel_for(n, kGrain, threads, [&](std::size_t begin, std::size_t end) {
+    for (std::size_t i = begin; i < end; ++i) order[i] = static_cast<std::uint32_t>(i);
+  });
+  return order;
+}
+
+// Each merged vertex at the position of its first input vertex.
+UninitializedVector<glm::vec3> merged_positions(const Mesh& mesh, const Weld& weld,
+                                                unsigned threads) {
+  UninitializedVector<glm::vec3> position(weld.count);
+  parallel_for(weld.count, kGrain, threads, [&](std::size_t begin, std::size_t end) {
+    for (std::size_t w = begin; w < end; ++w) position[w] = mesh.vertices[weld.first[w]];
+  });
+  return position;
+}
+
+// Three times each face's centroid (the Morton order needs no division).
+UninitializedVector<glm::vec3> centroids(const Mesh& mesh, unsigned threads) {
+  UninitializedVector<glm::vec3> centroid(mesh.triangles.size());
+  parallel_for(mesh.triangles.size(), kGrain, threads, [&](std::size_t begin, std::size_t end) {
+    for (std::size_t f = begin; f < end; ++f) {
+      const glm::uvec3 t = mesh.triangles[f];
+      centroid[f] = mesh.vertices[t.x] + mesh.vertices[t.y] + mesh.vertices[t.z];
+    }
+  });
+  return centroid;
+}
+
+// The mesh the rings walk: vertices merged (mesh_weld.h), merged vertices and faces
+// renumbered in Morton order of their positions (a batch of consecutive points is then a
+// compact patch, and its walk reads nearby memory whatever the input's order: a subdivided
+// mesh scatters neighbours all over its arrays), and its adjacency.
+struct RingMesh {
+  Weld weld;
+  UninitializedVector<std::uint32_t> new_vertex;  // input vertex -> new merged vertex
+  UninitializedVector<std::uint32_t> face_order;  // new -> input face
+  UninitializedVector<glm::uvec3> triangles;      // new faces, new vertices
+  Adjacency faces_of_vertices, vertex_neighbours;
+};
+
+// Faces are ordered only for face values; for vertex values they only link vertices.
+RingMesh ring_mesh(const Mesh& mesh, bool faces, double weld_tolerance_relative,
+                   unsigned threads, StageClock& clock, StageTimings* timings) {
+  RingMesh r;
+  r.weld = weld_tolerance_relative >= 0.0
+               ? weld_vertices(mesh.vertices.data(), mesh.vertices.size(),
+                               weld_tolerance(mesh, weld_tolerance_relative), threads, timings)
+               : identity_weld(mesh.vertices.size(), threads);
+  clock.lap("weld");
+  const UninitializedVector<glm::vec3> merged_position = merged_positions(mesh, r.weld, threads);
+  clock.lap("merged positions");
+  const UninitializedVector<std::uint32_t> vertex_rank =  // merged -> new
+      inverse(morton_order(merged_position, threads), threads);
+  // Composed once: one look-up per corner below instead of two dependent ones.
+  r.new_vertex.resize(mesh.vertices.size());
+  parallel_for(r.new_vertex.size(), kGrain, threads, [&](std::size_t begin, std::size_t end) {
+    for (std::size_t v = begin; v < end; ++v) r.new_vertex[v] = vertex_rank[r.weld.merged[v]];
+  });
+  clock.lap("vertex order");
+  const std::size_t m = mesh.triangles.size();
+  r.face_order = faces ? morton_order(centroids(mesh, threads), threads) : identity_order(m, threads);
+  clock.lap("face order");
+  r.triangles.resize(m);
+  parallel_for(m, kGrain, threads, [&](std::size_t begin, std::size_t end) {
+    for (std::size_t f = begin; f < end; ++f) {
+      const glm::uvec3 t = mesh.triangles[r.face_order[f]];
+      r.triangles[f] = glm::uvec3(r.new_vertex[t.x], r.new_vertex[t.y], r.new_vertex[t.z]);
+    }
+  });
+  clock.lap("triangles");
+  r.faces_of_vertices = faces_of_vertices(r.triangles.data(), m, r.weld.count, threads);
+  clock.lap("faces of vertices");
+  r.vertex_neighbours = vertex_neighbours(r.triangles.data(), r.faces_of_vertices, threads);
+  clock.lap("vertex neighbours");
+  return r;
+}
+
+// Per merged vertex (new_vertex: input vertex -> its merged vertex in the new numbering), the
+// mean of its input vertices' values within [lo, hi], summed in double in index order. The
+// first input vertex of each starts its sum in parallel; the others (a few percent: seams) are
+// added after, in index order, as the serial loop this replaced added them all.
+UninitializedVector<float> merged_values(const float* values, std::size_t n, const Weld& weld,
+                                         const UninitializedVector<std::uint32_t>& new_vertex,
+                                         float lo, float hi, unsigned threads) {
+  UninitializedVector<double> sum(weld.count);
+  UninitializedVector<std::uint32_t> count(weld.count);
+  parallel_for(weld.count, kGrain, threads, [&](std::size_t begin, std::size_t end) {
+    for (std::size_t w = begin; w < end; ++w) {
+      const std::uint32_t v = weld.first[w];
+      sum[new_vertex[v]] = 0.0 + static_cast<double>(values[v]);  // -0 as 0 + -0 makes it
+      count[new_vertex[v]] = 1;
+    }
+  });
+  const std::vector<std::uint32_t> joined =
+      indices_where(n, threads, [&](std::size_t v) { return weld.first[weld.merged[v]] != v; });
+  for (const std::uint32_t v : joined) {
+    sum[new_vertex[v]] += values[v];
+    ++count[new_vertex[v]];
+  }
+  UninitializedVector<float> mean(weld.count);
+  parallel_for(weld.count, kGrain, threads, [&](std::size_t begin, std::size_t end) {
+    for (std::size_t w = begin; w < end; ++w)
+      mean[w] = std::min(hi, std::max(lo, static_cast<float>(sum[w] / count[w])));
+  });
+  return mean;
 }
 
 // ---- Rings with corner preservation: one walk per point (kernel style: flat arrays). ----
@@ -406,6 +542,38 @@ glm::vec3 unit_or_zero(glm::vec3 v) {
   return v / len;
 }
 
+// Unit normals of the points for corner preservation: of the faces (in the new order), or of
+// the merged vertices, the area-weighted mean of the faces around. A vertex sums its faces in
+// increasing order, once per corner it is (the order of the serial scatter over the faces this
+// replaced, so the same sums).
+UninitializedVector<glm::vec3> unit_normals(const Mesh& mesh,
+                                            const UninitializedVector<std::uint32_t>& face_order,
+                                            const glm::uvec3* tris, const Adjacency& vf,
+                                            bool faces, unsigned threads) {
+  const std::size_t m = mesh.triangles.size();
+  UninitializedVector<glm::vec3> face_normal(m);
+  parallel_for(m, kGrain, threads, [&](std::size_t begin, std::size_t end) {
+    for (std::size_t f = begin; f < end; ++f) face_normal[f] = face_area_normal(mesh, face_order[f]);
+  });
+  if (faces) {
+    parallel_for(m, kGrain, threads, [&](std::size_t begin, std::size_t end) {
+      for (std::size_t f = begin; f < end; ++f) face_normal[f] = unit_or_zero(face_normal[f]);
+    });
+    return face_normal;
+  }
+  UninitializedVector<glm::vec3> normal(vf.size());
+  parallel_for(vf.size(), kGrain, threads, [&](std::size_t begin, std::size_t end) {
+    for (std::size_t v = begin; v < end; ++v) {
+      glm::vec3 sum(0.0f);
+      for (std::uint32_t i = vf.offsets[v]; i < vf.offsets[v + 1]; ++i)
+        for (int c = 0; c < 3; ++c)
+          if (tris[vf.items[i]][c] == v) sum += face_normal[vf.items[i]];
+      normal[v] = unit_or_zero(sum);
+    }
+  });
+  return normal;
+}
+
 }  // namespace
 
 int default_kring_k(std::size_t face_count) {
@@ -415,9 +583,10 @@ int default_kring_k(std::size_t face_count) {
   return static_cast<int>(std::min(16.0, std::max(1.0, k)));
 }
 
-std::vector<float> smooth_kring(const Mesh& mesh, PointKind kind, const float* values,
-                                const KringOptions& options, const ProgressFn& progress,
-                                double progress_from, double progress_to) {
+void smooth_kring_into(const Mesh& mesh, PointKind kind, const float* values,
+                       const KringOptions& options, float* out, const ProgressFn& progress,
+                       double progress_from, double progress_to, StageTimings* timings) {
+  StageClock clock(timings);
   const bool faces = kind == PointKind::Faces;
   const std::size_t n = faces ? mesh.triangles.size() : mesh.vertices.size();
   const int k = options.k < 0 ? default_kring_k(mesh.triangles.size()) : options.k;
@@ -427,81 +596,35 @@ std::vector<float> smooth_kring(const Mesh& mesh, PointKind kind, const float* v
   if (!(options.corner_angle >= 0.0) || !std::isfinite(options.corner_angle))
     throw std::invalid_argument("corner_angle must be a finite number of degrees >= 0");
 
-  std::vector<float> out(values, values + n);
-  if (k == 0 || n == 0) return out;
-  float lo = std::numeric_limits<float>::infinity(), hi = -lo;
-  for (std::size_t i = 0; i < n; ++i) {
-    if (!std::isfinite(values[i]))
-      throw std::invalid_argument("value " + std::to_string(i) + " is not finite");
-    lo = std::min(lo, values[i]);
-    hi = std::max(hi, values[i]);
-  }
-  if (lo == hi) return out;  // constant: exactly unchanged
+  auto unchanged = [&] { std::copy(values, values + n, out); };
+  if (k == 0 || n == 0) return unchanged();
+  const ValueRange range = value_range(values, n, options.threads, not_finite);
+  if (range.first_bad < n)
+    throw std::invalid_argument("value " + std::to_string(range.first_bad) + " is not finite");
+  const float lo = range.lo, hi = range.hi;
+  if (lo == hi) return unchanged();  // constant: exactly unchanged
+  clock.lap("checks");
 
   if (progress && !progress(progress_from)) throw Cancelled();
-  // Merged mesh and its adjacency.
-  Weld weld;
-  if (options.weld_tolerance >= 0.0) {
-    weld = weld_vertices(mesh.vertices.data(), mesh.vertices.size(),
-                         weld_tolerance(mesh, options.weld_tolerance), options.threads);
-  } else {
-    weld.merged.resize(mesh.vertices.size());
-    for (std::size_t v = 0; v < weld.merged.size(); ++v) weld.merged[v] = static_cast<std::uint32_t>(v);
-    weld.count = static_cast<std::uint32_t>(weld.merged.size());
-  }
-  // Merged vertices, and faces, renumbered in Morton order of their positions: a batch of
-  // consecutive points is then a compact patch, and its walk reads nearby memory whatever the
-  // input's order (a subdivided mesh scatters neighbours all over its arrays).
-  const std::size_t m = mesh.triangles.size();
-  std::vector<glm::vec3> merged_position(weld.count);
-  for (std::size_t v = mesh.vertices.size(); v-- > 0;) merged_position[weld.merged[v]] = mesh.vertices[v];
   const unsigned threads = options.threads;
-  constexpr std::size_t kGrain = 1 << 15;  // items per chunk of the setup loops
-  const std::vector<std::uint32_t> vertex_order = morton_order(merged_position, threads);  // new -> merged
-  std::vector<std::uint32_t> vertex_rank(weld.count);  // merged -> new
-  parallel_for(weld.count, kGrain, threads, [&](std::size_t begin, std::size_t end) {
-    for (std::size_t i = begin; i < end; ++i) vertex_rank[vertex_order[i]] = static_cast<std::uint32_t>(i);
-  });
-  std::vector<std::uint32_t> face_order(m);  // new -> input face
-  if (faces) {
-    std::vector<glm::vec3> centroid(m);
-    parallel_for(m, kGrain, threads, [&](std::size_t begin, std::size_t end) {
-      for (std::size_t f = begin; f < end; ++f) {
-        const glm::uvec3 t = mesh.triangles[f];
-        centroid[f] = mesh.vertices[t.x] + mesh.vertices[t.y] + mesh.vertices[t.z];
-      }
-    });
-    face_order = morton_order(centroid, threads);
-  } else {
-    for (std::uint32_t f = 0; f < m; ++f) face_order[f] = f;  // faces only link vertices
-  }
-  std::vector<glm::uvec3> tris(m);
-  parallel_for(m, kGrain, threads, [&](std::size_t begin, std::size_t end) {
-    for (std::size_t f = begin; f < end; ++f) {
-      const glm::uvec3 t = mesh.triangles[face_order[f]];
-      tris[f] = glm::uvec3(vertex_rank[weld.merged[t.x]], vertex_rank[weld.merged[t.y]],
-                           vertex_rank[weld.merged[t.z]]);
-    }
-  });
-  const Adjacency vf = faces_of_vertices(tris, weld.count);
-  const Adjacency vv = vertex_neighbours(tris, vf, threads);
+  const RingMesh ring = ring_mesh(mesh, faces, options.weld_tolerance, threads, clock, timings);
+  const Weld& weld = ring.weld;
+  const UninitializedVector<std::uint32_t>& face_order = ring.face_order;
+  const UninitializedVector<std::uint32_t>& new_vertex = ring.new_vertex;
+  const UninitializedVector<glm::uvec3>& tris = ring.triangles;
+  const Adjacency& vf = ring.faces_of_vertices;
+  const Adjacency& vv = ring.vertex_neighbours;
 
   // Values in the new numbering; a merged vertex takes the mean of its duplicates' values.
   const std::size_t points = faces ? n : weld.count;
-  std::vector<float> point_values(points);
+  UninitializedVector<float> point_values;
   if (faces) {
+    point_values.resize(n);
     parallel_for(n, kGrain, threads, [&](std::size_t begin, std::size_t end) {
       for (std::size_t f = begin; f < end; ++f) point_values[f] = values[face_order[f]];
     });
   } else {
-    std::vector<double> sum(weld.count, 0.0);
-    std::vector<std::uint32_t> count(weld.count, 0);
-    for (std::size_t v = 0; v < n; ++v) {
-      sum[vertex_rank[weld.merged[v]]] += values[v];
-      ++count[vertex_rank[weld.merged[v]]];
-    }
-    for (std::size_t w = 0; w < weld.count; ++w)
-      point_values[w] = std::min(hi, std::max(lo, static_cast<float>(sum[w] / count[w])));
+    point_values = merged_values(values, n, weld, new_vertex, lo, hi, threads);
   }
 
   const double sigma = options.sigma > 0.0 ? options.sigma : 0.5 * k;
@@ -510,26 +633,15 @@ std::vector<float> smooth_kring(const Mesh& mesh, PointKind kind, const float* v
 
   const bool corner = options.corner_angle > 0.0;
   const float inv_corner = corner ? static_cast<float>(180.0 / (options.corner_angle * 3.14159265358979323846)) : 0.0f;
-  std::vector<glm::vec3> normals;
-  if (corner) {
-    // Face normals; vertex normals are the area-weighted mean of the merged faces around.
-    std::vector<glm::vec3> face_normals(m);
-    for (std::size_t f = 0; f < m; ++f) face_normals[f] = face_area_normal(mesh, face_order[f]);
-    if (faces) {
-      normals.resize(n);
-      for (std::size_t f = 0; f < n; ++f) normals[f] = unit_or_zero(face_normals[f]);
-    } else {
-      normals.assign(weld.count, glm::vec3(0.0f));
-      for (std::size_t f = 0; f < tris.size(); ++f)
-        for (int c = 0; c < 3; ++c) normals[tris[f][c]] += face_normals[f];
-      for (glm::vec3& v : normals) v = unit_or_zero(v);
-    }
-  }
+  const UninitializedVector<glm::vec3> normals =
+      corner ? unit_normals(mesh, face_order, tris.data(), vf, faces, threads)
+             : UninitializedVector<glm::vec3>();
   const CornerWalk walk = {reinterpret_cast<const std::uint32_t*>(tris.data()),
                            faces ? vf.offsets.data() : vv.offsets.data(),
                            faces ? vf.items.data() : vv.items.data(), normals.data(), faces};
+  clock.lap("point values");
 
-  std::vector<float> smoothed(points);
+  UninitializedVector<float> smoothed(points);
   if (corner) {
     const std::size_t items = faces ? n : weld.count;
     ScratchPool<Scratch> pool([items] {
@@ -577,7 +689,7 @@ std::vector<float> smooth_kring(const Mesh& mesh, PointKind kind, const float* v
             const int count = static_cast<int>(std::min<std::size_t>(kBatch, points - b * kBatch));
             for (int i = 0; i < count; ++i) batch[i] = static_cast<std::uint32_t>(b * kBatch + i);
             if (faces)
-              kring_face_batch(batch, count, k, ring_weight.data(), tris, vf, vv,
+              kring_face_batch(batch, count, k, ring_weight.data(), tris.data(), vf, vv,
                                point_values.data(), *s, sum, weight);
             else
               kring_vertex_batch(batch, count, k, ring_weight.data(), vv, point_values.data(), *s,
@@ -592,6 +704,7 @@ std::vector<float> smooth_kring(const Mesh& mesh, PointKind kind, const float* v
         progress, progress_from, progress_to);
   }
   if (progress && !progress(progress_to)) throw Cancelled();
+  clock.lap("rings");
 
   if (faces) {
     parallel_for(n, kGrain, threads, [&](std::size_t begin, std::size_t end) {
@@ -599,9 +712,18 @@ std::vector<float> smooth_kring(const Mesh& mesh, PointKind kind, const float* v
     });
   } else {
     parallel_for(n, kGrain, threads, [&](std::size_t begin, std::size_t end) {
-      for (std::size_t v = begin; v < end; ++v) out[v] = smoothed[vertex_rank[weld.merged[v]]];
+      for (std::size_t v = begin; v < end; ++v) out[v] = smoothed[new_vertex[v]];
     });
   }
+  clock.lap("write back");
+}
+
+std::vector<float> smooth_kring(const Mesh& mesh, PointKind kind, const float* values,
+                                const KringOptions& options, const ProgressFn& progress,
+                                double progress_from, double progress_to) {
+  std::vector<float> out(kind == PointKind::Faces ? mesh.triangles.size() : mesh.vertices.size());
+  smooth_kring_into(mesh, kind, values, options, out.data(), progress, progress_from,
+                    progress_to);
   return out;
 }
 

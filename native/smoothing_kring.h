@@ -22,6 +22,7 @@
 #include "mesh.h"
 #include "parallel.h"
 #include "sampling.h"
+#include "stopwatch.h"
 
 namespace sdf {
 
@@ -48,5 +49,14 @@ int default_kring_k(std::size_t face_count);
 std::vector<float> smooth_kring(const Mesh& mesh, PointKind kind, const float* values,
                                 const KringOptions& options, const ProgressFn& progress = nullptr,
                                 double progress_from = 0.0, double progress_to = 1.0);
+
+// The same, writing the result into out[0, point count) (which may be the caller's final
+// array, e.g. a NumPy one: no serial zeroing and copy of 4 bytes a point). out must not
+// overlap values. With `timings`, appends the seconds of each stage, in order
+// (bench/kring_stages.py prints them).
+void smooth_kring_into(const Mesh& mesh, PointKind kind, const float* values,
+                       const KringOptions& options, float* out,
+                       const ProgressFn& progress = nullptr, double progress_from = 0.0,
+                       double progress_to = 1.0, StageTimings* timings = nullptr);
 
 }  // namespace sdf

@@ -11,6 +11,7 @@
 #include "radix_sort.h"
 #include "smoothing_projected_avx2.h"
 #include "uninitialized_vector.h"
+#include "value_range.h"
 
 namespace sdf {
 
@@ -362,35 +363,6 @@ std::size_t point_count(const Mesh& mesh, PointKind kind) {
   return kind == PointKind::Faces ? mesh.triangles.size() : mesh.vertices.size();
 }
 
-struct ValueRange {
-  float lo, hi;
-  std::size_t first_bad;  // the lowest index of a negative or non-finite value; n if none
-};
-
-ValueRange value_range(const float* values, std::size_t n, unsigned threads) {
-  const std::size_t chunks = chunk_count(n);
-  std::vector<ValueRange> per_chunk(chunks);
-  parallel_for(n, kGrain, threads, [&](std::size_t begin, std::size_t end) {
-    ValueRange r{std::numeric_limits<float>::infinity(), -std::numeric_limits<float>::infinity(), n};
-    for (std::size_t i = begin; i < end; ++i) {
-      if (!std::isfinite(values[i]) || values[i] < 0.0f) {
-        r.first_bad = i;
-        break;
-      }
-      r.lo = std::min(r.lo, values[i]);
-      r.hi = std::max(r.hi, values[i]);
-    }
-    per_chunk[begin / kGrain] = r;
-  });
-  ValueRange all{std::numeric_limits<float>::infinity(), -std::numeric_limits<float>::infinity(), n};
-  for (const ValueRange& r : per_chunk) {
-    if (r.first_bad < n) return r;
-    all.lo = std::min(all.lo, r.lo);
-    all.hi = std::max(all.hi, r.hi);
-  }
-  return all;
-}
-
 }  // namespace
 
 std::vector<PointOctreeNode> build_point_octree(const glm::vec3* points, const float* values,
@@ -413,13 +385,15 @@ bool gather_sphere(const PointOctreeNode* nodes, glm::vec3 center, float radius,
 void smooth_projected_into(const Mesh& mesh, PointKind kind, const float* values,
                            const ProjectedOptions& options, float* out,
                            const ProgressFn& progress, double progress_from, double progress_to,
-                           const ProjectedGatherFn& gather, StageTimes* timings) {
+                           const ProjectedGatherFn& gather, StageTimings* timings) {
   Stopwatch clock;
   if (options.iterations < 0)
     throw std::invalid_argument("iterations must be >= 0, got " +
                                 std::to_string(options.iterations));
   const std::size_t n = point_count(mesh, kind);
-  const ValueRange range = value_range(values, n, options.threads);
+  const ValueRange range = value_range(values, n, options.threads, [](float x) {
+    return !std::isfinite(x) || x < 0.0f;
+  });
   if (range.first_bad < n)
     throw std::invalid_argument("value " + std::to_string(range.first_bad) +
                                 " is negative or not finite (projected smoothing needs the "

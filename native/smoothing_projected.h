@@ -93,6 +93,6 @@ void smooth_projected_into(const Mesh& mesh, PointKind kind, const float* values
                            const ProjectedOptions& options, float* out,
                            const ProgressFn& progress = nullptr, double progress_from = 0.0,
                            double progress_to = 1.0, const ProjectedGatherFn& gather = nullptr,
-                           StageTimes* timings = nullptr);
+                           StageTimings* timings = nullptr);
 
 }  // namespace sdf

@@ -14,6 +14,7 @@
 #include "radix_sort.h"
 #include "stopwatch.h"
 #include "uninitialized_vector.h"
+#include "value_range.h"
 
 namespace sdf {
 
@@ -29,29 +30,11 @@ constexpr std::size_t kTexelGrain = 1 << 16;
 // The values' range, after checking that values and UVs are finite (the first bad one named).
 void check_inputs(const float* values, std::size_t n, const float* uvs, std::size_t m,
                   unsigned threads, float& lo, float& hi) {
-  const std::size_t chunks = (n + kTexelGrain - 1) / kTexelGrain;
-  std::vector<float> chunk_lo(chunks), chunk_hi(chunks);
-  std::vector<std::size_t> chunk_bad(chunks, n);
-  parallel_for(n, kTexelGrain, threads, [&](std::size_t begin, std::size_t end) {
-    float a = std::numeric_limits<float>::infinity(), b = -a;
-    std::size_t bad = n;
-    for (std::size_t i = begin; i < end; ++i) {
-      if (!std::isfinite(values[i]) && bad == n) bad = i;
-      a = std::min(a, values[i]);
-      b = std::max(b, values[i]);
-    }
-    chunk_lo[begin / kTexelGrain] = a;
-    chunk_hi[begin / kTexelGrain] = b;
-    chunk_bad[begin / kTexelGrain] = bad;
-  });
-  lo = std::numeric_limits<float>::infinity();
-  hi = -lo;
-  for (std::size_t c = 0; c < chunks; ++c) {
-    if (chunk_bad[c] < n)
-      throw std::invalid_argument("value " + std::to_string(chunk_bad[c]) + " is not finite");
-    lo = std::min(lo, chunk_lo[c]);
-    hi = std::max(hi, chunk_hi[c]);
-  }
+  const ValueRange range = value_range(values, n, threads, not_finite);
+  if (range.first_bad < n)
+    throw std::invalid_argument("value " + std::to_string(range.first_bad) + " is not finite");
+  lo = range.lo;
+  hi = range.hi;
   const std::size_t floats = 6 * m;
   const std::size_t uv_chunks = (floats + kTexelGrain - 1) / kTexelGrain;
   std::vector<std::size_t> uv_bad(uv_chunks, floats);

@@ -92,7 +92,7 @@ class FinishOnUnwind {
 
 void smooth_projected_opencl(const Device& device, const Mesh& mesh, PointKind kind,
                              const float* values, const ProjectedOptions& options, float* out,
-                             const ProgressFn& progress, StageTimes* timings) {
+                             const ProgressFn& progress, StageTimings* timings) {
   DeviceState& s = state_of(device);
   // The points' and results' buffers are made on the first iteration and kept for the others.
   // Per iteration: one upload of the packed points (xyz and value, 16 bytes a point), one of

@@ -20,7 +20,7 @@ namespace sdf::cl {
 // std::runtime_error when the octree and points do not fit the device.
 void smooth_projected_opencl(const Device& device, const Mesh& mesh, PointKind kind,
                              const float* values, const ProjectedOptions& options, float* out,
-                             const ProgressFn& progress = nullptr, StageTimes* timings = nullptr);
+                             const ProgressFn& progress = nullptr, StageTimings* timings = nullptr);
 
 // As sdf::smooth_texture, on `device` (the same errors as smooth_projected_opencl).
 TextureSmoothing smooth_texture_opencl(const Device& device, const Mesh& mesh, PointKind kind,

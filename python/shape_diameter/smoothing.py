@@ -247,7 +247,7 @@ def _run(v, t, values, points, method, o, threads, progress, engine="cpu", islan
             0.0 if o["corner_angle"] is None else o["corner_angle"],
             -1.0 if o["weld_tolerance"] is None else o["weld_tolerance"],
             threads, progress,
-        )
+        )["values"]
     if method == "projected":
         return _core.smooth_projected(
             v, t, values, points, o["iterations"], o["max_depth"], o["min_points"],

@@ -110,7 +110,7 @@ test::Arrays awkward_mesh() {
 }
 
 struct Oriented {
-  std::vector<glm::uvec3> triangles;
+  UninitializedVector<glm::uvec3> triangles;
   OrientationReport report;
 };
 

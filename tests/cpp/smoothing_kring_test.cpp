@@ -5,6 +5,7 @@
 #include <cmath>
 #include <vector>
 
+#include "mesh_weld.h"
 #include "smoothing_kring.h"
 #include "smoothing_test_meshes.h"
 
@@ -140,6 +141,44 @@ TEST(KringSmoothing, SplitSeamsSmoothLikeTheWeldedMesh) {
   apart.weld_tolerance = -1.0;
   EXPECT_NE(smooth_kring(split_mesh, PointKind::Faces, fv.data(), apart),
             smooth_kring(welded_mesh, PointKind::Faces, fv.data(), with_k(3)));
+}
+
+// Split copies carrying different values: the split mesh smooths as the welded one holding
+// their means, summed in double in index order (the serial loop that the parallel merge of
+// the copies' values replaced), with and without corner preservation (vertex normals
+// gathered per vertex where they were scattered per face), on any thread count.
+TEST(KringSmoothing, SplitCopiesSmoothAsTheirSeriallySummedMeans) {
+  const test::Arrays split = test::split_cube(6);
+  const Mesh split_mesh = split.mesh();
+  const Weld weld = weld_vertices(split_mesh.vertices.data(), split_mesh.vertices.size(),
+                                  weld_tolerance(split_mesh));
+  test::Arrays welded;
+  welded.vertices.resize(3 * weld.count);
+  for (std::size_t v = split_mesh.vertices.size(); v-- > 0;)
+    for (int a = 0; a < 3; ++a) welded.vertices[3 * weld.merged[v] + a] = split.vertices[3 * v + a];
+  for (std::int64_t t : split.triangles) welded.triangles.push_back(weld.merged[t]);
+  const Mesh welded_mesh = welded.mesh();
+  const std::vector<float> sv = test::noisy(split_mesh.vertices.size(), 1.0f, 0.5f, 11);
+  std::vector<double> sum(weld.count, 0.0);
+  std::vector<int> count(weld.count, 0);
+  for (std::size_t v = 0; v < sv.size(); ++v) {
+    sum[weld.merged[v]] += sv[v];
+    ++count[weld.merged[v]];
+  }
+  const auto [lo, hi] = std::minmax_element(sv.begin(), sv.end());
+  std::vector<float> wv(weld.count);
+  for (std::size_t w = 0; w < wv.size(); ++w)
+    wv[w] = std::min(*hi, std::max(*lo, static_cast<float>(sum[w] / count[w])));
+  for (double corner : {0.0, 40.0})
+    for (unsigned threads : {1u, 3u, 8u}) {
+      KringOptions o = with_k(2, corner);
+      o.threads = threads;
+      const std::vector<float> ss = smooth_kring(split_mesh, PointKind::Vertices, sv.data(), o);
+      const std::vector<float> ws = smooth_kring(welded_mesh, PointKind::Vertices, wv.data(), o);
+      for (std::size_t v = 0; v < sv.size(); ++v)
+        ASSERT_EQ(ss[v], ws[weld.merged[v]]) << "vertex " << v << ", corner " << corner
+                                             << ", threads " << threads;
+    }
 }
 
 TEST(KringSmoothing, CornerPreservationKeepsSidesApart) {

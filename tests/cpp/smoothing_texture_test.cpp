@@ -84,7 +84,7 @@ std::vector<std::int32_t> reference_islands(const Mesh& mesh, const float* uvs, 
     weld.count = static_cast<std::uint32_t>(mesh.vertices.size());
   }
   const std::vector<glm::uvec3> tris = welded_triangles(mesh, weld);
-  const Adjacency vf = faces_of_vertices(tris, weld.count);
+  const Adjacency vf = faces_of_vertices(tris.data(), tris.size(), weld.count);
   std::vector<std::uint32_t> parent(m);
   for (std::uint32_t f = 0; f < m; ++f) parent[f] = f;
   auto find = [&](std::uint32_t f) {

@@ -5,6 +5,7 @@
 #include <set>
 #include <vector>
 
+#include "adjacency_reference.h"
 #include "mesh_weld.h"
 #include "smoothing_test_meshes.h"
 #include "weld_reference.h"
@@ -31,8 +32,8 @@ TEST(WeldVertices, MergesTheSplitSidesOfACube) {
   }
   // Every edge of the welded cube has exactly two faces.
   const auto tris = welded_triangles(mesh, weld);
-  const Adjacency vf = faces_of_vertices(tris, weld.count);
-  const Adjacency vv = vertex_neighbours(tris, vf);
+  const Adjacency vf = faces_of_vertices(tris.data(), tris.size(), weld.count);
+  const Adjacency vv = vertex_neighbours(tris.data(), vf);
   std::size_t edges = 0;
   for (std::size_t v = 0; v < vv.size(); ++v) edges += vv.offsets[v + 1] - vv.offsets[v];
   EXPECT_EQ(edges / 2, 3 * tris.size() / 2);
@@ -65,8 +66,8 @@ TEST(Adjacency, FacesAndNeighboursOfAGrid) {
   const Mesh mesh = test::grid(2, 1).mesh();  // 6 vertices, 4 triangles
   const Weld weld = weld_vertices(mesh.vertices.data(), mesh.vertices.size(), 0.0f);
   const auto tris = welded_triangles(mesh, weld);
-  const Adjacency vf = faces_of_vertices(tris, weld.count);
-  const Adjacency vv = vertex_neighbours(tris, vf);
+  const Adjacency vf = faces_of_vertices(tris.data(), tris.size(), weld.count);
+  const Adjacency vv = vertex_neighbours(tris.data(), vf);
   // Vertex 1 (bottom middle): faces 0, 2, 3; neighbours 0, 2, 4 and the diagonal 5.
   std::vector<std::uint32_t> f1(vf.items.begin() + vf.offsets[1], vf.items.begin() + vf.offsets[2]);
   EXPECT_EQ(f1, (std::vector<std::uint32_t>{0, 2, 3}));
@@ -79,8 +80,9 @@ TEST(VertexNeighbours, SameListsForAnyThreadCount) {
   const Mesh mesh = test::icosphere(6).mesh();
   const Weld weld = weld_vertices(mesh.vertices.data(), mesh.vertices.size(), 0.0f);
   const auto tris = welded_triangles(mesh, weld);
-  const Adjacency vf = faces_of_vertices(tris, weld.count);
-  const Adjacency one = vertex_neighbours(tris, vf, 1), many = vertex_neighbours(tris, vf, 3);
+  const Adjacency vf = faces_of_vertices(tris.data(), tris.size(), weld.count);
+  const Adjacency one = vertex_neighbours(tris.data(), vf, 1);
+  const Adjacency many = vertex_neighbours(tris.data(), vf, 3);
   EXPECT_EQ(one.offsets, many.offsets);
   EXPECT_EQ(one.items, many.items);
   // Each list increasing, without the vertex itself (an icosphere vertex has 5 or 6).
@@ -90,6 +92,47 @@ TEST(VertexNeighbours, SameListsForAnyThreadCount) {
     for (std::uint32_t j = one.offsets[v]; j < one.offsets[v + 1]; ++j) {
       ASSERT_NE(one.items[j], v);
       if (j > one.offsets[v]) ASSERT_LT(one.items[j - 1], one.items[j]);
+    }
+  }
+}
+
+// Random triangles over `vertex_count` vertices, scattered over the index range (so that a
+// block of faces meets every range of vertices), some with corners merged into one vertex
+// (listed once per distinct corner), and the last vertices unused.
+std::vector<glm::uvec3> scattered_triangles(std::size_t faces, std::uint32_t vertex_count,
+                                            unsigned seed) {
+  std::mt19937 rng(seed);
+  std::uniform_int_distribution<std::uint32_t> vertex(0, vertex_count - 100);
+  std::vector<glm::uvec3> t(faces);
+  for (std::size_t f = 0; f < faces; ++f) {
+    t[f] = glm::uvec3(vertex(rng), vertex(rng), vertex(rng));
+    if (f % 7 == 0) t[f].y = t[f].x;
+    if (f % 11 == 0) t[f].z = t[f].y;
+  }
+  return t;
+}
+
+// The parallel lists against the serial ones they replaced: welded meshes (seams merged,
+// Morton-like locality) and scattered triangles (300k faces: more face blocks than one
+// thread's 8), on 1 to 8 threads.
+TEST(Adjacency, SameAsTheSerialListsForAnyThreadCount) {
+  std::vector<std::pair<std::vector<glm::uvec3>, std::uint32_t>> cases;
+  for (const Mesh& mesh : {test::split_cube(20).mesh(), test::icosphere(6).mesh()}) {
+    const Weld weld = weld_vertices(mesh.vertices.data(), mesh.vertices.size(), weld_tolerance(mesh));
+    cases.emplace_back(welded_triangles(mesh, weld), weld.count);
+  }
+  cases.emplace_back(scattered_triangles(300000, 120000, 5), 120000);
+  cases.emplace_back(scattered_triangles(1000, 5000, 6), 5000);
+  for (const auto& [tris, vertex_count] : cases) {
+    const Adjacency vf = test_reference::reference_faces_of_vertices(tris, vertex_count);
+    const Adjacency vv = test_reference::reference_vertex_neighbours(tris, vf);
+    for (unsigned threads : {1u, 2u, 3u, 8u}) {
+      const Adjacency got_vf = faces_of_vertices(tris.data(), tris.size(), vertex_count, threads);
+      ASSERT_EQ(got_vf.offsets, vf.offsets) << tris.size() << " faces, " << threads << " threads";
+      ASSERT_EQ(got_vf.items, vf.items) << tris.size() << " faces, " << threads << " threads";
+      const Adjacency got_vv = vertex_neighbours(tris.data(), vf, threads);
+      ASSERT_EQ(got_vv.offsets, vv.offsets) << tris.size() << " faces, " << threads << " threads";
+      ASSERT_EQ(got_vv.items, vv.items) << tris.size() << " faces, " << threads << " threads";
     }
   }
 }
