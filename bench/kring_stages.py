@@ -1,10 +1,12 @@
 # SPDX-License-Identifier: GPL-3.0-or-later
 """Where k-ring smoothing's time goes, stage by stage, and old against new in one run.
 
-    python bench/kring_stages.py [--threads T ...] [--k K ...] [--points faces|vertices] \\
-        [--repeat N] MESH...
-    python bench/kring_stages.py --compare OLD_PYTHONPATH NEW_PYTHONPATH [--rounds R] \\
-        [same options] MESH...
+    python bench/kring_stages.py MESH... [--threads T ...] [--k K ...] \\
+        [--points faces|vertices] [--repeat N]
+    python bench/kring_stages.py MESH... --compare OLD_PYTHONPATH NEW_PYTHONPATH \\
+        [--rounds R] [same options]
+
+(MESH first: --threads and --k take several numbers.)
 
 MESH: a name under build/bench-meshes (spot-x64, spot-x256: made by smoothing_bench.py). The
 field is the distance of each face's centre (or each vertex) from the mesh's centre: the cost
@@ -117,7 +119,8 @@ def compare(args, passthrough):
 
 
 def main():
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser = argparse.ArgumentParser(description=__doc__,
+                                     formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("meshes", nargs="+")
     parser.add_argument("--threads", type=int, nargs="+", default=[1, 2])
     parser.add_argument("--k", type=int, nargs="+", default=[-1, 1])

@@ -50,6 +50,8 @@ def measure(args):
     for name in args.meshes:
         z = np.load(CACHE / f"{name}.npz")
         v, t = z["vertices"], z["triangles"]
+        if args.method == "texture" and "uvs" not in z:
+            sys.exit(f"{name} has no UVs: texture smoothing needs a mesh with them (spot-x*)")
         uvs = z["uvs"] if args.method == "texture" else None
         field = sd.compute(v, t, engine=args.engine, points=args.points, threads=args.threads).raw
         options = {}
@@ -124,7 +126,8 @@ def compare(args, passthrough):
 
 
 def main():
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser = argparse.ArgumentParser(description=__doc__,
+                                     formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("meshes", nargs="+")
     parser.add_argument("--method", default="texture", choices=("texture", "projected"))
     parser.add_argument("--engine", default="cpu")

@@ -33,7 +33,9 @@ class Result:
     valid_rays: np.ndarray
     """int32: rays kept per point; 0 means the point's value was filled from its neighbours."""
     timings: dict = field(default_factory=dict)
-    """Seconds per stage: prepare, build, cast (cast and reduce, fused), fill, normalize, total."""
+    """Seconds per stage: prepare, build, cast (cast and reduce, fused), fill, normalize, total;
+    on OpenCL also setup, upload and download; with smoothing, smooth, and for 'texture'
+    'beside cast' (its UV islands: on OpenCL found during the cast, on the CPU after it)."""
     engine: str = "cpu"
     """What ran, e.g. 'cpu (2 threads)'."""
     points: str = "faces"

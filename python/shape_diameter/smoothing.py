@@ -108,7 +108,8 @@ def smooth(
         double precision, can differ in the last bits). 'projected' builds its octree on the
         host and gathers on the device; 'texture' finds the UV islands on the host and draws,
         dilates, blurs and reads face values back on the device (vertex values are read back
-        on the host; a device without double precision leaves 'texture' to the CPU threads).
+        on the host; a device without double precision, or a face spanning more than 2^16
+        texels, leaves 'texture' to the CPU threads, with the same values).
         'kring' and 'none' always run on the CPU. A device
         name that matches nothing raises ValueError listing the devices.
 
@@ -136,6 +137,8 @@ def smooth(
         margin: texels of dilation around each island (default 2; use more for baking).
         weld_tolerance: as for 'kring' (joins UV islands and averages vertex corners).
         return_image: also return the blurred image (see TextureResult).
+        A face keeps its value where no texel of its island lies under it or under its UV
+        centroid (a texture too coarse for the mesh).
 
     Returns float32 values of the same length as `values` (or a TextureResult for
     return_image=True). Raises ValueError for bad input or options; the GIL is released while

@@ -253,6 +253,13 @@ def test_version(capsys):
     assert capsys.readouterr().out.strip() == f"shape-diameter {shape_diameter.__version__}"
 
 
+def test_python_dash_m_runs_the_command_line():
+    done = subprocess.run([sys.executable, "-m", "shape_diameter", "--version"], check=False,
+                          capture_output=True, text=True, timeout=60)  # fmt: skip
+    assert done.returncode == 0, done.stderr
+    assert done.stdout.strip() == f"shape-diameter {shape_diameter.__version__}"
+
+
 def test_help_documents_the_default_output(capsys):
     assert cli.main(["--help"]) == 0
     assert ".sdf.ply" in capsys.readouterr().out
