@@ -43,6 +43,11 @@ Mesh make_mesh(const double* vertices, std::size_t vertex_count, const std::int6
   if (triangle_count == 0) throw std::invalid_argument("the mesh has no triangles");
   if (vertex_count > std::numeric_limits<std::uint32_t>::max())
     throw std::invalid_argument("more than 2^32 - 1 vertices are not supported");
+  // Corners are numbered 3 f + c in 32 bits (adjacency lists, UV islands).
+  if (triangle_count > std::numeric_limits<std::uint32_t>::max() / 3)
+    throw std::invalid_argument("more than " +
+                                std::to_string(std::numeric_limits<std::uint32_t>::max() / 3) +
+                                " triangles are not supported");
 
   auto point = [&](std::size_t i) {
     return glm::dvec3(vertices[3 * i], vertices[3 * i + 1], vertices[3 * i + 2]);

@@ -38,6 +38,15 @@ TEST(MeshValidation, RejectsNonFiniteAndEmpty) {
   EXPECT_THROW(make_mesh(v, 1, nullptr, 0), std::invalid_argument);
 }
 
+// Corners are numbered in 32 bits: a count above 2^32 / 3 triangles is refused before any
+// triangle is read (the array here holds one).
+TEST(MeshValidation, RejectsMoreTrianglesThanCornerNumbersReach) {
+  const double v[9] = {0, 0, 0, 1, 0, 0, 0, 1, 0};
+  const std::int64_t t[3] = {0, 1, 2};
+  EXPECT_NO_THROW(make_mesh(v, 3, t, 1));
+  EXPECT_THROW(make_mesh(v, 3, t, std::size_t{0xffffffffu} / 3 + 1), std::invalid_argument);
+}
+
 TEST(MeshValidation, FaceNormalsPointOutOfTheBox) {
   const Mesh m = test::box(1, 1, 1).mesh();
   for (std::size_t f = 0; f < m.triangles.size(); ++f) {

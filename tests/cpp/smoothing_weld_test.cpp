@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <random>
 #include <set>
 #include <vector>
@@ -112,9 +113,20 @@ std::vector<glm::uvec3> scattered_triangles(std::size_t faces, std::uint32_t ver
   return t;
 }
 
+// A fan of `faces` triangles around vertex 0, its ring numbered in shuffled order: a vertex
+// of very high valence (fan-triangulated caps, poles), and ring vertices of valence 2.
+std::vector<glm::uvec3> shuffled_fan(std::uint32_t faces, unsigned seed) {
+  std::vector<std::uint32_t> ring(faces);
+  for (std::uint32_t i = 0; i < faces; ++i) ring[i] = i + 1;
+  std::shuffle(ring.begin(), ring.end(), std::mt19937(seed));
+  std::vector<glm::uvec3> t(faces);
+  for (std::uint32_t i = 0; i < faces; ++i) t[i] = glm::uvec3(0, ring[i], ring[(i + 1) % faces]);
+  return t;
+}
+
 // The parallel lists against the serial ones they replaced: welded meshes (seams merged,
-// Morton-like locality) and scattered triangles (300k faces: more face blocks than one
-// thread's 8), on 1 to 8 threads.
+// Morton-like locality), scattered triangles (300k faces: more face blocks than one thread's
+// 8; the last vertices unused) and a fan (one vertex of valence 20000), on 1 to 8 threads.
 TEST(Adjacency, SameAsTheSerialListsForAnyThreadCount) {
   std::vector<std::pair<std::vector<glm::uvec3>, std::uint32_t>> cases;
   for (const Mesh& mesh : {test::split_cube(20).mesh(), test::icosphere(6).mesh()}) {
@@ -123,6 +135,7 @@ TEST(Adjacency, SameAsTheSerialListsForAnyThreadCount) {
   }
   cases.emplace_back(scattered_triangles(300000, 120000, 5), 120000);
   cases.emplace_back(scattered_triangles(1000, 5000, 6), 5000);
+  cases.emplace_back(shuffled_fan(20000, 7), 20001);
   for (const auto& [tris, vertex_count] : cases) {
     const Adjacency vf = test_reference::reference_faces_of_vertices(tris, vertex_count);
     const Adjacency vv = test_reference::reference_vertex_neighbours(tris, vf);
