@@ -24,12 +24,10 @@ and Amdahl says what it costs on 16 cores.
 import argparse
 import hashlib
 import json
-import os
-import subprocess
-import sys
 import time
 from pathlib import Path
 
+import alternate_builds
 import numpy as np
 
 CACHE = Path(__file__).resolve().parents[1] / "build" / "bench-meshes"
@@ -74,8 +72,6 @@ def measure(args):
 
 def keep_best(best, row):
     """Merges a row into the best so far: each time its minimum."""
-    if best is None:
-        return row
     best["smooth_ms"] = min(best["smooth_ms"], row["smooth_ms"])
     best["core_ms"] = min(best["core_ms"], row["core_ms"])
     for stage, ms in row["stages_ms"].items():
@@ -99,18 +95,9 @@ def print_comparison(old, new):
         print(f"| {total[:-3]}() total | {old[total]:.1f} | {new[total]:.1f} |")
 
 
-def compare(args, passthrough):
-    versions = {"old": args.compare[0], "new": args.compare[1]}
-    best = {}
-    for _ in range(args.rounds):
-        for label, path in versions.items():
-            env = dict(os.environ, PYTHONPATH=str(Path(path).resolve()) if path else "")
-            out = subprocess.run([sys.executable, __file__, *passthrough], env=env, check=True,
-                                 capture_output=True, text=True).stdout  # fmt: skip
-            for line in out.splitlines():
-                row = json.loads(line)
-                key = (row["mesh"], row["threads"], row["k"], label)
-                best[key] = keep_best(best.get(key), row)
+def compare(args):
+    best = alternate_builds.best_rows(
+        __file__, args, lambda row: (row["mesh"], row["threads"], row["k"]), keep_best)
     print(f"{args.points}; each time the best of {args.rounds} rounds x {args.repeat} calls")
     for name in args.meshes:
         for threads in args.threads:
@@ -126,15 +113,9 @@ def main():
     parser.add_argument("--k", type=int, nargs="+", default=[-1, 1])
     parser.add_argument("--points", default="faces", choices=("faces", "vertices"))
     parser.add_argument("--repeat", type=int, default=3)
-    parser.add_argument("--compare", nargs=2, metavar=("OLD_PYTHONPATH", "NEW_PYTHONPATH"))
-    parser.add_argument("--rounds", type=int, default=3, help="with --compare: alternations")
+    alternate_builds.add_arguments(parser, rounds=3)
     args = parser.parse_args()
-    if not args.compare:
-        return measure(args)
-    passthrough = list(sys.argv[1:])
-    i = passthrough.index("--compare")
-    del passthrough[i : i + 3]
-    return compare(args, passthrough)
+    return compare(args) if args.compare else measure(args)
 
 
 if __name__ == "__main__":

@@ -21,12 +21,11 @@ made in one run means anything.
 
 import argparse
 import json
-import os
-import subprocess
 import sys
 import time
 from pathlib import Path
 
+import alternate_builds
 import numpy as np
 
 CACHE = Path(__file__).resolve().parents[1] / "build" / "bench-meshes"
@@ -99,19 +98,10 @@ def measure(args):
                           "smooth_percent_of_cast": 100.0 * smooth / cast}), flush=True)  # fmt: skip
 
 
-def compare(args, passthrough):
-    versions = {"old": args.compare[0], "new": args.compare[1]}
-    best = {}
-    for _ in range(args.rounds):
-        for label, path in versions.items():
-            env = dict(os.environ, PYTHONPATH=path)
-            out = subprocess.run([sys.executable, __file__, *passthrough], env=env, check=True,
-                                 capture_output=True, text=True).stdout  # fmt: skip
-            for line in out.splitlines():
-                row = json.loads(line)
-                key = (row["mesh"], label)
-                if key not in best or row["smooth_ms"] < best[key]["smooth_ms"]:
-                    best[key] = row
+def compare(args):
+    best = alternate_builds.best_rows(
+        __file__, args, lambda row: (row["mesh"],),
+        lambda best, row: row if row["smooth_ms"] < best["smooth_ms"] else best)
     print(f"{args.method}, engine {args.engine}, threads {args.threads}, {args.points}; best of "
           f"{args.rounds} rounds x {args.repeat} (ms)")  # fmt: skip
     for name in args.meshes:
@@ -136,15 +126,9 @@ def main():
     parser.add_argument("--radius", type=float, default=None, help="texture: blur radius")
     parser.add_argument("--points", default="faces", choices=("faces", "vertices"))
     parser.add_argument("--repeat", type=int, default=3)
-    parser.add_argument("--compare", nargs=2, metavar=("OLD_PYTHONPATH", "NEW_PYTHONPATH"))
-    parser.add_argument("--rounds", type=int, default=2, help="with --compare: alternations")
+    alternate_builds.add_arguments(parser, rounds=2)
     args = parser.parse_args()
-    if not args.compare:
-        return measure(args)
-    passthrough = [a for a in sys.argv[1:]]
-    i = passthrough.index("--compare")
-    del passthrough[i : i + 3]
-    return compare(args, passthrough)
+    return compare(args) if args.compare else measure(args)
 
 
 if __name__ == "__main__":
