@@ -107,25 +107,15 @@ void cast_on_opencl(const Mesh& mesh, const Options& options, const SamplePoints
   }
   out.timings.emplace_back("build", clock.lap());
   report(progress, 0.05);
-  double beside_seconds = 0.0;
-  std::function<void()> timed_beside_cast;
-  if (beside_cast)
-    timed_beside_cast = [&] {
-      Stopwatch beside;
-      beside_cast();
-      beside_seconds = beside.lap();
-    };
   const cl::CastTimings t = cl::cast_opencl(
       devices, scene, points, order, cone, minimum_closeness(mesh), options.threads,
-      out.raw.data(), out.valid_rays.data(), progress, 0.05, 0.99, timed_beside_cast);
+      out.raw.data(), out.valid_rays.data(), progress, 0.05, 0.99, beside_cast);
   const double total = clock.lap();
   // Compile (or cache load) and set-up are what the three device stages leave of the total.
   out.timings.emplace_back("setup", std::max(0.0, total - t.upload - t.cast - t.download));
   out.timings.emplace_back("upload", t.upload);
   out.timings.emplace_back("cast", t.cast);
   out.timings.emplace_back("download", t.download);
-  // Overlapped with the cast: part of no other stage's time.
-  if (beside_cast) out.timings.emplace_back("beside cast", beside_seconds);
   out.device_bytes = t.device_bytes;
   out.engine.clear();
   for (const cl::Device* d : devices)
@@ -165,17 +155,28 @@ Output compute(Mesh mesh, const Options& options, const ProgressFn& progress,
   out.valid_rays.resize(points.size());
   out.timings.emplace_back("prepare", clock.lap());
 
+  // The hook's own time: a stage of its own after the CPU engine's cast; on OpenCL within the
+  // cast's (part of no other stage's time).
+  double beside_seconds = 0.0;
+  BesideCast timed_beside_cast;
+  if (beside_cast)
+    timed_beside_cast = [&] {
+      Stopwatch beside;
+      beside_cast();
+      beside_seconds = beside.lap();
+    };
   if (cpu) {
     cast_on_cpu(mesh, options, points, order, cone, out, clock, progress);
-    if (beside_cast) {
-      beside_cast();
-      out.timings.emplace_back("beside cast", clock.lap());
+    if (timed_beside_cast) {
+      timed_beside_cast();
+      clock.lap();
     }
   } else {
 #ifdef SDF_HAVE_OPENCL
-    cast_on_opencl(mesh, options, points, order, cone, out, clock, progress, beside_cast);
+    cast_on_opencl(mesh, options, points, order, cone, out, clock, progress, timed_beside_cast);
 #endif
   }
+  if (beside_cast) out.timings.emplace_back("beside cast", beside_seconds);
 
   out.fill = fill_missing(mesh, options.points, out.raw.data(), out.valid_rays.data());
   out.timings.emplace_back("fill", clock.lap());
