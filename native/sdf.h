@@ -15,6 +15,7 @@
 #include "parallel.h"
 #include "rays.h"
 #include "sampling.h"
+#include "stopwatch.h"
 
 namespace sdf {
 
@@ -46,7 +47,7 @@ struct Options {
 struct Output {
   std::vector<float> raw;                  // per point, input units, filled
   std::vector<std::int32_t> valid_rays;    // rays kept per point; 0 = value was filled
-  std::vector<std::pair<std::string, double>> timings;  // stage -> seconds
+  StageTimings timings;  // stage -> seconds
   FillResult fill = FillResult::NothingToFill;
   std::string engine;                      // what ran, e.g. "cpu (2 threads, bvh)"
   std::uint64_t device_bytes = 0;          // OpenCL buffers on the device (0 on the CPU)

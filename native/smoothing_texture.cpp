@@ -282,7 +282,7 @@ TextureSmoothing smooth_texture(const Mesh& mesh, PointKind kind, const float* v
   if (options.bilateral && !(options.range_sigma > 0.0 && std::isfinite(options.range_sigma)))
     throw std::invalid_argument("range_sigma must be a finite number > 0");
   Stopwatch clock;
-  std::vector<std::pair<std::string, double>> timings;
+  StageTimings timings;
   const unsigned threads = options.threads;
   const bool faces = kind == PointKind::Faces;
   const std::size_t m = mesh.triangles.size();

@@ -33,6 +33,7 @@
 #include "mesh.h"
 #include "parallel.h"
 #include "sampling.h"
+#include "stopwatch.h"
 #include "uv_islands.h"
 
 namespace sdf {
@@ -60,7 +61,7 @@ struct TextureSmoothing {
   // Seconds per stage, in order (checks, islands, rasterise, dilate and blur, read back, image;
   // on a device, its own stages in place of the middle three): bench/smoothing_stages.py
   // prints them.
-  std::vector<std::pair<std::string, double>> timings;
+  StageTimings timings;
 };
 
 // Steps 3 and 4 (dilate, blur) of one image, as smooth_texture runs them.
@@ -89,7 +90,7 @@ struct TextureJob {
 using TextureDeviceFn = std::function<void(
     const TextureJob& job, bool images, std::vector<float>& values,
     std::vector<std::int32_t>& island, std::vector<float>& blurred,
-    std::vector<std::pair<std::string, double>>& timings)>;
+    StageTimings& timings)>;
 
 // uvs: per face corner, (u, v) for corners 0, 1, 2 of face 0, then face 1, ... (6 floats a
 // face), finite. keep_image: fill image and mask (else they stay empty). Throws

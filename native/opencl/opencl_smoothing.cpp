@@ -234,7 +234,7 @@ TextureSmoothing smooth_texture_opencl(const Device& device, const Mesh& mesh, P
   constexpr std::size_t kFaceChunk = std::size_t{1} << 20;  // faces per launch
   auto on_device = [&](const TextureJob& job, bool images, std::vector<float>& out,
                        std::vector<std::int32_t>& island, std::vector<float>& blurred,
-                       std::vector<std::pair<std::string, double>>& timings) {
+                       StageTimings& timings) {
     Stopwatch clock;
     const TextureFilter& f = job.filter;
     const bool faces = job.kind == PointKind::Faces;
