@@ -12,8 +12,7 @@ import numpy as np
 
 from . import _core
 from .normalization import NORMALIZATIONS, normalize_values
-from .smoothing import _run as run_smoothing_checked
-from .smoothing import check_smoothing, uv_islands_for
+from .smoothing import check_smoothing, run_checked, uv_islands_for
 
 SAMPLINGS = ("fibonacci", "random", "cgal")
 POINTS = ("faces", "vertices")
@@ -291,7 +290,7 @@ def compute(
         def run_smoothing(engine_name):
             # compute()'s own checked mesh, options and SDF (raw: finite, >= 0): no second
             # round of checks.
-            return run_smoothing_checked(
+            return run_checked(
                 v, t, raw, points, smoothing, smoothing_resolved, int(threads),
                 None if progress is None else lambda f: progress(0.9 + 0.1 * f),
                 engine_name, islands[0] if islands else None,

@@ -159,7 +159,7 @@ def smooth(
         )
     chosen = _resolve_engine(engine) if method in ("projected", "texture") else "cpu"
     try:
-        return _run(v, t, values, points, method, resolved, threads, progress, chosen)
+        return run_checked(v, t, values, points, method, resolved, threads, progress, chosen)
     except RuntimeError as error:
         if engine != "auto" or chosen == "cpu":
             raise
@@ -168,7 +168,7 @@ def smooth(
             RuntimeWarning,
             stacklevel=2,
         )
-        return _run(v, t, values, points, method, resolved, threads, progress, "cpu")
+        return run_checked(v, t, values, points, method, resolved, threads, progress, "cpu")
 
 
 def check_smoothing(
@@ -230,16 +230,23 @@ def check_smoothing(
 
 
 def uv_islands_for(v, t, points, o, threads):
-    """Texture smoothing's first step alone (the UV islands), for _run(islands=...): v, t and
-    the options `o` as check_smoothing returns them (with 'uvs')."""
+    """Texture smoothing's first step alone (the UV islands), for run_checked(islands=...):
+    v, t and the options `o` as check_smoothing returns them (with 'uvs')."""
     return _core.label_uv_islands(
-        v, t, o["uvs"], -1.0 if o["weld_tolerance"] is None else o["weld_tolerance"],
+        v, t, o["uvs"], _weld_argument(o),
         points == "vertices", threads,
     )
 
 
-def _run(v, t, values, points, method, o, threads, progress, engine="cpu", islands=None):
-    # v, t, values and the options o are checked already (compute() and smooth() check them).
+def _weld_argument(o):
+    """The native weld tolerance: < 0 for none."""
+    return -1.0 if o["weld_tolerance"] is None else o["weld_tolerance"]
+
+
+def run_checked(v, t, values, points, method, o, threads, progress, engine="cpu", islands=None):
+    """smooth()'s work on arguments checked already (by smooth(), or by compute() on its own
+    mesh and SDF), with the options `o` as check_smoothing returns them; islands: from
+    uv_islands_for, or None."""
     if method == "none":
         return values.copy()
     if method == "kring":
@@ -248,7 +255,7 @@ def _run(v, t, values, points, method, o, threads, progress, engine="cpu", islan
             -1 if o["k"] is None else o["k"],
             0.0 if o["sigma"] is None else o["sigma"],
             0.0 if o["corner_angle"] is None else o["corner_angle"],
-            -1.0 if o["weld_tolerance"] is None else o["weld_tolerance"],
+            _weld_argument(o),
             threads, progress,
         )["values"]
     if method == "projected":
@@ -260,7 +267,7 @@ def _run(v, t, values, points, method, o, threads, progress, engine="cpu", islan
     out = _core.smooth_texture(
         v, t, values, points, o["uvs"], width, height, o["radius"], o["bilateral"],
         o["range_sigma"], o["margin"],
-        -1.0 if o["weld_tolerance"] is None else o["weld_tolerance"],
+        _weld_argument(o),
         o["return_image"], threads, progress, engine, islands,
     )
     if o["return_image"]:
