@@ -297,6 +297,21 @@ void build_subtrees(const std::vector<Subtree>& subtrees, PrimRef* buffers[2],
   });
 }
 
+// Fills bvh.triangles[i] (already sized) with the record of face face_of(i), read from mesh.
+template <class FaceOf>
+void write_triangles(const Mesh& mesh, unsigned threads, FaceOf face_of, Bvh& bvh) {
+  parallel_for(bvh.triangles.size(), kChunk, threads, [&](std::size_t b, std::size_t e) {
+    for (std::size_t i = b; i < e; ++i) {
+      const std::uint32_t f = face_of(i);
+      const glm::uvec3 t = mesh.triangles[f];
+      const glm::vec3 v0 = mesh.vertices[t.x];
+      const glm::vec3 e1 = mesh.vertices[t.y] - v0, e2 = mesh.vertices[t.z] - v0;
+      bvh.triangles[i] = kern::SdfTriangle{v0.x, v0.y, v0.z, static_cast<std::int32_t>(f),
+                                           e1.x, e1.y, e1.z, 0.0f, e2.x, e2.y, e2.z, 0.0f};
+    }
+  });
+}
+
 }  // namespace
 
 Bvh build_bvh(const Mesh& mesh, const BvhConfig& config) {
@@ -320,17 +335,14 @@ Bvh build_bvh(const Mesh& mesh, const BvhConfig& config) {
   build_subtrees(subtrees, buffers, count, config, bvh.nodes);
 
   bvh.triangles.resize(count);
-  parallel_for(count, kChunk, config.threads, [&](std::size_t b, std::size_t e) {
-    for (std::size_t i = b; i < e; ++i) {
-      const std::uint32_t f = refs[i].id;
-      const glm::uvec3 t = mesh.triangles[f];
-      const glm::vec3 v0 = mesh.vertices[t.x];
-      const glm::vec3 e1 = mesh.vertices[t.y] - v0, e2 = mesh.vertices[t.z] - v0;
-      bvh.triangles[i] = kern::SdfTriangle{v0.x, v0.y, v0.z, static_cast<std::int32_t>(f),
-                                           e1.x, e1.y, e1.z, 0.0f, e2.x, e2.y, e2.z, 0.0f};
-    }
-  });
+  write_triangles(mesh, config.threads, [&](std::size_t i) { return refs[i].id; }, bvh);
   return bvh;
+}
+
+void rewrite_triangles(Bvh& bvh, const Mesh& mesh, unsigned threads) {
+  write_triangles(mesh, threads, [&](std::size_t i) {
+    return static_cast<std::uint32_t>(bvh.triangles[i].id);
+  }, bvh);
 }
 
 int bvh_depth(const Bvh& bvh) {

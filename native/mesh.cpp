@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
 #include "mesh.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <limits>
@@ -111,6 +112,28 @@ Mesh make_mesh(const double* vertices, std::size_t vertex_count, const std::int6
         mesh.triangles[f][k] = static_cast<std::uint32_t>(triangles[3 * f + k]);
   });
   return mesh;
+}
+
+namespace {
+
+template <class T>
+void copy_in_parallel(const UninitializedVector<T>& from, UninitializedVector<T>& to,
+                      unsigned threads) {
+  to.resize(from.size());
+  parallel_for(from.size(), kGrain, threads, [&](std::size_t begin, std::size_t end) {
+    std::copy(from.begin() + begin, from.begin() + end, to.begin() + begin);
+  });
+}
+
+}  // namespace
+
+Mesh copy_mesh(const Mesh& mesh, unsigned threads) {
+  Mesh copy;
+  copy_in_parallel(mesh.vertices, copy.vertices, threads);
+  copy_in_parallel(mesh.triangles, copy.triangles, threads);
+  copy.center = mesh.center;
+  copy.max_extent = mesh.max_extent;
+  return copy;
 }
 
 float minimum_closeness(const Mesh& mesh) { return static_cast<float>(2e-5 * mesh.max_extent); }

@@ -62,4 +62,8 @@ inline glm::vec3 face_area_normal(const Mesh& mesh, std::size_t face) {
 // work. In the engines' (centred) units, which equal input units.
 float minimum_closeness(const Mesh& mesh);
 
+// A copy of `mesh`, made on `threads` (0 = every core): one thread copies a million faces'
+// 22 MB in several milliseconds, most of them first-touch page faults.
+Mesh copy_mesh(const Mesh& mesh, unsigned threads = 0);
+
 }  // namespace sdf

@@ -1,7 +1,11 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
 #include "sdf.h"
 
+#include <future>
+#include <memory>
 #include <stdexcept>
+#include <system_error>
+#include <tuple>
 
 #include "bvh.h"
 #include "bvh4.h"
@@ -38,36 +42,121 @@ struct Structures {
 // the H100 (1024: 178 ms; 64: 199 ms, little faster to build than SAH everywhere).
 constexpr std::size_t kFastMortonBelow = 1024;
 
-void build_structures(const Mesh& mesh, const Options& options, BvhWidths widths,
-                      bool fast_build, Structures& s) {
-  if (options.accel == Accel::Bvh) {
+// What a run builds and where it casts, settled before anything is built.
+struct Plan {
+#ifdef SDF_HAVE_OPENCL
+  std::vector<const cl::Device*> devices;
+#endif
+  BvhWidths widths;  // the BVH casters read (accel 'bvh')
+  bool fast_build = false;
+};
+
+Plan make_plan(const Options& options) {
+  Plan plan;
+  plan.fast_build = options.bvh_quality == BvhQuality::Fast;
+  if (options.engine == "cpu") {
+    // The 8-wide tree needs AVX2 (chosen at run time); without it the 4-wide SSE tree.
+    plan.widths.eight = bvh8_supported();
+    plan.widths.four = !plan.widths.eight;
+    return plan;
+  }
+#ifdef SDF_HAVE_OPENCL
+  plan.devices = cl::select_devices(options.engine);
+  plan.widths = cl::wanted_bvhs(plan.devices);
+  if (options.bvh_quality == BvhQuality::Auto) {
+    plan.fast_build = options.rays <= 64;
+    for (const cl::Device* d : plan.devices) plan.fast_build = plan.fast_build && d->gpu;
+  }
+#endif
+  return plan;
+}
+
+// The binary BVH, built on a thread of its own while the calling thread orients the mesh and
+// samples its points (each stage runs on every core; together they keep the cores busier
+// than one after the other). A tree depends on positions alone: reversing a face swaps two of
+// its corners, which leaves its box and its zero-area test unchanged (nothing in the core is
+// contracted into fused multiply-adds), so the tree built from the mesh before orientation is
+// the tree built after it, and rewrite_triangles() then makes its records those of the
+// oriented mesh: the same bits as building afterwards. Orientation changes the computation's
+// mesh in place, so the build reads a copy of it unless orientation is 'as_is'.
+class BackgroundBvh {
+ public:
+  BackgroundBvh(const Mesh& mesh, const Options& options, bool fast_build) {
     BvhConfig config;
     config.threads = options.threads;
     config.morton_below = fast_build ? kFastMortonBelow : 0;
-    s.bvh = build_bvh(mesh, config);
+    if (options.orientation != Orientation::AsIs)
+      copy_ = std::make_unique<Mesh>(copy_mesh(mesh, options.threads));
+    const Mesh* source = copy_ ? copy_.get() : &mesh;
+    try {
+      build_ = std::async(std::launch::async, [source, config] {
+        Stopwatch clock;
+        Bvh bvh = build_bvh(*source, config);
+        return std::make_pair(std::move(bvh), clock.lap());
+      });
+    } catch (const std::system_error&) {
+      // No thread to be had: built in finish() instead.
+      config_ = config;
+      deferred_ = true;
+    }
+  }
+
+  // The tree with the records of `oriented`, and the seconds its build took.
+  std::pair<Bvh, double> finish(const Mesh& oriented, bool turned, unsigned threads) {
+    if (deferred_) {
+      Stopwatch clock;
+      Bvh bvh = build_bvh(oriented, config_);
+      return {std::move(bvh), clock.lap()};
+    }
+    std::pair<Bvh, double> built = build_.get();
+    copy_.reset();
+    if (turned) {
+      Stopwatch clock;
+      rewrite_triangles(built.first, oriented, threads);
+      built.second += clock.lap();
+    }
+    return built;
+  }
+
+ private:
+  std::unique_ptr<Mesh> copy_;
+  std::future<std::pair<Bvh, double>> build_;  // waits in its destructor if never finished
+  BvhConfig config_;
+  bool deferred_ = false;
+};
+
+// Completes `s` from the binary tree (or builds the octree) once the mesh is oriented. Adds
+// the build's own time to out.timings as 'build' (the background part ran beside 'prepare'),
+// and the time this call took as 'build wait': what the build added to the wall time.
+void finish_structures(const Mesh& mesh, const Options& options, const Plan& plan,
+                       std::unique_ptr<BackgroundBvh>& background, bool turned, Structures& s,
+                       Output& out) {
+  Stopwatch clock, wait;
+  double seconds = 0.0;
+  if (options.accel == Accel::Bvh) {
+    std::tie(s.bvh, seconds) = background->finish(mesh, turned, options.threads);
+    background.reset();
+    clock.lap();  // the wait for the background build is not the build's time
     grow_boxes_to_cover_hits(s.bvh, options.threads);
-    if (widths.four) s.wide4 = collapse_to_bvh4(s.bvh);
-    if (widths.eight) s.wide8 = collapse_to_bvh8(s.bvh);
-    if (widths.eight && !widths.binary && !widths.four) s.bvh = Bvh();
+    if (plan.widths.four) s.wide4 = collapse_to_bvh4(s.bvh);
+    if (plan.widths.eight) s.wide8 = collapse_to_bvh8(s.bvh);
+    if (plan.widths.eight && !plan.widths.binary && !plan.widths.four) s.bvh = Bvh();
   } else {
     s.tree = build_octree(mesh, options.octree);
   }
+  out.timings.emplace_back("build", seconds + clock.lap());
+  out.timings.emplace_back("build wait", wait.lap());
 }
 
 // Casting and reducing are fused per point: the lengths never leave the cache (CPU) or the
 // registers (OpenCL).
-void cast_on_cpu(const Mesh& mesh, const Options& options, const SamplePoints& points,
+void cast_on_cpu(const Options& options, const Plan& plan, const Structures& built,
+                 const Mesh& mesh, const SamplePoints& points,
                  const std::vector<std::uint32_t>& order, const Cone& cone, Output& out,
-                 Stopwatch& clock, const ProgressFn& progress) {
-  // The 8-wide tree needs AVX2 (chosen at run time); without it the 4-wide SSE tree.
-  Structures built;
-  BvhWidths widths;
-  widths.eight = bvh8_supported();
-  widths.four = !widths.eight;
-  build_structures(mesh, options, widths, options.bvh_quality == BvhQuality::Fast, built);
+                 const ProgressFn& progress) {
   CpuScene scene;
   if (options.accel == Accel::Bvh) {
-    if (widths.eight) {
+    if (plan.widths.eight) {
       scene.bvh8 = &built.wide8;
     } else {
       scene.bvh4 = &built.wide4;
@@ -75,8 +164,7 @@ void cast_on_cpu(const Mesh& mesh, const Options& options, const SamplePoints& p
   } else {
     scene.octree = &built.tree;
   }
-  out.timings.emplace_back("build", clock.lap());
-  report(progress, 0.05);
+  Stopwatch clock;
   cast_cpu(scene, points, order, cone, minimum_closeness(mesh), options.threads, out.raw.data(),
            out.valid_rays.data(), progress, 0.05, 0.99);
   out.timings.emplace_back("cast", clock.lap());
@@ -85,40 +173,41 @@ void cast_on_cpu(const Mesh& mesh, const Options& options, const SamplePoints& p
 }
 
 #ifdef SDF_HAVE_OPENCL
-void cast_on_opencl(const Mesh& mesh, const Options& options, const SamplePoints& points,
-                    const std::vector<std::uint32_t>& order, const Cone& cone, Output& out,
-                    Stopwatch& clock, const ProgressFn& progress, const BesideCast& beside_cast) {
-  const std::vector<const cl::Device*> devices = cl::select_devices(options.engine);
-  const BvhWidths wanted = cl::wanted_bvhs(devices);
-  bool fast_build = options.bvh_quality == BvhQuality::Fast;
-  if (options.bvh_quality == BvhQuality::Auto) {
-    fast_build = options.rays <= 64;
-    for (const cl::Device* d : devices) fast_build = fast_build && d->gpu;
-  }
-  Structures built;
-  build_structures(mesh, options, wanted, fast_build, built);
-  cl::Scene scene;
-  if (options.accel == Accel::Bvh) {
-    scene.bvh = wanted.binary ? &built.bvh : nullptr;
-    scene.bvh4 = wanted.four ? &built.wide4 : nullptr;
-    scene.bvh8 = wanted.eight ? &built.wide8 : nullptr;
-  } else {
-    scene.octree = &built.tree;
-  }
-  out.timings.emplace_back("build", clock.lap());
-  report(progress, 0.05);
+// The structure is finished from a device thread once the points are uploaded (build_scene):
+// their upload overlaps the build.
+void cast_on_opencl(const Options& options, const Plan& plan,
+                    const std::function<const Structures&()>& build_scene, const Mesh& mesh,
+                    const SamplePoints& points, const std::vector<std::uint32_t>& order,
+                    const Cone& cone, Output& out, const ProgressFn& progress,
+                    const BesideCast& beside_cast) {
+  const cl::SceneSource scene_source = [&] {
+    const Structures& built = build_scene();
+    cl::Scene scene;
+    if (options.accel == Accel::Bvh) {
+      scene.bvh = plan.widths.binary ? &built.bvh : nullptr;
+      scene.bvh4 = plan.widths.four ? &built.wide4 : nullptr;
+      scene.bvh8 = plan.widths.eight ? &built.wide8 : nullptr;
+    } else {
+      scene.octree = &built.tree;
+    }
+    return scene;
+  };
+  Stopwatch clock;
   const cl::CastTimings t = cl::cast_opencl(
-      devices, scene, points, order, cone, minimum_closeness(mesh), options.threads,
-      out.raw.data(), out.valid_rays.data(), progress, 0.05, 0.99, beside_cast);
+      plan.devices, scene_source, points, order, cone, minimum_closeness(mesh),
+      options.threads, out.raw.data(), out.valid_rays.data(), progress, 0.05, 0.99,
+      beside_cast);
   const double total = clock.lap();
-  // Compile (or cache load) and set-up are what the three device stages leave of the total.
-  out.timings.emplace_back("setup", std::max(0.0, total - t.upload - t.cast - t.download));
+  // Compile (or cache load) and set-up are what the device stages and the wait for the
+  // structure leave of the total.
+  out.timings.emplace_back(
+      "setup", std::max(0.0, total - t.upload - t.wait - t.cast - t.download));
   out.timings.emplace_back("upload", t.upload);
   out.timings.emplace_back("cast", t.cast);
   out.timings.emplace_back("download", t.download);
   out.device_bytes = t.device_bytes;
   out.engine.clear();
-  for (const cl::Device* d : devices)
+  for (const cl::Device* d : plan.devices)
     out.engine += (out.engine.empty() ? "" : " + ") + std::string("opencl:") +
                   std::to_string(d->index) + " " + d->name;
   out.engine += std::string(" (") + accel_name(options.accel) + ")";
@@ -144,9 +233,15 @@ Output compute(Mesh mesh, const Options& options, const ProgressFn& progress,
 #ifndef SDF_HAVE_OPENCL
   if (!cpu) throw std::invalid_argument("this build of shape_diameter has no OpenCL engine");
 #endif
+  const Plan plan = make_plan(options);
   Output out;
   Stopwatch clock;
   report(progress, 0.0);
+  // The BVH builds beside orientation and sampling; the octree, which stores its triangles as
+  // they are wound, after them.
+  std::unique_ptr<BackgroundBvh> background;
+  if (options.accel == Accel::Bvh)
+    background = std::make_unique<BackgroundBvh>(mesh, options, plan.fast_build);
   // `mesh` is the computation's own copy, wound outward; the caller's mesh is never changed.
   out.orientation = orient(mesh, options.orientation, options.threads);
   const SamplePoints points = sample_points(mesh, options.points, options.threads);
@@ -154,6 +249,14 @@ Output compute(Mesh mesh, const Options& options, const ProgressFn& progress,
   out.raw.resize(points.size());
   out.valid_rays.resize(points.size());
   out.timings.emplace_back("prepare", clock.lap());
+  report(progress, 0.02);  // a cancel here unwinds through the background build's wait
+
+  Structures built;
+  const bool turned = out.orientation.flipped_faces > 0;
+  auto build_scene = [&]() -> const Structures& {
+    finish_structures(mesh, options, plan, background, turned, built, out);
+    return built;
+  };
 
   // The hook's own time: a stage of its own after the CPU engine's cast; on OpenCL within the
   // cast's (part of no other stage's time).
@@ -166,17 +269,18 @@ Output compute(Mesh mesh, const Options& options, const ProgressFn& progress,
       beside_seconds = beside.lap();
     };
   if (cpu) {
-    cast_on_cpu(mesh, options, points, order, cone, out, clock, progress);
-    if (timed_beside_cast) {
-      timed_beside_cast();
-      clock.lap();
-    }
+    build_scene();
+    report(progress, 0.05);
+    cast_on_cpu(options, plan, built, mesh, points, order, cone, out, progress);
+    if (timed_beside_cast) timed_beside_cast();
   } else {
 #ifdef SDF_HAVE_OPENCL
-    cast_on_opencl(mesh, options, points, order, cone, out, clock, progress, timed_beside_cast);
+    cast_on_opencl(options, plan, build_scene, mesh, points, order, cone, out, progress,
+                   timed_beside_cast);
 #endif
   }
   if (beside_cast) out.timings.emplace_back("beside cast", beside_seconds);
+  clock.lap();
 
   out.fill = fill_missing(mesh, options.points, out.raw.data(), out.valid_rays.data());
   out.timings.emplace_back("fill", clock.lap());

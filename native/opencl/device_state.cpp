@@ -58,15 +58,16 @@ cl_program program_for(const Device& device, DeviceState& s, const std::string& 
 
 std::string mib(std::uint64_t bytes) { return std::to_string((bytes + (1 << 20) - 1) >> 20) + " MiB"; }
 
-void check_fits(const Device& device, const std::vector<std::size_t>& buffers) {
+void check_fits(const Device& device, const std::vector<std::size_t>& buffers, bool at_least) {
   std::uint64_t total = 0, largest = 0;
   for (std::size_t b : buffers) {
     total += b;
     largest = std::max<std::uint64_t>(largest, b);
   }
   if (largest > device.max_allocation || total > device.global_memory)
-    throw std::runtime_error("the mesh does not fit OpenCL device " + device.name + ": it needs " +
-                             mib(total) + " (largest buffer " + mib(largest) + "), the device has " +
+    throw std::runtime_error("the mesh does not fit OpenCL device " + device.name +
+                             ": it needs " + (at_least ? "at least " : "") + mib(total) +
+                             " (largest buffer " + mib(largest) + "), the device has " +
                              mib(device.global_memory) + " (largest buffer " +
                              mib(device.max_allocation) + "); use engine='cpu'");
 }

@@ -99,6 +99,8 @@ std::size_t bytes_of(const std::vector<T, Allocator>& v) {
 std::string mib(std::uint64_t bytes);
 
 // Refuses, before allocating anything, a scene that cannot fit the device.
-void check_fits(const Device& device, const std::vector<std::size_t>& buffers);
+// at_least: `buffers` are only the first of a run's (the message says "at least").
+void check_fits(const Device& device, const std::vector<std::size_t>& buffers,
+                bool at_least = false);
 
 }  // namespace sdf::cl

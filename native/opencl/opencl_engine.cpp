@@ -89,7 +89,36 @@ BvhWidths wanted_bvhs(const std::vector<const Device*>& devices) {
 
 namespace {
 
-void run_device(const Device& device, const Scene& scene, const SamplePoints& points,
+// Gets the scene once for every device thread: the first to ask runs the source (the others
+// wait), and a failure reaches each of them.
+class SharedScene {
+ public:
+  explicit SharedScene(const SceneSource& source) : source_(source) {}
+  // Null when every triangle has zero area (nothing can be hit: an empty tree has no root).
+  const Scene* get() {
+    std::lock_guard<std::mutex> lock(mutex_);
+    if (!asked_) {
+      asked_ = true;
+      try {
+        scene_ = source_();
+      } catch (...) {
+        failure_ = std::current_exception();
+      }
+    }
+    if (failure_) std::rethrow_exception(failure_);
+    const bool empty = (scene_.bvh && scene_.bvh->empty()) || (scene_.bvh8 && scene_.bvh8->empty());
+    return empty ? nullptr : &scene_;
+  }
+
+ private:
+  const SceneSource& source_;
+  std::mutex mutex_;
+  bool asked_ = false;
+  Scene scene_;
+  std::exception_ptr failure_;
+};
+
+void run_device(const Device& device, SharedScene& shared_scene, const SamplePoints& points,
                 const std::vector<std::uint32_t>& order, const Cone& cone, float min_closeness,
                 UninitializedVector<float>& raw_ordered,
                 UninitializedVector<std::int32_t>& valid_ordered,
@@ -101,10 +130,44 @@ void run_device(const Device& device, const Scene& scene, const SamplePoints& po
   const std::size_t n = points.size();
   const std::string options = build_options(device, cone.rays);
 
+  // The points, their order and the results first: they go to the device (and the program is
+  // compiled or loaded) while the scene may still be building on the host.
   std::vector<std::size_t> sizes = {3 * n * sizeof(float),        3 * n * sizeof(float),
                                     n * sizeof(std::int32_t),       n * sizeof(std::uint32_t),
                                     n * sizeof(float),              n * sizeof(std::int32_t),
                                     3 * n * sizeof(float)};
+  check_fits(device, sizes, true);
+  cl_program program = program_for(device, s, options);
+  Clock::time_point upload_start = Clock::now();
+  Buffer origins(s, sizes[0], points.origins.data());
+  Buffer axes(s, sizes[1], points.axes.data());
+  Buffer own_face(s, sizes[2], points.own_face.data());
+  Buffer order_buffer(s, sizes[3], order.data());
+  Buffer raw(s, sizes[4], nullptr);
+  Buffer valid(s, sizes[5], nullptr);
+  Buffer tangents(s, sizes[6], points.tangents.data());
+  // The host's ray table (direction, angle) for deterministic samplings; random rays are
+  // generated on the device and read none of it.
+  std::vector<float> table(4 * std::max<std::size_t>(cone.local.size(), 1), 0.0f);
+  for (std::size_t i = 0; i < cone.local.size(); ++i) {
+    table[4 * i] = cone.local[i].x;
+    table[4 * i + 1] = cone.local[i].y;
+    table[4 * i + 2] = cone.local[i].z;
+    table[4 * i + 3] = cone.local_angle[i];
+  }
+  Buffer local_rays(s, table.size() * sizeof(float), table.data());
+  result.timings.upload += seconds_since(upload_start);
+
+  const Clock::time_point wait_start = Clock::now();
+  const Scene* scene_or_empty = shared_scene.get();
+  result.timings.wait = seconds_since(wait_start);
+  if (!scene_or_empty) {
+    check(cl.clFinish(s.queue), "clFinish (upload)");
+    work.stop = true;  // nothing to cast; cast_opencl fills the results
+    return;
+  }
+  const Scene& scene = *scene_or_empty;
+  upload_start = Clock::now();
   const std::size_t first_accel = sizes.size();
   const CastKernel choice = cast_kernel_for(device);
   // The 8-wide tree needs no depth check: its stack holds the deepest tree the builder makes
@@ -129,25 +192,6 @@ void run_device(const Device& device, const Scene& scene, const SamplePoints& po
   check_fits(device, sizes);
   for (std::size_t b : sizes) result.timings.device_bytes += b;
 
-  cl_program program = program_for(device, s, options);
-  const Clock::time_point upload_start = Clock::now();
-  Buffer origins(s, sizes[0], points.origins.data());
-  Buffer axes(s, sizes[1], points.axes.data());
-  Buffer own_face(s, sizes[2], points.own_face.data());
-  Buffer order_buffer(s, sizes[3], order.data());
-  Buffer raw(s, sizes[4], nullptr);
-  Buffer valid(s, sizes[5], nullptr);
-  Buffer tangents(s, sizes[6], points.tangents.data());
-  // The host's ray table (direction, angle) for deterministic samplings; random rays are
-  // generated on the device and read none of it.
-  std::vector<float> table(4 * std::max<std::size_t>(cone.local.size(), 1), 0.0f);
-  for (std::size_t i = 0; i < cone.local.size(); ++i) {
-    table[4 * i] = cone.local[i].x;
-    table[4 * i + 1] = cone.local[i].y;
-    table[4 * i + 2] = cone.local[i].z;
-    table[4 * i + 3] = cone.local_angle[i];
-  }
-  Buffer local_rays(s, table.size() * sizeof(float), table.data());
   std::unique_ptr<Buffer> accel0, accel1, accel2;
   std::unique_ptr<Kernel> kernel;
   kern::SdfCastParams params{};
@@ -210,7 +254,7 @@ void run_device(const Device& device, const Scene& scene, const SamplePoints& po
     kernel->local_arg(a++, 2 * points_per_group * cone.rays * sizeof(float));
   }
   check(cl.clFinish(s.queue), "clFinish (upload)");
-  result.timings.upload = seconds_since(upload_start);
+  result.timings.upload += seconds_since(upload_start);
 
   // Launches of about 100 ms on this device: short enough that a display driver's watchdog
   // never fires and progress and cancellation stay responsive, long enough to fill the device.
@@ -277,20 +321,14 @@ void run_device(const Device& device, const Scene& scene, const SamplePoints& po
 
 }  // namespace
 
-CastTimings cast_opencl(const std::vector<const Device*>& devices, const Scene& scene,
+CastTimings cast_opencl(const std::vector<const Device*>& devices, const SceneSource& scene,
                         const SamplePoints& points, const std::vector<std::uint32_t>& order,
                         const Cone& cone, float min_closeness, unsigned host_threads, float* raw,
                         std::int32_t* valid_rays, const ProgressFn& progress,
                         double progress_from, double progress_to,
                         const std::function<void()>& beside_cast) {
   const std::size_t n = points.size();
-  if ((scene.bvh && scene.bvh->empty()) || (scene.bvh8 && scene.bvh8->empty())) {
-    // Every triangle has zero area: nothing can be hit, and an empty tree has no root to read.
-    std::fill(raw, raw + n, -1.0f);
-    std::fill(valid_rays, valid_rays + n, 0);
-    if (beside_cast) beside_cast();
-    return CastTimings{};
-  }
+  SharedScene shared_scene(scene);
   // The kernels write results in Morton order (contiguous per launch); scattered back below.
   UninitializedVector<float> raw_ordered(n);
   UninitializedVector<std::int32_t> valid_ordered(n);
@@ -303,7 +341,7 @@ CastTimings cast_opencl(const std::vector<const Device*>& devices, const Scene& 
   for (std::size_t i = 0; i < devices.size(); ++i) {
     threads.emplace_back([&, i] {
       try {
-        run_device(*devices[i], scene, points, order, cone, min_closeness, raw_ordered,
+        run_device(*devices[i], shared_scene, points, order, cone, min_closeness, raw_ordered,
                    valid_ordered, work, done_mutex, done_changed, results[i]);
       } catch (const Error&) {
         // An OpenCL call failed: the device may be lost, so the next run starts afresh.
@@ -355,9 +393,16 @@ CastTimings cast_opencl(const std::vector<const Device*>& devices, const Scene& 
   for (const DeviceResult& r : results) {
     if (r.failure) std::rethrow_exception(r.failure);
     timings.upload = std::max(timings.upload, r.timings.upload);
+    timings.wait = std::max(timings.wait, r.timings.wait);
     timings.cast = std::max(timings.cast, r.timings.cast);
     timings.download = std::max(timings.download, r.timings.download);
     timings.device_bytes = std::max(timings.device_bytes, r.timings.device_bytes);
+  }
+  if (!shared_scene.get()) {
+    // Every triangle has zero area: nothing was cast, nothing can be hit.
+    std::fill(raw, raw + n, -1.0f);
+    std::fill(valid_rays, valid_rays + n, 0);
+    return timings;
   }
   parallel_for(n, 1 << 16, host_threads, [&](std::size_t begin, std::size_t end) {
     for (std::size_t i = begin; i < end; ++i) {

@@ -41,8 +41,13 @@ CastKernel cast_kernel_for(const Device& device);
 // tree reads the binary tree's triangles, so `binary` is also set when `four` is.
 BvhWidths wanted_bvhs(const std::vector<const Device*>& devices);
 
+// The scene, from where the caller makes it: cast_opencl calls it once, from a device thread
+// once the points are on their way to the devices, so the caller can still be building it.
+using SceneSource = std::function<Scene()>;
+
 struct CastTimings {
   double upload = 0.0, cast = 0.0, download = 0.0;
+  double wait = 0.0;  // for the scene, once the points were uploaded
   std::uint64_t device_bytes = 0;  // buffers on the device (the largest of several devices)
 };
 
@@ -52,7 +57,7 @@ struct CastTimings {
 // Throws Error for OpenCL failures (naming the call and code) and std::runtime_error when
 // the scene does not fit a device's memory. Progress covers [progress_from, progress_to].
 // beside_cast (sdf.h's BesideCast) runs on the calling thread once the devices have started.
-CastTimings cast_opencl(const std::vector<const Device*>& devices, const Scene& scene,
+CastTimings cast_opencl(const std::vector<const Device*>& devices, const SceneSource& scene,
                         const SamplePoints& points, const std::vector<std::uint32_t>& order,
                         const Cone& cone, float min_closeness, unsigned host_threads, float* raw,
                         std::int32_t* valid_rays, const ProgressFn& progress,

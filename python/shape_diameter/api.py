@@ -32,9 +32,11 @@ class Result:
     valid_rays: np.ndarray
     """int32: rays kept per point; 0 means the point's value was filled from its neighbours."""
     timings: dict = field(default_factory=dict)
-    """Seconds per stage: prepare, build, cast (cast and reduce, fused), fill, normalize, total;
-    on OpenCL also setup, upload and download; with smoothing, smooth, and for 'texture'
-    'beside cast' (its UV islands: on OpenCL found during the cast, on the CPU after it)."""
+    """Seconds per stage: prepare (orientation, points), build, build wait, cast (cast and
+    reduce, fused), fill, normalize, total; on OpenCL also setup, upload and download; with
+    smoothing, smooth, and for 'texture' 'beside cast' (its UV islands: on OpenCL found during
+    the cast, on the CPU after it). The BVH builds beside 'prepare' (and on OpenCL beside the
+    points' upload): 'build' is its own time, 'build wait' what it added to the wall time."""
     engine: str = "cpu"
     """What ran, e.g. 'cpu (2 threads)'."""
     points: str = "faces"

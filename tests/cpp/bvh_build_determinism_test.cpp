@@ -4,10 +4,12 @@
 #include <gtest/gtest.h>
 
 #include <cstring>
+#include <utility>
 
 #include "../../kernels/sdf_bvh_traverse.h"
 #include "bvh.h"
 #include "bvh_stats.h"
+#include "mesh.h"
 #include "test_meshes.h"
 
 namespace sdf {
@@ -55,6 +57,28 @@ TEST(BvhDeterminism, ManyIdenticalTrianglesStillSplitTheSameWay) {
   EXPECT_TRUE(same_bytes(one.triangles, four.triangles));
   for (const auto& node : one.nodes) EXPECT_LE(node.count, BvhConfig().max_leaf_size);
   EXPECT_LT(bvh_depth(one), SDF_BVH_STACK_SIZE);
+}
+
+// compute() builds the tree from the mesh before orientation reverses faces, then rewrites the
+// records: that must be the tree and records of building after the reversal, byte for byte.
+TEST(BvhDeterminism, RewritingTrianglesAfterReversalsEqualsBuildingAfterThem) {
+  for (std::size_t morton_below : {std::size_t{0}, std::size_t{1024}}) {
+    const Mesh before = test::soup(50000, 5).mesh();
+    Mesh turned = copy_mesh(before);
+    std::size_t reversed = 0;
+    for (std::size_t f = 0; f < turned.triangles.size(); f += 3, ++reversed)
+      std::swap(turned.triangles[f].y, turned.triangles[f].z);  // as orient() reverses
+    BvhConfig config;
+    config.morton_below = morton_below;
+    Bvh early = build_bvh(before, config);
+    const Bvh late = build_bvh(turned, config);
+    EXPECT_TRUE(same_bytes(early.nodes, late.nodes));
+    EXPECT_FALSE(same_bytes(early.triangles, late.triangles));  // the test reverses something
+    rewrite_triangles(early, turned, 3);
+    EXPECT_TRUE(same_bytes(early.nodes, late.nodes));
+    EXPECT_TRUE(same_bytes(early.triangles, late.triangles));
+    EXPECT_GT(reversed, 10000u);
+  }
 }
 
 TEST(BvhSahCost, OneTriangleCostsOneAndASplitTreeCostsLessThanALeaf) {

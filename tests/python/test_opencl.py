@@ -269,6 +269,28 @@ def test_opencl_all_shares_points_over_devices_with_identical_results():
     assert out["same"]
 
 
+@pytest.mark.parametrize("engine", ["cpu", *OPENCL])
+def test_a_mesh_of_zero_area_triangles_only_casts_nothing(engine):
+    # Its tree is empty (no root to read): known only once built, after the points' upload.
+    V = np.array([[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [2.0, 0.0, 0.0], [0.0, 1.0, 0.0]])
+    F = np.array([[0, 1, 2], [3, 3, 1], [0, 0, 0]])
+    with pytest.warns(RuntimeWarning, match=r"no ray of any point"):
+        result = sd.compute(V, F, engine=engine)
+    assert (result.raw == 0).all() and (result.valid_rays == 0).all()
+    assert {"build", "build wait"} <= set(result.timings)
+
+
+def test_stages_of_an_opencl_run_account_for_its_time():
+    vertices, triangles = load_mesh(DATA / "bunny00.off")
+    t = sd.compute(vertices, triangles, engine=OPENCL[0]).timings
+    # 'build' overlaps 'prepare' and the upload; the others follow one another.
+    serial = sum(t[k] for k in ("prepare", "build wait", "setup", "upload", "cast", "download",
+                                "fill", "normalize"))
+    # Not all of total: the mesh's conversion and checks come before the first stage.
+    assert 0.75 * t["total"] <= serial <= t["total"] * 1.001
+    assert 0.0 <= t["build wait"] and t["build"] > 0.0
+
+
 def test_progress_and_cancellation_on_opencl():
     vertices, triangles = load_mesh(DATA / "fandisk.obj")
     seen = []
