@@ -34,6 +34,10 @@ namespace sdf::cl {
   X(clCreateBuffer)           \
   X(clReleaseMemObject)       \
   X(clEnqueueWriteBuffer)     \
+  X(clEnqueueMapBuffer)       \
+  X(clEnqueueUnmapMemObject)  \
+  X(clWaitForEvents)          \
+  X(clReleaseEvent)           \
   X(clEnqueueReadBuffer)      \
   X(clEnqueueNDRangeKernel)   \
   X(clFinish)

@@ -31,9 +31,25 @@ DeviceState& state_of(const Device& device) {
     check(err, "clCreateContext");
     s->queue = cl.clCreateCommandQueue(s->context, device.id, 0, &err);
     check(err, "clCreateCommandQueue");
+    s->stage_uploads = device.gpu;
+    if (const char* chunk = std::getenv("SDF_OPENCL_STAGING_CHUNK")) {
+      if (const long bytes = std::strtol(chunk, nullptr, 10); bytes > 0) {
+        s->stage_uploads = true;
+        s->staging.set_chunk_bytes(static_cast<std::size_t>(bytes));
+      }
+    }
     slot = std::move(s);
   }
   return *slot;
+}
+
+void write_buffer(DeviceState& s, cl_mem destination, const void* data, std::size_t bytes) {
+  if (s.stage_uploads && s.staging.worth(bytes) &&
+      s.staging.write(s.context, s.queue, destination, data, bytes))
+    return;
+  check(api()->clEnqueueWriteBuffer(s.queue, destination, CL_FALSE, 0, bytes, data, 0, nullptr,
+                                    nullptr),
+        "clEnqueueWriteBuffer");
 }
 
 std::string build_options(const Device& device, int rays) {

@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "devices.h"
+#include "staging.h"
 
 namespace sdf::cl {
 
@@ -22,7 +23,10 @@ struct DeviceState {
   cl_context context = nullptr;
   cl_command_queue queue = nullptr;
   std::map<std::string, cl_program> programs;
-  std::mutex mutex;  // one computation at a time per device
+  // Large uploads to a GPU go through it (write_buffer); CPU devices read host memory.
+  bool stage_uploads = false;
+  Staging staging;
+  std::mutex mutex;  // one computation at a time per device; guards all of the above
   // Set when an OpenCL call failed while computing (a lost device, a driver reset): the next
   // computation gets a fresh context and queue instead of this one.
   std::atomic<bool> broken{false};
@@ -70,6 +74,11 @@ class Kernel {
   cl_kernel kernel_ = nullptr;
 };
 
+// Queues the upload of `bytes` from `data` into `destination`, through s.staging where that
+// is faster (then `data` may change once this returns); otherwise non-blocking, so `data` must
+// stay unchanged until the queue has run it (a later blocking read or clFinish).
+void write_buffer(DeviceState& s, cl_mem destination, const void* data, std::size_t bytes);
+
 class Buffer {
  public:
   Buffer(DeviceState& s, std::size_t bytes, const void* data) {
@@ -78,9 +87,7 @@ class Buffer {
     const std::size_t size = std::max<std::size_t>(bytes, 4);
     mem_ = api()->clCreateBuffer(s.context, CL_MEM_READ_WRITE, size, nullptr, &err);
     check(err, "clCreateBuffer");
-    if (data && bytes)
-      check(api()->clEnqueueWriteBuffer(s.queue, mem_, CL_FALSE, 0, bytes, data, 0, nullptr, nullptr),
-            "clEnqueueWriteBuffer");
+    if (data && bytes) write_buffer(s, mem_, data, bytes);
   }
   ~Buffer() { api()->clReleaseMemObject(mem_); }
   Buffer(const Buffer&) = delete;

@@ -114,9 +114,7 @@ void smooth_projected_opencl(const Device& device, const Mesh& mesh, PointKind k
     // Both writes are non-blocking: nodes and points stay unchanged until the blocking read
     // below returns, and by then the in-order queue has run everything before it.
     Buffer node_buffer(s, bytes_of(nodes), nodes.data());
-    check(api()->clEnqueueWriteBuffer(s.queue, points_buffer->get(), CL_FALSE, 0, point_bytes,
-                                      points, 0, nullptr, nullptr),
-          "clEnqueueWriteBuffer");
+    write_buffer(s, points_buffer->get(), points, point_bytes);
     Kernel kernel(program, "sdf_smooth_projected");
     kernel.arg(2, node_buffer.get());
     kernel.arg(3, points_buffer->get());
