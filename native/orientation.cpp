@@ -132,17 +132,20 @@ OrientationReport orient_auto(Mesh& mesh, unsigned threads, bool fast_path) {
     const double diagonal = glm::length(boxes[p].hi - boxes[p].lo);
     reverse_part[p] = volume[p] < -1e-6 * diagonal * diagonal * diagonal;
   }
+  // flip[f] becomes whether face f is reversed.
   std::atomic<std::size_t> flipped{0};
   parallel_for(n, kGrain, threads, [&](std::size_t begin, std::size_t end) {
     std::size_t mine = 0;
     for (std::size_t f = begin; f < end; ++f) {
-      if (!(flip[f] ^ reverse_part[parts.part_of[f]])) continue;
+      flip[f] = flip[f] ^ reverse_part[parts.part_of[f]];
+      if (!flip[f]) continue;
       reverse_face(mesh.triangles[f]);
       ++mine;
     }
     flipped.fetch_add(mine, std::memory_order_relaxed);
   });
   report.flipped_faces = flipped.load();
+  if (report.flipped_faces > 0) report.reversed.assign(flip.begin(), flip.end());
   return report;
 }
 
@@ -156,6 +159,7 @@ OrientationReport orient(Mesh& mesh, Orientation mode, unsigned threads) {
   });
   OrientationReport report;
   report.flipped_faces = mesh.triangles.size();
+  report.reversed.assign(mesh.triangles.size(), 1);
   return report;
 }
 

@@ -4,6 +4,8 @@
 #pragma once
 
 #include <cstddef>
+#include <cstdint>
+#include <vector>
 
 #include "mesh.h"
 
@@ -18,6 +20,9 @@ enum class Orientation {
 struct OrientationReport {
   std::size_t flipped_faces = 0;  // faces whose winding the computation reversed
   std::size_t parts = 0;          // parts the mesh was seen as (Auto only)
+  // Per face, 1 where it was reversed; empty when none was (no cost for the common case).
+  // What ran on the oriented mesh afterwards (projected smoothing's inward axes) needs it.
+  std::vector<std::uint8_t> reversed;
 };
 
 // Auto:

@@ -146,6 +146,16 @@ py::dict compute(const Doubles& vertices, const Int64s& triangles, int rays, dou
   result["device_bytes"] = out.device_bytes;
   result["flipped_faces"] = out.orientation.flipped_faces;
   result["parts"] = out.orientation.parts;
+  // Which faces were reversed (None when none was): what runs on the caller's arrays after
+  // the cast and depends on the winding (projected smoothing) reverses them too.
+  if (out.orientation.reversed.empty()) {
+    result["reversed"] = py::none();
+  } else {
+    py::array_t<bool> reversed(static_cast<py::ssize_t>(out.orientation.reversed.size()));
+    std::copy(out.orientation.reversed.begin(), out.orientation.reversed.end(),
+              reversed.mutable_data());
+    result["reversed"] = reversed;
+  }
   return result;
 }
 

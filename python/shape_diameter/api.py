@@ -288,12 +288,18 @@ def compute(
     if smoothing != "none":
         clock = time.perf_counter()
         smooth_engine = "cpu" if fallback else chosen
+        # Projected smoothing moves points along their inward axes: those of the mesh as the
+        # cast oriented it (the other methods do not depend on the winding).
+        smooth_t = t
+        if smoothing == "projected" and out["reversed"] is not None:
+            smooth_t = t.copy()
+            smooth_t[out["reversed"]] = smooth_t[out["reversed"]][:, [0, 2, 1]]
 
         def run_smoothing(engine_name):
             # compute()'s own checked mesh, options and SDF (raw: finite, >= 0): no second
             # round of checks.
             return run_checked(
-                v, t, raw, points, smoothing, smoothing_resolved, int(threads),
+                v, smooth_t, raw, points, smoothing, smoothing_resolved, int(threads),
                 None if progress is None else lambda f: progress(0.9 + 0.1 * f),
                 engine_name, islands[0] if islands else None,
             )

@@ -121,7 +121,9 @@ def smooth(
         weld_tolerance: merge distance relative to the largest bounding-box side (default
             1e-6); None merges nothing.
     Options of 'projected' (octree over points moved inward by half their value; values are
-        lengths >= 0 in mesh units, the sphere radius is each point's own value):
+        lengths >= 0 in mesh units, the sphere radius is each point's own value; inward is
+        against the faces' normals, so the winding must point outward: compute() orients the
+        mesh first and smooths with its orientation):
         iterations: int >= 0 (default 1); max_depth: 0..20 (default 8, paper);
         min_points: a node branches only if it holds more than this fraction of the points
             (default 0.002, paper); node_size_ratio: ... and only if its points' value is at

@@ -71,11 +71,15 @@ TEST(ComputePipeline, ReversedFacesGiveTheValuesOfTheMeshWoundRight) {
   for (std::size_t f = 0; f < messy.triangles.size() / 3; f += 7, ++reversed)
     std::swap(messy.triangles[3 * f + 1], messy.triangles[3 * f + 2]);
   const Output clean = compute(right.mesh(), options_for(Orientation::AsIs, 0));
+  EXPECT_TRUE(clean.orientation.reversed.empty());  // nothing reversed, nothing listed
   EXPECT_GT(stage(clean, "build"), 0.0);
   EXPECT_GE(stage(clean, "build wait"), 0.0);
   for (unsigned threads : {1u, 3u}) {
     const Output fixed = compute(messy.mesh(), options_for(Orientation::Auto, threads));
     EXPECT_EQ(fixed.orientation.flipped_faces, reversed);
+    ASSERT_EQ(fixed.orientation.reversed.size(), messy.triangles.size() / 3);
+    for (std::size_t f = 0; f < fixed.orientation.reversed.size(); ++f)
+      ASSERT_EQ(fixed.orientation.reversed[f], f % 7 == 0 ? 1 : 0) << "face " << f;
     EXPECT_TRUE(same_bits(fixed.raw, clean.raw)) << threads << " threads";
     // Trusting the messy winding changes values: the test reverses something that matters.
     const Output trusted = compute(messy.mesh(), options_for(Orientation::AsIs, threads));

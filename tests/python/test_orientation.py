@@ -52,6 +52,22 @@ def test_scattered_reversed_faces_are_put_back():
     assert (np.abs(as_is.raw - clean.raw) > 1e-3 * clean.raw).any()
 
 
+@pytest.mark.parametrize("points", ["faces", "vertices"])
+def test_projected_smoothing_moves_points_inward_on_the_mesh_as_oriented(points):
+    # compute() turns the inside-out horse outward before casting; the projected points must
+    # then move along the turned mesh's inward axes too (they once took the caller's winding
+    # and moved outward: values off by up to 0.04).
+    vertices, triangles = load_mesh(DATA / "horse.ply")
+    inside_out = sd.compute(vertices, triangles, rays=10, points=points, engine="cpu",
+                            smoothing="projected")
+    outward = sd.compute(vertices, triangles[:, [0, 2, 1]], rays=10, points=points,
+                         engine="cpu", smoothing="projected")
+    assert inside_out.flipped_faces == len(triangles) and outward.flipped_faces == 0
+    np.testing.assert_array_equal(inside_out.raw, outward.raw)
+    np.testing.assert_array_equal(inside_out.values, outward.values)
+    assert not np.array_equal(outward.values, outward.raw)  # it smoothed something
+
+
 def test_each_part_is_judged_on_its_own():
     small_v, small_t = icosphere(1.0, 2)
     big_v, big_t = icosphere(2.0, 2)
