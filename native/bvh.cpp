@@ -64,8 +64,10 @@ std::size_t make_references(const Mesh& mesh, unsigned threads,
         const glm::vec3 normal = glm::cross(v1 - v0, v2 - v0);  // as face_area_normal
         if (normal.x == 0.0f && normal.y == 0.0f && normal.z == 0.0f) continue;
         PrimRef& r = out[n++];
-        r.lo = glm::min(v0, glm::min(v1, v2));
-        r.hi = glm::max(v0, glm::max(v1, v2));
+        // + 0: a -0 corner becomes +0, so the box does not depend on which of two equal
+        // zeros min and max keep (a reversed face lists its corners in another order).
+        r.lo = glm::min(v0, glm::min(v1, v2)) + 0.0f;
+        r.hi = glm::max(v0, glm::max(v1, v2)) + 0.0f;
         r.id = static_cast<std::uint32_t>(f);
         r.bins = 0;
         const bvh_build::Float4 lo = bvh_build::lo4(r), hi = bvh_build::hi4(r), c2 = lo + hi;

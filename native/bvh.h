@@ -34,8 +34,9 @@ Bvh build_bvh(const Mesh& mesh, const BvhConfig& config = BvhConfig());
 
 // Rewrites every triangle record from `mesh`, keeping the tree and each record's face: for a
 // tree built from a copy of `mesh` taken before some faces were reversed (a reversal swaps two
-// corners, which leaves a face's box and its zero-area test as they were, so build_bvh would
-// have built the same tree). Then equal to build_bvh(mesh) bit for bit.
+// corners, which leaves a face's box (its zero corners made +0) and its zero-area test as they
+// were, so build_bvh would have built the same tree). Then equal to build_bvh(mesh) bit for
+// bit.
 void rewrite_triangles(Bvh& bvh, const Mesh& mesh, unsigned threads = 0);
 
 // Which trees the casters of a run read: the binary BVH and its collapses to 4 children

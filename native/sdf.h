@@ -35,7 +35,8 @@ struct Options {
   Sampling sampling = Sampling::Fibonacci;
   std::uint32_t seed = 0;      // for Sampling::Random
   PointKind points = PointKind::Faces;
-  unsigned threads = 0;        // CPU engine threads; 0: every core
+  unsigned threads = 0;        // CPU threads; 0: every core (and the BVH builds beside
+                               // orientation and sampling, each on every core)
   // "cpu", or an OpenCL selection: "opencl", "opencl:N", "opencl:all", "opencl:<name part>".
   std::string engine = "cpu";
   Accel accel = Accel::Bvh;

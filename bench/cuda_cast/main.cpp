@@ -126,7 +126,8 @@ int main(int argc, char** argv) {
     cl.valid.resize(n);
     for (int r = 0; r < runs; ++r) {
       const sdf::cl::CastTimings t =
-          sdf::cl::cast_opencl(devices, scene, points, order, cone, tmin, 0, cl.raw.data(),
+          sdf::cl::cast_opencl(devices, [&] { return scene; }, points, order, cone, tmin, 0,
+                               cl.raw.data(),
                                cl.valid.data(), nullptr, 0.0, 1.0);
       best = std::min(best, t.cast);
     }

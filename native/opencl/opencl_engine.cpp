@@ -166,6 +166,7 @@ void run_device(const Device& device, SharedScene& shared_scene, const SamplePoi
     work.stop = true;  // nothing to cast; cast_opencl fills the results
     return;
   }
+  if (work.stop.load()) return;  // cancelled (or another device failed) during the build
   const Scene& scene = *scene_or_empty;
   upload_start = Clock::now();
   const std::size_t first_accel = sizes.size();

@@ -63,7 +63,20 @@ TEST(BvhDeterminism, ManyIdenticalTrianglesStillSplitTheSameWay) {
 // records: that must be the tree and records of building after the reversal, byte for byte.
 TEST(BvhDeterminism, RewritingTrianglesAfterReversalsEqualsBuildingAfterThem) {
   for (std::size_t morton_below : {std::size_t{0}, std::size_t{1024}}) {
-    const Mesh before = test::soup(50000, 5).mesh();
+    test::Arrays soup = test::soup(50000, 5);
+    // Zeros of both signs on one axis of some faces: min and max keep the first of two equal
+    // values, so their boxes would follow the corner order but for build_bvh's +0.
+    // Two faces at x = -10 and 10 put the centre, which make_mesh subtracts, at x = 0.
+    for (double x : {-10.0, 10.0}) {
+      const auto first = static_cast<std::int64_t>(soup.vertices.size() / 3);
+      soup.vertices.insert(soup.vertices.end(), {x, 0.0, 0.0, x, 1.0, 0.0, x, 0.0, 1.0});
+      soup.triangles.insert(soup.triangles.end(), {first, first + 1, first + 2});
+    }
+    for (std::size_t f = 0; f < 3000; f += 3) {
+      soup.vertices[9 * f + 3] = 0.0;
+      soup.vertices[9 * f + 6] = -0.0;
+    }
+    const Mesh before = soup.mesh();
     Mesh turned = copy_mesh(before);
     std::size_t reversed = 0;
     for (std::size_t f = 0; f < turned.triangles.size(); f += 3, ++reversed)

@@ -249,10 +249,13 @@ def test_the_module_does_not_link_libopencl():
 
 def test_opencl_all_shares_points_over_devices_with_identical_results():
     # POCL_DEVICES makes PoCL offer two CPU devices: the points are shared out between them.
+    # Every fifth face reversed: the tree the devices share is built beside orientation and
+    # its records rewritten after it.
     code = (
         "import json, numpy as np, shape_diameter as sd\n"
         "from shape_diameter.mesh_io import load_mesh\n"
         f"v, t = load_mesh({str(DATA / 'fandisk.obj')!r})\n"
+        "t = t.copy(); t[::5] = t[::5][:, [0, 2, 1]]\n"
         "first = next(e['name'] for e in sd.engines() if e['name'] != 'cpu'"
         " and (e['type'] == 'GPU' or not any(g['type'] == 'GPU' for g in sd.engines())))\n"
         "one = sd.compute(v, t, engine=first)\n"
@@ -267,6 +270,21 @@ def test_opencl_all_shares_points_over_devices_with_identical_results():
     assert out["expected"] >= 1
     assert out["engine"].count("opencl:") == out["expected"]
     assert out["same"]
+
+
+@pytest.mark.parametrize("engine", OPENCL)
+def test_reversed_faces_give_the_bits_of_the_mesh_wound_right(engine):
+    # The device's tree is built from the mesh before orientation reverses faces, and its
+    # records are rewritten after: the values are the cpu engine's on the clean mesh.
+    vertices, triangles = load_mesh(DATA / "fandisk.obj")
+    messy = triangles.copy()
+    messy[::7] = messy[::7][:, [0, 2, 1]]
+    clean = sd.compute(vertices, triangles, engine="cpu")
+    for threads in (0, 2):  # the build beside orientation, and after it
+        result = sd.compute(vertices, messy, engine=engine, threads=threads)
+        assert result.flipped_faces == len(messy[::7])
+        np.testing.assert_array_equal(result.raw, clean.raw)
+        np.testing.assert_array_equal(result.valid_rays, clean.valid_rays)
 
 
 def test_uploads_staged_through_pinned_chunks_give_the_same_bits():
