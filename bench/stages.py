@@ -1,7 +1,7 @@
 # SPDX-License-Identifier: GPL-3.0-or-later
 """Where compute()'s time goes: each stage of one call (the fastest of --repeat by wall time)
-for the benchmark's largest meshes, with the defaults, with orientation 'as_is', and with
-'as_is' and bvh_quality 'high'; and old against new in one run.
+for the benchmark's largest meshes, with each orientation ('auto', 'as_is') and bvh_quality
+('auto', 'high'); and old against new in one run.
 
     python bench/stages.py [ENGINE [MESH,MESH]] [--rays R] [--repeat N]
     python bench/stages.py --compare OLD_PYTHONPATH NEW_PYTHONPATH [same arguments]
@@ -22,7 +22,7 @@ sys.path.insert(0, os.path.dirname(__file__))
 import alternate_builds  # noqa: E402
 from meshes import benchmark_meshes  # noqa: E402
 
-SETTINGS = (("auto", "auto"), ("as_is", "auto"), ("as_is", "high"))
+SETTINGS = (("auto", "auto"), ("auto", "high"), ("as_is", "auto"), ("as_is", "high"))
 
 
 def measure(args):

@@ -4,6 +4,7 @@
 #include <pybind11/numpy.h>
 #include <pybind11/pybind11.h>
 
+#include <memory>
 #include <stdexcept>
 #include <string>
 
@@ -156,12 +157,28 @@ py::array_t<float> smooth_projected(const Doubles& vertices, const Int64s& trian
   return out;
 }
 
+// smooth_texture's results as the Python layer takes them: values, timings, image and mask.
+py::dict texture_result(const sdf::TextureSmoothing& out, bool return_image) {
+  py::dict result;
+  result["values"] = to_array(out.values);
+  result["timings"] = sdf::timings_dict(out.timings);
+  if (return_image) {
+    py::array_t<float> image({py::ssize_t(out.height), py::ssize_t(out.width)});
+    py::array_t<bool> mask({py::ssize_t(out.height), py::ssize_t(out.width)});
+    std::copy(out.image.begin(), out.image.end(), image.mutable_data());
+    bool* m = mask.mutable_data();
+    for (std::size_t t = 0; t < out.mask.size(); ++t) m[t] = out.mask[t] != 0;
+    result["image"] = image;
+    result["mask"] = mask;
+  }
+  return result;
+}
+
 py::dict smooth_texture(const Doubles& vertices, const Int64s& triangles, const Floats& values,
                         const std::string& points, const Floats& uvs, int width, int height,
                         double radius, bool bilateral, double range_sigma, int margin,
                         double weld_tolerance, bool return_image, unsigned threads,
-                        const py::object& progress, const std::string& engine,
-                        const sdf::UvIslands* islands) {
+                        const py::object& progress, const std::string& engine) {
   const sdf::Mesh mesh = mesh_from(vertices, triangles, threads);
   const sdf::PointKind kind = kind_from(points);
   const float* v = point_values(mesh, kind, values);
@@ -184,25 +201,77 @@ py::dict smooth_texture(const Doubles& vertices, const Int64s& triangles, const 
 #ifdef SDF_HAVE_OPENCL
     if (device)
       out = sdf::cl::smooth_texture_opencl(*device, mesh, kind, v, uvs.data(), options,
-                                           return_image, report, islands);
+                                           return_image, report);
     else
 #endif
-      out = sdf::smooth_texture(mesh, kind, v, uvs.data(), options, return_image, report, 0.0,
-                                1.0, nullptr, islands);
+      out = sdf::smooth_texture(mesh, kind, v, uvs.data(), options, return_image, report);
   }
-  py::dict result;
-  result["values"] = to_array(out.values);
-  result["timings"] = sdf::timings_dict(out.timings);
-  if (return_image) {
-    py::array_t<float> image({py::ssize_t(out.height), py::ssize_t(out.width)});
-    py::array_t<bool> mask({py::ssize_t(out.height), py::ssize_t(out.width)});
-    std::copy(out.image.begin(), out.image.end(), image.mutable_data());
-    bool* m = mask.mutable_data();
-    for (std::size_t t = 0; t < out.mask.size(); ++t) m[t] = out.mask[t] != 0;
-    result["image"] = image;
-    result["mask"] = mask;
+  return texture_result(out, return_image);
+}
+
+// Texture smoothing's mesh-and-UV half (sdf::prepare_texture), and on an OpenCL engine the
+// UVs and islands uploaded on the device's side queue: compute() runs it while the device
+// casts. An upload that fails is left to smooth_texture_prepared to make (and report).
+std::shared_ptr<sdf::PreparedTexture> prepare_texture(const Doubles& vertices,
+                                                      const Int64s& triangles, const Floats& uvs,
+                                                      int width, int height,
+                                                      double weld_tolerance, bool need_merged,
+                                                      unsigned threads,
+                                                      const std::string& engine) {
+  sdf::Mesh mesh = mesh_from(vertices, triangles, threads);
+  require_corner_uvs(uvs, mesh);
+  sdf::TextureOptions options;
+  options.width = width;
+  options.height = height;
+  options.weld_tolerance = weld_tolerance;
+  options.threads = threads;
+  const auto* device = device_for(engine);
+  (void)device;  // unused without OpenCL
+  py::gil_scoped_release release;
+  auto prepared = std::make_shared<sdf::PreparedTexture>(
+      sdf::prepare_texture(std::move(mesh), uvs.data(), options, need_merged));
+#ifdef SDF_HAVE_OPENCL
+  if (device) {
+    try {
+      sdf::cl::upload_prepared_texture(*device, *prepared);
+    } catch (const sdf::cl::Error&) {
+    }
   }
-  return result;
+#endif
+  return prepared;
+}
+
+py::dict smooth_texture_prepared(const sdf::PreparedTexture& prepared, const Floats& values,
+                                 const std::string& points, double radius, bool bilateral,
+                                 double range_sigma, int margin, bool return_image,
+                                 unsigned threads, const py::object& progress,
+                                 const std::string& engine) {
+  const sdf::PointKind kind = kind_from(points);
+  const float* v = point_values(prepared.mesh, kind, values);
+  sdf::TextureOptions options;
+  options.width = prepared.width;
+  options.height = prepared.height;
+  options.radius = radius;
+  options.bilateral = bilateral;
+  options.range_sigma = range_sigma;
+  options.margin = margin;
+  options.weld_tolerance = prepared.islands.weld_tolerance;
+  options.threads = threads;
+  const auto* device = device_for(engine);
+  (void)device;  // unused without OpenCL
+  const sdf::ProgressFn report = progress_from(progress);
+  sdf::TextureSmoothing out;
+  {
+    py::gil_scoped_release release;
+#ifdef SDF_HAVE_OPENCL
+    if (device)
+      out = sdf::cl::smooth_texture_opencl(*device, prepared, kind, v, options, return_image,
+                                           report);
+    else
+#endif
+      out = sdf::smooth_texture(prepared, kind, v, options, return_image, report);
+  }
+  return texture_result(out, return_image);
 }
 
 py::tuple weld_vertices(const Doubles& vertices, const Int64s& triangles, double tolerance) {
@@ -216,17 +285,6 @@ py::tuple weld_vertices(const Doubles& vertices, const Int64s& triangles, double
   py::array_t<std::int64_t> merged(static_cast<py::ssize_t>(weld.merged.size()));
   std::copy(weld.merged.begin(), weld.merged.end(), merged.mutable_data());
   return py::make_tuple(merged, weld.count);
-}
-
-// Step 1 of texture smoothing on its own, for smooth_texture(islands=...): compute() finds
-// them while a device casts.
-sdf::UvIslands label_uv_islands(const Doubles& vertices, const Int64s& triangles,
-                                const Floats& uvs, double weld_tolerance, bool need_merged,
-                                unsigned threads) {
-  const sdf::Mesh mesh = mesh_from(vertices, triangles, threads);
-  require_corner_uvs(uvs, mesh);
-  py::gil_scoped_release release;
-  return sdf::label_uv_islands(mesh, uvs.data(), weld_tolerance, need_merged, threads);
 }
 
 py::array_t<std::int32_t> uv_islands(const Doubles& vertices, const Int64s& triangles,
@@ -256,12 +314,17 @@ void bind_smoothing(py::module_& m) {
         py::arg("values"), py::arg("points"), py::arg("uvs"), py::arg("width"),
         py::arg("height"), py::arg("radius"), py::arg("bilateral"), py::arg("range_sigma"),
         py::arg("margin"), py::arg("weld_tolerance"), py::arg("return_image"),
-        py::arg("threads"), py::arg("progress"), py::arg("engine") = "cpu",
-        py::arg("islands") = nullptr);
-  py::class_<sdf::UvIslands>(m, "UvIslands",
-                             "Texture smoothing's UV islands (label_uv_islands), opaque");
-  m.def("label_uv_islands", &label_uv_islands, py::arg("vertices"), py::arg("triangles"),
-        py::arg("uvs"), py::arg("weld_tolerance"), py::arg("need_merged"), py::arg("threads"));
+        py::arg("threads"), py::arg("progress"), py::arg("engine") = "cpu");
+  py::class_<sdf::PreparedTexture, std::shared_ptr<sdf::PreparedTexture>>(
+      m, "PreparedTexture",
+      "Texture smoothing's mesh, UVs and UV islands made ready (prepare_texture), opaque");
+  m.def("prepare_texture", &prepare_texture, py::arg("vertices"), py::arg("triangles"),
+        py::arg("uvs"), py::arg("width"), py::arg("height"), py::arg("weld_tolerance"),
+        py::arg("need_merged"), py::arg("threads"), py::arg("engine") = "cpu");
+  m.def("smooth_texture_prepared", &smooth_texture_prepared, py::arg("prepared"),
+        py::arg("values"), py::arg("points"), py::arg("radius"), py::arg("bilateral"),
+        py::arg("range_sigma"), py::arg("margin"), py::arg("return_image"), py::arg("threads"),
+        py::arg("progress"), py::arg("engine") = "cpu");
   m.def("default_kring_k", [](std::size_t faces) { return sdf::default_kring_k(faces); },
         py::arg("faces"));
   m.def("weld_vertices", &weld_vertices, py::arg("vertices"), py::arg("triangles"),

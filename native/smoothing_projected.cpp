@@ -309,7 +309,7 @@ struct PointOctree {
 // Options must have been checked.
 template <class Points>
 PointOctree build_octree(const Points& points, const ChunkSummary& summary,
-                         const ProjectedOptions& options) {
+                         const ProjectedOptions& options, StageTimings* timings = nullptr) {
   const std::size_t members = summary.first_member.back();
   if (members == 0) return {};
   if (members > std::numeric_limits<std::uint32_t>::max())
@@ -322,12 +322,16 @@ PointOctree build_octree(const Points& points, const ChunkSummary& summary,
   }
   const RootCube cube(lo, hi, options.max_depth);
   PointOctree tree;
+  Stopwatch clock;
   tree.order = morton_order(points, cube, 3 * options.max_depth, summary.first_member, members,
                             options.threads);
+  add_time(timings, "octree: Morton order", clock.lap());
   const RunValues runs = run_values(points, tree.order,
                                     options.branch_on == ProjectedOptions::Branch::Min,
                                     options.threads);
+  add_time(timings, "octree: sums", clock.lap());
   tree.nodes = grow_nodes(tree.order, runs, cube, options);
+  add_time(timings, "octree: nodes", clock.lap());
   return tree;
 }
 
@@ -433,9 +437,10 @@ void smooth_projected_into(const Mesh& mesh, PointKind kind, const float* values
     });
     summary.finish();
     add_time(timings, "points", clock.lap());
-    const PointOctree tree = build_octree(PackedPoints{points.data(), member.data(), n}, summary, options);
+    const PointOctree tree =
+        build_octree(PackedPoints{points.data(), member.data(), n}, summary, options, timings);
     const std::vector<PointOctreeNode>& nodes = tree.nodes;
-    add_time(timings, "octree", clock.lap());
+    clock.lap();  // the octree's stages were added by build_octree
     if (nodes.empty()) return unchanged();  // no point has an axis (then on the first iteration)
     if (gather) {  // it adds its own stages
       gather(nodes, points.data(), n, range.lo, range.hi, out);

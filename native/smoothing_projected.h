@@ -87,7 +87,8 @@ std::vector<float> smooth_projected(const Mesh& mesh, PointKind kind, const floa
 
 // The same, writing the result into out[0, point count) (which may be the caller's final
 // array, e.g. a NumPy one: no copy of the result is made). out must not overlap values.
-// timings: where given, seconds per stage are added (checks, frames, points, octree, gather;
+// timings: where given, seconds per stage are added (checks, frames, points, the octree's
+// "octree: Morton order", "octree: sums" and "octree: nodes", gather;
 // bench/smoothing_stages.py prints them).
 void smooth_projected_into(const Mesh& mesh, PointKind kind, const float* values,
                            const ProjectedOptions& options, float* out,

@@ -27,14 +27,8 @@ constexpr int kMaxSize = 16384;
 constexpr std::size_t kFaceGrain = 1 << 12;
 constexpr std::size_t kTexelGrain = 1 << 16;
 
-// The values' range, after checking that values and UVs are finite (the first bad one named).
-void check_inputs(const float* values, std::size_t n, const float* uvs, std::size_t m,
-                  unsigned threads, float& lo, float& hi) {
-  const ValueRange range = value_range(values, n, threads, not_finite);
-  if (range.first_bad < n)
-    throw std::invalid_argument("value " + std::to_string(range.first_bad) + " is not finite");
-  lo = range.lo;
-  hi = range.hi;
+// Throws naming the first UV that is not finite.
+void check_uvs(const float* uvs, std::size_t m, unsigned threads) {
   const std::size_t floats = 6 * m;
   const std::size_t uv_chunks = (floats + kTexelGrain - 1) / kTexelGrain;
   std::vector<std::size_t> uv_bad(uv_chunks, floats);
@@ -49,6 +43,22 @@ void check_inputs(const float* values, std::size_t n, const float* uvs, std::siz
     if (uv_bad[c] < floats)
       throw std::invalid_argument("the UV of face " + std::to_string(uv_bad[c] / 6) + " corner " +
                                   std::to_string((uv_bad[c] / 2) % 3) + " is not finite");
+}
+
+void check_size(const TextureOptions& options) {
+  if (options.width < 1 || options.height < 1 || options.width > kMaxSize ||
+      options.height > kMaxSize)
+    throw std::invalid_argument("the texture size must be in [1, " + std::to_string(kMaxSize) +
+                                "] texels, got " + std::to_string(options.width) + " x " +
+                                std::to_string(options.height));
+}
+
+// Corners are numbered 3 f + c in 32 bits (UV islands, read-back), one value kept free.
+void check_face_count(std::size_t m) {
+  if (m >= (std::size_t{1} << 32) / 3)
+    throw std::invalid_argument("texture smoothing takes at most " +
+                                std::to_string((std::size_t{1} << 32) / 3 - 1) + " faces, got " +
+                                std::to_string(m));
 }
 
 // Step 2 on the CPU threads, in one pass: every face offers (rank, value) to its texels
@@ -263,37 +273,27 @@ void read_back_vertices(const Mesh& mesh, const float* uvs, const UvIslands& isl
   });
 }
 
-}  // namespace
-
-TextureSmoothing smooth_texture(const Mesh& mesh, PointKind kind, const float* values,
+// smooth_texture's work once the UVs are checked; islands: found already, or null.
+TextureSmoothing smooth_checked(const Mesh& mesh, PointKind kind, const float* values,
                                 const float* uvs, const TextureOptions& options, bool keep_image,
                                 const ProgressFn& progress, double progress_from,
                                 double progress_to, const TextureDeviceFn& device,
-                                const UvIslands* given_islands) {
+                                const UvIslands* given_islands, Stopwatch& clock,
+                                StageTimings& timings) {
   const int width = options.width, height = options.height;
-  if (width < 1 || height < 1 || width > kMaxSize || height > kMaxSize)
-    throw std::invalid_argument("the texture size must be in [1, " + std::to_string(kMaxSize) +
-                                "] texels, got " + std::to_string(width) + " x " +
-                                std::to_string(height));
   if (!std::isfinite(options.radius))
     throw std::invalid_argument("radius must be a finite number of texels");
   if (options.margin < 0 || options.margin > kMaxSize)
     throw std::invalid_argument("margin must be in [0, " + std::to_string(kMaxSize) + "]");
   if (options.bilateral && !(options.range_sigma > 0.0 && std::isfinite(options.range_sigma)))
     throw std::invalid_argument("range_sigma must be a finite number > 0");
-  Stopwatch clock;
-  StageTimings timings;
   const unsigned threads = options.threads;
   const bool faces = kind == PointKind::Faces;
-  const std::size_t m = mesh.triangles.size();
-  const std::size_t n = faces ? m : mesh.vertices.size();
-  // Corners are numbered 3 f + c in 32 bits (UV islands, read-back), one value kept free.
-  if (m >= (std::size_t{1} << 32) / 3)
-    throw std::invalid_argument("texture smoothing takes at most " +
-                                std::to_string((std::size_t{1} << 32) / 3 - 1) + " faces, got " +
-                                std::to_string(m));
-  float lo, hi;
-  check_inputs(values, n, uvs, m, threads, lo, hi);
+  const std::size_t n = faces ? mesh.triangles.size() : mesh.vertices.size();
+  const ValueRange range = value_range(values, n, threads, not_finite);
+  if (range.first_bad < n)
+    throw std::invalid_argument("value " + std::to_string(range.first_bad) + " is not finite");
+  const float lo = range.lo, hi = range.hi;
   const double radius = options.radius < 0.0 ? 2.0 * std::max(width, height) / 256.0 : options.radius;
   auto report = [&](double fraction) {
     if (progress && !progress(progress_from + (progress_to - progress_from) * fraction))
@@ -302,16 +302,10 @@ TextureSmoothing smooth_texture(const Mesh& mesh, PointKind kind, const float* v
 
   report(0.0);
   timings.emplace_back("checks", clock.lap());
-  // Vertex values are averaged over merged vertices: those need the weld whatever the islands.
   UvIslands found;
-  if (given_islands) {
-    const UvIslands& g = *given_islands;
-    if (g.face_island.size() != m || g.vertex_count != mesh.vertices.size() ||
-        g.weld_tolerance != options.weld_tolerance || (!faces && !g.need_merged))
-      throw std::invalid_argument(
-          "the UV islands given were found for another mesh or other options (weld "
-          "tolerance, vertex values)");
-  } else {
+  if (!given_islands) {
+    // Vertex values are averaged over merged vertices: those need the weld whatever the
+    // islands.
     found = label_uv_islands(mesh, uvs, options.weld_tolerance, !faces, threads);
     timings.emplace_back(found.merged.empty() ? "islands" : "islands (welded)", clock.lap());
   }
@@ -379,6 +373,76 @@ TextureSmoothing smooth_texture(const Mesh& mesh, PointKind kind, const float* v
   timings.emplace_back("image", clock.lap());
   out.timings = std::move(timings);
   return out;
+}
+
+}  // namespace
+
+TextureSmoothing smooth_texture(const Mesh& mesh, PointKind kind, const float* values,
+                                const float* uvs, const TextureOptions& options, bool keep_image,
+                                const ProgressFn& progress, double progress_from,
+                                double progress_to, const TextureDeviceFn& device) {
+  Stopwatch clock;
+  StageTimings timings;
+  check_size(options);
+  check_face_count(mesh.triangles.size());
+  check_uvs(uvs, mesh.triangles.size(), options.threads);
+  return smooth_checked(mesh, kind, values, uvs, options, keep_image, progress, progress_from,
+                        progress_to, device, nullptr, clock, timings);
+}
+
+double largest_face_texels(const float* uvs, std::size_t m, int width, int height,
+                           unsigned threads) {
+  constexpr std::size_t kGrain = 1 << 14;
+  std::vector<double> largest((m + kGrain - 1) / kGrain, 0.0);
+  parallel_for(m, kGrain, threads, [&](std::size_t begin, std::size_t end) {
+    double most = 0.0;
+    for (std::size_t f = begin; f < end; ++f) {
+      const float* uv = uvs + 6 * f;
+      auto span = [&](int axis, int size) {
+        const double lo = std::min(uv[axis], std::min(uv[axis + 2], uv[axis + 4]));
+        const double hi = std::max(uv[axis], std::max(uv[axis + 2], uv[axis + 4]));
+        return std::min(double(size),
+                        std::max(0.0, (std::min(hi, 1.0) - std::max(lo, 0.0)) * size) + 1.0);
+      };
+      most = std::max(most, span(0, width) * span(1, height));
+    }
+    largest[begin / kGrain] = most;
+  });
+  return largest.empty() ? 0.0 : *std::max_element(largest.begin(), largest.end());
+}
+
+PreparedTexture prepare_texture(Mesh mesh, const float* uvs, const TextureOptions& options,
+                                bool need_merged) {
+  check_size(options);
+  const std::size_t m = mesh.triangles.size();
+  check_face_count(m);
+  check_uvs(uvs, m, options.threads);
+  PreparedTexture prepared;
+  prepared.uvs.assign(uvs, uvs + 6 * m);
+  prepared.islands =
+      label_uv_islands(mesh, uvs, options.weld_tolerance, need_merged, options.threads);
+  prepared.width = options.width;
+  prepared.height = options.height;
+  prepared.largest_face_texels =
+      largest_face_texels(uvs, m, options.width, options.height, options.threads);
+  prepared.mesh = std::move(mesh);
+  return prepared;
+}
+
+TextureSmoothing smooth_texture(const PreparedTexture& prepared, PointKind kind,
+                                const float* values, const TextureOptions& options,
+                                bool keep_image, const ProgressFn& progress, double progress_from,
+                                double progress_to, const TextureDeviceFn& device) {
+  Stopwatch clock;
+  StageTimings timings;
+  const UvIslands& islands = prepared.islands;
+  if (options.width != prepared.width || options.height != prepared.height ||
+      options.weld_tolerance != islands.weld_tolerance ||
+      (kind == PointKind::Vertices && !islands.need_merged))
+    throw std::invalid_argument(
+        "the texture was prepared for other options (size, weld tolerance, vertex values)");
+  return smooth_checked(prepared.mesh, kind, values, prepared.uvs.data(), options, keep_image,
+                        progress, progress_from, progress_to, device, &islands, clock, timings);
 }
 
 }  // namespace sdf

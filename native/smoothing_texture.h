@@ -27,6 +27,7 @@
 #include <cstdint>
 #include <functional>
 #include <string>
+#include <memory>
 #include <utility>
 #include <vector>
 
@@ -95,13 +96,42 @@ using TextureDeviceFn = std::function<void(
 // uvs: per face corner, (u, v) for corners 0, 1, 2 of face 0, then face 1, ... (6 floats a
 // face), finite. keep_image: fill image and mask (else they stay empty). Throws
 // std::invalid_argument for bad options, non-finite values or UVs. device: null runs
-// steps 2 to 5 on the CPU threads. islands: step 1 done already, by label_uv_islands on this
-// mesh and these UVs with options.weld_tolerance and need_merged for vertex values (null:
-// found here).
+// steps 2 to 5 on the CPU threads.
 TextureSmoothing smooth_texture(const Mesh& mesh, PointKind kind, const float* values,
                                 const float* uvs, const TextureOptions& options, bool keep_image,
                                 const ProgressFn& progress = nullptr, double progress_from = 0.0,
-                                double progress_to = 1.0, const TextureDeviceFn& device = nullptr,
-                                const UvIslands* islands = nullptr);
+                                double progress_to = 1.0, const TextureDeviceFn& device = nullptr);
+
+// What texture smoothing needs of the mesh and its UVs alone, made ahead of the values:
+// compute() makes it while a device casts, when the host would only wait. The mesh and a
+// copy of the UVs (checked), their UV islands (step 1), and the most texels a face's UV box
+// covers at width x height (a device walks one face per work item).
+struct PreparedTexture {
+  Mesh mesh;
+  std::vector<float> uvs;
+  UvIslands islands;
+  int width = 0, height = 0;
+  double largest_face_texels = 0.0;
+  // What an engine made of them on a device (opencl_smoothing.h), released with this.
+  std::shared_ptr<void> on_device;
+};
+
+// options' width, height, weld_tolerance and threads are used; need_merged: for vertex
+// values. Throws std::invalid_argument for non-finite UVs or a bad size.
+PreparedTexture prepare_texture(Mesh mesh, const float* uvs, const TextureOptions& options,
+                                bool need_merged);
+
+// The most texels the UV box of one face covers (clipped to the image), at width x height.
+double largest_face_texels(const float* uvs, std::size_t m, int width, int height,
+                           unsigned threads);
+
+// As above on a prepared mesh and UVs. Throws std::invalid_argument where options ask for
+// another size or weld tolerance than `prepared` was made for, or for vertex values when it
+// was not made for them.
+TextureSmoothing smooth_texture(const PreparedTexture& prepared, PointKind kind,
+                                const float* values, const TextureOptions& options,
+                                bool keep_image, const ProgressFn& progress = nullptr,
+                                double progress_from = 0.0, double progress_to = 1.0,
+                                const TextureDeviceFn& device = nullptr);
 
 }  // namespace sdf

@@ -27,6 +27,10 @@ struct DeviceState {
   bool stage_uploads = false;
   Staging staging;
   std::mutex mutex;  // one computation at a time per device; guards all of the above
+  // A second queue, for uploads made while a computation holds `mutex` and its queue
+  // (opencl_smoothing.h: upload_prepared_texture); made on first use, guarded by side_mutex.
+  cl_command_queue side_queue = nullptr;
+  std::mutex side_mutex;
   // Set when an OpenCL call failed while computing (a lost device, a driver reset): the next
   // computation gets a fresh context and queue instead of this one.
   std::atomic<bool> broken{false};

@@ -192,47 +192,46 @@ void filter_on_device(const Device& device, DeviceState& s, cl_program program,
   for (auto* b : {&value_b, &row_value, &row_weight, &taps}) keep.push_back(std::move(*b));
 }
 
-// The most texels any face's UV bounding box spans (clipped to the image): a device walks a
-// face's box in one work item.
-double largest_face_box(const float* uvs, std::size_t m, int width, int height, unsigned threads) {
-  constexpr std::size_t kGrain = 1 << 14;
-  std::vector<double> largest((m + kGrain - 1) / kGrain, 0.0);
-  parallel_for(m, kGrain, threads, [&](std::size_t begin, std::size_t end) {
-    double most = 0.0;
-    for (std::size_t f = begin; f < end; ++f) {
-      const float* uv = uvs + 6 * f;
-      auto span = [&](int axis, int size) {
-        const double lo = std::min(uv[axis], std::min(uv[axis + 2], uv[axis + 4]));
-        const double hi = std::max(uv[axis], std::max(uv[axis + 2], uv[axis + 4]));
-        return std::min(double(size), std::max(0.0, (std::min(hi, 1.0) - std::max(lo, 0.0)) * size) + 1.0);
-      };
-      most = std::max(most, span(0, width) * span(1, height));
-    }
-    largest[begin / kGrain] = most;
-  });
-  return largest.empty() ? 0.0 : *std::max_element(largest.begin(), largest.end());
+// Drawing and reading back compute texel coverage in double: a device without it would cover
+// other texels than the CPU, so there the CPU threads do it all. So they do where a face spans
+// more than 2^16 texels (a low-poly mesh on a large texture): a device walks each face in one
+// work item, in double, which consumer GPUs run at 1/32 to 1/64 of float speed.
+bool texture_suits(const Device& device, double largest_face_texels) {
+  constexpr double kMostTexelsPerFace = 65536.0;
+  return device.fp64 && largest_face_texels <= kMostTexelsPerFace;
 }
 
-}  // namespace
+// A prepared texture's UVs and face islands on a device, uploaded on its side queue while it
+// cast. Released with the prepared texture, unless the device failed since (its driver
+// objects may be dead: set aside like its state).
+struct TextureUploads {
+  DeviceState* state = nullptr;
+  cl_mem uvs = nullptr, face_island = nullptr;
+  TextureUploads() = default;
+  TextureUploads(const TextureUploads&) = delete;
+  TextureUploads& operator=(const TextureUploads&) = delete;
+  ~TextureUploads() {
+    if (!state || state->broken) return;
+    for (cl_mem mem : {uvs, face_island})
+      if (mem) api()->clReleaseMemObject(mem);
+  }
+};
 
-TextureSmoothing smooth_texture_opencl(const Device& device, const Mesh& mesh, PointKind kind,
-                                       const float* values, const float* uvs,
-                                       const TextureOptions& options, bool keep_image,
-                                       const ProgressFn& progress, const UvIslands* islands) {
-  // Drawing and reading back compute texel coverage in double: a device without it would
-  // cover other texels than the CPU, so there the CPU threads do it all. So they do where a
-  // face spans more than 2^16 texels (a low-poly mesh on a large texture): a device walks each
-  // face in one work item, in double, which consumer GPUs run at 1/32 to 1/64 of float speed.
-  constexpr double kMostTexelsPerFace = 65536.0;
-  if (!device.fp64 || largest_face_box(uvs, mesh.triangles.size(), options.width, options.height,
-                                       options.threads) > kMostTexelsPerFace)
-    return smooth_texture(mesh, kind, values, uvs, options, keep_image, progress, 0.0, 1.0,
-                          nullptr, islands);
-  DeviceState& s = state_of(device);
-  constexpr std::size_t kFaceChunk = std::size_t{1} << 20;  // faces per launch
-  auto on_device = [&](const TextureJob& job, bool images, std::vector<float>& out,
-                       std::vector<std::int32_t>& island, std::vector<float>& blurred,
-                       StageTimings& timings) {
+// The uploads of `prepared` that `s` can read, or null (none made, or made for another
+// device or a state since replaced).
+const TextureUploads* uploads_for(const PreparedTexture& prepared, DeviceState& s) {
+  const auto* uploads = static_cast<const TextureUploads*>(prepared.on_device.get());
+  return uploads && uploads->state == &s && !s.broken ? uploads : nullptr;
+}
+
+// Steps 2 to 5 on `device` (TextureDeviceFn); the UVs and face islands from `uploads` where
+// given, else uploaded here.
+TextureDeviceFn texture_on_device(const Device& device, const TextureUploads* uploads) {
+  return [&device, uploads](const TextureJob& job, bool images, std::vector<float>& out,
+                            std::vector<std::int32_t>& island, std::vector<float>& blurred,
+                            StageTimings& timings) {
+    DeviceState& s = state_of(device);
+    constexpr std::size_t kFaceChunk = std::size_t{1} << 20;  // faces per launch
     Stopwatch clock;
     const TextureFilter& f = job.filter;
     const bool faces = job.kind == PointKind::Faces;
@@ -252,9 +251,14 @@ TextureSmoothing smooth_texture_opencl(const Device& device, const Mesh& mesh, P
     const FinishOnUnwind finish_on_unwind(s.queue);
     cl_program program = smoothing_program(device, s);
     // Non-blocking uploads: the host arrays stay unchanged until the blocking reads below.
-    Buffer uv_buffer(s, 6 * m * sizeof(float), job.uvs);
+    std::unique_ptr<Buffer> own_uvs, own_islands;
+    if (!uploads) {
+      own_uvs = std::make_unique<Buffer>(s, 6 * m * sizeof(float), job.uvs);
+      own_islands = std::make_unique<Buffer>(s, m * sizeof(std::int32_t), job.face_island);
+    }
+    const cl_mem uv_buffer = uploads ? uploads->uvs : own_uvs->get();
+    const cl_mem face_island = uploads ? uploads->face_island : own_islands->get();
     Buffer value_buffer(s, n * sizeof(float), job.values);
-    Buffer face_island(s, m * sizeof(std::int32_t), job.face_island);
     std::unique_ptr<Buffer> triangles, read_values;
     if (faces) read_values = std::make_unique<Buffer>(s, m * sizeof(float), nullptr);
     else triangles = std::make_unique<Buffer>(s, bytes_of(job.mesh->triangles), job.mesh->triangles.data());
@@ -277,7 +281,7 @@ TextureSmoothing smooth_texture_opencl(const Device& device, const Mesh& mesh, P
     rank.arg(2, faces_count);
     rank.arg(3, static_cast<cl_int>(f.width));
     rank.arg(4, static_cast<cl_int>(f.height));
-    rank.arg(5, uv_buffer.get());
+    rank.arg(5, uv_buffer);
     rank.arg(6, owner.get());
     launch_chunks(device, s, rank, m, kFaceChunk);
     Kernel draw(program, "sdf_texture_draw");
@@ -285,12 +289,12 @@ TextureSmoothing smooth_texture_opencl(const Device& device, const Mesh& mesh, P
     draw.arg(a++, faces_count);
     draw.arg(a++, static_cast<cl_int>(f.width));
     draw.arg(a++, static_cast<cl_int>(f.height));
-    draw.arg(a++, uv_buffer.get());
+    draw.arg(a++, uv_buffer);
     draw.arg(a++, value_buffer.get());
     draw.arg(a++, triangles ? triangles->get() : cl_mem{nullptr});  // null: face values
     draw.arg(a++, f.lo);
     draw.arg(a++, f.hi);
-    draw.arg(a++, face_island.get());
+    draw.arg(a++, face_island);
     draw.arg(a++, owner.get());
     draw.arg(a++, island_a->get());
     draw.arg(a++, value_a->get());
@@ -302,8 +306,8 @@ TextureSmoothing smooth_texture_opencl(const Device& device, const Mesh& mesh, P
       a = 2;
       read_faces.arg(a++, static_cast<cl_int>(f.width));
       read_faces.arg(a++, static_cast<cl_int>(f.height));
-      read_faces.arg(a++, uv_buffer.get());
-      read_faces.arg(a++, face_island.get());
+      read_faces.arg(a++, uv_buffer);
+      read_faces.arg(a++, face_island);
       read_faces.arg(a++, island_a->get());
       read_faces.arg(a++, value_a->get());
       read_faces.arg(a++, f.lo);
@@ -329,8 +333,63 @@ TextureSmoothing smooth_texture_opencl(const Device& device, const Mesh& mesh, P
     check(api()->clFinish(s.queue), "clFinish (download)");
     timings.emplace_back("device: download", clock.lap());
   };
+}
+
+}  // namespace
+
+TextureSmoothing smooth_texture_opencl(const Device& device, const Mesh& mesh, PointKind kind,
+                                       const float* values, const float* uvs,
+                                       const TextureOptions& options, bool keep_image,
+                                       const ProgressFn& progress) {
+  const double largest = largest_face_texels(uvs, mesh.triangles.size(), options.width,
+                                             options.height, options.threads);
   return smooth_texture(mesh, kind, values, uvs, options, keep_image, progress, 0.0, 1.0,
-                        on_device, islands);
+                        texture_suits(device, largest) ? texture_on_device(device, nullptr)
+                                                       : nullptr);
+}
+
+TextureSmoothing smooth_texture_opencl(const Device& device, const PreparedTexture& prepared,
+                                       PointKind kind, const float* values,
+                                       const TextureOptions& options, bool keep_image,
+                                       const ProgressFn& progress) {
+  TextureDeviceFn on_device;
+  if (texture_suits(device, prepared.largest_face_texels))
+    on_device = texture_on_device(device, uploads_for(prepared, state_of(device)));
+  return smooth_texture(prepared, kind, values, options, keep_image, progress, 0.0, 1.0,
+                        on_device);
+}
+
+bool upload_prepared_texture(const Device& device, PreparedTexture& prepared) {
+  if (!texture_suits(device, prepared.largest_face_texels)) return false;
+  const std::size_t m = prepared.mesh.triangles.size();
+  const std::size_t uv_bytes = std::max<std::size_t>(bytes_of(prepared.uvs), 4);
+  const std::size_t island_bytes = std::max<std::size_t>(m * sizeof(std::int32_t), 4);
+  if (uv_bytes + island_bytes > device.global_memory / 4) return false;  // leave room to cast
+  DeviceState& s = state_of(device);
+  const Api& cl = *api();
+  auto uploads = std::make_shared<TextureUploads>();
+  uploads->state = &s;
+  std::lock_guard<std::mutex> lock(s.side_mutex);
+  cl_int err = CL_SUCCESS;
+  if (!s.side_queue) {
+    s.side_queue = cl.clCreateCommandQueue(s.context, device.id, 0, &err);
+    check(err, "clCreateCommandQueue (side)");
+  }
+  uploads->uvs = cl.clCreateBuffer(s.context, CL_MEM_READ_ONLY, uv_bytes, nullptr, &err);
+  check(err, "clCreateBuffer");
+  uploads->face_island = cl.clCreateBuffer(s.context, CL_MEM_READ_ONLY, island_bytes, nullptr, &err);
+  check(err, "clCreateBuffer");
+  if (m > 0) {
+    check(cl.clEnqueueWriteBuffer(s.side_queue, uploads->uvs, CL_TRUE, 0, bytes_of(prepared.uvs),
+                                  prepared.uvs.data(), 0, nullptr, nullptr),
+          "clEnqueueWriteBuffer (side)");
+    check(cl.clEnqueueWriteBuffer(s.side_queue, uploads->face_island, CL_TRUE, 0,
+                                  m * sizeof(std::int32_t), prepared.islands.face_island.data(), 0,
+                                  nullptr, nullptr),
+          "clEnqueueWriteBuffer (side)");
+  }
+  prepared.on_device = std::move(uploads);
+  return true;
 }
 
 }  // namespace sdf::cl

@@ -26,7 +26,20 @@ void smooth_projected_opencl(const Device& device, const Mesh& mesh, PointKind k
 TextureSmoothing smooth_texture_opencl(const Device& device, const Mesh& mesh, PointKind kind,
                                        const float* values, const float* uvs,
                                        const TextureOptions& options, bool keep_image,
-                                       const ProgressFn& progress = nullptr,
-                                       const UvIslands* islands = nullptr);
+                                       const ProgressFn& progress = nullptr);
+
+// The same on a prepared texture, reading its UVs and islands on the device where
+// upload_prepared_texture put them there.
+TextureSmoothing smooth_texture_opencl(const Device& device, const PreparedTexture& prepared,
+                                       PointKind kind, const float* values,
+                                       const TextureOptions& options, bool keep_image,
+                                       const ProgressFn& progress = nullptr);
+
+// Uploads the prepared UVs and face islands to `device` on a queue of the device's own beside
+// the one that casts (compute() calls it while the device casts), and keeps them in
+// prepared.on_device. Returns false, doing nothing, where texture smoothing would not run on
+// the device (no double precision, faces spanning more than 2^16 texels) or they would take
+// more than a quarter of its memory. Throws Error for OpenCL failures.
+bool upload_prepared_texture(const Device& device, PreparedTexture& prepared);
 
 }  // namespace sdf::cl

@@ -12,7 +12,7 @@ import numpy as np
 
 from . import _core
 from .normalization import NORMALIZATIONS, normalize_values
-from .smoothing import check_smoothing, run_checked, uv_islands_for
+from .smoothing import check_smoothing, prepare_texture_for, run_checked
 
 SAMPLINGS = ("fibonacci", "random", "cgal")
 POINTS = ("faces", "vertices")
@@ -32,11 +32,13 @@ class Result:
     valid_rays: np.ndarray
     """int32: rays kept per point; 0 means the point's value was filled from its neighbours."""
     timings: dict = field(default_factory=dict)
-    """Seconds per stage: prepare (orientation, points), build, build wait, cast (cast and
-    reduce, fused), fill, normalize, total; on OpenCL also setup, upload and download; with
-    smoothing, smooth, and for 'texture' 'beside cast' (its UV islands: on OpenCL found during
-    the cast, on the CPU after it). The BVH builds beside 'prepare' (and on OpenCL beside the
-    points' upload): 'build' is its own time, 'build wait' what it added to the wall time."""
+    """Seconds per stage: prepare (orientation, points, and with threads=0 the copy of the
+    mesh the build reads), build, build wait, cast (cast and reduce, fused), fill, normalize,
+    total; on OpenCL also setup, upload and download; with smoothing, smooth, and for
+    'texture' 'beside cast' (its UV islands, and on OpenCL the UVs' upload: on OpenCL done
+    during the cast, on the CPU after it). With threads=0 the BVH builds beside 'prepare'
+    (and on OpenCL beside the points' upload): 'build' is its own time, 'build wait' what it
+    added to the wall time."""
     engine: str = "cpu"
     """What ran, e.g. 'cpu (2 threads)'."""
     points: str = "faces"
@@ -220,7 +222,8 @@ def compute(
         build costs more than the slower cast; 'high' otherwise). Same values either way.
     progress: called with the fraction done in [0, 1] from the calling thread; if it raises,
         the computation stops and the exception propagates.
-    threads: CPU threads, 0 for every core.
+    threads: CPU threads, 0 for every core (then the BVH builds beside orientation and
+        sampling, each on every core).
     smoothing: 'none', 'kring', 'projected' or 'texture' (paper 4.4; see smooth()), applied
         to the SDF after filling: Result.values and Result.normalized are the smoothed field,
         Result.raw stays as cast. 'projected' and 'texture' run on the engine that cast (an
@@ -253,28 +256,31 @@ def compute(
     if progress is not None and smoothing != "none":
         cast_progress = lambda fraction: progress(0.9 * fraction)  # noqa: E731
 
-    # Texture smoothing's UV islands depend on the mesh and UVs alone: found while a device
-    # casts, when the host would only wait (for the CPU engine, after its cast).
-    islands, islands_failure = [], []
-
-    def find_islands():
-        try:
-            islands.append(uv_islands_for(v, t, points, smoothing_resolved, int(threads)))
-        except Exception as error:  # raised after the cast: no device failure to fall back from
-            islands_failure.append(error)
+    # Texture smoothing's work on the mesh and UVs alone (UV islands; on a device, the UVs
+    # and islands uploaded): done while a device casts, when the host would only wait (for
+    # the CPU engine, after its cast).
+    prepared, prepare_failure = [], []
 
     def run(engine_name):
-        islands.clear()
-        islands_failure.clear()
+        prepared.clear()
+        prepare_failure.clear()
+
+        def prepare_texture():
+            try:
+                prepared.append(prepare_texture_for(v, t, points, smoothing_resolved,
+                                                    int(threads), engine_name))
+            except Exception as error:  # raised after the cast: not a device failure
+                prepare_failure.append(error)
+
         return _core.compute(
             v, t, int(rays), float(cone_angle), sampling, int(seed), points, int(threads),
             cast_progress, engine_name, accel, int(octree_depth), int(octree_leaf_size),
-            orientation, bvh_quality, find_islands if smoothing == "texture" else None,
+            orientation, bvh_quality, prepare_texture if smoothing == "texture" else None,
         )
 
     out, fallback = _run_with_fallback(run, chosen, engine, "")
-    if islands_failure:
-        raise islands_failure[0]
+    if prepare_failure:
+        raise prepare_failure[0]
     if out["fill"] == "no-value-anywhere":
         warnings.warn(
             "no ray of any point found the other side of the mesh (is it open, flat or inside "
@@ -301,7 +307,7 @@ def compute(
             return run_checked(
                 v, smooth_t, raw, points, smoothing, smoothing_resolved, int(threads),
                 None if progress is None else lambda f: progress(0.9 + 0.1 * f),
-                engine_name, islands[0] if islands else None,
+                engine_name, prepared[0] if prepared else None,
             )
 
         values, smoothing_fallback = _run_with_fallback(

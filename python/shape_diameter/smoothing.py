@@ -231,12 +231,14 @@ def check_smoothing(
     return o
 
 
-def uv_islands_for(v, t, points, o, threads):
-    """Texture smoothing's first step alone (the UV islands), for run_checked(islands=...):
+def prepare_texture_for(v, t, points, o, threads, engine="cpu"):
+    """Texture smoothing's work on the mesh and UVs alone (their UV islands; on an OpenCL
+    engine the UVs and islands uploaded to its device), for run_checked(prepared=...):
     v, t and the options `o` as check_smoothing returns them (with 'uvs')."""
-    return _core.label_uv_islands(
-        v, t, o["uvs"], _weld_argument(o),
-        points == "vertices", threads,
+    width, height = o["texture_size"]
+    return _core.prepare_texture(
+        v, t, o["uvs"], width, height, _weld_argument(o), points == "vertices", threads,
+        engine,
     )
 
 
@@ -245,10 +247,11 @@ def _weld_argument(o):
     return -1.0 if o["weld_tolerance"] is None else o["weld_tolerance"]
 
 
-def run_checked(v, t, values, points, method, o, threads, progress, engine="cpu", islands=None):
+def run_checked(v, t, values, points, method, o, threads, progress, engine="cpu",
+                prepared=None):
     """smooth()'s work on arguments checked already (by smooth(), or by compute() on its own
-    mesh and SDF), with the options `o` as check_smoothing returns them; islands: from
-    uv_islands_for, or None."""
+    mesh and SDF), with the options `o` as check_smoothing returns them; prepared: from
+    prepare_texture_for on this mesh and these options, or None."""
     if method == "none":
         return values.copy()
     if method == "kring":
@@ -265,13 +268,19 @@ def run_checked(v, t, values, points, method, o, threads, progress, engine="cpu"
             v, t, values, points, o["iterations"], o["max_depth"], o["min_points"],
             o["node_size_ratio"], o["branch_on"], threads, progress, engine,
         )
-    width, height = o["texture_size"]
-    out = _core.smooth_texture(
-        v, t, values, points, o["uvs"], width, height, o["radius"], o["bilateral"],
-        o["range_sigma"], o["margin"],
-        _weld_argument(o),
-        o["return_image"], threads, progress, engine, islands,
-    )
+    if prepared is not None:
+        out = _core.smooth_texture_prepared(
+            prepared, values, points, o["radius"], o["bilateral"], o["range_sigma"],
+            o["margin"], o["return_image"], threads, progress, engine,
+        )
+    else:
+        width, height = o["texture_size"]
+        out = _core.smooth_texture(
+            v, t, values, points, o["uvs"], width, height, o["radius"], o["bilateral"],
+            o["range_sigma"], o["margin"],
+            _weld_argument(o),
+            o["return_image"], threads, progress, engine,
+        )
     if o["return_image"]:
         return TextureResult(out["values"], out["image"], out["mask"])
     return out["values"]

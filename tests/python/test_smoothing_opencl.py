@@ -188,37 +188,51 @@ def test_a_failure_finding_uv_islands_is_not_taken_for_a_device_failure(spot, mo
         raise RuntimeError("no islands today")
 
     monkeypatch.setattr(api._core, "compute", counting)
-    monkeypatch.setattr(api, "uv_islands_for", failing)
+    monkeypatch.setattr(api, "prepare_texture_for", failing)
     with pytest.raises(RuntimeError, match="no islands today"):
         sd.compute(v, t, engine="auto", smoothing="texture", uvs=uvs,
                    smoothing_options={"texture_size": 64})  # fmt: skip
     assert len(casts) == 1
 
 
-def test_uv_islands_of_another_mesh_or_other_options_are_refused(spot):
+def test_a_prepared_texture_gives_the_same_values_and_refuses_other_options(spot):
+    # compute() prepares the mesh, UVs and islands while the device casts (and uploads the UVs
+    # and islands on the device's side queue); smoothing them must give smooth()'s values.
     from shape_diameter import _core
 
     v, t, uvs, faces, vertices = spot
     corner_uvs = np.ascontiguousarray(uvs, dtype=np.float32)
     v64, t64 = v.astype(np.float64), t.astype(np.int64)
 
-    def smooth(values, points, islands, weld=1e-6, vertices=v64, triangles=t64):
-        return _core.smooth_texture(vertices, triangles, values, points, corner_uvs, 64, 64, 2.0,
-                                    False, 0.1, 2, weld, False, 0, None, DEVICE, islands)  # fmt: skip
+    def prepare(need_merged, engine=DEVICE, size=64):
+        return _core.prepare_texture(v64, t64, corner_uvs, size, size, 1e-6, need_merged, 0,
+                                     engine)  # fmt: skip
 
-    for_faces = _core.label_uv_islands(v64, t64, corner_uvs, 1e-6, False, 0)
-    for_vertices = _core.label_uv_islands(v64, t64, corner_uvs, 1e-6, True, 0)
-    np.testing.assert_array_equal(smooth(faces, "faces", for_faces)["values"],
-                                  smooth(faces, "faces", None)["values"])  # fmt: skip
-    np.testing.assert_array_equal(smooth(vertices, "vertices", for_vertices)["values"],
-                                  smooth(vertices, "vertices", None)["values"])  # fmt: skip
-    with pytest.raises(ValueError, match="another mesh or other options"):
-        smooth(vertices, "vertices", for_faces)  # not merged for vertex values
-    with pytest.raises(ValueError, match="another mesh or other options"):
-        smooth(faces, "faces", for_faces, weld=1e-3)
-    more = np.vstack([v64, v64[:1]])  # one vertex more: merged[] would be too short
-    with pytest.raises(ValueError, match="another mesh or other options"):
-        smooth(np.append(vertices, vertices[:1]), "vertices", for_vertices, vertices=more)
+    def prepared(values, points, ready, engine=DEVICE):
+        return _core.smooth_texture_prepared(ready, values, points, 2.0, False, 0.1, 2, False,
+                                             0, None, engine)["values"]  # fmt: skip
+
+    def plain(values, points):
+        return _core.smooth_texture(v64, t64, values, points, corner_uvs, 64, 64, 2.0, False,
+                                    0.1, 2, 1e-6, False, 0, None, DEVICE)["values"]  # fmt: skip
+
+    for_faces, for_vertices = prepare(False), prepare(True)
+    np.testing.assert_array_equal(prepared(faces, "faces", for_faces), plain(faces, "faces"))
+    np.testing.assert_array_equal(prepared(vertices, "vertices", for_vertices),
+                                  plain(vertices, "vertices"))  # fmt: skip
+    # Prepared for the CPU (nothing uploaded) and smoothed on the device, or the other way.
+    np.testing.assert_array_equal(prepared(faces, "faces", prepare(False, "cpu")),
+                                  plain(faces, "faces"))  # fmt: skip
+    np.testing.assert_array_equal(prepared(faces, "faces", for_faces, "cpu"),
+                                  plain(faces, "faces"))  # fmt: skip
+    with pytest.raises(ValueError, match="prepared for other options"):
+        prepared(vertices, "vertices", for_faces)  # not merged for vertex values
+    with pytest.raises(ValueError, match="one entry per point"):
+        prepared(faces[:-1], "faces", for_faces)
+    with pytest.raises(ValueError, match="not finite"):
+        bad = corner_uvs.copy()
+        bad[3, 1, 0] = np.nan
+        _core.prepare_texture(v64, t64, bad, 64, 64, 1e-6, False, 0, DEVICE)
 
 
 def test_faces_spanning_many_texels_are_drawn_on_the_cpu():
