@@ -218,8 +218,10 @@ std::shared_ptr<sdf::PreparedTexture> prepare_texture(const Doubles& vertices,
                                                       double weld_tolerance, bool need_merged,
                                                       unsigned threads,
                                                       const std::string& engine) {
+  sdf::Stopwatch clock;
   sdf::Mesh mesh = mesh_from(vertices, triangles, threads);
   require_corner_uvs(uvs, mesh);
+  const double converted = clock.lap();
   sdf::TextureOptions options;
   options.width = width;
   options.height = height;
@@ -230,6 +232,7 @@ std::shared_ptr<sdf::PreparedTexture> prepare_texture(const Doubles& vertices,
   py::gil_scoped_release release;
   auto prepared = std::make_shared<sdf::PreparedTexture>(
       sdf::prepare_texture(std::move(mesh), uvs.data(), options, need_merged));
+  prepared->timings.insert(prepared->timings.begin(), {"mesh", converted});
 #ifdef SDF_HAVE_OPENCL
   if (device) {
     try {
@@ -317,7 +320,10 @@ void bind_smoothing(py::module_& m) {
         py::arg("threads"), py::arg("progress"), py::arg("engine") = "cpu");
   py::class_<sdf::PreparedTexture, std::shared_ptr<sdf::PreparedTexture>>(
       m, "PreparedTexture",
-      "Texture smoothing's mesh, UVs and UV islands made ready (prepare_texture), opaque");
+      "Texture smoothing's mesh, UVs and UV islands made ready (prepare_texture), opaque")
+      .def_property_readonly("timings", [](const sdf::PreparedTexture& p) {
+        return sdf::timings_dict(p.timings);
+      });
   m.def("prepare_texture", &prepare_texture, py::arg("vertices"), py::arg("triangles"),
         py::arg("uvs"), py::arg("width"), py::arg("height"), py::arg("weld_tolerance"),
         py::arg("need_merged"), py::arg("threads"), py::arg("engine") = "cpu");

@@ -413,18 +413,24 @@ double largest_face_texels(const float* uvs, std::size_t m, int width, int heigh
 
 PreparedTexture prepare_texture(Mesh mesh, const float* uvs, const TextureOptions& options,
                                 bool need_merged) {
+  Stopwatch clock;
   check_size(options);
   const std::size_t m = mesh.triangles.size();
   check_face_count(m);
   check_uvs(uvs, m, options.threads);
   PreparedTexture prepared;
-  prepared.uvs.assign(uvs, uvs + 6 * m);
-  prepared.islands =
-      label_uv_islands(mesh, uvs, options.weld_tolerance, need_merged, options.threads);
+  prepared.uvs.resize(6 * m);
+  parallel_for(6 * m, kTexelGrain, options.threads, [&](std::size_t begin, std::size_t end) {
+    std::copy(uvs + begin, uvs + end, prepared.uvs.begin() + begin);
+  });
   prepared.width = options.width;
   prepared.height = options.height;
   prepared.largest_face_texels =
       largest_face_texels(uvs, m, options.width, options.height, options.threads);
+  prepared.timings.emplace_back("checks and copy", clock.lap());
+  prepared.islands =
+      label_uv_islands(mesh, uvs, options.weld_tolerance, need_merged, options.threads);
+  prepared.timings.emplace_back("islands", clock.lap());
   prepared.mesh = std::move(mesh);
   return prepared;
 }

@@ -114,6 +114,7 @@ struct PreparedTexture {
   double largest_face_texels = 0.0;
   // What an engine made of them on a device (opencl_smoothing.h), released with this.
   std::shared_ptr<void> on_device;
+  StageTimings timings;  // seconds per step of the preparation (and of the uploads)
 };
 
 // options' width, height, weld_tolerance and threads are used; need_merged: for vertex

@@ -30,6 +30,7 @@ struct DeviceState {
   // A second queue, for uploads made while a computation holds `mutex` and its queue
   // (opencl_smoothing.h: upload_prepared_texture); made on first use, guarded by side_mutex.
   cl_command_queue side_queue = nullptr;
+  Staging side_staging;  // for the side queue's uploads
   std::mutex side_mutex;
   // Set when an OpenCL call failed while computing (a lost device, a driver reset): the next
   // computation gets a fresh context and queue instead of this one.

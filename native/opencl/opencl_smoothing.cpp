@@ -379,15 +379,21 @@ bool upload_prepared_texture(const Device& device, PreparedTexture& prepared) {
   check(err, "clCreateBuffer");
   uploads->face_island = cl.clCreateBuffer(s.context, CL_MEM_READ_ONLY, island_bytes, nullptr, &err);
   check(err, "clCreateBuffer");
-  if (m > 0) {
-    check(cl.clEnqueueWriteBuffer(s.side_queue, uploads->uvs, CL_TRUE, 0, bytes_of(prepared.uvs),
-                                  prepared.uvs.data(), 0, nullptr, nullptr),
+  Stopwatch clock;
+  auto write = [&](cl_mem destination, const void* data, std::size_t bytes) {
+    if (bytes == 0) return;
+    if (s.stage_uploads && s.side_staging.worth(bytes) &&
+        s.side_staging.write(s.context, s.side_queue, destination, data, bytes))
+      return;
+    check(cl.clEnqueueWriteBuffer(s.side_queue, destination, CL_FALSE, 0, bytes, data, 0, nullptr,
+                                  nullptr),
           "clEnqueueWriteBuffer (side)");
-    check(cl.clEnqueueWriteBuffer(s.side_queue, uploads->face_island, CL_TRUE, 0,
-                                  m * sizeof(std::int32_t), prepared.islands.face_island.data(), 0,
-                                  nullptr, nullptr),
-          "clEnqueueWriteBuffer (side)");
-  }
+  };
+  write(uploads->uvs, prepared.uvs.data(), bytes_of(prepared.uvs));
+  write(uploads->face_island, prepared.islands.face_island.data(), m * sizeof(std::int32_t));
+  // Done before the smoothing's queue reads them (and before `prepared` may change).
+  check(cl.clFinish(s.side_queue), "clFinish (side)");
+  prepared.timings.emplace_back("upload", clock.lap());
   prepared.on_device = std::move(uploads);
   return true;
 }

@@ -35,8 +35,9 @@ class Result:
     """Seconds per stage: prepare (orientation, points, and with threads=0 the copy of the
     mesh the build reads), build, build wait, cast (cast and reduce, fused), fill, normalize,
     total; on OpenCL also setup, upload and download; with smoothing, smooth, and for
-    'texture' 'beside cast' (its UV islands, and on OpenCL the UVs' upload: on OpenCL done
-    during the cast, on the CPU after it). With threads=0 the BVH builds beside 'prepare'
+    'texture' 'beside cast' (the mesh and UVs made ready, their UV islands, and on OpenCL the
+    UVs' upload: on OpenCL done during the cast, on the CPU after it; its steps follow as
+    'beside cast: mesh', 'beside cast: islands', ...). With threads=0 the BVH builds beside 'prepare'
     (and on OpenCL beside the points' upload): 'build' is its own time, 'build wait' what it
     added to the wall time."""
     engine: str = "cpu"
@@ -289,6 +290,8 @@ def compute(
             stacklevel=2,
         )
     timings = dict(out["timings"])
+    if prepared:  # what 'beside cast' spent its time on
+        timings.update({f"beside cast: {k}": x for k, x in prepared[0].timings.items()})
     raw = out["raw"]
     values = raw.copy()
     if smoothing != "none":
