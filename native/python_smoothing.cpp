@@ -229,9 +229,16 @@ std::shared_ptr<sdf::PreparedTexture> prepare_texture(const Doubles& vertices,
   options.threads = threads;
   const auto* device = device_for(engine);
   (void)device;  // unused without OpenCL
+  // The UVs are not copied: the prepared texture keeps their array (the caller's, or the
+  // float32 copy `uvs` converted it to) alive. Made here, under the GIL; let go of under it.
+  std::shared_ptr<const void> keep(new py::object(uvs), [](const void* p) {
+    py::gil_scoped_acquire gil;
+    delete static_cast<const py::object*>(p);
+  });
   py::gil_scoped_release release;
   auto prepared = std::make_shared<sdf::PreparedTexture>(
       sdf::prepare_texture(std::move(mesh), uvs.data(), options, need_merged));
+  prepared->keep = std::move(keep);
   prepared->timings.insert(prepared->timings.begin(), {"mesh", converted});
 #ifdef SDF_HAVE_OPENCL
   if (device) {

@@ -419,15 +419,12 @@ PreparedTexture prepare_texture(Mesh mesh, const float* uvs, const TextureOption
   check_face_count(m);
   check_uvs(uvs, m, options.threads);
   PreparedTexture prepared;
-  prepared.uvs.resize(6 * m);
-  parallel_for(6 * m, kTexelGrain, options.threads, [&](std::size_t begin, std::size_t end) {
-    std::copy(uvs + begin, uvs + end, prepared.uvs.begin() + begin);
-  });
+  prepared.uvs = uvs;
   prepared.width = options.width;
   prepared.height = options.height;
   prepared.largest_face_texels =
       largest_face_texels(uvs, m, options.width, options.height, options.threads);
-  prepared.timings.emplace_back("checks and copy", clock.lap());
+  prepared.timings.emplace_back("checks", clock.lap());
   prepared.islands =
       label_uv_islands(mesh, uvs, options.weld_tolerance, need_merged, options.threads);
   prepared.timings.emplace_back("islands", clock.lap());
@@ -447,7 +444,7 @@ TextureSmoothing smooth_texture(const PreparedTexture& prepared, PointKind kind,
       (kind == PointKind::Vertices && !islands.need_merged))
     throw std::invalid_argument(
         "the texture was prepared for other options (size, weld tolerance, vertex values)");
-  return smooth_checked(prepared.mesh, kind, values, prepared.uvs.data(), options, keep_image,
+  return smooth_checked(prepared.mesh, kind, values, prepared.uvs, options, keep_image,
                         progress, progress_from, progress_to, device, &islands, clock, timings);
 }
 

@@ -362,7 +362,7 @@ TextureSmoothing smooth_texture_opencl(const Device& device, const PreparedTextu
 bool upload_prepared_texture(const Device& device, PreparedTexture& prepared) {
   if (!texture_suits(device, prepared.largest_face_texels)) return false;
   const std::size_t m = prepared.mesh.triangles.size();
-  const std::size_t uv_bytes = std::max<std::size_t>(bytes_of(prepared.uvs), 4);
+  const std::size_t uv_bytes = std::max<std::size_t>(6 * m * sizeof(float), 4);
   const std::size_t island_bytes = std::max<std::size_t>(m * sizeof(std::int32_t), 4);
   if (uv_bytes + island_bytes > device.global_memory / 4) return false;  // leave room to cast
   DeviceState& s = state_of(device);
@@ -389,7 +389,7 @@ bool upload_prepared_texture(const Device& device, PreparedTexture& prepared) {
                                   nullptr),
           "clEnqueueWriteBuffer (side)");
   };
-  write(uploads->uvs, prepared.uvs.data(), bytes_of(prepared.uvs));
+  write(uploads->uvs, prepared.uvs, 6 * m * sizeof(float));
   write(uploads->face_island, prepared.islands.face_island.data(), m * sizeof(std::int32_t));
   // Done before the smoothing's queue reads them (and before `prepared` may change).
   check(cl.clFinish(s.side_queue), "clFinish (side)");

@@ -235,6 +235,29 @@ def test_a_prepared_texture_gives_the_same_values_and_refuses_other_options(spot
         _core.prepare_texture(v64, t64, bad, 64, 64, 1e-6, False, 0, DEVICE)
 
 
+def test_a_prepared_texture_keeps_its_uvs_alive(spot):
+    # It holds the UVs by reference, not by copy: the array (here the float32 copy made of a
+    # float64 one) must outlive the caller's, whatever reuses the freed memory.
+    import gc
+
+    from shape_diameter import _core
+
+    v, t, uvs, faces, _ = spot
+    v64, t64 = v.astype(np.float64), t.astype(np.int64)
+    corner_uvs = np.array(uvs, dtype=np.float64)
+    expected = _core.smooth_texture(v64, t64, faces, "faces", corner_uvs.astype(np.float32), 64,
+                                    64, 2.0, False, 0.1, 2, 1e-6, False, 0, None, DEVICE)  # fmt: skip
+    ready = _core.prepare_texture(v64, t64, corner_uvs, 64, 64, 1e-6, False, 0, DEVICE)
+    del corner_uvs
+    gc.collect()
+    noise = [np.random.default_rng(k).random(uvs.size).astype(np.float32) for k in range(8)]
+    for engine in (DEVICE, "cpu"):
+        out = _core.smooth_texture_prepared(ready, faces, "faces", 2.0, False, 0.1, 2, False, 0,
+                                            None, engine)  # fmt: skip
+        np.testing.assert_array_equal(out["values"], expected["values"])
+    assert len(noise) == 8
+
+
 def test_faces_spanning_many_texels_are_drawn_on_the_cpu():
     """A device walks each face in one work item: a face spanning more than 2^16 texels (two
     triangles over a 512 x 512 texture) leaves the method to the CPU threads, same values."""
