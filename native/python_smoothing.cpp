@@ -157,6 +157,21 @@ py::array_t<float> smooth_projected(const Doubles& vertices, const Int64s& trian
   return out;
 }
 
+sdf::TextureOptions texture_options(int width, int height, double radius, bool bilateral,
+                                    double range_sigma, int margin, double weld_tolerance,
+                                    unsigned threads) {
+  sdf::TextureOptions options;
+  options.width = width;
+  options.height = height;
+  options.radius = radius;
+  options.bilateral = bilateral;
+  options.range_sigma = range_sigma;
+  options.margin = margin;
+  options.weld_tolerance = weld_tolerance;
+  options.threads = threads;
+  return options;
+}
+
 // smooth_texture's results as the Python layer takes them: values, timings, image and mask.
 py::dict texture_result(const sdf::TextureSmoothing& out, bool return_image) {
   py::dict result;
@@ -183,15 +198,8 @@ py::dict smooth_texture(const Doubles& vertices, const Int64s& triangles, const 
   const sdf::PointKind kind = kind_from(points);
   const float* v = point_values(mesh, kind, values);
   require_corner_uvs(uvs, mesh);
-  sdf::TextureOptions options;
-  options.width = width;
-  options.height = height;
-  options.radius = radius;
-  options.bilateral = bilateral;
-  options.range_sigma = range_sigma;
-  options.margin = margin;
-  options.weld_tolerance = weld_tolerance;
-  options.threads = threads;
+  const sdf::TextureOptions options = texture_options(width, height, radius, bilateral,
+                                                      range_sigma, margin, weld_tolerance, threads);
   const auto* device = device_for(engine);
   (void)device;  // unused without OpenCL
   const sdf::ProgressFn report = progress_from(progress);
@@ -258,15 +266,9 @@ py::dict smooth_texture_prepared(const sdf::PreparedTexture& prepared, const Flo
                                  const std::string& engine) {
   const sdf::PointKind kind = kind_from(points);
   const float* v = point_values(prepared.mesh, kind, values);
-  sdf::TextureOptions options;
-  options.width = prepared.width;
-  options.height = prepared.height;
-  options.radius = radius;
-  options.bilateral = bilateral;
-  options.range_sigma = range_sigma;
-  options.margin = margin;
-  options.weld_tolerance = prepared.islands.weld_tolerance;
-  options.threads = threads;
+  const sdf::TextureOptions options =
+      texture_options(prepared.width, prepared.height, radius, bilateral, range_sigma, margin,
+                      prepared.islands.weld_tolerance, threads);
   const auto* device = device_for(engine);
   (void)device;  // unused without OpenCL
   const sdf::ProgressFn report = progress_from(progress);
