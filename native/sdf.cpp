@@ -244,20 +244,28 @@ Output compute(Mesh mesh, const Options& options, const ProgressFn& progress,
   const Plan plan = make_plan(options);
   Output out;
   Stopwatch clock;
+  StageTimings steps;  // of 'prepare'
+  StageClock step(&steps);
   report(progress, 0.0);
   // The BVH builds beside orientation and sampling; the octree, which stores its triangles as
   // they are wound, after them.
   std::unique_ptr<BackgroundBvh> background;
-  if (options.accel == Accel::Bvh)
+  if (options.accel == Accel::Bvh) {
     background = std::make_unique<BackgroundBvh>(mesh, options, plan.fast_build,
                                                  options.threads == 0);
+    step.lap("prepare: start of the build");  // the copy of the mesh it reads
+  }
   // `mesh` is the computation's own copy, wound outward; the caller's mesh is never changed.
   out.orientation = orient(mesh, options.orientation, options.threads);
+  step.lap("prepare: orientation");
   const SamplePoints points = sample_points(mesh, options.points, options.threads);
+  step.lap("prepare: points");
   const std::vector<std::uint32_t> order = spatial_order(points, options.threads);
   out.raw.resize(points.size());
   out.valid_rays.resize(points.size());
+  step.lap("prepare: order");
   out.timings.emplace_back("prepare", clock.lap());
+  out.timings.insert(out.timings.end(), steps.begin(), steps.end());
   report(progress, 0.02);  // a cancel here unwinds through the background build's wait
 
   Structures built;

@@ -32,14 +32,15 @@ class Result:
     valid_rays: np.ndarray
     """int32: rays kept per point; 0 means the point's value was filled from its neighbours."""
     timings: dict = field(default_factory=dict)
-    """Seconds per stage: prepare (orientation, points, and with threads=0 the copy of the
-    mesh the build reads), build, build wait, cast (cast and reduce, fused), fill, normalize,
-    total; on OpenCL also setup, upload and download; with smoothing, smooth, and for
-    'texture' 'beside cast' (the mesh and UVs made ready, their UV islands, and on OpenCL the
-    UVs' upload: on OpenCL done during the cast, on the CPU after it; its steps follow as
-    'beside cast: mesh', 'beside cast: islands', ...). With threads=0 the BVH builds beside 'prepare'
-    (and on OpenCL beside the points' upload): 'build' is its own time, 'build wait' what it
-    added to the wall time."""
+    """Seconds per stage: prepare (orientation, points, their Morton order, and with
+    threads=0 the copy of the mesh the build reads; its steps follow as 'prepare: ...'),
+    build, build wait, cast (cast and reduce, fused), fill, normalize, total; on OpenCL also
+    setup, upload and download; with smoothing, smooth, and for 'texture' 'beside cast' (the
+    mesh and UVs made ready, their UV islands, and on OpenCL the UVs' upload: on OpenCL done
+    during the cast, on the CPU after it; its steps follow as 'beside cast: mesh', 'beside
+    cast: islands', ...). With threads=0 the BVH builds beside 'prepare' (and on OpenCL
+    beside the points' upload): 'build' is its own time, 'build wait' what it added to the
+    wall time."""
     engine: str = "cpu"
     """What ran, e.g. 'cpu (2 threads)'."""
     points: str = "faces"
