@@ -12,6 +12,7 @@
 #include <utility>
 
 #include "parallel.h"
+#include "prefetch.h"
 #include "uninitialized_vector.h"
 
 namespace sdf {
@@ -34,13 +35,7 @@ class ConcurrentUnionFind {
         parent_[i].store(parent[i], std::memory_order_relaxed);
     });
   }
-  void prefetch_parent(std::uint32_t x) const {
-#if defined(__GNUC__) || defined(__clang__)
-    __builtin_prefetch(&parent_[x]);
-#else
-    (void)x;
-#endif
-  }
+  void prefetch_parent(std::uint32_t x) const { prefetch(&parent_[x]); }
   std::uint32_t find(std::uint32_t x) const {
     for (;;) {
       const std::uint32_t p = parent_[x].load(std::memory_order_relaxed);

@@ -9,6 +9,7 @@
 
 #include <glm/glm.hpp>
 
+#include "prefetch.h"
 #include "uninitialized_vector.h"
 
 namespace sdf {
@@ -34,16 +35,11 @@ Mesh make_mesh(const double* vertices, std::size_t vertex_count, const std::int6
 // cache misses by itself: loops over faces call this some 16 faces ahead (measured 1.5x
 // faster on 1.5M faces).
 inline void prefetch_corners(const Mesh& mesh, std::size_t face) {
-#if defined(__GNUC__) || defined(__clang__)
   if (face >= mesh.triangles.size()) return;
   const glm::uvec3 t = mesh.triangles[face];
-  __builtin_prefetch(&mesh.vertices[t.x]);
-  __builtin_prefetch(&mesh.vertices[t.y]);
-  __builtin_prefetch(&mesh.vertices[t.z]);
-#else
-  (void)mesh;
-  (void)face;
-#endif
+  prefetch(&mesh.vertices[t.x]);
+  prefetch(&mesh.vertices[t.y]);
+  prefetch(&mesh.vertices[t.z]);
 }
 
 // How far ahead prefetch_corners looks (8 to 32 measured alike).

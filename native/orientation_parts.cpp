@@ -7,6 +7,7 @@
 
 #include "concurrent_union_find.h"
 #include "parallel.h"
+#include "prefetch.h"
 
 namespace sdf {
 
@@ -20,16 +21,6 @@ std::uint32_t bits_of(float x) {
   std::uint32_t b;
   std::memcpy(&b, &x, sizeof b);
   return b;
-}
-
-// A hint to start loading what a later step of the loop reads at a scattered address, so that
-// a batch of such loads overlaps instead of waiting one after another.
-inline void prefetch(const void* p) {
-#if defined(__GNUC__) || defined(__clang__)
-  __builtin_prefetch(p);
-#else
-  (void)p;
-#endif
 }
 
 // Items handled per batch of prefetches.

@@ -8,6 +8,7 @@
 #include <string>
 
 #include "morton.h"
+#include "prefetch.h"
 #include "radix_sort.h"
 #include "smoothing_projected_avx2.h"
 #include "uninitialized_vector.h"
@@ -50,6 +51,7 @@ struct ArrayPoints {
   glm::vec3 point(std::size_t i) const { return points[i]; }
   float value(std::size_t i) const { return values[i]; }
   bool member(std::size_t) const { return true; }
+  void prefetch(std::size_t i) const { sdf::prefetch(values + i); }
 };
 
 struct PackedPoints {
@@ -60,6 +62,7 @@ struct PackedPoints {
   glm::vec3 point(std::size_t i) const { return glm::vec3(points[i]); }
   float value(std::size_t i) const { return points[i].w; }
   bool member(std::size_t i) const { return members[i] != 0; }
+  void prefetch(std::size_t i) const { sdf::prefetch(points + i); }
 };
 
 // The root cube and each point's Morton key at the deepest level (3 bits a level).
@@ -171,7 +174,14 @@ RunValues run_values(const Points& points, const MortonOrder& order, bool by_min
     runs.block_min.resize((m + kMinBlock - 1) / kMinBlock);
   }
   parallel_for(m, kGrain, threads, [&](std::size_t begin, std::size_t end) {
-    for (std::size_t k = begin; k < end; ++k) runs.prefix[k + 1] = points.value(order.index(k));
+    // Reads in Morton order from points in mesh order: each a cache miss once the points
+    // outgrow the last-level cache (1.5M points: 90 ms on one thread of the H100 machine's
+    // Xeon, 7 on a 128 MiB-L3 EPYC), so the reads are asked for ahead.
+    constexpr std::size_t kAhead = 32;
+    for (std::size_t k = begin; k < end; ++k) {
+      if (k + kAhead < end) points.prefetch(order.index(k + kAhead));
+      runs.prefix[k + 1] = points.value(order.index(k));
+    }
     if (!by_min) return;
     for (std::size_t block = begin; block < end; block += kMinBlock) {
       float low = std::numeric_limits<float>::infinity();
