@@ -47,6 +47,11 @@ def subdivide(vertices, triangles):
     return new_vertices, new_triangles
 
 
+# The names benchmark_meshes() gives, smallest first.
+NAMES = ("ChineseDragon-10kv", "armadillo", "bunny00", "armadillo-x4", "armadillo-x16",
+         "bunny00-x16")
+
+
 def benchmark_meshes(largest=True):
     """[(name, vertices, triangles)]: three real meshes and subdivisions up to 1.2M faces."""
     CACHE.mkdir(parents=True, exist_ok=True)

@@ -15,6 +15,8 @@ sys.path.insert(0, os.path.dirname(__file__))
 import shape_diameter as sd  # noqa: E402
 from meshes import benchmark_meshes  # noqa: E402
 
+if any(a in ("-h", "--help") for a in sys.argv[1:]):
+    sys.exit(print(__doc__))
 engine = sys.argv[1] if len(sys.argv) > 1 else "opencl:0"
 names = (sys.argv[2] if len(sys.argv) > 2 else "armadillo,bunny00,armadillo-x4,armadillo-x16")
 kernels = (sys.argv[3] if len(sys.argv) > 3 else "bvh4_per_point,bvh8_per_point").split(",")

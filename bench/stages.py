@@ -20,7 +20,7 @@ import time
 
 sys.path.insert(0, os.path.dirname(__file__))
 import alternate_builds  # noqa: E402
-from meshes import benchmark_meshes  # noqa: E402
+from meshes import NAMES, benchmark_meshes  # noqa: E402
 
 SETTINGS = (("auto", "auto"), ("auto", "high"), ("as_is", "auto"), ("as_is", "high"))
 
@@ -76,12 +76,22 @@ def main():
                                      formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("engine", nargs="?", default="opencl")
     parser.add_argument("meshes", nargs="?", default="armadillo-x16,bunny00-x16",
-                        type=lambda s: s.split(","))
+                        type=lambda s: s.split(","),
+                        help=f"comma-separated, of: {', '.join(NAMES)}")
     parser.add_argument("--rays", type=int, default=30)
     parser.add_argument("--repeat", type=int, default=3)
     parser.add_argument("--json", action="store_true", help="one JSON line per row")
     alternate_builds.add_arguments(parser, rounds=2)
     args = parser.parse_args()
+    unknown = [name for name in args.meshes if name not in NAMES]
+    if unknown:
+        parser.error(f"unknown mesh {', '.join(unknown)}; the meshes: {', '.join(NAMES)}")
+    import shape_diameter as sd
+
+    if args.engine != "auto" and args.engine not in [e["name"] for e in sd.engines()] and \
+            not args.engine.startswith("opencl"):
+        parser.error(f"unknown engine {args.engine!r}; here: "
+                     f"{', '.join(e['name'] for e in sd.engines())}")
     return compare(args) if args.compare else measure(args)
 
 

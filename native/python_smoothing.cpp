@@ -177,6 +177,7 @@ py::dict texture_result(const sdf::TextureSmoothing& out, bool return_image) {
   py::dict result;
   result["values"] = to_array(out.values);
   result["timings"] = sdf::timings_dict(out.timings);
+  result["faces_outside"] = out.faces_outside;
   if (return_image) {
     py::array_t<float> image({py::ssize_t(out.height), py::ssize_t(out.width)});
     py::array_t<bool> mask({py::ssize_t(out.height), py::ssize_t(out.width)});

@@ -241,9 +241,12 @@ Output compute(Mesh mesh, const Options& options, const ProgressFn& progress,
 #ifndef SDF_HAVE_OPENCL
   if (!cpu) throw std::invalid_argument("this build of shape_diameter has no OpenCL engine");
 #endif
-  const Plan plan = make_plan(options);
   Output out;
   Stopwatch clock;
+  // The first OpenCL run of a process loads the drivers and lists their devices (50-130 ms
+  // on the development machine's PoCL).
+  const Plan plan = make_plan(options);
+  if (!cpu) out.timings.emplace_back("devices", clock.lap());
   StageTimings steps;  // of 'prepare'
   StageClock step(&steps);
   report(progress, 0.0);

@@ -27,22 +27,38 @@ constexpr int kMaxSize = 16384;
 constexpr std::size_t kFaceGrain = 1 << 12;
 constexpr std::size_t kTexelGrain = 1 << 16;
 
-// Throws naming the first UV that is not finite.
-void check_uvs(const float* uvs, std::size_t m, unsigned threads) {
-  const std::size_t floats = 6 * m;
-  const std::size_t uv_chunks = (floats + kTexelGrain - 1) / kTexelGrain;
-  std::vector<std::size_t> uv_bad(uv_chunks, floats);
-  parallel_for(floats, kTexelGrain, threads, [&](std::size_t begin, std::size_t end) {
-    for (std::size_t i = begin; i < end; ++i)
-      if (!std::isfinite(uvs[i])) {
-        uv_bad[begin / kTexelGrain] = i;
-        return;
+// Throws naming the first UV that is not finite; returns how many faces have UVs wholly
+// outside the [0, 1] square (UDIM tiles, offset layouts): no texel is theirs.
+std::size_t check_uvs(const float* uvs, std::size_t m, unsigned threads) {
+  constexpr std::size_t kGrain = kTexelGrain / 6;
+  const std::size_t chunks = (m + kGrain - 1) / kGrain;
+  std::vector<std::size_t> first_bad(chunks, 6 * m), outside(chunks, 0);
+  parallel_for(m, kGrain, threads, [&](std::size_t begin, std::size_t end) {
+    std::size_t away = 0;
+    for (std::size_t f = begin; f < end; ++f) {
+      const float* uv = uvs + 6 * f;
+      float lo[2] = {uv[0], uv[1]}, hi[2] = {uv[0], uv[1]};
+      for (int i = 0; i < 6; ++i) {
+        if (!std::isfinite(uv[i])) {
+          first_bad[begin / kGrain] = 6 * f + i;
+          return;
+        }
+        lo[i & 1] = std::min(lo[i & 1], uv[i]);
+        hi[i & 1] = std::max(hi[i & 1], uv[i]);
       }
+      away += hi[0] < 0.0f || lo[0] > 1.0f || hi[1] < 0.0f || lo[1] > 1.0f;
+    }
+    outside[begin / kGrain] = away;
   });
-  for (std::size_t c = 0; c < uv_chunks; ++c)
-    if (uv_bad[c] < floats)
-      throw std::invalid_argument("the UV of face " + std::to_string(uv_bad[c] / 6) + " corner " +
-                                  std::to_string((uv_bad[c] / 2) % 3) + " is not finite");
+  std::size_t faces_outside = 0;
+  for (std::size_t c = 0; c < chunks; ++c) {
+    if (first_bad[c] < 6 * m)
+      throw std::invalid_argument("the UV of face " + std::to_string(first_bad[c] / 6) +
+                                  " corner " + std::to_string((first_bad[c] / 2) % 3) +
+                                  " is not finite");
+    faces_outside += outside[c];
+  }
+  return faces_outside;
 }
 
 void check_size(const TextureOptions& options) {
@@ -385,9 +401,12 @@ TextureSmoothing smooth_texture(const Mesh& mesh, PointKind kind, const float* v
   StageTimings timings;
   check_size(options);
   check_face_count(mesh.triangles.size());
-  check_uvs(uvs, mesh.triangles.size(), options.threads);
-  return smooth_checked(mesh, kind, values, uvs, options, keep_image, progress, progress_from,
-                        progress_to, device, nullptr, clock, timings);
+  const std::size_t outside = check_uvs(uvs, mesh.triangles.size(), options.threads);
+  TextureSmoothing out = smooth_checked(mesh, kind, values, uvs, options, keep_image, progress,
+                                        progress_from, progress_to, device, nullptr, clock,
+                                        timings);
+  out.faces_outside = outside;
+  return out;
 }
 
 double largest_face_texels(const float* uvs, std::size_t m, int width, int height,
@@ -417,8 +436,9 @@ PreparedTexture prepare_texture(Mesh mesh, const float* uvs, const TextureOption
   check_size(options);
   const std::size_t m = mesh.triangles.size();
   check_face_count(m);
-  check_uvs(uvs, m, options.threads);
+  const std::size_t outside = check_uvs(uvs, m, options.threads);
   PreparedTexture prepared;
+  prepared.faces_outside = outside;
   prepared.uvs = uvs;
   prepared.width = options.width;
   prepared.height = options.height;
@@ -444,8 +464,11 @@ TextureSmoothing smooth_texture(const PreparedTexture& prepared, PointKind kind,
       (kind == PointKind::Vertices && !islands.need_merged))
     throw std::invalid_argument(
         "the texture was prepared for other options (size, weld tolerance, vertex values)");
-  return smooth_checked(prepared.mesh, kind, values, prepared.uvs, options, keep_image,
-                        progress, progress_from, progress_to, device, &islands, clock, timings);
+  TextureSmoothing out = smooth_checked(prepared.mesh, kind, values, prepared.uvs, options,
+                                        keep_image, progress, progress_from, progress_to, device,
+                                        &islands, clock, timings);
+  out.faces_outside = prepared.faces_outside;
+  return out;
 }
 
 }  // namespace sdf

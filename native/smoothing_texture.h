@@ -63,6 +63,9 @@ struct TextureSmoothing {
   // on a device, its own stages in place of the middle three): bench/smoothing_stages.py
   // prints them.
   StageTimings timings;
+  // Faces whose UVs lie wholly outside the [0, 1] square (UDIM tiles, offset layouts): they
+  // cover no texel and keep their values.
+  std::size_t faces_outside = 0;
 };
 
 // Steps 3 and 4 (dilate, blur) of one image, as smooth_texture runs them.
@@ -114,6 +117,7 @@ struct PreparedTexture {
   UvIslands islands;
   int width = 0, height = 0;
   double largest_face_texels = 0.0;
+  std::size_t faces_outside = 0;  // as TextureSmoothing::faces_outside
   // What an engine made of them on a device (opencl_smoothing.h), released with this.
   std::shared_ptr<void> on_device;
   StageTimings timings;  // seconds per step of the preparation (and of the uploads)

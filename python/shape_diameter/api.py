@@ -32,7 +32,8 @@ class Result:
     valid_rays: np.ndarray
     """int32: rays kept per point; 0 means the point's value was filled from its neighbours."""
     timings: dict = field(default_factory=dict)
-    """Seconds per stage: prepare (orientation, points, their Morton order, and with
+    """Seconds per stage: devices (finding OpenCL devices; the first run of a process loads
+    the drivers), prepare (orientation, points, their Morton order, and with
     threads=0 the copy of the mesh the build reads; its steps follow as 'prepare: ...'),
     build, build wait, cast (cast and reduce, fused), fill, normalize, total; on OpenCL also
     setup, upload and download; with smoothing, smooth, and for 'texture' 'beside cast' (the
@@ -252,7 +253,9 @@ def compute(
                                          face_count=len(t), vertex_count=len(v), triangles=t)
     if smoothing_options and smoothing_options.get("return_image"):
         raise ValueError("return_image is an option of shape_diameter.smooth(), not compute()")
+    clock = time.perf_counter()
     chosen = _resolve_engine(engine)
+    choosing = time.perf_counter() - clock  # 'auto' lists the devices (drivers load once)
     # With smoothing, casting reports [0, 0.9] of the progress and smoothing the rest.
     cast_progress = progress
     if progress is not None and smoothing != "none":
@@ -291,6 +294,8 @@ def compute(
             stacklevel=2,
         )
     timings = dict(out["timings"])
+    if engine == "auto":
+        timings["devices"] = timings.get("devices", 0.0) + choosing
     if prepared:  # what 'beside cast' spent its time on
         timings.update({f"beside cast: {k}": x for k, x in prepared[0].timings.items()})
     raw = out["raw"]

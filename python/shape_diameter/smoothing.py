@@ -281,6 +281,14 @@ def run_checked(v, t, values, points, method, o, threads, progress, engine="cpu"
             _weld_argument(o),
             o["return_image"], threads, progress, engine,
         )
+    if out["faces_outside"]:
+        warnings.warn(
+            f"{out['faces_outside']} of {len(t)} faces have UVs wholly outside the [0, 1] square (UDIM tiles or an offset "
+            "layout): texture smoothing does not reach them and they keep their values; "
+            "move each tile's UVs into the square to smooth them",
+            RuntimeWarning,
+            stacklevel=3,
+        )
     if o["return_image"]:
         return TextureResult(out["values"], out["image"], out["mask"])
     return out["values"]

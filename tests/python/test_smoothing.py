@@ -374,6 +374,34 @@ def test_texture_per_vertex_uvs_equal_per_corner_uvs():
     )
 
 
+@pytest.mark.parametrize("engine", ["cpu", "auto"])
+def test_texture_warns_about_faces_outside_the_uv_square(spot, engine):
+    # A UDIM layout (tile 1002: u in [1, 2]) or an offset one reaches no texel of the [0, 1]
+    # image: those faces keep their values, and a warning says how many and why.
+    import warnings
+
+    v, t, uvs, faces, _ = spot
+    corner_uvs = np.asarray(uvs[t] if uvs.shape == (len(v), 2) else uvs, dtype=np.float32)
+
+    def outside(shifted):
+        lo, hi = shifted.min(axis=1), shifted.max(axis=1)
+        return (hi[:, 0] < 0) | (lo[:, 0] > 1) | (hi[:, 1] < 0) | (lo[:, 1] > 1)
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # none inside the square
+        smooth(v, t, faces, "texture", uvs=corner_uvs, engine=engine)
+    for shift in ([1.0, 0.0], [-0.5, -0.5]):
+        shifted = corner_uvs + np.float32(shift)
+        away = outside(shifted)
+        assert 0 < away.sum() < len(t) + 1
+        with pytest.warns(RuntimeWarning, match=rf"^{away.sum()} of {len(t)} faces have UVs "
+                                                r"wholly outside the \[0, 1\] square"):  # fmt: skip
+            out = smooth(v, t, faces, "texture", uvs=shifted, engine=engine)
+        np.testing.assert_array_equal(out[away], faces[away])
+    with pytest.warns(RuntimeWarning, match=rf"^{away.sum()} of {len(t)} faces"):
+        shape_diameter.compute(v, t, rays=8, smoothing="texture", uvs=shifted, engine=engine)
+
+
 def test_texture_needs_uvs(spot):
     v, t, _, faces, _ = spot
     with pytest.raises(ValueError, match="texture.*needs UVs"):
