@@ -88,6 +88,7 @@ def test_texture_default_size_agrees_with_cpu(spot):
 
 
 @pytest.mark.parametrize("points", ["faces", "vertices"])
+@pytest.mark.filterwarnings("ignore:.*wholly outside the \\[0, 1\\] square:RuntimeWarning")
 def test_texture_drawing_on_the_device_is_the_cpus_to_the_bit(points):
     """Overlapping, mirrored, sliver and out-of-image UV triangles: which face a texel takes
     (device: two passes of 32-bit maxima; CPU: one of 64-bit) and what it reads back are the
