@@ -252,7 +252,7 @@ std::shared_ptr<sdf::PreparedTexture> prepare_texture(const Doubles& vertices,
 #ifdef SDF_HAVE_OPENCL
   if (device) {
     try {
-      sdf::cl::upload_prepared_texture(*device, *prepared);
+      sdf::cl::upload_prepared_texture(*device, *prepared, threads);
     } catch (const sdf::cl::Error&) {
     }
   }

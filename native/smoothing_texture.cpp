@@ -355,6 +355,7 @@ TextureSmoothing smooth_checked(const Mesh& mesh, PointKind kind, const float* v
     job.uvs = uvs;
     job.face_island = islands.face_island.data();
     job.filter = f;
+    job.threads = threads;
     device(job, !faces || keep_image, out.values, island, blurred, timings);
     report(0.85);
     clock.lap();

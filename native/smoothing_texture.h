@@ -85,6 +85,7 @@ struct TextureJob {
   const float* uvs = nullptr;          // 6 floats a face
   const std::int32_t* face_island = nullptr;
   TextureFilter filter;                // sizes, dilation, blur, the values' range
+  unsigned threads = 0;                // host threads the device's uploads may copy on
 };
 // Draws, dilates, blurs and, for face values, reads back into `values` (which comes in
 // holding the input), with the CPU's code (kernels/sdf_smooth_texture.h) and bits. Where

@@ -45,7 +45,7 @@ DeviceState& state_of(const Device& device) {
 
 void write_buffer(DeviceState& s, cl_mem destination, const void* data, std::size_t bytes) {
   if (s.stage_uploads && s.staging.worth(bytes) &&
-      s.staging.write(s.context, s.queue, destination, data, bytes))
+      s.staging.write(s.context, s.queue, destination, data, bytes, s.copy_threads))
     return;
   check(api()->clEnqueueWriteBuffer(s.queue, destination, CL_FALSE, 0, bytes, data, 0, nullptr,
                                     nullptr),

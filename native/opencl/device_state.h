@@ -26,6 +26,7 @@ struct DeviceState {
   // Large uploads to a GPU go through it (write_buffer); CPU devices read host memory.
   bool stage_uploads = false;
   Staging staging;
+  unsigned copy_threads = 0;  // host threads its copies may use: the computation's `threads`
   std::mutex mutex;  // one computation at a time per device; guards all of the above
   // A second queue, for uploads made while a computation holds `mutex` and its queue
   // (opencl_smoothing.h: upload_prepared_texture); made on first use, guarded by side_mutex.

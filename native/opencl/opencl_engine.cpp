@@ -120,6 +120,7 @@ class SharedScene {
 
 void run_device(const Device& device, SharedScene& shared_scene, const SamplePoints& points,
                 const std::vector<std::uint32_t>& order, const Cone& cone, float min_closeness,
+                unsigned host_threads,
                 UninitializedVector<float>& raw_ordered,
                 UninitializedVector<std::int32_t>& valid_ordered,
                 WorkQueue& work, std::mutex& done_mutex, std::condition_variable& done_changed,
@@ -127,6 +128,7 @@ void run_device(const Device& device, SharedScene& shared_scene, const SamplePoi
   const Api& cl = *api();
   DeviceState& s = state_of(device);
   std::lock_guard<std::mutex> device_lock(s.mutex);
+  s.copy_threads = host_threads;
   const std::size_t n = points.size();
   const std::string options = build_options(device, cone.rays);
 
@@ -342,8 +344,8 @@ CastTimings cast_opencl(const std::vector<const Device*>& devices, const SceneSo
   for (std::size_t i = 0; i < devices.size(); ++i) {
     threads.emplace_back([&, i] {
       try {
-        run_device(*devices[i], shared_scene, points, order, cone, min_closeness, raw_ordered,
-                   valid_ordered, work, done_mutex, done_changed, results[i]);
+        run_device(*devices[i], shared_scene, points, order, cone, min_closeness, host_threads,
+                   raw_ordered, valid_ordered, work, done_mutex, done_changed, results[i]);
       } catch (const Error&) {
         // An OpenCL call failed: the device may be lost, so the next run starts afresh.
         results[i].failure = std::current_exception();

@@ -106,6 +106,7 @@ void smooth_projected_opencl(const Device& device, const Mesh& mesh, PointKind k
     check_fits(device, {bytes_of(nodes), point_bytes, next_bytes});
     std::lock_guard<std::mutex> lock(s.mutex);
     const FinishOnUnwind finish_on_unwind(s.queue);
+    s.copy_threads = options.threads;
     cl_program program = smoothing_program(device, s);
     if (!points_buffer) {
       points_buffer = std::make_unique<Buffer>(s, point_bytes, nullptr);
@@ -217,19 +218,12 @@ struct TextureUploads {
   }
 };
 
-// The uploads of `prepared` that `s` can read, or null (none made, or made for another
-// device or a state since replaced).
-const TextureUploads* uploads_for(const PreparedTexture& prepared, DeviceState& s) {
-  const auto* uploads = static_cast<const TextureUploads*>(prepared.on_device.get());
-  return uploads && uploads->state == &s && !s.broken ? uploads : nullptr;
-}
-
-// Steps 2 to 5 on `device` (TextureDeviceFn); the UVs and face islands from `uploads` where
-// given, else uploaded here.
-TextureDeviceFn texture_on_device(const Device& device, const TextureUploads* uploads) {
-  return [&device, uploads](const TextureJob& job, bool images, std::vector<float>& out,
-                            std::vector<std::int32_t>& island, std::vector<float>& blurred,
-                            StageTimings& timings) {
+// Steps 2 to 5 on `device` (TextureDeviceFn); the UVs and face islands from `prepared`'s
+// uploads where it has some that this device's state can read, else uploaded here.
+TextureDeviceFn texture_on_device(const Device& device, const PreparedTexture* prepared) {
+  return [&device, prepared](const TextureJob& job, bool images, std::vector<float>& out,
+                             std::vector<std::int32_t>& island, std::vector<float>& blurred,
+                             StageTimings& timings) {
     DeviceState& s = state_of(device);
     constexpr std::size_t kFaceChunk = std::size_t{1} << 20;  // faces per launch
     Stopwatch clock;
@@ -250,6 +244,11 @@ TextureDeviceFn texture_on_device(const Device& device, const TextureUploads* up
     std::lock_guard<std::mutex> lock(s.mutex);
     const FinishOnUnwind finish_on_unwind(s.queue);
     cl_program program = smoothing_program(device, s);
+    // Checked under the lock: made for this state, which no failed run has replaced since.
+    const auto* uploads =
+        prepared ? static_cast<const TextureUploads*>(prepared->on_device.get()) : nullptr;
+    if (uploads && (uploads->state != &s || s.broken)) uploads = nullptr;
+    s.copy_threads = job.threads;
     // Non-blocking uploads: the host arrays stay unchanged until the blocking reads below.
     std::unique_ptr<Buffer> own_uvs, own_islands;
     if (!uploads) {
@@ -354,12 +353,12 @@ TextureSmoothing smooth_texture_opencl(const Device& device, const PreparedTextu
                                        const ProgressFn& progress) {
   TextureDeviceFn on_device;
   if (texture_suits(device, prepared.largest_face_texels))
-    on_device = texture_on_device(device, uploads_for(prepared, state_of(device)));
+    on_device = texture_on_device(device, &prepared);
   return smooth_texture(prepared, kind, values, options, keep_image, progress, 0.0, 1.0,
                         on_device);
 }
 
-bool upload_prepared_texture(const Device& device, PreparedTexture& prepared) {
+bool upload_prepared_texture(const Device& device, PreparedTexture& prepared, unsigned threads) {
   if (!texture_suits(device, prepared.largest_face_texels)) return false;
   const std::size_t m = prepared.mesh.triangles.size();
   const std::size_t uv_bytes = std::max<std::size_t>(6 * m * sizeof(float), 4);
@@ -375,6 +374,8 @@ bool upload_prepared_texture(const Device& device, PreparedTexture& prepared) {
     s.side_queue = cl.clCreateCommandQueue(s.context, device.id, 0, &err);
     check(err, "clCreateCommandQueue (side)");
   }
+  // A failed call must not leave a write still reading the caller's arrays.
+  const FinishOnUnwind finish_on_unwind(s.side_queue);
   uploads->uvs = cl.clCreateBuffer(s.context, CL_MEM_READ_ONLY, uv_bytes, nullptr, &err);
   check(err, "clCreateBuffer");
   uploads->face_island = cl.clCreateBuffer(s.context, CL_MEM_READ_ONLY, island_bytes, nullptr, &err);
@@ -383,7 +384,7 @@ bool upload_prepared_texture(const Device& device, PreparedTexture& prepared) {
   auto write = [&](cl_mem destination, const void* data, std::size_t bytes) {
     if (bytes == 0) return;
     if (s.stage_uploads && s.side_staging.worth(bytes) &&
-        s.side_staging.write(s.context, s.side_queue, destination, data, bytes))
+        s.side_staging.write(s.context, s.side_queue, destination, data, bytes, threads))
       return;
     check(cl.clEnqueueWriteBuffer(s.side_queue, destination, CL_FALSE, 0, bytes, data, 0, nullptr,
                                   nullptr),

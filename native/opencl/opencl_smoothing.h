@@ -39,7 +39,9 @@ TextureSmoothing smooth_texture_opencl(const Device& device, const PreparedTextu
 // the one that casts (compute() calls it while the device casts), and keeps them in
 // prepared.on_device. Returns false, doing nothing, where texture smoothing would not run on
 // the device (no double precision, faces spanning more than 2^16 texels) or they would take
-// more than a quarter of its memory. Throws Error for OpenCL failures.
-bool upload_prepared_texture(const Device& device, PreparedTexture& prepared);
+// more than a quarter of its memory. threads: the host threads that may copy into pinned
+// memory (0: every core, at most 8). Throws Error for OpenCL failures.
+bool upload_prepared_texture(const Device& device, PreparedTexture& prepared,
+                             unsigned threads = 0);
 
 }  // namespace sdf::cl

@@ -10,8 +10,8 @@ namespace sdf::cl {
 
 namespace {
 
-// Threads that copy into a chunk: memory-bound, so more than 8 only contend (16 threads were
-// slower than 4 in the H100 measurement above).
+// Threads that copy into a chunk, at most: memory-bound, so more than 8 only contend (16
+// threads were slower than 4 in the H100 measurement above).
 constexpr unsigned kCopyThreads = 8;
 constexpr std::size_t kCopyGrain = std::size_t{1} << 20;
 
@@ -46,16 +46,17 @@ void Staging::wait(int slot) {
 }
 
 bool Staging::write(cl_context context, cl_command_queue queue, cl_mem destination,
-                    const void* data, std::size_t bytes) {
+                    const void* data, std::size_t bytes, unsigned threads) {
   if (!ready(context, queue)) return false;
   const Api& cl = *api();
   const char* from = static_cast<const char*>(data);
-  int slot = 0;
-  for (std::size_t offset = 0; offset < bytes; offset += chunk_bytes_, slot ^= 1) {
+  const unsigned copiers = std::min(kCopyThreads, resolve_threads(threads));
+  for (std::size_t offset = 0; offset < bytes; offset += chunk_bytes_, next_ ^= 1) {
+    const int slot = next_;
     const std::size_t size = std::min(chunk_bytes_, bytes - offset);
     wait(slot);  // its last DMA must be done before the chunk is overwritten
     char* to = static_cast<char*>(host_[slot]);
-    parallel_for(size, kCopyGrain, kCopyThreads, [&](std::size_t begin, std::size_t end) {
+    parallel_for(size, kCopyGrain, copiers, [&](std::size_t begin, std::size_t end) {
       std::memcpy(to + begin, from + offset + begin, end - begin);
     });
     check(cl.clEnqueueWriteBuffer(queue, destination, CL_FALSE, offset, size, to, 0, nullptr,

@@ -27,8 +27,9 @@ class Staging {
   // returns once `data` may change (the DMA of the last chunk may still run: the queue's
   // later commands wait for it). Returns false, having written nothing, when pinned memory
   // cannot be had: the caller then writes directly. Throws Error when an OpenCL call fails.
+  // threads: the host threads that copy (0: every core; at most 8 either way).
   bool write(cl_context context, cl_command_queue queue, cl_mem destination, const void* data,
-             std::size_t bytes);
+             std::size_t bytes, unsigned threads);
 
   // Whether an upload of `bytes` is worth staging: it costs a copy, and below 1 MiB (or one
   // chunk, if smaller) a direct write is as fast.
@@ -51,6 +52,7 @@ class Staging {
   cl_mem chunk_[2] = {nullptr, nullptr};
   void* host_[2] = {nullptr, nullptr};
   cl_event pending_[2] = {nullptr, nullptr};  // the last DMA out of each chunk
+  int next_ = 0;  // the chunk to fill next: the one whose DMA was queued longest ago
 };
 
 }  // namespace sdf::cl

@@ -303,10 +303,11 @@ def compute(
     if smoothing != "none":
         clock = time.perf_counter()
         smooth_engine = "cpu" if fallback else chosen
-        # Projected smoothing moves points along their inward axes: those of the mesh as the
-        # cast oriented it (the other methods do not depend on the winding).
+        # Projected smoothing moves points along their inward axes, and the k-ring's corner
+        # weights compare face normals: both on the mesh as the cast oriented it. (Texture
+        # smoothing does not depend on the winding, and its UVs follow the caller's corners.)
         smooth_t = t
-        if smoothing == "projected" and out["reversed"] is not None:
+        if smoothing in ("projected", "kring") and out["reversed"] is not None:
             smooth_t = t.copy()
             smooth_t[out["reversed"]] = smooth_t[out["reversed"]][:, [0, 2, 1]]
 

@@ -299,11 +299,16 @@ def test_uploads_staged_through_pinned_chunks_give_the_same_bits():
         "cpu = sd.compute(v, t, engine='cpu')\n"
         "cl = sd.compute(v, t, engine=engine)\n"
         "smoothed = sd.smooth(v, t, cpu.raw, 'projected', engine=engine)\n"
+        "uvs = np.stack([v[:, 0] - v[:, 0].min(), v[:, 1] - v[:, 1].min()], axis=1)\n"
+        "uvs = uvs / uvs.max()\n"
+        "options = {'texture_size': 128}\n"
+        "texture = [sd.compute(v, t, engine=e, smoothing='texture', uvs=uvs,"
+        " smoothing_options=options).values for e in ('cpu', engine)]\n"
         "print(json.dumps({'cast': bool(np.array_equal(cpu.raw, cl.raw)),"
-        " 'smoothed': smoothed.tolist()}))\n"
+        " 'texture': bool(np.array_equal(*texture)), 'smoothed': smoothed.tolist()}))\n"
     )
     out = run_python(code, SDF_OPENCL_STAGING_CHUNK=65536)
-    assert out["cast"]
+    assert out["cast"] and out["texture"]  # the texture's UVs went up the side queue's chunks
     vertices, triangles = load_mesh(DATA / "bunny00.off")
     raw = sd.compute(vertices, triangles, engine="cpu").raw
     direct = sd.smooth(vertices, triangles, raw, "projected", engine=OPENCL[0])

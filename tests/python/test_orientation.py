@@ -68,6 +68,24 @@ def test_projected_smoothing_moves_points_inward_on_the_mesh_as_oriented(points)
     assert not np.array_equal(outward.values, outward.raw)  # it smoothed something
 
 
+@pytest.mark.parametrize("points", ["faces", "vertices"])
+def test_kring_corner_weights_use_the_normals_of_the_mesh_as_oriented(points):
+    # Scattered reversed faces put back by orientation: the k-ring's dihedral-angle weights
+    # must see the normals as put back, not as given (a reversed neighbour looks 180 degrees
+    # away: values once differed by up to 0.84 on fandisk).
+    vertices, triangles = load_mesh(DATA / "fandisk.obj")
+    messy = triangles.copy()
+    messy[::7] = messy[::7][:, [0, 2, 1]]
+    options = {"corner_angle": 30.0}
+    clean = sd.compute(vertices, triangles, rays=10, points=points, engine="cpu",
+                       smoothing="kring", smoothing_options=options)
+    fixed = sd.compute(vertices, messy, rays=10, points=points, engine="cpu",
+                       smoothing="kring", smoothing_options=options)
+    assert fixed.flipped_faces == len(messy[::7])
+    np.testing.assert_array_equal(fixed.raw, clean.raw)
+    np.testing.assert_array_equal(fixed.values, clean.values)
+
+
 def test_each_part_is_judged_on_its_own():
     small_v, small_t = icosphere(1.0, 2)
     big_v, big_t = icosphere(2.0, 2)
