@@ -281,7 +281,9 @@ def run_checked(v, t, values, points, method, o, threads, progress, engine="cpu"
             _weld_argument(o),
             o["return_image"], threads, progress, engine,
         )
-    if out["faces_outside"]:
+    # A few faces just over the square's edge are common (spot.obj's layout: 0.05% at 1.5M
+    # faces) and lose little; most of them outside is a UDIM or offset layout.
+    if out["faces_outside"] > 0.01 * len(t):
         warnings.warn(
             f"{out['faces_outside']} of {len(t)} faces have UVs wholly outside the [0, 1] square (UDIM tiles or an offset "
             "layout): texture smoothing does not reach them and they keep their values; "

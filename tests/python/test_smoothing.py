@@ -393,13 +393,20 @@ def test_texture_warns_about_faces_outside_the_uv_square(spot, engine):
     for shift in ([1.0, 0.0], [-0.5, -0.5]):
         shifted = corner_uvs + np.float32(shift)
         away = outside(shifted)
-        assert 0 < away.sum() < len(t) + 1
+        assert 0.01 * len(t) < away.sum() <= len(t)  # above the warning's 1%
         with pytest.warns(RuntimeWarning, match=rf"^{away.sum()} of {len(t)} faces have UVs "
                                                 r"wholly outside the \[0, 1\] square"):  # fmt: skip
             out = smooth(v, t, faces, "texture", uvs=shifted, engine=engine)
         np.testing.assert_array_equal(out[away], faces[away])
     with pytest.warns(RuntimeWarning, match=rf"^{away.sum()} of {len(t)} faces"):
         shape_diameter.compute(v, t, rays=8, smoothing="texture", uvs=shifted, engine=engine)
+    # A few faces just over the edge (under 1%) lose little and warn nothing.
+    few = corner_uvs.copy()
+    few[:20] += np.float32(2.0)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        out = smooth(v, t, faces, "texture", uvs=few, engine=engine)
+    np.testing.assert_array_equal(out[:20], faces[:20])
 
 
 def test_texture_needs_uvs(spot):
