@@ -10,6 +10,7 @@
 #include "orientation_edges.h"
 #include "orientation_parts.h"
 #include "parallel.h"
+#include "stopwatch.h"
 #include "uninitialized_vector.h"
 
 namespace sdf {
@@ -97,19 +98,24 @@ std::vector<Box> part_boxes(const Mesh& mesh, const Parts& parts, unsigned threa
 
 void reverse_face(glm::uvec3& t) { std::swap(t.y, t.z); }
 
-OrientationReport orient_auto(Mesh& mesh, unsigned threads, bool fast_path) {
+OrientationReport orient_auto(Mesh& mesh, unsigned threads, bool fast_path,
+                              StageTimings* steps) {
+  StageClock step(steps);
   OrientationReport report;
   const std::size_t n = mesh.triangles.size();
   std::vector<char> flip;
   {
     const EdgeNeighbours edges = manifold_edge_neighbours(mesh, threads, !fast_path);
+    step.lap("orientation: edges");
     // Fast path: no manifold edge runs the same way in its two faces, so propagation would
     // reverse nothing (every patch already agrees).
     flip = edges.any_same || !fast_path ? propagate_flips(mesh, edges) : std::vector<char>(n, 0);
   }
+  step.lap("orientation: patches");
 
   const Parts parts = find_parts(mesh, threads);
   report.parts = parts.count;
+  step.lap("orientation: parts");
   const std::vector<Box> boxes = part_boxes(mesh, parts, threads);
   // Signed volume of each part about its bounding-box centre, in double. The terms in
   // parallel; their sum in face order, as always, so that no rounding changes.
@@ -146,14 +152,15 @@ OrientationReport orient_auto(Mesh& mesh, unsigned threads, bool fast_path) {
   });
   report.flipped_faces = flipped.load();
   if (report.flipped_faces > 0) report.reversed.assign(flip.begin(), flip.end());
+  step.lap("orientation: volumes");
   return report;
 }
 
 }  // namespace
 
-OrientationReport orient(Mesh& mesh, Orientation mode, unsigned threads) {
+OrientationReport orient(Mesh& mesh, Orientation mode, unsigned threads, StageTimings* steps) {
   if (mode == Orientation::AsIs) return OrientationReport{};
-  if (mode == Orientation::Auto) return orient_auto(mesh, threads, true);
+  if (mode == Orientation::Auto) return orient_auto(mesh, threads, true, steps);
   parallel_for(mesh.triangles.size(), kGrain, threads, [&](std::size_t begin, std::size_t end) {
     for (std::size_t f = begin; f < end; ++f) reverse_face(mesh.triangles[f]);
   });
@@ -164,7 +171,7 @@ OrientationReport orient(Mesh& mesh, Orientation mode, unsigned threads) {
 }
 
 OrientationReport orient_auto_without_fast_path(Mesh& mesh, unsigned threads) {
-  return orient_auto(mesh, threads, false);
+  return orient_auto(mesh, threads, false, nullptr);
 }
 
 }  // namespace sdf

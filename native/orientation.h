@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "mesh.h"
+#include "stopwatch.h"
 
 namespace sdf {
 
@@ -36,7 +37,10 @@ struct OrientationReport {
 //    acted on (a flat sheet, volume 0, is left alone).
 // Reverses faces in place (swapping two corners) and reports what it did. Runs on `threads`
 // (0 = every core); the result does not depend on the thread count.
-OrientationReport orient(Mesh& mesh, Orientation mode, unsigned threads = 0);
+// steps: where given, Auto's steps' seconds are appended ('orientation: edges', 'patches',
+// 'parts', 'volumes').
+OrientationReport orient(Mesh& mesh, Orientation mode, unsigned threads = 0,
+                         StageTimings* steps = nullptr);
 
 // Auto as orient() does it, but with step 1 always run. orient() skips it when no manifold
 // edge runs the same way in its two faces (it would reverse nothing); tests compare the two.

@@ -259,8 +259,11 @@ Output compute(Mesh mesh, const Options& options, const ProgressFn& progress,
     step.lap("prepare: start of the build");  // the copy of the mesh it reads
   }
   // `mesh` is the computation's own copy, wound outward; the caller's mesh is never changed.
-  out.orientation = orient(mesh, options.orientation, options.threads);
+  StageTimings orientation_steps;
+  out.orientation = orient(mesh, options.orientation, options.threads, &orientation_steps);
   step.lap("prepare: orientation");
+  for (const auto& [name, seconds] : orientation_steps)
+    steps.emplace_back("prepare: " + name, seconds);
   const SamplePoints points = sample_points(mesh, options.points, options.threads);
   step.lap("prepare: points");
   const std::vector<std::uint32_t> order = spatial_order(points, options.threads);
