@@ -57,8 +57,8 @@ struct Output {
 
 // Host work that needs no result of the computation, run once on the calling thread: while
 // an OpenCL device casts (when the host would only wait), or after the CPU engine's cast.
-// compute(smoothing='texture') finds the UV islands there. An exception it throws ends the
-// computation and propagates.
+// compute(smoothing='texture') prepares its texture there (UV islands; on OpenCL the UVs'
+// upload). An exception it throws ends the computation and propagates.
 using BesideCast = std::function<void()>;
 
 // Takes the mesh by value: the computation reorients its own copy, and a caller that has no
