@@ -43,11 +43,13 @@ DeviceState& state_of(const Device& device) {
   return *slot;
 }
 
-void write_buffer(DeviceState& s, cl_mem destination, const void* data, std::size_t bytes) {
-  if (s.stage_uploads && s.staging.worth(bytes) &&
-      s.staging.write(s.context, s.queue, destination, data, bytes, s.copy_threads))
+void write_buffer(cl_context context, cl_command_queue queue, Staging* staging, unsigned threads,
+                  cl_mem destination, const void* data, std::size_t bytes) {
+  if (bytes == 0) return;
+  if (staging && staging->worth(bytes) &&
+      staging->write(context, queue, destination, data, bytes, threads))
     return;
-  check(api()->clEnqueueWriteBuffer(s.queue, destination, CL_FALSE, 0, bytes, data, 0, nullptr,
+  check(api()->clEnqueueWriteBuffer(queue, destination, CL_FALSE, 0, bytes, data, 0, nullptr,
                                     nullptr),
         "clEnqueueWriteBuffer");
 }

@@ -80,10 +80,19 @@ class Kernel {
   cl_kernel kernel_ = nullptr;
 };
 
-// Queues the upload of `bytes` from `data` into `destination`, through s.staging where that
-// is faster (then `data` may change once this returns); otherwise non-blocking, so `data` must
-// stay unchanged until the queue has run it (a later blocking read or clFinish).
-void write_buffer(DeviceState& s, cl_mem destination, const void* data, std::size_t bytes);
+// Queues the upload of `bytes` from `data` into `destination` on `queue`, through `staging`
+// (null: none) with `threads` copying where that is faster (then `data` may change once this
+// returns); otherwise non-blocking, so `data` must stay unchanged until the queue has run it
+// (a later blocking read or clFinish).
+void write_buffer(cl_context context, cl_command_queue queue, Staging* staging, unsigned threads,
+                  cl_mem destination, const void* data, std::size_t bytes);
+
+// The same on the state's queue, through its staging where uploads are staged.
+inline void write_buffer(DeviceState& s, cl_mem destination, const void* data,
+                         std::size_t bytes) {
+  write_buffer(s.context, s.queue, s.stage_uploads ? &s.staging : nullptr, s.copy_threads,
+               destination, data, bytes);
+}
 
 class Buffer {
  public:

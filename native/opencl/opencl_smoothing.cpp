@@ -381,17 +381,11 @@ bool upload_prepared_texture(const Device& device, PreparedTexture& prepared, un
   uploads->face_island = cl.clCreateBuffer(s.context, CL_MEM_READ_ONLY, island_bytes, nullptr, &err);
   check(err, "clCreateBuffer");
   Stopwatch clock;
-  auto write = [&](cl_mem destination, const void* data, std::size_t bytes) {
-    if (bytes == 0) return;
-    if (s.stage_uploads && s.side_staging.worth(bytes) &&
-        s.side_staging.write(s.context, s.side_queue, destination, data, bytes, threads))
-      return;
-    check(cl.clEnqueueWriteBuffer(s.side_queue, destination, CL_FALSE, 0, bytes, data, 0, nullptr,
-                                  nullptr),
-          "clEnqueueWriteBuffer (side)");
-  };
-  write(uploads->uvs, prepared.uvs, 6 * m * sizeof(float));
-  write(uploads->face_island, prepared.islands.face_island.data(), m * sizeof(std::int32_t));
+  Staging* staging = s.stage_uploads ? &s.side_staging : nullptr;
+  write_buffer(s.context, s.side_queue, staging, threads, uploads->uvs, prepared.uvs,
+               6 * m * sizeof(float));
+  write_buffer(s.context, s.side_queue, staging, threads, uploads->face_island,
+               prepared.islands.face_island.data(), m * sizeof(std::int32_t));
   // Done before the smoothing's queue reads them (and before `prepared` may change).
   check(cl.clFinish(s.side_queue), "clFinish (side)");
   prepared.timings.emplace_back("upload", clock.lap());
