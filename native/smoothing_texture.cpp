@@ -27,14 +27,22 @@ constexpr int kMaxSize = 16384;
 constexpr std::size_t kFaceGrain = 1 << 12;
 constexpr std::size_t kTexelGrain = 1 << 16;
 
-// Throws naming the first UV that is not finite; returns how many faces have UVs wholly
-// outside the [0, 1] square (UDIM tiles, offset layouts): no texel is theirs.
-std::size_t check_uvs(const float* uvs, std::size_t m, unsigned threads) {
+// What one pass over the UVs finds, once they are known to be finite.
+struct UvCheck {
+  // Faces whose UVs lie wholly outside the [0, 1] square (UDIM tiles, offset layouts): no
+  // texel is theirs.
+  std::size_t faces_outside = 0;
+  double largest_face_texels = 0.0;  // the most texels one face's UV box covers, clipped
+};
+
+// Throws naming the first UV that is not finite.
+UvCheck check_uvs(const float* uvs, std::size_t m, int width, int height, unsigned threads) {
   constexpr std::size_t kGrain = kTexelGrain / 6;
   const std::size_t chunks = (m + kGrain - 1) / kGrain;
-  std::vector<std::size_t> first_bad(chunks, 6 * m), outside(chunks, 0);
+  std::vector<std::size_t> first_bad(chunks, 6 * m);
+  std::vector<UvCheck> per_chunk(chunks);
   parallel_for(m, kGrain, threads, [&](std::size_t begin, std::size_t end) {
-    std::size_t away = 0;
+    UvCheck found;
     for (std::size_t f = begin; f < end; ++f) {
       const float* uv = uvs + 6 * f;
       float lo[2] = {uv[0], uv[1]}, hi[2] = {uv[0], uv[1]};
@@ -46,19 +54,26 @@ std::size_t check_uvs(const float* uvs, std::size_t m, unsigned threads) {
         lo[i & 1] = std::min(lo[i & 1], uv[i]);
         hi[i & 1] = std::max(hi[i & 1], uv[i]);
       }
-      away += hi[0] < 0.0f || lo[0] > 1.0f || hi[1] < 0.0f || lo[1] > 1.0f;
+      found.faces_outside += hi[0] < 0.0f || lo[0] > 1.0f || hi[1] < 0.0f || lo[1] > 1.0f;
+      auto span = [&](int axis, int size) {
+        const double clipped = std::min<double>(hi[axis], 1.0) - std::max<double>(lo[axis], 0.0);
+        return std::min(double(size), std::max(0.0, clipped * size) + 1.0);
+      };
+      found.largest_face_texels =
+          std::max(found.largest_face_texels, span(0, width) * span(1, height));
     }
-    outside[begin / kGrain] = away;
+    per_chunk[begin / kGrain] = found;
   });
-  std::size_t faces_outside = 0;
+  UvCheck all;
   for (std::size_t c = 0; c < chunks; ++c) {
     if (first_bad[c] < 6 * m)
       throw std::invalid_argument("the UV of face " + std::to_string(first_bad[c] / 6) +
                                   " corner " + std::to_string((first_bad[c] / 2) % 3) +
                                   " is not finite");
-    faces_outside += outside[c];
+    all.faces_outside += per_chunk[c].faces_outside;
+    all.largest_face_texels = std::max(all.largest_face_texels, per_chunk[c].largest_face_texels);
   }
-  return faces_outside;
+  return all;
 }
 
 void check_size(const TextureOptions& options) {
@@ -402,33 +417,14 @@ TextureSmoothing smooth_texture(const Mesh& mesh, PointKind kind, const float* v
   StageTimings timings;
   check_size(options);
   check_face_count(mesh.triangles.size());
-  const std::size_t outside = check_uvs(uvs, mesh.triangles.size(), options.threads);
+  const UvCheck uv = check_uvs(uvs, mesh.triangles.size(), options.width, options.height,
+                               options.threads);
+  const bool on_device = device && uv.largest_face_texels <= kMostTexelsPerDeviceFace;
   TextureSmoothing out = smooth_checked(mesh, kind, values, uvs, options, keep_image, progress,
-                                        progress_from, progress_to, device, nullptr, clock,
-                                        timings);
-  out.faces_outside = outside;
+                                        progress_from, progress_to,
+                                        on_device ? device : nullptr, nullptr, clock, timings);
+  out.faces_outside = uv.faces_outside;
   return out;
-}
-
-double largest_face_texels(const float* uvs, std::size_t m, int width, int height,
-                           unsigned threads) {
-  constexpr std::size_t kGrain = 1 << 14;
-  std::vector<double> largest((m + kGrain - 1) / kGrain, 0.0);
-  parallel_for(m, kGrain, threads, [&](std::size_t begin, std::size_t end) {
-    double most = 0.0;
-    for (std::size_t f = begin; f < end; ++f) {
-      const float* uv = uvs + 6 * f;
-      auto span = [&](int axis, int size) {
-        const double lo = std::min(uv[axis], std::min(uv[axis + 2], uv[axis + 4]));
-        const double hi = std::max(uv[axis], std::max(uv[axis + 2], uv[axis + 4]));
-        return std::min(double(size),
-                        std::max(0.0, (std::min(hi, 1.0) - std::max(lo, 0.0)) * size) + 1.0);
-      };
-      most = std::max(most, span(0, width) * span(1, height));
-    }
-    largest[begin / kGrain] = most;
-  });
-  return largest.empty() ? 0.0 : *std::max_element(largest.begin(), largest.end());
 }
 
 PreparedTexture prepare_texture(Mesh mesh, const float* uvs, const TextureOptions& options,
@@ -437,14 +433,13 @@ PreparedTexture prepare_texture(Mesh mesh, const float* uvs, const TextureOption
   check_size(options);
   const std::size_t m = mesh.triangles.size();
   check_face_count(m);
-  const std::size_t outside = check_uvs(uvs, m, options.threads);
+  const UvCheck uv = check_uvs(uvs, m, options.width, options.height, options.threads);
   PreparedTexture prepared;
-  prepared.faces_outside = outside;
+  prepared.faces_outside = uv.faces_outside;
+  prepared.largest_face_texels = uv.largest_face_texels;
   prepared.uvs = uvs;
   prepared.width = options.width;
   prepared.height = options.height;
-  prepared.largest_face_texels =
-      largest_face_texels(uvs, m, options.width, options.height, options.threads);
   prepared.timings.emplace_back("checks", clock.lap());
   prepared.islands =
       label_uv_islands(mesh, uvs, options.weld_tolerance, need_merged, options.threads);
@@ -465,9 +460,10 @@ TextureSmoothing smooth_texture(const PreparedTexture& prepared, PointKind kind,
       (kind == PointKind::Vertices && !islands.need_merged))
     throw std::invalid_argument(
         "the texture was prepared for other options (size, weld tolerance, vertex values)");
+  const bool on_device = device && prepared.largest_face_texels <= kMostTexelsPerDeviceFace;
   TextureSmoothing out = smooth_checked(prepared.mesh, kind, values, prepared.uvs, options,
-                                        keep_image, progress, progress_from, progress_to, device,
-                                        &islands, clock, timings);
+                                        keep_image, progress, progress_from, progress_to,
+                                        on_device ? device : nullptr, &islands, clock, timings);
   out.faces_outside = prepared.faces_outside;
   return out;
 }

@@ -91,11 +91,14 @@ struct TextureJob {
 // holding the input), with the CPU's code (kernels/sdf_smooth_texture.h) and bits. Where
 // `images` is true it also fills `island` (dilated) and `blurred`, row-major: vertex values
 // are read back on the host from those, and a kept image is that one. Appends its stages'
-// seconds to `timings`.
+// seconds to `timings`. A device walks each face in one work item, so smooth_texture runs
+// it only where no face's UV box covers more than kMostTexelsPerDeviceFace texels (a low-poly
+// mesh on a large texture stays on the CPU threads, with the same values).
 using TextureDeviceFn = std::function<void(
     const TextureJob& job, bool images, std::vector<float>& values,
     std::vector<std::int32_t>& island, std::vector<float>& blurred,
     StageTimings& timings)>;
+constexpr double kMostTexelsPerDeviceFace = 65536.0;
 
 // uvs: per face corner, (u, v) for corners 0, 1, 2 of face 0, then face 1, ... (6 floats a
 // face), finite. keep_image: fill image and mask (else they stay empty). Throws
@@ -129,10 +132,6 @@ struct PreparedTexture {
 // what owns them). Throws std::invalid_argument for non-finite UVs or a bad size.
 PreparedTexture prepare_texture(Mesh mesh, const float* uvs, const TextureOptions& options,
                                 bool need_merged);
-
-// The most texels the UV box of one face covers (clipped to the image), at width x height.
-double largest_face_texels(const float* uvs, std::size_t m, int width, int height,
-                           unsigned threads);
 
 // As above on a prepared mesh and UVs. Throws std::invalid_argument where options ask for
 // another size or weld tolerance than `prepared` was made for, or for vertex values when it

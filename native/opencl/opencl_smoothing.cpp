@@ -9,7 +9,6 @@
 #include <string>
 #include <vector>
 
-#include "../parallel.h"
 #include "../stopwatch.h"
 #include "device_state.h"
 
@@ -194,13 +193,9 @@ void filter_on_device(const Device& device, DeviceState& s, cl_program program,
 }
 
 // Drawing and reading back compute texel coverage in double: a device without it would cover
-// other texels than the CPU, so there the CPU threads do it all. So they do where a face spans
-// more than 2^16 texels (a low-poly mesh on a large texture): a device walks each face in one
-// work item, in double, which consumer GPUs run at 1/32 to 1/64 of float speed.
-bool texture_suits(const Device& device, double largest_face_texels) {
-  constexpr double kMostTexelsPerFace = 65536.0;
-  return device.fp64 && largest_face_texels <= kMostTexelsPerFace;
-}
+// other texels than the CPU, so there the CPU threads do it all. (smooth_texture also keeps
+// faces spanning more than kMostTexelsPerDeviceFace texels off a device: each is one work
+// item, in double, which consumer GPUs run at 1/32 to 1/64 of float speed.)
 
 // A prepared texture's UVs and face islands on a device, uploaded on its side queue while it
 // cast. Released with the prepared texture, unless the device failed since (its driver
@@ -340,26 +335,20 @@ TextureSmoothing smooth_texture_opencl(const Device& device, const Mesh& mesh, P
                                        const float* values, const float* uvs,
                                        const TextureOptions& options, bool keep_image,
                                        const ProgressFn& progress) {
-  const double largest = largest_face_texels(uvs, mesh.triangles.size(), options.width,
-                                             options.height, options.threads);
   return smooth_texture(mesh, kind, values, uvs, options, keep_image, progress, 0.0, 1.0,
-                        texture_suits(device, largest) ? texture_on_device(device, nullptr)
-                                                       : nullptr);
+                        device.fp64 ? texture_on_device(device, nullptr) : nullptr);
 }
 
 TextureSmoothing smooth_texture_opencl(const Device& device, const PreparedTexture& prepared,
                                        PointKind kind, const float* values,
                                        const TextureOptions& options, bool keep_image,
                                        const ProgressFn& progress) {
-  TextureDeviceFn on_device;
-  if (texture_suits(device, prepared.largest_face_texels))
-    on_device = texture_on_device(device, &prepared);
   return smooth_texture(prepared, kind, values, options, keep_image, progress, 0.0, 1.0,
-                        on_device);
+                        device.fp64 ? texture_on_device(device, &prepared) : nullptr);
 }
 
 bool upload_prepared_texture(const Device& device, PreparedTexture& prepared, unsigned threads) {
-  if (!texture_suits(device, prepared.largest_face_texels)) return false;
+  if (!device.fp64 || prepared.largest_face_texels > kMostTexelsPerDeviceFace) return false;
   const std::size_t m = prepared.mesh.triangles.size();
   const std::size_t uv_bytes = std::max<std::size_t>(6 * m * sizeof(float), 4);
   const std::size_t island_bytes = std::max<std::size_t>(m * sizeof(std::int32_t), 4);
