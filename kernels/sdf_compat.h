@@ -23,6 +23,7 @@
 typedef int sdf_int32;
 typedef uint sdf_uint32;
 typedef long sdf_int64;
+typedef ulong sdf_uint64;
 #define make_float3(x, y, z) ((float3)((x), (y), (z)))
 #define sdf_vmin(a, b) fmin((a), (b))
 #define sdf_vmax(a, b) fmax((a), (b))
@@ -75,6 +76,7 @@ typedef glm::vec3 float3;
 typedef std::int32_t sdf_int32;
 typedef std::uint32_t sdf_uint32;
 typedef std::int64_t sdf_int64;
+typedef std::uint64_t sdf_uint64;
 typedef double sdf_wide;
 #define SDF_HAVE_DOUBLE 1
 inline float3 make_float3(float x, float y, float z) { return float3(x, y, z); }
@@ -113,6 +115,7 @@ using std::cos;
 using std::exp;
 using std::fabs;
 using std::floor;
+using std::ldexp;
 using std::fmax;
 using std::fmin;
 using std::sin;

@@ -1,8 +1,9 @@
 /* SPDX-License-Identifier: GPL-3.0-or-later */
-/* Smoothing on projected points (paper 4.4), the per-point part: the weighted mean of the
- * octree nodes that a sphere gathers. The octree is built on the host
- * (native/smoothing_projected.cpp); the CPU calls these functions as C++ and the OpenCL
- * kernel sdf_smooth_projected (sdf_smooth_kernels.cl) calls them as OpenCL C. */
+/* Smoothing on projected points (paper 4.4), the per-point parts: where a point goes, which
+ * cell of the octree it falls in, what it adds to a node's sum, and the weighted mean of the
+ * nodes that a sphere gathers. The host (native/smoothing_projected.cpp) and the OpenCL
+ * kernels (sdf_smooth_kernels.cl) both build the octree from these, so they make the same
+ * tree; the CPU calls them as C++, the kernels as OpenCL C. */
 #ifndef SDF_SMOOTH_PROJECTED_H
 #define SDF_SMOOTH_PROJECTED_H
 
@@ -28,6 +29,38 @@ SDF_STATIC_ASSERT(sizeof(SdfPointNode) == 32, "SdfPointNode is 32 bytes in every
  * most 8, one visit pops 1: 7 more per level. */
 #define SDF_POINT_MAX_DEPTH 20
 #define SDF_POINT_STACK (7 * SDF_POINT_MAX_DEPTH + 2)
+
+/* A point moved inward along its axis by half its value (the SDF): near the medial axis. */
+SDF_INLINE float3 sdf_project_point(float3 origin, float3 axis, float value) {
+  float h = 0.5f * value;
+  return make_float3(origin.x + axis.x * h, origin.y + axis.y * h, origin.z + axis.z * h);
+}
+
+/* A coordinate's cell along one axis at the deepest level: `cells` per axis over the root
+ * cube, which starts at `corner`; scale = cells / the cube's side. A multiplication, not a
+ * division: OpenCL rounds division differently unless asked not to. */
+SDF_INLINE sdf_uint32 sdf_point_cell(float x, float corner, float scale, sdf_uint32 cells) {
+  float c = floor((x - corner) * scale);
+  if (!(c > 0.0f)) return 0u;
+  return c < (float)cells ? (sdf_uint32)c : cells - 1u;
+}
+
+/* Which child (octant: bit 0 x, bit 1 y, bit 2 z) of a node of level `level` in a tree of
+ * depth `depth` holds the cell (cx, cy, cz): the cells' bits at depth - level - 1, as in a
+ * Morton key whose x bits come first. */
+SDF_INLINE sdf_uint32 sdf_point_octant(sdf_uint32 cx, sdf_uint32 cy, sdf_uint32 cz, int level,
+                                       int depth) {
+  int bit = depth - level - 1;
+  return ((cx >> bit) & 1u) | ((cy >> bit) & 1u) << 1 | ((cz >> bit) & 1u) << 2;
+}
+
+/* A value >= 0 in fixed point, units of 2^-shift (truncated). Node sums add these as
+ * integers, which give the same sum in any order: one thread or a device's thousands, with
+ * atomics, make the same means. The host picks shift so that no sum overflows 2^62
+ * (smoothing_projected.h, point_fixed_shift); ldexp is exact. */
+SDF_INLINE sdf_uint64 sdf_fixed_value(float value, int shift) {
+  return (sdf_uint64)ldexp(value, shift);
+}
 
 /* Approximate fraction of a cube of side `side` whose centre is `distance` from the centre of
  * a sphere of radius `radius` that lies inside the sphere: the cube is taken as the ball of

@@ -8,6 +8,7 @@
 
 #include <stdexcept>
 #include <string>
+#include <memory>
 #include <utility>
 
 #include <chrono>
@@ -20,6 +21,7 @@
 #include "bvh_stats.h"
 #include "normalize.h"
 #include "parallel.h"
+#include "python_cast_points.h"
 #include "python_timings.h"
 #include "sdf.h"
 #ifdef SDF_HAVE_OPENCL
@@ -123,12 +125,18 @@ py::dict compute(const Doubles& vertices, const Int64s& triangles, int rays, dou
       return true;
     };
   }
-  // Also on the calling thread, taking the GIL for its Python code.
+  // Also on the calling thread, taking the GIL for its Python code; it gets the cast's points
+  // (sdf::CastPoints) for the length of the call.
   sdf::BesideCast beside;
   if (!beside_cast.is_none()) {
-    beside = [&beside_cast] {
+    beside = [&beside_cast](const sdf::SamplePoints& points) {
       py::gil_scoped_acquire gil;
-      beside_cast();
+      auto lent = std::make_shared<sdf::CastPoints>(sdf::CastPoints{&points});
+      struct Return {
+        sdf::CastPoints& lent;
+        ~Return() { lent.points = nullptr; }
+      } give_back{*lent};
+      beside_cast(lent);
     };
   }
   sdf::Output out;

@@ -10,12 +10,14 @@
 
 #include "mesh_weld.h"
 #include "parallel.h"
+#include "python_cast_points.h"
 #include "python_timings.h"
 #include "smoothing_kring.h"
 #include "smoothing_projected.h"
 #include "smoothing_texture.h"
 #ifdef SDF_HAVE_OPENCL
 #include "opencl/devices.h"
+#include "opencl/opencl_projected.h"
 #include "opencl/opencl_smoothing.h"
 #endif
 
@@ -120,15 +122,9 @@ py::dict smooth_kring(const Doubles& vertices, const Int64s& triangles, const Fl
   return result;
 }
 
-py::array_t<float> smooth_projected(const Doubles& vertices, const Int64s& triangles,
-                                    const Floats& values, const std::string& points,
-                                    int iterations, int max_depth, double min_points,
-                                    double node_size_ratio, const std::string& branch_on,
-                                    unsigned threads, const py::object& progress,
-                                    const std::string& engine, const py::object& timings) {
-  const sdf::Mesh mesh = mesh_from(vertices, triangles, threads);
-  const sdf::PointKind kind = kind_from(points);
-  const float* v = point_values(mesh, kind, values);
+sdf::ProjectedOptions projected_options(int iterations, int max_depth, double min_points,
+                                       double node_size_ratio, const std::string& branch_on,
+                                       unsigned threads) {
   sdf::ProjectedOptions options;
   options.iterations = iterations;
   options.max_depth = max_depth;
@@ -138,6 +134,20 @@ py::array_t<float> smooth_projected(const Doubles& vertices, const Int64s& trian
   else if (branch_on == "min") options.branch_on = sdf::ProjectedOptions::Branch::Min;
   else throw std::invalid_argument("branch_on must be 'mean' or 'min', got '" + branch_on + "'");
   options.threads = threads;
+  return options;
+}
+
+py::array_t<float> smooth_projected(const Doubles& vertices, const Int64s& triangles,
+                                    const Floats& values, const std::string& points,
+                                    int iterations, int max_depth, double min_points,
+                                    double node_size_ratio, const std::string& branch_on,
+                                    unsigned threads, const py::object& progress,
+                                    const std::string& engine, const py::object& timings) {
+  const sdf::Mesh mesh = mesh_from(vertices, triangles, threads);
+  const sdf::PointKind kind = kind_from(points);
+  const float* v = point_values(mesh, kind, values);
+  const sdf::ProjectedOptions options = projected_options(iterations, max_depth, min_points,
+                                                          node_size_ratio, branch_on, threads);
   const auto* device = device_for(engine);
   (void)device;  // unused without OpenCL
   const sdf::ProgressFn report = progress_from(progress);
@@ -151,11 +161,64 @@ py::array_t<float> smooth_projected(const Doubles& vertices, const Int64s& trian
     if (device) sdf::cl::smooth_projected_opencl(*device, mesh, kind, v, options, o, report, &stages);
     else
 #endif
-      sdf::smooth_projected_into(mesh, kind, v, options, o, report, 0.0, 1.0, nullptr, &stages);
+      sdf::smooth_projected_into(mesh, kind, v, options, o, report, 0.0, 1.0, &stages);
   }
   if (!timings.is_none()) timings.attr("update")(sdf::timings_dict(stages));
   return out;
 }
+
+#ifdef SDF_HAVE_OPENCL
+// compute(smoothing='projected') on an OpenCL engine, while the device casts: the cast's
+// points' frames uploaded for smooth_projected_prepared. None where they were not (an OpenCL
+// failure, or too large: smooth_projected then makes and uploads them itself).
+py::object prepare_projected(const sdf::CastPoints& cast, unsigned threads,
+                             const std::string& engine) {
+  if (!cast.points)
+    throw std::invalid_argument("the cast's points are lent only during compute()'s callback");
+  const auto* device = device_for(engine);
+  if (!device) throw std::invalid_argument("prepare_projected needs an OpenCL engine");
+  std::shared_ptr<sdf::cl::PreparedProjected> prepared;
+  {
+    py::gil_scoped_release release;
+    try {
+      prepared = std::make_shared<sdf::cl::PreparedProjected>(
+          sdf::cl::prepare_projected(*device, *cast.points, threads));
+    } catch (const sdf::cl::Error&) {
+    }
+  }
+  if (!prepared || !prepared->on_device) return py::none();
+  return py::cast(prepared);
+}
+
+// smooth_projected on the frames prepare_projected uploaded (the engine must name the same
+// device; else a device error, after which compute() falls back to the CPU).
+py::array_t<float> smooth_projected_prepared(const sdf::cl::PreparedProjected& prepared,
+                                             const Floats& values, int iterations,
+                                             int max_depth, double min_points,
+                                             double node_size_ratio, const std::string& branch_on,
+                                             unsigned threads, const py::object& progress,
+                                             const std::string& engine,
+                                             const py::object& timings) {
+  if (values.ndim() != 1 || static_cast<std::size_t>(values.shape(0)) != prepared.count)
+    throw std::invalid_argument("values must have one entry per point (" +
+                                std::to_string(prepared.count) + ")");
+  const sdf::ProjectedOptions options = projected_options(iterations, max_depth, min_points,
+                                                          node_size_ratio, branch_on, threads);
+  const auto* device = device_for(engine);
+  if (!device) throw std::invalid_argument("smooth_projected_prepared needs an OpenCL engine");
+  const sdf::ProgressFn report = progress_from(progress);
+  py::array_t<float> out(values.shape(0));
+  float* o = out.mutable_data();
+  sdf::StageTimings stages;
+  {
+    py::gil_scoped_release release;
+    sdf::cl::smooth_projected_opencl(*device, prepared, values.data(), options, o, report,
+                                     &stages);
+  }
+  if (!timings.is_none()) timings.attr("update")(sdf::timings_dict(stages));
+  return out;
+}
+#endif
 
 sdf::TextureOptions texture_options(int width, int height, double radius, bool bilateral,
                                     double range_sigma, int margin, double weld_tolerance,
@@ -323,6 +386,22 @@ void bind_smoothing(py::module_& m) {
         py::arg("values"), py::arg("points"), py::arg("iterations"), py::arg("max_depth"),
         py::arg("min_points"), py::arg("node_size_ratio"), py::arg("branch_on"), py::arg("threads"),
         py::arg("progress"), py::arg("engine") = "cpu", py::arg("timings") = py::none());
+  py::class_<sdf::CastPoints, std::shared_ptr<sdf::CastPoints>>(
+      m, "CastPoints", "The points compute() casts from, lent to its beside-cast callback, opaque");
+#ifdef SDF_HAVE_OPENCL
+  py::class_<sdf::cl::PreparedProjected, std::shared_ptr<sdf::cl::PreparedProjected>>(
+      m, "PreparedProjected",
+      "Projected smoothing's point frames on an OpenCL device (prepare_projected), opaque")
+      .def_property_readonly("timings", [](const sdf::cl::PreparedProjected& p) {
+        return sdf::timings_dict(p.timings);
+      });
+  m.def("prepare_projected", &prepare_projected, py::arg("cast_points"), py::arg("threads"),
+        py::arg("engine"));
+  m.def("smooth_projected_prepared", &smooth_projected_prepared, py::arg("prepared"),
+        py::arg("values"), py::arg("iterations"), py::arg("max_depth"), py::arg("min_points"),
+        py::arg("node_size_ratio"), py::arg("branch_on"), py::arg("threads"),
+        py::arg("progress"), py::arg("engine"), py::arg("timings") = py::none());
+#endif
   m.def("smooth_texture", &smooth_texture, py::arg("vertices"), py::arg("triangles"),
         py::arg("values"), py::arg("points"), py::arg("uvs"), py::arg("width"),
         py::arg("height"), py::arg("radius"), py::arg("bilateral"), py::arg("range_sigma"),

@@ -187,7 +187,7 @@ void cast_on_opencl(const Options& options, const Plan& plan,
                     const std::function<const Structures&()>& build_scene, const Mesh& mesh,
                     const SamplePoints& points, const std::vector<std::uint32_t>& order,
                     const Cone& cone, Output& out, const ProgressFn& progress,
-                    const BesideCast& beside_cast) {
+                    const std::function<void()>& beside_cast) {
   const cl::SceneSource scene_source = [&] {
     const Structures& built = build_scene();
     cl::Scene scene;
@@ -284,11 +284,11 @@ Output compute(Mesh mesh, const Options& options, const ProgressFn& progress,
   // The hook's own time: a stage of its own after the CPU engine's cast; on OpenCL within the
   // cast's (part of no other stage's time).
   double beside_seconds = 0.0;
-  BesideCast timed_beside_cast;
+  std::function<void()> timed_beside_cast;
   if (beside_cast)
     timed_beside_cast = [&] {
       Stopwatch beside;
-      beside_cast();
+      beside_cast(points);
       beside_seconds = beside.lap();
     };
   if (cpu) {

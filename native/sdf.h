@@ -57,9 +57,11 @@ struct Output {
 
 // Host work that needs no result of the computation, run once on the calling thread: while
 // an OpenCL device casts (when the host would only wait), or after the CPU engine's cast.
+// It gets the points the cast casts from (on the mesh as orientation wound it).
 // compute(smoothing='texture') prepares its texture there (UV islands; on OpenCL the UVs'
-// upload). An exception it throws ends the computation and propagates.
-using BesideCast = std::function<void()>;
+// upload), compute(smoothing='projected') on OpenCL uploads the points' frames. An exception
+// it throws ends the computation and propagates.
+using BesideCast = std::function<void(const SamplePoints& points)>;
 
 // Takes the mesh by value: the computation reorients its own copy, and a caller that has no
 // further use for its mesh moves it in and saves the copy (~10 ms per million faces).

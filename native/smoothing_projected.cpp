@@ -8,6 +8,7 @@
 #include <string>
 
 #include "morton.h"
+#include "parallel_scan.h"
 #include "prefetch.h"
 #include "radix_sort.h"
 #include "smoothing_projected_avx2.h"
@@ -30,7 +31,9 @@ static_assert(kGrain % kMinBlock == 0, "a chunk holds whole minimum blocks");
 
 std::size_t chunk_count(std::size_t n) { return (n + kGrain - 1) / kGrain; }
 
-void check_options(const ProjectedOptions& options) {
+}  // namespace
+
+void check_projected_options(const ProjectedOptions& options) {
   if (options.max_depth < 0 || options.max_depth > kMaxDepth)
     throw std::invalid_argument("max_depth must be in [0, " + std::to_string(kMaxDepth) +
                                 "], got " + std::to_string(options.max_depth));
@@ -39,6 +42,59 @@ void check_options(const ProjectedOptions& options) {
   if (!(options.node_size_ratio >= 0.0) || !std::isfinite(options.node_size_ratio))
     throw std::invalid_argument("node_size_ratio must be a finite number >= 0");
 }
+
+PointCube::PointCube(glm::vec3 lo, glm::vec3 hi, int depth) {
+  // +0 for -0: which zero a minimum keeps depends on the order it saw them in.
+  lo += glm::vec3(0.0f);
+  hi += glm::vec3(0.0f);
+  const glm::vec3 extent = hi - lo;
+  side = std::max(extent.x, std::max(extent.y, extent.z));
+  const float magnitude = std::max(glm::length(lo), glm::length(hi));
+  side = std::max(side * (1.0f + 1.0f / 1024.0f), std::max(magnitude * 1e-6f, 1e-30f));
+  center = 0.5f * (lo + hi);
+  corner = center - glm::vec3(0.5f * side);
+  cells = std::uint32_t{1} << depth;
+  scale = static_cast<float>(cells) / side;
+}
+
+int point_fixed_shift(float hi, std::size_t count) {
+  int exponent = 0;
+  std::frexp(hi, &exponent);  // hi < 2^exponent
+  int count_bits = 0;
+  while (count_bits < 64 && (count >> count_bits) != 0) ++count_bits;  // count < 2^count_bits
+  return 62 - count_bits - exponent;
+}
+
+PointOctreeNode make_point_node(glm::vec3 center, float half_side, std::uint32_t count,
+                                std::uint64_t sum, int shift) {
+  PointOctreeNode node;
+  node.center[0] = center.x;
+  node.center[1] = center.y;
+  node.center[2] = center.z;
+  node.half_side = half_side;
+  node.count = count;
+  node.mean = static_cast<float>(std::ldexp(static_cast<double>(sum) / count, -shift));
+  node.first_child = -1;
+  node.child_count = 0;
+  return node;
+}
+
+glm::vec3 point_child_center(const PointOctreeNode& parent, unsigned octant) {
+  const float q = 0.5f * parent.half_side;
+  return glm::vec3(parent.center[0] + ((octant & 1) ? q : -q),
+                   parent.center[1] + ((octant & 2) ? q : -q),
+                   parent.center[2] + ((octant & 4) ? q : -q));
+}
+
+bool point_node_branches(const PointOctreeNode& node, int level, float min_value,
+                         const ProjectedOptions& options, double branch_above) {
+  if (level >= options.max_depth || !(static_cast<double>(node.count) > branch_above))
+    return false;
+  const float test_value = options.branch_on == ProjectedOptions::Branch::Min ? min_value : node.mean;
+  return test_value <= options.node_size_ratio * 2.0 * node.half_side;
+}
+
+namespace {
 
 // The two kinds of input the builder takes: plain arrays (build_point_octree), and the
 // smoothing's packed points (xyz projected, w value) with a flag for the points that have an
@@ -65,34 +121,13 @@ struct PackedPoints {
   void prefetch(std::size_t i) const { sdf::prefetch(points + i); }
 };
 
-// The root cube and each point's Morton key at the deepest level (3 bits a level).
-struct RootCube {
-  glm::vec3 center, corner;
-  float side;
-  double cells;  // 2^depth per axis
-
-  // Bounding cube of a box, a little larger so every point falls strictly inside, and never
-  // of zero size (all points may coincide, as on a sphere).
-  RootCube(glm::vec3 lo, glm::vec3 hi, int depth) {
-    const glm::vec3 extent = hi - lo;
-    side = std::max(extent.x, std::max(extent.y, extent.z));
-    const float magnitude = std::max(glm::length(lo), glm::length(hi));
-    side = std::max(side * (1.0f + 1.0f / 1024.0f), std::max(magnitude * 1e-6f, 1e-30f));
-    center = 0.5f * (lo + hi);
-    cells = std::ldexp(1.0, depth);
-    corner = center - glm::vec3(0.5f * side);
-  }
-
-  std::uint64_t key(glm::vec3 p) const {
-    std::uint64_t key = 0;
-    for (int a = 0; a < 3; ++a) {
-      const double c = std::floor((p[a] - corner[a]) / side * cells);
-      const std::uint64_t cell = static_cast<std::uint64_t>(std::min(cells - 1.0, std::max(0.0, c)));
-      key |= spread_bits_21(cell) << a;
-    }
-    return key;
-  }
-};
+// Each point's Morton key at the deepest level (3 bits a level, x first).
+std::uint64_t morton_key(const PointCube& cube, glm::vec3 p) {
+  std::uint64_t key = 0;
+  for (int a = 0; a < 3; ++a)
+    key |= spread_bits_21(kern::sdf_point_cell(p[a], cube.corner[a], cube.scale, cube.cells)) << a;
+  return key;
+}
 
 // The members in Morton order, ties in index order (so the order, and every sum over it, is
 // the same on any thread count): index(k) is the k-th member's point index, key(k) its key.
@@ -106,7 +141,7 @@ struct MortonOrder {
 };
 
 template <class Points>
-MortonOrder morton_order(const Points& points, const RootCube& cube, int key_bits,
+MortonOrder morton_order(const Points& points, const PointCube& cube, int key_bits,
                          const std::vector<std::size_t>& first_member, std::size_t members,
                          unsigned threads) {
   const std::size_t n = points.size();
@@ -117,7 +152,7 @@ MortonOrder morton_order(const Points& points, const RootCube& cube, int key_bit
     std::size_t to = first_member[begin / kGrain];
     for (std::size_t i = begin; i < end; ++i)
       if (points.member(i)) {
-        const std::uint64_t key = cube.key(points.point(i));
+        const std::uint64_t key = morton_key(cube, points.point(i));
         order.items[to++] = (deep ? key & 0xffffffffull : key) << 32 | i;
       }
   });
@@ -127,7 +162,7 @@ MortonOrder morton_order(const Points& points, const RootCube& cube, int key_bit
   UninitializedVector<std::uint64_t> high(members);
   parallel_for(members, kGrain, threads, [&](std::size_t begin, std::size_t end) {
     for (std::size_t k = begin; k < end; ++k)
-      high[k] = (cube.key(points.point(order.index(k))) >> 32) << 32 | k;
+      high[k] = (morton_key(cube, points.point(order.index(k))) >> 32) << 32 | k;
   });
   radix_sort_by_bits(high, 32, key_bits - 32, threads);
   UninitializedVector<std::uint64_t> items(members);
@@ -145,13 +180,15 @@ MortonOrder morton_order(const Points& points, const RootCube& cube, int key_bit
 
 // Sums and minima of the values over runs of the Morton order.
 struct RunValues {
-  // prefix[k]: the values of the first k points in Morton order summed one by one in double,
-  // as the serial builder did (a run's sum is a difference of two of them: the same bits).
-  UninitializedVector<double> prefix;
+  // prefix[k]: the fixed-point values (kern::sdf_fixed_value) of the first k points in Morton
+  // order summed; a run's sum is a difference of two of them.
+  UninitializedVector<std::uint64_t> prefix;
   UninitializedVector<float> sorted;     // branch on minimum only: values in Morton order
   UninitializedVector<float> block_min;  // ... and the minimum of each kMinBlock of them
 
-  double sum(std::uint32_t begin, std::uint32_t end) const { return prefix[end] - prefix[begin]; }
+  std::uint64_t sum(std::uint32_t begin, std::uint32_t end) const {
+    return prefix[end] - prefix[begin];
+  }
 
   float min(std::size_t begin, std::size_t end) const {
     float m = std::numeric_limits<float>::infinity();
@@ -164,7 +201,7 @@ struct RunValues {
 };
 
 template <class Points>
-RunValues run_values(const Points& points, const MortonOrder& order, bool by_min,
+RunValues run_values(const Points& points, const MortonOrder& order, int shift, bool by_min,
                      unsigned threads) {
   const std::size_t m = order.items.size();
   RunValues runs;
@@ -180,64 +217,47 @@ RunValues run_values(const Points& points, const MortonOrder& order, bool by_min
     constexpr std::size_t kAhead = 32;
     for (std::size_t k = begin; k < end; ++k) {
       if (k + kAhead < end) points.prefetch(order.index(k + kAhead));
-      runs.prefix[k + 1] = points.value(order.index(k));
+      const float value = points.value(order.index(k));
+      runs.prefix[k + 1] = kern::sdf_fixed_value(value, shift);
+      if (by_min) runs.sorted[k] = value;
     }
     if (!by_min) return;
     for (std::size_t block = begin; block < end; block += kMinBlock) {
       float low = std::numeric_limits<float>::infinity();
-      for (std::size_t k = block; k < std::min(end, block + kMinBlock); ++k) {
-        runs.sorted[k] = static_cast<float>(runs.prefix[k + 1]);
+      for (std::size_t k = block; k < std::min(end, block + kMinBlock); ++k)
         low = std::min(low, runs.sorted[k]);
-      }
       runs.block_min[block / kMinBlock] = low;
     }
   });
-  // The one serial pass: a running double sum rounds differently in any other order, and
-  // the node means must keep their bits (about 1 ns a point).
-  runs.prefix[0] = 0.0;
-  for (std::size_t k = 0; k < m; ++k) runs.prefix[k + 1] = runs.prefix[k] + runs.prefix[k + 1];
+  runs.prefix[0] = 0;
+  inclusive_scan(runs.prefix.data(), m + 1, threads);  // integers: the same sums on any threads
   return runs;
 }
 
-// The nodes, top-down in the serial builder's order (a stack, children in octant order), so
-// the array is the same node for node. Work per tested node: eight binary searches (and a
-// minimum over block minima), so the loop is short next to the passes above.
+// The nodes, breadth first (point_octree_rules above): a queue of nodes to test, children
+// in octant order. Work per tested node: eight binary searches (and a minimum over block
+// minima), so the loop is short next to the passes above.
 std::vector<PointOctreeNode> grow_nodes(const MortonOrder& order, const RunValues& runs,
-                                        const RootCube& cube, const ProjectedOptions& options) {
+                                        const PointCube& cube, int shift,
+                                        const ProjectedOptions& options) {
   const std::uint32_t count = static_cast<std::uint32_t>(order.items.size());
   const int depth = options.max_depth;
   const bool by_min = options.branch_on == ProjectedOptions::Branch::Min;
-  auto make_node = [&](glm::vec3 c, float half, std::uint32_t begin, std::uint32_t end) {
-    PointOctreeNode node;
-    node.center[0] = c.x;
-    node.center[1] = c.y;
-    node.center[2] = c.z;
-    node.half_side = half;
-    node.count = end - begin;
-    node.mean = static_cast<float>(runs.sum(begin, end) / node.count);
-    node.first_child = -1;
-    node.child_count = 0;
-    return node;
-  };
-
   const double branch_above = options.min_points * static_cast<double>(count);
-  struct Task {
-    std::uint32_t node, begin, end;
+  struct Run {
+    std::uint32_t begin, end;
     int level;
   };
   std::vector<PointOctreeNode> nodes;
-  std::vector<Task> stack;
-  nodes.push_back(make_node(cube.center, 0.5f * cube.side, 0, count));
-  stack.push_back({0, 0, count, 0});
-  while (!stack.empty()) {
-    const Task t = stack.back();
-    stack.pop_back();
-    const PointOctreeNode node = nodes[t.node];
-    if (t.level >= depth || !(static_cast<double>(node.count) > branch_above)) continue;
-    const float test_value = by_min ? runs.min(t.begin, t.end) : node.mean;
-    const bool branch = test_value <= options.node_size_ratio * 2.0 * node.half_side;
-    if (!branch) continue;
-    const int shift = 3 * (depth - t.level - 1);
+  std::vector<Run> runs_of;  // per node: its run of the Morton order and its level
+  nodes.push_back(make_point_node(cube.center, 0.5f * cube.side, count, runs.sum(0, count), shift));
+  runs_of.push_back({0, count, 0});
+  for (std::size_t next = 0; next < nodes.size(); ++next) {  // the queue: nodes not yet tested
+    const Run t = runs_of[next];
+    const float min_value = by_min ? runs.min(t.begin, t.end) : 0.0f;
+    if (!point_node_branches(nodes[next], t.level, min_value, options, branch_above)) continue;
+    const int shift_bits = 3 * (depth - t.level - 1);
+    const PointOctreeNode parent = nodes[next];
     const std::uint32_t first = static_cast<std::uint32_t>(nodes.size());
     std::uint32_t begin = t.begin;
     for (std::uint32_t octant = 0; octant < 8 && begin < t.end; ++octant) {
@@ -245,21 +265,18 @@ std::vector<PointOctreeNode> grow_nodes(const MortonOrder& order, const RunValue
       std::uint32_t low = begin, high = t.end;
       while (low < high) {
         const std::uint32_t mid = low + (high - low) / 2;
-        if (((order.key(mid) >> shift) & 7u) <= octant) low = mid + 1;
+        if (((order.key(mid) >> shift_bits) & 7u) <= octant) low = mid + 1;
         else high = mid;
       }
       const std::uint32_t end = low;
       if (end == begin) continue;
-      const float q = 0.5f * node.half_side;
-      const glm::vec3 c(node.center[0] + ((octant & 1) ? q : -q),
-                        node.center[1] + ((octant & 2) ? q : -q),
-                        node.center[2] + ((octant & 4) ? q : -q));
-      stack.push_back({static_cast<std::uint32_t>(nodes.size()), begin, end, t.level + 1});
-      nodes.push_back(make_node(c, q, begin, end));
+      nodes.push_back(make_point_node(point_child_center(parent, octant), 0.5f * parent.half_side,
+                                      end - begin, runs.sum(begin, end), shift));
+      runs_of.push_back({begin, end, t.level + 1});
       begin = end;
     }
-    nodes[t.node].first_child = static_cast<std::int32_t>(first);
-    nodes[t.node].child_count = static_cast<std::uint32_t>(nodes.size()) - first;
+    nodes[next].first_child = static_cast<std::int32_t>(first);
+    nodes[next].child_count = static_cast<std::uint32_t>(nodes.size()) - first;
   }
   return nodes;
 }
@@ -317,8 +334,9 @@ struct PointOctree {
 };
 
 // Options must have been checked.
+// shift: point_fixed_shift for an upper bound of the values and the point count.
 template <class Points>
-PointOctree build_octree(const Points& points, const ChunkSummary& summary,
+PointOctree build_octree(const Points& points, const ChunkSummary& summary, int shift,
                          const ProjectedOptions& options, StageTimings* timings = nullptr) {
   const std::size_t members = summary.first_member.back();
   if (members == 0) return {};
@@ -330,17 +348,17 @@ PointOctree build_octree(const Points& points, const ChunkSummary& summary,
     lo = glm::min(lo, summary.lo[c]);
     hi = glm::max(hi, summary.hi[c]);
   }
-  const RootCube cube(lo, hi, options.max_depth);
+  const PointCube cube(lo, hi, options.max_depth);
   PointOctree tree;
   Stopwatch clock;
   tree.order = morton_order(points, cube, 3 * options.max_depth, summary.first_member, members,
                             options.threads);
   add_time(timings, "octree: Morton order", clock.lap());
-  const RunValues runs = run_values(points, tree.order,
+  const RunValues runs = run_values(points, tree.order, shift,
                                     options.branch_on == ProjectedOptions::Branch::Min,
                                     options.threads);
   add_time(timings, "octree: sums", clock.lap());
-  tree.nodes = grow_nodes(tree.order, runs, cube, options);
+  tree.nodes = grow_nodes(tree.order, runs, cube, shift, options);
   add_time(timings, "octree: nodes", clock.lap());
   return tree;
 }
@@ -382,9 +400,12 @@ std::size_t point_count(const Mesh& mesh, PointKind kind) {
 std::vector<PointOctreeNode> build_point_octree(const glm::vec3* points, const float* values,
                                                 std::size_t count,
                                                 const ProjectedOptions& options) {
-  check_options(options);
+  check_projected_options(options);
+  const ValueRange range = value_range(values, count, options.threads, [](float) { return false; });
   const ArrayPoints input{points, values, count};
-  return build_octree(input, summarize(input, options.threads), options).nodes;
+  return build_octree(input, summarize(input, options.threads),
+                      point_fixed_shift(range.hi, count), options)
+      .nodes;
 }
 
 // ---- Per-point work: kernels/sdf_smooth_projected.h (shared with the OpenCL kernels). ----
@@ -396,15 +417,11 @@ bool gather_sphere(const PointOctreeNode* nodes, glm::vec3 center, float radius,
   return kern::sdf_gather_sphere(nodes, center, radius, mean) != 0;
 }
 
-void smooth_projected_into(const Mesh& mesh, PointKind kind, const float* values,
-                           const ProjectedOptions& options, float* out,
-                           const ProgressFn& progress, double progress_from, double progress_to,
-                           const ProjectedGatherFn& gather, StageTimings* timings) {
-  Stopwatch clock;
+ValueRange checked_projected_input(const float* values, std::size_t n,
+                                   const ProjectedOptions& options) {
   if (options.iterations < 0)
     throw std::invalid_argument("iterations must be >= 0, got " +
                                 std::to_string(options.iterations));
-  const std::size_t n = point_count(mesh, kind);
   const ValueRange range = value_range(values, n, options.threads, [](float x) {
     return !std::isfinite(x) || x < 0.0f;
   });
@@ -412,7 +429,17 @@ void smooth_projected_into(const Mesh& mesh, PointKind kind, const float* values
     throw std::invalid_argument("value " + std::to_string(range.first_bad) +
                                 " is negative or not finite (projected smoothing needs the "
                                 "SDF, a length >= 0)");
-  check_options(options);  // even when there is nothing to do
+  check_projected_options(options);  // even when there is nothing to do
+  return range;
+}
+
+void smooth_projected_into(const Mesh& mesh, PointKind kind, const float* values,
+                           const ProjectedOptions& options, float* out,
+                           const ProgressFn& progress, double progress_from, double progress_to,
+                           StageTimings* timings) {
+  Stopwatch clock;
+  const std::size_t n = point_count(mesh, kind);
+  const ValueRange range = checked_projected_input(values, n, options);
   auto unchanged = [&] { std::copy(values, values + n, out); };
   if (n == 0 || range.lo == range.hi || options.iterations == 0) return unchanged();
 
@@ -438,7 +465,7 @@ void smooth_projected_into(const Mesh& mesh, PointKind kind, const float* values
         frames.prefetch(i + kPrefetchFacesAhead);
         glm::vec3 origin, axis;
         frames.frame(i, &origin, &axis);
-        const glm::vec3 p = origin + axis * (0.5f * current[i]);
+        const glm::vec3 p = kern::sdf_project_point(origin, axis, current[i]);
         points[i] = glm::vec4(p, current[i]);
         member[i] = axis != glm::vec3(0.0f);
         if (member[i]) chunk.add(p);
@@ -447,17 +474,12 @@ void smooth_projected_into(const Mesh& mesh, PointKind kind, const float* values
     });
     summary.finish();
     add_time(timings, "points", clock.lap());
-    const PointOctree tree =
-        build_octree(PackedPoints{points.data(), member.data(), n}, summary, options, timings);
+    // Later iterations' values stay within the first's range: one shift for all.
+    const PointOctree tree = build_octree(PackedPoints{points.data(), member.data(), n}, summary,
+                                          point_fixed_shift(range.hi, n), options, timings);
     const std::vector<PointOctreeNode>& nodes = tree.nodes;
     clock.lap();  // the octree's stages were added by build_octree
     if (nodes.empty()) return unchanged();  // no point has an axis (then on the first iteration)
-    if (gather) {  // it adds its own stages
-      gather(nodes, points.data(), n, range.lo, range.hi, out);
-      clock.lap();
-      if (progress && !progress(progress_from + (it + 1) * span)) throw Cancelled();
-      continue;
-    }
     auto smooth_point = [&](std::size_t i) {
       out[i] = kern::sdf_smooth_projected_point(nodes.data(), glm::vec3(points[i]), points[i].w,
                                                 range.lo, range.hi);
@@ -494,11 +516,10 @@ void smooth_projected_into(const Mesh& mesh, PointKind kind, const float* values
 
 std::vector<float> smooth_projected(const Mesh& mesh, PointKind kind, const float* values,
                                     const ProjectedOptions& options, const ProgressFn& progress,
-                                    double progress_from, double progress_to,
-                                    const ProjectedGatherFn& gather) {
+                                    double progress_from, double progress_to) {
   std::vector<float> out(point_count(mesh, kind));
   smooth_projected_into(mesh, kind, values, options, out.data(), progress, progress_from,
-                        progress_to, gather);
+                        progress_to);
   return out;
 }
 

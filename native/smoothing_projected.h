@@ -11,7 +11,6 @@
 #pragma once
 
 #include <cstdint>
-#include <functional>
 #include <vector>
 
 #include "../kernels/sdf_smooth_projected.h"
@@ -20,6 +19,7 @@
 #include "parallel.h"
 #include "sampling.h"
 #include "stopwatch.h"
+#include "value_range.h"
 
 namespace sdf {
 
@@ -51,16 +51,52 @@ struct ProjectedOptions {
 // first_child on.
 using PointOctreeNode = kern::SdfPointNode;
 
+// ---- The rules both octree builders follow (this file's, on the host, and the OpenCL one in
+// opencl/opencl_projected.cpp), so that they make the same tree node for node: nodes in
+// breadth-first order (children of a branching node next to each other, in octant order,
+// nodes of one level in their parents' order), sums in fixed point (kern::sdf_fixed_value). ----
+
+// The root cube: the points' bounding cube, a little larger so every point falls strictly
+// inside, and never of zero size (all points may coincide, as on a sphere).
+struct PointCube {
+  glm::vec3 center, corner;
+  float side;
+  std::uint32_t cells;  // per axis at the deepest level: 2^depth
+  float scale;          // cells / side (kern::sdf_point_cell)
+  PointCube(glm::vec3 lo, glm::vec3 hi, int depth);
+};
+
+// The fixed-point shift for sums of up to `count` values in [0, hi]: each value below
+// 2^(62 - bits of count), so no sum reaches 2^62; hi maps to at least 2^(61 - bits of count)
+// units (2^40 at 1.5M points), so a mean keeps float precision.
+int point_fixed_shift(float hi, std::size_t count);
+
+// A node of `count` points (> 0) whose fixed-point values sum to `sum`, with no children yet.
+PointOctreeNode make_point_node(glm::vec3 center, float half_side, std::uint32_t count,
+                                std::uint64_t sum, int shift);
+
+// The centre of child `octant` (bit 0 x, bit 1 y, bit 2 z) of `parent`.
+glm::vec3 point_child_center(const PointOctreeNode& parent, unsigned octant);
+
+// Whether a node of `level` branches: above the deepest level, holding more than
+// branch_above points (min_points x all points), and with its points' value (their mean, or
+// `min_value` when options.branch_on is Min) at most node_size_ratio x its side.
+bool point_node_branches(const PointOctreeNode& node, int level, float min_value,
+                         const ProjectedOptions& options, double branch_above);
+
+// Checks options as build_point_octree does (std::invalid_argument).
+void check_projected_options(const ProjectedOptions& options);
+
 // kernels/sdf_smooth_projected.h's sdf_cube_fraction_in_sphere: approximate fraction of a
 // cube of side `side` whose centre is `distance` from the centre of a sphere of radius
 // `radius` that lies inside the sphere (the cube taken as the ball of equal volume).
 float cube_fraction_in_sphere(float side, float distance, float radius);
 
-// Octree over points with values; nodes[0] is the root. Throws std::invalid_argument for bad
-// options (max_depth outside [0, 20], min_points outside [0, 1], node_size_ratio < 0). Built on
-// options.threads from the points in Morton order (a parallel radix sort; every node is then a
-// run of that order, its sum a difference of two prefix sums); the nodes do not depend on the
-// thread count.
+// Octree over points with values (>= 0); nodes[0] is the root. Throws std::invalid_argument
+// for bad options (max_depth outside [0, 20], min_points outside [0, 1], node_size_ratio < 0).
+// Built on options.threads from the points in Morton order (a parallel radix sort; every node
+// is then a run of that order, its sum a difference of two prefix sums); the nodes do not
+// depend on the thread count.
 std::vector<PointOctreeNode> build_point_octree(const glm::vec3* points, const float* values,
                                                 std::size_t count, const ProjectedOptions& options);
 
@@ -68,22 +104,19 @@ std::vector<PointOctreeNode> build_point_octree(const glm::vec3* points, const f
 // Returns false (and leaves *mean alone) when it gathers nothing.
 bool gather_sphere(const PointOctreeNode* nodes, glm::vec3 center, float radius, float* mean);
 
+// The range of projected smoothing's input: n values, each finite and >= 0. Throws
+// std::invalid_argument naming the first that is not, or for iterations < 0 or bad options.
+ValueRange checked_projected_input(const float* values, std::size_t n,
+                                   const ProjectedOptions& options);
+
 // values: one per face (kind Faces) or vertex (kind Vertices), >= 0. Returns the smoothed
 // values, clamped to the input's [min, max]. A point that gathers nothing keeps its value.
 // Throws std::invalid_argument for negative or non-finite values or bad options.
-//
-// gather: runs one iteration's per-point step on another device (the OpenCL engine); null:
-// on the CPU threads. points[i] holds point i's projected position (xyz) and its value (w), the
-// layout a device reads in one 16-byte load; the gather must set next[i] =
-// kern::sdf_smooth_projected_point(nodes, points[i].xyz, points[i].w, lo, hi) for i < count.
-using ProjectedGatherFn =
-    std::function<void(const std::vector<PointOctreeNode>& nodes, const glm::vec4* points,
-                       std::size_t count, float lo, float hi, float* next)>;
+// (opencl/opencl_projected.h: the same on an OpenCL device.)
 std::vector<float> smooth_projected(const Mesh& mesh, PointKind kind, const float* values,
                                     const ProjectedOptions& options,
                                     const ProgressFn& progress = nullptr,
-                                    double progress_from = 0.0, double progress_to = 1.0,
-                                    const ProjectedGatherFn& gather = nullptr);
+                                    double progress_from = 0.0, double progress_to = 1.0);
 
 // The same, writing the result into out[0, point count) (which may be the caller's final
 // array, e.g. a NumPy one: no copy of the result is made). out must not overlap values.
@@ -93,7 +126,6 @@ std::vector<float> smooth_projected(const Mesh& mesh, PointKind kind, const floa
 void smooth_projected_into(const Mesh& mesh, PointKind kind, const float* values,
                            const ProjectedOptions& options, float* out,
                            const ProgressFn& progress = nullptr, double progress_from = 0.0,
-                           double progress_to = 1.0, const ProjectedGatherFn& gather = nullptr,
-                           StageTimings* timings = nullptr);
+                           double progress_to = 1.0, StageTimings* timings = nullptr);
 
 }  // namespace sdf

@@ -1,28 +1,21 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
-// The OpenCL versions of two smoothing methods (paper 4.4): projected points (the octree is
-// built on the host each iteration and uploaded; the per-point gather runs on the device) and
-// texture space (the UV islands are found on the host; drawing, dilation, both blur passes and
-// reading face values back run on the device; vertex values are read back on the host). The
-// device code is kernels/sdf_smooth_*.h, which the CPU versions run as C++, so the results
-// agree with the CPU's to float rounding (exp, and float sums where a device has no double;
-// texture smoothing runs on the CPU threads on such a device, since drawing needs double).
+// The OpenCL version of texture-space smoothing (paper 4.4; projected points:
+// opencl_projected.h): the UV islands are found on the host; drawing, dilation, both blur
+// passes and reading face values back run on the device; vertex values are read back on the
+// host. The device code is kernels/sdf_smooth_texture.h, which the CPU version runs as C++, so
+// the results agree with the CPU's to float rounding (exp); on a device without double
+// precision texture smoothing runs on the CPU threads, since drawing needs double.
 #pragma once
 
 #include <vector>
 
-#include "../smoothing_projected.h"
 #include "../smoothing_texture.h"
 #include "devices.h"
 
 namespace sdf::cl {
 
-// As sdf::smooth_projected_into, on `device`. Throws Error for OpenCL failures and
-// std::runtime_error when the octree and points do not fit the device.
-void smooth_projected_opencl(const Device& device, const Mesh& mesh, PointKind kind,
-                             const float* values, const ProjectedOptions& options, float* out,
-                             const ProgressFn& progress = nullptr, StageTimings* timings = nullptr);
-
-// As sdf::smooth_texture, on `device` (the same errors as smooth_projected_opencl).
+// As sdf::smooth_texture, on `device` (throws Error for OpenCL failures and
+// std::runtime_error when the images do not fit the device).
 TextureSmoothing smooth_texture_opencl(const Device& device, const Mesh& mesh, PointKind kind,
                                        const float* values, const float* uvs,
                                        const TextureOptions& options, bool keep_image,

@@ -12,7 +12,12 @@ import numpy as np
 
 from . import _core
 from .normalization import NORMALIZATIONS, normalize_values
-from .smoothing import check_smoothing, prepare_texture_for, run_checked
+from .smoothing import (
+    check_smoothing,
+    prepare_projected_for,
+    prepare_texture_for,
+    run_checked,
+)
 
 SAMPLINGS = ("fibonacci", "random", "cgal")
 POINTS = ("faces", "vertices")
@@ -261,26 +266,34 @@ def compute(
     if progress is not None and smoothing != "none":
         cast_progress = lambda fraction: progress(0.9 * fraction)  # noqa: E731
 
-    # Texture smoothing's work on the mesh and UVs alone (UV islands; on a device, the UVs
-    # and islands uploaded): done while a device casts, when the host would only wait (for
-    # the CPU engine, after its cast).
+    # Smoothing's work that needs no SDF, done while a device casts, when the host would only
+    # wait (for the CPU engine, after its cast): texture smoothing's UV islands (on a device,
+    # the UVs and islands uploaded); on a device, projected smoothing's point frames uploaded
+    # from the cast's own points (oriented as the cast saw the mesh).
     prepared, prepare_failure = [], []
 
     def run(engine_name):
         prepared.clear()
         prepare_failure.clear()
 
-        def prepare_texture():
+        def prepare(cast_points):
             try:
-                prepared.append(prepare_texture_for(v, t, points, smoothing_resolved,
-                                                    int(threads), engine_name))
+                if smoothing == "texture":
+                    prepared.append(prepare_texture_for(v, t, points, smoothing_resolved,
+                                                        int(threads), engine_name))
+                else:
+                    prepared.append(prepare_projected_for(cast_points, int(threads),
+                                                          engine_name))
             except Exception as error:  # raised after the cast: not a device failure
                 prepare_failure.append(error)
 
+        beside = None
+        if smoothing == "texture" or (smoothing == "projected" and engine_name != "cpu"):
+            beside = prepare
         return _core.compute(
             v, t, int(rays), float(cone_angle), sampling, int(seed), points, int(threads),
             cast_progress, engine_name, accel, int(octree_depth), int(octree_leaf_size),
-            orientation, bvh_quality, prepare_texture if smoothing == "texture" else None,
+            orientation, bvh_quality, beside,
         )
 
     out, fallback = _run_with_fallback(run, chosen, engine, "")
@@ -296,28 +309,35 @@ def compute(
     timings = dict(out["timings"])
     if engine == "auto":
         timings["devices"] = timings.get("devices", 0.0) + choosing
-    if prepared:  # what 'beside cast' spent its time on
+    if prepared and prepared[0] is not None:  # what 'beside cast' spent its time on
         timings.update({f"beside cast: {k}": x for k, x in prepared[0].timings.items()})
     raw = out["raw"]
     values = raw.copy()
     if smoothing != "none":
         clock = time.perf_counter()
         smooth_engine = "cpu" if fallback else chosen
-        # Projected smoothing moves points along their inward axes, and the k-ring's corner
-        # weights compare face normals: both on the mesh as the cast oriented it. (Texture
-        # smoothing does not depend on the winding, and its UVs follow the caller's corners.)
-        smooth_t = t
-        if smoothing in ("projected", "kring") and out["reversed"] is not None:
-            smooth_t = t.copy()
-            smooth_t[out["reversed"]] = smooth_t[out["reversed"]][:, [0, 2, 1]]
+        stages = {}  # of the smoothing, as 'smooth: <stage>'
 
         def run_smoothing(engine_name):
+            stages.clear()  # a failed device's partial stages
+            ready = prepared[0] if prepared else None
+            if smoothing == "projected" and engine_name == "cpu":
+                ready = None  # the frames on a device that failed: the CPU works from the mesh
+            # Projected smoothing moves points along their inward axes, and the k-ring's
+            # corner weights compare face normals: both on the mesh as the cast oriented it
+            # (prepared frames come from the cast's points, oriented already). Texture
+            # smoothing does not depend on the winding, and its UVs follow the caller's corners.
+            smooth_t = t
+            if (smoothing in ("projected", "kring") and ready is None
+                    and out["reversed"] is not None):
+                smooth_t = t.copy()
+                smooth_t[out["reversed"]] = smooth_t[out["reversed"]][:, [0, 2, 1]]
             # compute()'s own checked mesh, options and SDF (raw: finite, >= 0): no second
             # round of checks.
             return run_checked(
                 v, smooth_t, raw, points, smoothing, smoothing_resolved, int(threads),
                 None if progress is None else lambda f: progress(0.9 + 0.1 * f),
-                engine_name, prepared[0] if prepared else None,
+                engine_name, ready, stages,
             )
 
         values, smoothing_fallback = _run_with_fallback(
@@ -325,6 +345,7 @@ def compute(
         )
         fallback = smoothing_fallback or fallback
         timings["smooth"] = time.perf_counter() - clock
+        timings.update({f"smooth: {k}": x for k, x in stages.items()})
     clock = time.perf_counter()
     normalized = normalize_values(values, normalize, threads)
     timings["normalize"] = time.perf_counter() - clock

@@ -242,31 +242,49 @@ def prepare_texture_for(v, t, points, o, threads, engine="cpu"):
     )
 
 
+def prepare_projected_for(cast_points, threads, engine):
+    """Projected smoothing's point frames (origins, inward axes) uploaded to the device of
+    `engine` (an OpenCL one) from compute()'s cast points, for run_checked(prepared=...); None
+    where they were not uploaded (run_checked then works from the mesh)."""
+    return _core.prepare_projected(cast_points, threads, engine)
+
+
 def _weld_argument(o):
     """The native weld tolerance: < 0 for none."""
     return -1.0 if o["weld_tolerance"] is None else o["weld_tolerance"]
 
 
 def run_checked(v, t, values, points, method, o, threads, progress, engine="cpu",
-                prepared=None):
+                prepared=None, timings=None):
     """smooth()'s work on arguments checked already (by smooth(), or by compute() on its own
     mesh and SDF), with the options `o` as check_smoothing returns them; prepared: from
-    prepare_texture_for on this mesh and these options, or None."""
+    prepare_texture_for or prepare_projected_for on this mesh and these options (projected: on
+    an OpenCL engine only), or None; timings: a dict the method's stages (seconds) are added
+    to, or None."""
+    if timings is None:
+        timings = {}
     if method == "none":
         return values.copy()
     if method == "kring":
-        return _core.smooth_kring(
+        out = _core.smooth_kring(
             v, t, values, points,
             -1 if o["k"] is None else o["k"],
             0.0 if o["sigma"] is None else o["sigma"],
             0.0 if o["corner_angle"] is None else o["corner_angle"],
             _weld_argument(o),
             threads, progress,
-        )["values"]
+        )
+        timings.update(out["timings"])
+        return out["values"]
+    if method == "projected" and prepared is not None:
+        return _core.smooth_projected_prepared(
+            prepared, values, o["iterations"], o["max_depth"], o["min_points"],
+            o["node_size_ratio"], o["branch_on"], threads, progress, engine, timings,
+        )
     if method == "projected":
         return _core.smooth_projected(
             v, t, values, points, o["iterations"], o["max_depth"], o["min_points"],
-            o["node_size_ratio"], o["branch_on"], threads, progress, engine,
+            o["node_size_ratio"], o["branch_on"], threads, progress, engine, timings,
         )
     if prepared is not None:
         out = _core.smooth_texture_prepared(
@@ -281,6 +299,7 @@ def run_checked(v, t, values, points, method, o, threads, progress, engine="cpu"
             _weld_argument(o),
             o["return_image"], threads, progress, engine,
         )
+    timings.update(out["timings"])
     # A few faces just over the square's edge are common (spot.obj's layout: 0.05% at 1.5M
     # faces) and lose little; most of them outside is a UDIM or offset layout.
     if out["faces_outside"] > 0.01 * len(t):

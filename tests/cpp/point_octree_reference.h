@@ -1,7 +1,9 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
 // Projected-points smoothing as it was written first: serial, every stage on one thread. Kept
-// as the specification the parallel version (native/smoothing_projected.cpp) must match bit
-// for bit: the same node array, the same smoothed values.
+// as the specification the parallel version (native/smoothing_projected.cpp) and the OpenCL
+// builder must match bit for bit: the same node array, the same smoothed values. Since the
+// sixth session: cells by multiplying with cells / side (as OpenCL computes them), node sums
+// in fixed point (the same in any order) and nodes breadth first (as a device makes them).
 #pragma once
 
 #include <algorithm>
@@ -38,11 +40,15 @@ inline void radix_sort(std::vector<std::uint64_t>& keys, std::vector<std::uint32
 
 }  // namespace reference_detail
 
-// Options are assumed valid (the tests pass valid ones).
+// Options are assumed valid (the tests pass valid ones). The fixed-point scale comes from the
+// largest value and `count` (build_point_octree), or from `scale_top` and `scale_count` where
+// given (smooth_projected: the input's largest value and all points, members or not).
 inline std::vector<PointOctreeNode> reference_point_octree(const glm::vec3* points,
                                                            const float* values,
                                                            std::size_t count,
-                                                           const ProjectedOptions& options) {
+                                                           const ProjectedOptions& options,
+                                                           float scale_top = -1.0f,
+                                                           std::size_t scale_count = 0) {
   using namespace reference_detail;
   std::vector<PointOctreeNode> nodes;
   if (count == 0) return nodes;
@@ -58,23 +64,34 @@ inline std::vector<PointOctreeNode> reference_point_octree(const glm::vec3* poin
   const glm::vec3 center = 0.5f * (lo + hi);
 
   const int depth = options.max_depth;
-  const double cells = std::ldexp(1.0, depth);
+  const std::uint32_t cells = std::uint32_t{1} << depth;
+  const float scale = static_cast<float>(cells) / side;
   const glm::vec3 corner = center - glm::vec3(0.5f * side);
+  // Fixed point: values below 2^(62 - bits of count) units, so sums stay below 2^62.
+  float top = scale_top;
+  if (top < 0.0f)
+    for (std::size_t i = 0; i < count; ++i) top = std::max(top, values[i]);
+  if (scale_count == 0) scale_count = count;
+  int exponent = 0, count_bits = 0;
+  std::frexp(top, &exponent);
+  while ((scale_count >> count_bits) != 0) ++count_bits;
+  const int fixed_shift = 62 - count_bits - exponent;
   std::vector<std::uint64_t> keys(count);
   std::vector<std::uint32_t> order(count);
   for (std::size_t i = 0; i < count; ++i) {
     std::uint64_t key = 0;
     for (int a = 0; a < 3; ++a) {
-      const double c = std::floor((points[i][a] - corner[a]) / side * cells);
-      const std::uint64_t cell = static_cast<std::uint64_t>(std::min(cells - 1.0, std::max(0.0, c)));
+      const float c = std::floor((points[i][a] - corner[a]) * scale);
+      const std::uint64_t cell = c > 0.0f ? std::min<std::uint64_t>(cells - 1, static_cast<std::uint64_t>(c)) : 0;
       key |= spread_bits_21(cell) << a;
     }
     keys[i] = key;
     order[i] = static_cast<std::uint32_t>(i);
   }
   radix_sort(keys, order, 3 * depth);
-  std::vector<double> prefix(count + 1, 0.0);
-  for (std::size_t i = 0; i < count; ++i) prefix[i + 1] = prefix[i] + values[order[i]];
+  std::vector<std::uint64_t> prefix(count + 1, 0);
+  for (std::size_t i = 0; i < count; ++i)
+    prefix[i + 1] = prefix[i] + static_cast<std::uint64_t>(std::ldexp(values[order[i]], fixed_shift));
 
   const bool by_min = options.branch_on == ProjectedOptions::Branch::Min;
   std::vector<float> sorted_values;
@@ -90,7 +107,8 @@ inline std::vector<PointOctreeNode> reference_point_octree(const glm::vec3* poin
     node.center[2] = c.z;
     node.half_side = half;
     node.count = end - begin;
-    node.mean = static_cast<float>((prefix[end] - prefix[begin]) / node.count);
+    node.mean = static_cast<float>(
+        std::ldexp(static_cast<double>(prefix[end] - prefix[begin]) / node.count, -fixed_shift));
     node.first_child = -1;
     node.child_count = 0;
     return node;
@@ -101,12 +119,11 @@ inline std::vector<PointOctreeNode> reference_point_octree(const glm::vec3* poin
     std::uint32_t node, begin, end;
     int level;
   };
-  std::vector<Task> stack;
+  std::vector<Task> queue;  // breadth first: tasks are taken in the order they were made
   nodes.push_back(make_node(center, 0.5f * side, 0, static_cast<std::uint32_t>(count)));
-  stack.push_back({0, 0, static_cast<std::uint32_t>(count), 0});
-  while (!stack.empty()) {
-    const Task t = stack.back();
-    stack.pop_back();
+  queue.push_back({0, 0, static_cast<std::uint32_t>(count), 0});
+  for (std::size_t next = 0; next < queue.size(); ++next) {
+    const Task t = queue[next];
     const PointOctreeNode node = nodes[t.node];
     if (t.level >= depth || !(static_cast<double>(node.count) > branch_above)) continue;
     float test_value = node.mean;
@@ -127,7 +144,7 @@ inline std::vector<PointOctreeNode> reference_point_octree(const glm::vec3* poin
       const glm::vec3 c(node.center[0] + ((octant & 1) ? q : -q),
                         node.center[1] + ((octant & 2) ? q : -q),
                         node.center[2] + ((octant & 4) ? q : -q));
-      stack.push_back({static_cast<std::uint32_t>(nodes.size()), begin, end, t.level + 1});
+      queue.push_back({static_cast<std::uint32_t>(nodes.size()), begin, end, t.level + 1});
       nodes.push_back(make_node(c, q, begin, end));
       begin = end;
     }
@@ -164,7 +181,8 @@ inline std::vector<float> reference_smooth_projected(const Mesh& mesh, PointKind
       tree_values[j] = current[members[j]];
     }
     const std::vector<PointOctreeNode> nodes =
-        reference_point_octree(tree_points.data(), tree_values.data(), members.size(), options);
+        reference_point_octree(tree_points.data(), tree_values.data(), members.size(), options,
+                               hi, n);  // the input's largest value: later iterations stay below it
     for (std::size_t i = 0; i < n; ++i)
       next[i] = kern::sdf_smooth_projected_point(nodes.data(), projected[i], current[i], lo, hi);
     current.swap(next);

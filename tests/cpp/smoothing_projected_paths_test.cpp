@@ -184,27 +184,5 @@ TEST(ProjectedSmoothingPaths, SameValuesAsTheSerialVersion) {
   }
 }
 
-TEST(ProjectedSmoothingPaths, TheGatherGetsEveryPointPackedWithItsValue) {
-  // What the OpenCL engine's gather receives: point i's projected position and value in one
-  // vec4; running the kernel on them gives the CPU's result.
-  const Mesh mesh = sphere_with_degenerate_points();
-  const std::vector<float> v = test::noisy(mesh.triangles.size(), 1.8f, 0.6f, 5);
-  ProjectedOptions o;
-  o.iterations = 2;
-  std::size_t calls = 0;
-  const ProjectedGatherFn gather = [&](const std::vector<PointOctreeNode>& nodes,
-                                       const glm::vec4* points, std::size_t count, float lo,
-                                       float hi, float* next) {
-    ++calls;
-    ASSERT_EQ(count, mesh.triangles.size());
-    for (std::size_t i = 0; i < count; ++i)
-      next[i] = kern::sdf_smooth_projected_point(nodes.data(), glm::vec3(points[i]), points[i].w,
-                                                 lo, hi);
-  };
-  EXPECT_EQ(smooth_projected(mesh, PointKind::Faces, v.data(), o, nullptr, 0.0, 1.0, gather),
-            smooth_projected(mesh, PointKind::Faces, v.data(), o));
-  EXPECT_EQ(calls, 2u);
-}
-
 }  // namespace
 }  // namespace sdf

@@ -106,6 +106,33 @@ TEST(PointOctree, BranchingOnTheMinimumSplitsMixedNodes) {
   EXPECT_GT(by_min.size(), 100u);
 }
 
+TEST(PointOctree, FixedPointSumsKeepMeansExactForAnyScaleAndCount) {
+  // Node sums are integers of 2^-shift units (kern::sdf_fixed_value): a constant's mean must
+  // come back exactly, with no sum overflowing, from tiny to huge values and counts.
+  for (float value : {1e-30f, 3.7e-5f, 1.0f, 0.1f, 6.02e20f}) {
+    for (std::size_t n : {std::size_t{1}, std::size_t{1000}, std::size_t{1} << 20}) {
+      std::vector<glm::vec3> p(n);
+      for (std::size_t i = 0; i < n; ++i)
+        p[i] = glm::vec3(float(i % 101), float(i % 37), float(i % 13)) * value;
+      const std::vector<float> v(n, value);
+      ProjectedOptions o;
+      o.node_size_ratio = 1e30;  // branch wherever the counts allow
+      const auto nodes = build_point_octree(p.data(), v.data(), n, o);
+      for (const PointOctreeNode& node : nodes) ASSERT_EQ(node.mean, value) << value << " " << n;
+    }
+  }
+  // Mixed magnitudes: a mean's relative error stays at float precision (values down to
+  // 2^-24 of the largest keep 16 of their bits or more).
+  std::vector<glm::vec3> p;
+  std::vector<float> v;
+  cloud(50000, p, v);
+  for (std::size_t i = 0; i < v.size(); i += 3) v[i] *= 1e-4f;
+  const auto nodes = build_point_octree(p.data(), v.data(), p.size(), ProjectedOptions{});
+  double total = 0.0;
+  for (float x : v) total += x;
+  EXPECT_NEAR(nodes[0].mean, total / v.size(), 1e-7 * total / v.size());
+}
+
 TEST(CubeFraction, LimitsAndShape) {
   const float side = 1.0f, rho = 0.62035049f;
   EXPECT_EQ(cube_fraction_in_sphere(side, 5.0f, 1.0f), 0.0f);        // far apart
