@@ -54,6 +54,15 @@ void write_buffer(cl_context context, cl_command_queue queue, Staging* staging, 
         "clEnqueueWriteBuffer");
 }
 
+void read_buffer(DeviceState& s, cl_mem source, void* data, std::size_t bytes) {
+  if (bytes == 0) return;
+  if (s.stage_uploads && s.staging.worth(bytes) &&
+      s.staging.read(s.context, s.queue, source, data, bytes, s.copy_threads))
+    return;
+  check(api()->clEnqueueReadBuffer(s.queue, source, CL_TRUE, 0, bytes, data, 0, nullptr, nullptr),
+        "clEnqueueReadBuffer");
+}
+
 std::string build_options(const Device& device, int rays) {
   std::string options = "-cl-std=CL1.2 -DSDF_MAX_RAYS=" + std::to_string(std::max(rays, 1));
   cl_device_fp_config fp = 0;

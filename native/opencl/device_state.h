@@ -94,6 +94,10 @@ inline void write_buffer(DeviceState& s, cl_mem destination, const void* data,
                destination, data, bytes);
 }
 
+// Reads `bytes` of `source` into `data` on the state's queue, waiting for them: through its
+// staging where uploads are staged and it is worth it (the copy out on s.copy_threads).
+void read_buffer(DeviceState& s, cl_mem source, void* data, std::size_t bytes);
+
 class Buffer {
  public:
   Buffer(DeviceState& s, std::size_t bytes, const void* data) {

@@ -208,7 +208,7 @@ TextureDeviceFn texture_on_device(const Device& device, const PreparedTexture* p
                                        blurred.data(), 0, nullptr, nullptr),
             "clEnqueueReadBuffer");
     }
-    if (faces && m > 0) read(s, *read_values, m * sizeof(float), out.data());
+    if (faces && m > 0) read_buffer(s, read_values->get(), out.data(), m * sizeof(float));
     check(api()->clFinish(s.queue), "clFinish (download)");
     timings.emplace_back("device: download", clock.lap());
   };

@@ -66,4 +66,32 @@ bool Staging::write(cl_context context, cl_command_queue queue, cl_mem destinati
   return true;
 }
 
+bool Staging::read(cl_context context, cl_command_queue queue, cl_mem source, void* data,
+                   std::size_t bytes, unsigned threads) {
+  if (!ready(context, queue)) return false;
+  const Api& cl = *api();
+  char* to = static_cast<char*>(data);
+  const unsigned copiers = std::min(kCopyThreads, resolve_threads(threads));
+  auto queue_read = [&](std::size_t offset, int slot) {
+    wait(slot);  // an upload's DMA out of the chunk must be done before it is overwritten
+    check(cl.clEnqueueReadBuffer(queue, source, CL_FALSE, offset,
+                                 std::min(chunk_bytes_, bytes - offset), host_[slot], 0, nullptr,
+                                 &pending_[slot]),
+          "clEnqueueReadBuffer (staged)");
+  };
+  int slot = next_;
+  queue_read(0, slot);
+  for (std::size_t offset = 0; offset < bytes; offset += chunk_bytes_, slot ^= 1) {
+    if (offset + chunk_bytes_ < bytes) queue_read(offset + chunk_bytes_, slot ^ 1);
+    wait(slot);
+    const char* from = static_cast<const char*>(host_[slot]);
+    const std::size_t size = std::min(chunk_bytes_, bytes - offset);
+    parallel_for(size, kCopyGrain, copiers, [&](std::size_t begin, std::size_t end) {
+      std::memcpy(to + offset + begin, from + begin, end - begin);
+    });
+  }
+  next_ = slot;
+  return true;
+}
+
 }  // namespace sdf::cl

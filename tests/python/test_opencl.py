@@ -288,9 +288,11 @@ def test_reversed_faces_give_the_bits_of_the_mesh_wound_right(engine):
 
 
 def test_uploads_staged_through_pinned_chunks_give_the_same_bits():
-    # GPUs upload through two pinned chunks of 16 MiB taken in turn; the hook stages every
-    # upload on any device through 64 KiB chunks, so bunny00's (3.6 MB of triangles, 3.3 MB
-    # of points) and the smoothing's cross dozens of chunk boundaries.
+    # GPUs upload (and the smoothing downloads) through two pinned chunks of 16 MiB taken in
+    # turn; the hook stages every transfer on any device through 64 KiB chunks, so bunny00's
+    # (3.6 MB of triangles, 3.3 MB of points) and the smoothing's cross dozens of chunk
+    # boundaries, both ways; compute(smoothing='projected') uploads the cast's points' frames
+    # through the side queue's chunks.
     code = (
         "import json, numpy as np, shape_diameter as sd\n"
         "from shape_diameter.mesh_io import load_mesh\n"
@@ -304,11 +306,15 @@ def test_uploads_staged_through_pinned_chunks_give_the_same_bits():
         "options = {'texture_size': 128}\n"
         "texture = [sd.compute(v, t, engine=e, smoothing='texture', uvs=uvs,"
         " smoothing_options=options).values for e in ('cpu', engine)]\n"
+        "projected = [sd.compute(v, t, engine=e, smoothing='projected').values"
+        " for e in ('cpu', engine)]\n"
         "print(json.dumps({'cast': bool(np.array_equal(cpu.raw, cl.raw)),"
-        " 'texture': bool(np.array_equal(*texture)), 'smoothed': smoothed.tolist()}))\n"
+        " 'texture': bool(np.array_equal(*texture)),"
+        " 'projected': bool(np.array_equal(*projected)), 'smoothed': smoothed.tolist()}))\n"
     )
     out = run_python(code, SDF_OPENCL_STAGING_CHUNK=65536)
     assert out["cast"] and out["texture"]  # the texture's UVs went up the side queue's chunks
+    assert out["projected"]
     vertices, triangles = load_mesh(DATA / "bunny00.off")
     raw = sd.compute(vertices, triangles, engine="cpu").raw
     direct = sd.smooth(vertices, triangles, raw, "projected", engine=OPENCL[0])
