@@ -265,9 +265,9 @@ def opencl_main(args, repeat, threads):
                 cells.append(f"{seconds:.3f}")
         lines.append(f"| {radius} | " + " | ".join(cells) + " |")
     lines += ["", "### Projected points, CPU and OpenCL", "",
-              "Seconds per call, 1 iteration (the octree is built on the host and uploaded; on "
-              "OpenCL the per-point gather runs on the device). Paper: 0.58 s (GPU) to 3.39 s "
-              "(CPU) at 500k faces.", "",
+              "Seconds per call, 1 iteration (on OpenCL the points, the octree and the gather "
+              "all run on the device; the points' frames are made on the host). Paper: 0.58 s "
+              "(GPU) to 3.39 s (CPU) at 500k faces.", "",
               "| mesh | faces | CPU | OpenCL | OpenCL, 2 iterations |", "|---|---:|---:|---:|---:|"]
     for m in meshes:
         cpu = m.smooth("projected", repeat, threads)[0]
@@ -278,8 +278,7 @@ def opencl_main(args, repeat, threads):
               "Defaults (projected: 1 iteration; texture: 1024 x 1024, radius 8), over "
               f"compute(engine={engine!r})'s cast time on the same mesh: smooth() alone, and "
               "compute(smoothing=...)'s 'smooth' stage (there the texture's UV islands are found "
-              "while the device casts). The projected points' octree is built on the host; "
-              "its gather runs on the device.", "",
+              "while the device casts, and the projected points' frames uploaded).", "",
               "| mesh | faces | OpenCL cast s | projected s | % | in compute() s | % | "
               "texture s | % | in compute() s | % |",
               "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|"]  # fmt: skip

@@ -105,8 +105,8 @@ def smooth(
         name>' ('opencl:all' uses the first of its devices). OpenCL runs the same kernel code
         as the CPU (kernels/sdf_smooth_*.h): results agree within 1e-4 relative, and are
         usually the CPU's bits (the bilateral weights' exp, and sums on a device without
-        double precision, can differ in the last bits). 'projected' builds its octree on the
-        host and gathers on the device; 'texture' finds the UV islands on the host and draws,
+        double precision, can differ in the last bits). 'projected' runs wholly on the device
+        (its octree built there, level by level, node for node the CPU's); 'texture' finds the UV islands on the host and draws,
         dilates, blurs and reads face values back on the device (vertex values are read back
         on the host; a device without double precision, or a face spanning more than 2^16
         texels, leaves 'texture' to the CPU threads, with the same values).
