@@ -107,4 +107,37 @@ __kernel void sdf_texture_read_faces(uint first, uint count, int width, int heig
   out[f] = sdf_texture_read_face(f, uvs, width, height, face_island[f], island, blurred, lo, hi,
                                  values[f]);
 }
+
+/* Read back, vertex values, first step: every corner of faces [first, first + count) sampled
+ * (sdf_texture_sample_corner; NaN: not sampled), 3 per face. */
+__kernel void sdf_texture_sample_corners(uint first, uint count, int width, int height,
+                                         __global const float* uvs,
+                                         __global const int* face_island,
+                                         __global const int* island,
+                                         __global const float* blurred,
+                                         __global float* samples) {
+  uint gid = get_global_id(0);
+  if (gid >= count) return;
+  size_t f = first + gid;
+  for (int c = 0; c < 3; ++c)
+    samples[3 * f + c] = sdf_texture_sample_corner(uvs[6 * f + 2 * c], uvs[6 * f + 2 * c + 1],
+                                                   width, height, face_island[f], island,
+                                                   blurred);
+}
+
+/* Then each vertex of [first, first + count): the mean over its merged vertex's corners
+ * (group_first, corners: CornerGroups; merged: per vertex its group, null for the vertex's
+ * own), or its input value where none was sampled. */
+__kernel void sdf_texture_read_vertices(uint first, uint count, __global const uint* merged,
+                                        __global const uint* group_first,
+                                        __global const uint* corners,
+                                        __global const float* samples, float lo, float hi,
+                                        __global const float* values, __global float* out) {
+  uint gid = get_global_id(0);
+  if (gid >= count) return;
+  uint v = first + gid;
+  uint k = merged ? merged[v] : v;
+  out[v] = sdf_texture_vertex_mean(group_first[k], group_first[k + 1], corners, samples, lo, hi,
+                                   values[v]);
+}
 #endif

@@ -252,6 +252,51 @@ SDF_INLINE float sdf_texture_read_face(sdf_uint32 f, SDF_GLOBAL const float* uvs
   return t >= 0 && island[t] == face_island ? blurred[t] : keep;
 }
 
+/* Step 5 for vertex values, one corner at (u, v) of a face of island `face_island`: the
+ * bilinear read of the blurred texels around it that belong to the island, each weighing its
+ * share; where none does, the texel under it if of the island; else NaN (not sampled). */
+SDF_INLINE float sdf_texture_sample_corner(float u, float v, int width, int height,
+                                           sdf_int32 face_island,
+                                           SDF_GLOBAL const sdf_int32* island,
+                                           SDF_GLOBAL const float* blurred) {
+  double x = u * (double)width - 0.5, y = v * (double)height - 0.5;
+  double fx = floor(x), fy = floor(y);
+  int x0 = (int)sdf_dmax(-2.0, sdf_dmin(fx, (double)width));
+  int y0 = (int)sdf_dmax(-2.0, sdf_dmin(fy, (double)height));
+  double ax = x - fx, ay = y - fy;
+  double sum = 0.0, weight = 0.0;
+  for (int k = 0; k < 4; ++k) {
+    int tx = x0 + (k & 1), ty = y0 + (k >> 1);
+    if (tx < 0 || ty < 0 || tx >= width || ty >= height) continue;
+    size_t t = (size_t)ty * width + tx;
+    if (island[t] != face_island) continue;
+    double w = ((k & 1) ? ax : 1.0 - ax) * ((k >> 1) ? ay : 1.0 - ay);
+    sum += w * blurred[t];
+    weight += w;
+  }
+  if (weight > 0.0) return (float)(sum / weight);
+  sdf_int64 t = sdf_texel_at(u, v, width, height);
+  return t >= 0 && island[t] == face_island ? blurred[t] : NAN;
+}
+
+/* Step 5 for vertex values, one vertex: the mean of its (merged vertex's) sampled corners,
+ * corners[begin, end) in face order (samples: NaN where not sampled), summed in double in that
+ * order, clamped to [lo, hi]; `keep` where none was sampled. */
+SDF_INLINE float sdf_texture_vertex_mean(sdf_uint32 begin, sdf_uint32 end,
+                                         SDF_GLOBAL const sdf_uint32* corners,
+                                         SDF_GLOBAL const float* samples, float lo, float hi,
+                                         float keep) {
+  double sum = 0.0;
+  sdf_uint32 count = 0;
+  for (sdf_uint32 j = begin; j < end; ++j) {
+    float s = samples[corners[j]];
+    if (s != s) continue; /* NaN: not sampled */
+    sum += s;
+    ++count;
+  }
+  return count > 0 ? sdf_min(hi, sdf_max(lo, (float)(sum / count))) : keep;
+}
+
 #endif /* SDF_HAVE_DOUBLE */
 
 /* One ring of dilation at texel (x, y): an empty texel (island < 0) next to texels with a

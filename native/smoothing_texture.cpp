@@ -218,99 +218,38 @@ void read_back_faces(const float* uvs, const std::vector<std::int32_t>& face_isl
 }
 
 // Step 5 for vertex values: a bilinear read at every corner (taps of the corner's island),
-// then the mean over each merged vertex's corners, in face order, so the copies of a vertex
-// split at a UV seam agree.
-void read_back_vertices(const Mesh& mesh, const float* uvs, const UvIslands& islands, int width,
-                        int height, const std::vector<std::int32_t>& island,
-                        const std::vector<float>& blurred, float lo, float hi, unsigned threads,
-                        std::vector<float>& out) {
+// then each vertex the mean over its merged vertex's corners, in face order, so the copies of
+// a vertex split at a UV seam agree.
+void read_back_vertices(const Mesh& mesh, const float* uvs, const UvIslands& islands,
+                        const CornerGroups& groups, int width, int height,
+                        const std::vector<std::int32_t>& island, const std::vector<float>& blurred,
+                        float lo, float hi, unsigned threads, std::vector<float>& out) {
   const std::size_t m = mesh.triangles.size();
-  UninitializedVector<float> sample(3 * m);
-  UninitializedVector<std::uint8_t> sampled(3 * m);
+  UninitializedVector<float> samples(3 * m);
   parallel_for(m, kFaceGrain, threads, [&](std::size_t begin, std::size_t end) {
-    for (std::size_t f = begin; f < end; ++f) {
-      const std::int32_t id = islands.face_island[f];
-      for (int c = 0; c < 3; ++c) {
-        sampled[3 * f + c] = 0;
-        const float u = uvs[6 * f + 2 * c], v = uvs[6 * f + 2 * c + 1];
-        const double x = u * double(width) - 0.5, y = v * double(height) - 0.5;
-        const double fx = std::floor(x), fy = std::floor(y);
-        const int x0 = static_cast<int>(std::max(-2.0, std::min(fx, double(width))));
-        const int y0 = static_cast<int>(std::max(-2.0, std::min(fy, double(height))));
-        const double ax = x - fx, ay = y - fy;
-        double sum = 0.0, weight = 0.0;
-        for (int k = 0; k < 4; ++k) {
-          const int tx = x0 + (k & 1), ty = y0 + (k >> 1);
-          if (tx < 0 || ty < 0 || tx >= width || ty >= height) continue;
-          const std::size_t t = static_cast<std::size_t>(ty) * width + tx;
-          if (island[t] != id) continue;
-          const double w = ((k & 1) ? ax : 1.0 - ax) * ((k >> 1) ? ay : 1.0 - ay);
-          sum += w * blurred[t];
-          weight += w;
-        }
-        if (weight > 0.0) {
-          sample[3 * f + c] = static_cast<float>(sum / weight);
-          sampled[3 * f + c] = 1;
-          continue;
-        }
-        const std::int64_t t = kern::sdf_texel_at(u, v, width, height);
-        if (t >= 0 && island[t] == id) {
-          sample[3 * f + c] = blurred[t];
-          sampled[3 * f + c] = 1;
-        }
-      }
-    }
-  });
-  // The sums in face order per merged vertex, in parallel: the sampled corners are
-  // partitioned (stably, one radix pass) into blocks of consecutive keys, and each block sums
-  // its own keys walking its corners in order.
-  const std::uint32_t keys = islands.merged_count;
-  auto key_of = [&](std::size_t corner) {
-    const std::uint32_t v = mesh.triangles[corner / 3][corner % 3];
-    return islands.merged.empty() ? v : islands.merged[v];
-  };
-  int key_bits = 1;
-  while (key_bits < 32 && (std::uint64_t{1} << key_bits) < keys) ++key_bits;
-  const int block_bits = std::min(key_bits, 8);
-  const int shift = key_bits - block_bits;  // block of key k: k >> shift
-  UninitializedVector<std::uint64_t> items(3 * m);
-  parallel_for(m, kFaceGrain, threads, [&](std::size_t begin, std::size_t end) {
-    for (std::size_t corner = 3 * begin; corner < 3 * end; ++corner)
-      items[corner] = (std::uint64_t{key_of(corner)} << 32) | corner;
-  });
-  radix_sort_by_bits(items, 32 + shift, block_bits, threads);
-  std::vector<double> sum(keys, 0.0);
-  std::vector<std::uint32_t> count(keys, 0);
-  const std::size_t blocks = std::size_t{1} << block_bits;
-  parallel_for(blocks, 1, threads, [&](std::size_t b0, std::size_t b1) {
-    auto first_of = [&](std::size_t block) {
-      return std::lower_bound(items.begin(), items.end(), block, [&](std::uint64_t item, std::size_t b) {
-        return (item >> (32 + shift)) < b;
-      });
-    };
-    for (auto it = first_of(b0), end = first_of(b1); it != end; ++it) {
-      const std::uint32_t corner = static_cast<std::uint32_t>(*it);
-      if (!sampled[corner]) continue;
-      const std::uint32_t k = static_cast<std::uint32_t>(*it >> 32);
-      sum[k] += sample[corner];
-      ++count[k];
-    }
+    for (std::size_t f = begin; f < end; ++f)
+      for (int c = 0; c < 3; ++c)
+        samples[3 * f + c] = kern::sdf_texture_sample_corner(
+            uvs[6 * f + 2 * c], uvs[6 * f + 2 * c + 1], width, height, islands.face_island[f],
+            island.data(), blurred.data());
   });
   parallel_for(mesh.vertices.size(), kFaceGrain, threads, [&](std::size_t begin, std::size_t end) {
     for (std::size_t v = begin; v < end; ++v) {
       const std::uint32_t k = islands.merged.empty() ? static_cast<std::uint32_t>(v) : islands.merged[v];
-      if (count[k] > 0) out[v] = std::min(hi, std::max(lo, static_cast<float>(sum[k] / count[k])));
+      out[v] = kern::sdf_texture_vertex_mean(groups.first[k], groups.first[k + 1],
+                                             groups.corners.data(), samples.data(), lo, hi, out[v]);
     }
   });
 }
 
-// smooth_texture's work once the UVs are checked; islands: found already, or null.
+// smooth_texture's work once the UVs are checked; islands and groups (vertex values): made
+// already, or null.
 TextureSmoothing smooth_checked(const Mesh& mesh, PointKind kind, const float* values,
                                 const float* uvs, const TextureOptions& options, bool keep_image,
                                 const ProgressFn& progress, double progress_from,
                                 double progress_to, const TextureDeviceFn& device,
-                                const UvIslands* given_islands, Stopwatch& clock,
-                                StageTimings& timings) {
+                                const UvIslands* given_islands, const CornerGroups* given_groups,
+                                Stopwatch& clock, StageTimings& timings) {
   const int width = options.width, height = options.height;
   if (!std::isfinite(options.radius))
     throw std::invalid_argument("radius must be a finite number of texels");
@@ -341,6 +280,12 @@ TextureSmoothing smooth_checked(const Mesh& mesh, PointKind kind, const float* v
     timings.emplace_back(found.merged.empty() ? "islands" : "islands (welded)", clock.lap());
   }
   const UvIslands& islands = given_islands ? *given_islands : found;
+  CornerGroups made_groups;
+  if (!faces && !given_groups) {
+    made_groups = group_corners(mesh, islands, threads);
+    timings.emplace_back("corner groups", clock.lap());
+  }
+  const CornerGroups* groups = faces ? nullptr : given_groups ? given_groups : &made_groups;
   // Dilate and blur as a TextureFilter says.
   TextureFilter f;
   f.width = width;
@@ -369,9 +314,11 @@ TextureSmoothing smooth_checked(const Mesh& mesh, PointKind kind, const float* v
     job.values = values;
     job.uvs = uvs;
     job.face_island = islands.face_island.data();
+    job.islands = &islands;
+    job.groups = groups;
     job.filter = f;
     job.threads = threads;
-    device(job, !faces || keep_image, out.values, island, blurred, timings);
+    device(job, keep_image, out.values, island, blurred, timings);
     report(0.85);
     clock.lap();
   } else {
@@ -385,12 +332,12 @@ TextureSmoothing smooth_checked(const Mesh& mesh, PointKind kind, const float* v
     if (faces)
       read_back_faces(uvs, islands.face_island, width, height, island, blurred, lo, hi, threads,
                       out.values);
+    else
+      read_back_vertices(mesh, uvs, islands, *groups, width, height, island, blurred, lo, hi,
+                         threads, out.values);
   }
-  if (!faces)
-    read_back_vertices(mesh, uvs, islands, width, height, island, blurred, lo, hi, threads,
-                       out.values);
   report(1.0);
-  if (!device || !faces) timings.emplace_back("read back", clock.lap());
+  if (!device) timings.emplace_back("read back", clock.lap());
 
   if (keep_image) {
     const std::size_t texels = blurred.size();
@@ -409,6 +356,39 @@ TextureSmoothing smooth_checked(const Mesh& mesh, PointKind kind, const float* v
 
 }  // namespace
 
+CornerGroups group_corners(const Mesh& mesh, const UvIslands& islands, unsigned threads) {
+  const std::size_t m = mesh.triangles.size();
+  const std::uint32_t keys = islands.merged.empty()
+                                 ? static_cast<std::uint32_t>(mesh.vertices.size())
+                                 : islands.merged_count;
+  // (group << 32 | corner), sorted stably by group: each group's corners stay in face order.
+  UninitializedVector<std::uint64_t> items(3 * m);
+  parallel_for(m, kFaceGrain, threads, [&](std::size_t begin, std::size_t end) {
+    for (std::size_t corner = 3 * begin; corner < 3 * end; ++corner) {
+      const std::uint32_t v = mesh.triangles[corner / 3][corner % 3];
+      const std::uint64_t k = islands.merged.empty() ? v : islands.merged[v];
+      items[corner] = k << 32 | corner;
+    }
+  });
+  int key_bits = 1;
+  while (key_bits < 32 && (std::uint64_t{1} << key_bits) < keys) ++key_bits;
+  radix_sort_by_bits(items, 32, key_bits, threads);
+  CornerGroups groups;
+  groups.corners.resize(3 * m);
+  groups.first.assign(std::size_t{keys} + 1, static_cast<std::uint32_t>(3 * m));
+  // Where each group starts: at the first corner of a larger group than the one before (the
+  // groups between, empty, start there too; those after the last, at the end).
+  parallel_for(3 * m, kFaceGrain, threads, [&](std::size_t begin, std::size_t end) {
+    for (std::size_t j = begin; j < end; ++j) {
+      groups.corners[j] = static_cast<std::uint32_t>(items[j]);
+      const std::uint64_t k = items[j] >> 32;
+      const std::uint64_t before = j == 0 ? 0 : (items[j - 1] >> 32) + 1;
+      for (std::uint64_t g = before; g <= k; ++g) groups.first[g] = static_cast<std::uint32_t>(j);
+    }
+  });
+  return groups;
+}
+
 TextureSmoothing smooth_texture(const Mesh& mesh, PointKind kind, const float* values,
                                 const float* uvs, const TextureOptions& options, bool keep_image,
                                 const ProgressFn& progress, double progress_from,
@@ -422,7 +402,8 @@ TextureSmoothing smooth_texture(const Mesh& mesh, PointKind kind, const float* v
   const bool on_device = device && uv.largest_face_texels <= kMostTexelsPerDeviceFace;
   TextureSmoothing out = smooth_checked(mesh, kind, values, uvs, options, keep_image, progress,
                                         progress_from, progress_to,
-                                        on_device ? device : nullptr, nullptr, clock, timings);
+                                        on_device ? device : nullptr, nullptr, nullptr, clock,
+                                        timings);
   out.faces_outside = uv.faces_outside;
   return out;
 }
@@ -444,6 +425,10 @@ PreparedTexture prepare_texture(Mesh mesh, const float* uvs, const TextureOption
   prepared.islands =
       label_uv_islands(mesh, uvs, options.weld_tolerance, need_merged, options.threads);
   prepared.timings.emplace_back("islands", clock.lap());
+  if (need_merged) {
+    prepared.groups = group_corners(mesh, prepared.islands, options.threads);
+    prepared.timings.emplace_back("corner groups", clock.lap());
+  }
   prepared.mesh = std::move(mesh);
   return prepared;
 }
@@ -463,7 +448,8 @@ TextureSmoothing smooth_texture(const PreparedTexture& prepared, PointKind kind,
   const bool on_device = device && prepared.largest_face_texels <= kMostTexelsPerDeviceFace;
   TextureSmoothing out = smooth_checked(prepared.mesh, kind, values, prepared.uvs, options,
                                         keep_image, progress, progress_from, progress_to,
-                                        on_device ? device : nullptr, &islands, clock, timings);
+                                        on_device ? device : nullptr, &islands,
+                                        &prepared.groups, clock, timings);
   out.faces_outside = prepared.faces_outside;
   return out;
 }

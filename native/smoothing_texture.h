@@ -68,6 +68,16 @@ struct TextureSmoothing {
   std::size_t faces_outside = 0;
 };
 
+// Vertex values' read-back averages each merged vertex's corners (the copies of a vertex
+// split at a UV seam get one value): the corners grouped by merged vertex, each group in face
+// order, the order the sums run in on the host and on a device.
+struct CornerGroups {
+  std::vector<std::uint32_t> first;            // per group k, where its corners start; k + 1 ends
+  UninitializedVector<std::uint32_t> corners;  // 3 f + c for corner c of face f
+};
+// Groups by islands.merged (each vertex its own group when it is empty).
+CornerGroups group_corners(const Mesh& mesh, const UvIslands& islands, unsigned threads);
+
 // Steps 3 and 4 (dilate, blur) of one image, as smooth_texture runs them.
 struct TextureFilter {
   int width = 0, height = 0;
@@ -84,13 +94,14 @@ struct TextureJob {
   const float* values = nullptr;       // per face or vertex, as given to smooth_texture
   const float* uvs = nullptr;          // 6 floats a face
   const std::int32_t* face_island = nullptr;
+  const UvIslands* islands = nullptr;  // vertex values: their merged vertices ...
+  const CornerGroups* groups = nullptr;  // ... and corners grouped by them
   TextureFilter filter;                // sizes, dilation, blur, the values' range
   unsigned threads = 0;                // host threads the device's uploads may copy on
 };
-// Draws, dilates, blurs and, for face values, reads back into `values` (which comes in
-// holding the input), with the CPU's code (kernels/sdf_smooth_texture.h) and bits. Where
-// `images` is true it also fills `island` (dilated) and `blurred`, row-major: vertex values
-// are read back on the host from those, and a kept image is that one. Appends its stages'
+// Draws, dilates, blurs and reads back into `values` (which comes in holding the input), with
+// the CPU's code (kernels/sdf_smooth_texture.h) and bits. Where `images` is true it also fills
+// `island` (dilated) and `blurred`, row-major: the kept image. Appends its stages'
 // seconds to `timings`. A device walks each face in one work item, so smooth_texture runs
 // it only where no face's UV box covers more than kMostTexelsPerDeviceFace texels (a low-poly
 // mesh on a large texture stays on the CPU threads, with the same values).
@@ -119,6 +130,7 @@ struct PreparedTexture {
   const float* uvs = nullptr;        // 6 floats a face, owned by the caller or by `keep`
   std::shared_ptr<const void> keep;  // what keeps `uvs` alive, if the caller set it
   UvIslands islands;
+  CornerGroups groups;  // made for vertex values (need_merged) only
   int width = 0, height = 0;
   double largest_face_texels = 0.0;
   std::size_t faces_outside = 0;  // as TextureSmoothing::faces_outside

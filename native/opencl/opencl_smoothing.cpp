@@ -82,18 +82,20 @@ void filter_on_device(const Device& device, DeviceState& s, cl_program program,
 // faces spanning more than kMostTexelsPerDeviceFace texels off a device: each is one work
 // item, in double, which consumer GPUs run at 1/32 to 1/64 of float speed.)
 
-// A prepared texture's UVs and face islands on a device, uploaded on its side queue while it
-// cast. Released with the prepared texture, unless the device failed since (its driver
-// objects may be dead: set aside like its state).
+// A prepared texture's UVs and face islands on a device (for vertex values also its corner
+// groups and merged vertices), uploaded on its side queue while it cast. Released with the
+// prepared texture, unless the device failed since (its driver objects may be dead: set aside
+// like its state).
 struct TextureUploads {
   DeviceState* state = nullptr;
   cl_mem uvs = nullptr, face_island = nullptr;
+  cl_mem group_first = nullptr, corners = nullptr, merged = nullptr;  // vertex values
   TextureUploads() = default;
   TextureUploads(const TextureUploads&) = delete;
   TextureUploads& operator=(const TextureUploads&) = delete;
   ~TextureUploads() {
     if (!state || state->broken) return;
-    for (cl_mem mem : {uvs, face_island})
+    for (cl_mem mem : {uvs, face_island, group_first, corners, merged})
       if (mem) api()->clReleaseMemObject(mem);
   }
 };
@@ -113,13 +115,17 @@ TextureDeviceFn texture_on_device(const Device& device, const PreparedTexture* p
     const std::size_t n = faces ? m : job.mesh->vertices.size();
     const std::size_t texels = static_cast<std::size_t>(f.width) * f.height;
     const std::size_t image = texels * sizeof(float);
-    // uvs, values, face islands, triangles (vertex values) or read-back values (face values);
-    // owner, island, value and their dilation copies; the blur's two sums and taps.
+    // uvs, values, face islands, read-back values; owner, island, value and their dilation
+    // copies; the blur's two sums and taps; vertex values: triangles, corner samples, groups,
+    // merged vertices.
     std::vector<std::size_t> sizes = {6 * m * sizeof(float), n * sizeof(float),
-                                      m * sizeof(std::int32_t), faces ? m * sizeof(float)
-                                                                      : bytes_of(job.mesh->triangles),
+                                      m * sizeof(std::int32_t), n * sizeof(float),
                                       image, image, image, image, image};
     if (f.taps >= 1) sizes.insert(sizes.end(), {image, image, bytes_of(f.kernel)});
+    if (!faces)
+      sizes.insert(sizes.end(), {bytes_of(job.mesh->triangles), 3 * m * sizeof(float),
+                                 bytes_of(job.groups->first), bytes_of(job.groups->corners),
+                                 bytes_of(job.islands->merged)});
     check_fits(device, sizes);
     std::lock_guard<std::mutex> lock(s.mutex);
     const FinishOnUnwind finish_on_unwind(s.queue);
@@ -138,9 +144,26 @@ TextureDeviceFn texture_on_device(const Device& device, const PreparedTexture* p
     const cl_mem uv_buffer = uploads ? uploads->uvs : own_uvs->get();
     const cl_mem face_island = uploads ? uploads->face_island : own_islands->get();
     Buffer value_buffer(s, n * sizeof(float), job.values);
-    std::unique_ptr<Buffer> triangles, read_values;
-    if (faces) read_values = std::make_unique<Buffer>(s, m * sizeof(float), nullptr);
-    else triangles = std::make_unique<Buffer>(s, bytes_of(job.mesh->triangles), job.mesh->triangles.data());
+    Buffer read_values(s, n * sizeof(float), nullptr);
+    std::unique_ptr<Buffer> triangles, samples, own_first, own_corners, own_merged;
+    cl_mem group_first = nullptr, corners = nullptr, merged = nullptr;
+    if (!faces) {
+      triangles = std::make_unique<Buffer>(s, bytes_of(job.mesh->triangles), job.mesh->triangles.data());
+      samples = std::make_unique<Buffer>(s, 3 * m * sizeof(float), nullptr);
+      if (uploads && uploads->group_first) {
+        group_first = uploads->group_first;
+        corners = uploads->corners;
+        merged = uploads->merged;
+      } else {
+        own_first = std::make_unique<Buffer>(s, bytes_of(job.groups->first), job.groups->first.data());
+        own_corners = std::make_unique<Buffer>(s, bytes_of(job.groups->corners), job.groups->corners.data());
+        if (!job.islands->merged.empty())
+          own_merged = std::make_unique<Buffer>(s, bytes_of(job.islands->merged), job.islands->merged.data());
+        group_first = own_first->get();
+        corners = own_corners->get();
+        merged = own_merged ? own_merged->get() : nullptr;
+      }
+    }
     Buffer owner(s, texels * sizeof(std::uint32_t), nullptr);
     auto island_a = std::make_unique<Buffer>(s, image, nullptr);
     auto value_a = std::make_unique<Buffer>(s, image, nullptr);
@@ -192,8 +215,30 @@ TextureDeviceFn texture_on_device(const Device& device, const PreparedTexture* p
       read_faces.arg(a++, f.lo);
       read_faces.arg(a++, f.hi);
       read_faces.arg(a++, value_buffer.get());
-      read_faces.arg(a++, read_values->get());
+      read_faces.arg(a++, read_values.get());
       launch_chunks(device, s, read_faces, m, kFaceChunk);
+    } else {
+      Kernel sample(program, "sdf_texture_sample_corners");
+      a = 2;
+      sample.arg(a++, static_cast<cl_int>(f.width));
+      sample.arg(a++, static_cast<cl_int>(f.height));
+      sample.arg(a++, uv_buffer);
+      sample.arg(a++, face_island);
+      sample.arg(a++, island_a->get());
+      sample.arg(a++, value_a->get());
+      sample.arg(a++, samples->get());
+      launch_chunks(device, s, sample, m, kFaceChunk);
+      Kernel read_vertices(program, "sdf_texture_read_vertices");
+      a = 2;
+      read_vertices.arg(a++, merged);  // null: each vertex its own group
+      read_vertices.arg(a++, group_first);
+      read_vertices.arg(a++, corners);
+      read_vertices.arg(a++, samples->get());
+      read_vertices.arg(a++, f.lo);
+      read_vertices.arg(a++, f.hi);
+      read_vertices.arg(a++, value_buffer.get());
+      read_vertices.arg(a++, read_values.get());
+      launch_chunks(device, s, read_vertices, n, kFaceChunk);
     }
     check(api()->clFinish(s.queue), "clFinish (texture)");
     timings.emplace_back("device: kernels", clock.lap());
@@ -208,7 +253,7 @@ TextureDeviceFn texture_on_device(const Device& device, const PreparedTexture* p
                                        blurred.data(), 0, nullptr, nullptr),
             "clEnqueueReadBuffer");
     }
-    if (faces && m > 0) read_buffer(s, read_values->get(), out.data(), m * sizeof(float));
+    if (n > 0) read_buffer(s, read_values.get(), out.data(), n * sizeof(float));
     check(api()->clFinish(s.queue), "clFinish (download)");
     timings.emplace_back("device: download", clock.lap());
   };
@@ -237,7 +282,13 @@ bool upload_prepared_texture(const Device& device, PreparedTexture& prepared, un
   const std::size_t m = prepared.mesh.triangles.size();
   const std::size_t uv_bytes = std::max<std::size_t>(6 * m * sizeof(float), 4);
   const std::size_t island_bytes = std::max<std::size_t>(m * sizeof(std::int32_t), 4);
-  if (uv_bytes + island_bytes > device.global_memory / 4) return false;  // leave room to cast
+  const CornerGroups& groups = prepared.groups;
+  const std::vector<std::uint32_t>& merged = prepared.islands.merged;
+  const bool vertex_values = !groups.first.empty();
+  const std::size_t group_bytes =
+      vertex_values ? bytes_of(groups.first) + bytes_of(groups.corners) + bytes_of(merged) : 0;
+  if (uv_bytes + island_bytes + group_bytes > device.global_memory / 4)
+    return false;  // leave room to cast
   DeviceState& s = state_of(device);
   const Api& cl = *api();
   auto uploads = std::make_shared<TextureUploads>();
@@ -260,6 +311,19 @@ bool upload_prepared_texture(const Device& device, PreparedTexture& prepared, un
                6 * m * sizeof(float));
   write_buffer(s.context, s.side_queue, staging, threads, uploads->face_island,
                prepared.islands.face_island.data(), m * sizeof(std::int32_t));
+  // Into `mem`, which `uploads` releases (also after a failed write).
+  auto upload = [&](cl_mem& mem, const void* data, std::size_t bytes) {
+    mem = cl.clCreateBuffer(s.context, CL_MEM_READ_ONLY, std::max<std::size_t>(bytes, 4), nullptr,
+                            &err);
+    if (err != CL_SUCCESS) mem = nullptr;
+    check(err, "clCreateBuffer");
+    write_buffer(s.context, s.side_queue, staging, threads, mem, data, bytes);
+  };
+  if (vertex_values) {
+    upload(uploads->group_first, groups.first.data(), bytes_of(groups.first));
+    upload(uploads->corners, groups.corners.data(), bytes_of(groups.corners));
+    if (!merged.empty()) upload(uploads->merged, merged.data(), bytes_of(merged));
+  }
   // Done before the smoothing's queue reads them (and before `prepared` may change).
   check(cl.clFinish(s.side_queue), "clFinish (side)");
   prepared.timings.emplace_back("upload", clock.lap());
