@@ -16,11 +16,14 @@
 
 /* A bin: 4 uints (host: ProjectedBin). The 64-bit sum is added as two 32-bit halves, the carry
  * of the low half added to the high one (exact: additions commute), so devices without 64-bit
- * atomics run it too. Values are >= 0, so their float bits order as the values do (minimum). */
+ * atomics run it too. Values are >= 0, so their float bits order as the values do (minimum),
+ * once -0 is taken as +0 (its bits are the largest: a node of -0 and 0.5 had minimum 0.5). */
 #define SDF_BIN_COUNT 0
 #define SDF_BIN_SUM_LOW 1
 #define SDF_BIN_SUM_HIGH 2
 #define SDF_BIN_MIN 3
+
+uint sdf_value_bits(float value) { return as_uint(value) & 0x7fffffffu; }
 
 /* OpenCL 1.2 functions take one address space per pointer: the same body for both. */
 #define SDF_BIN_ADD(b, count, sum, min_bits)                                        \
@@ -120,7 +123,7 @@ __kernel void sdf_projected_points(uint count, uint span, __global const float* 
     if (!member) continue;
     ++members;
     sum += sdf_fixed_value(value, shift);
-    min_bits = min(min_bits, as_uint(value));
+    min_bits = min(min_bits, sdf_value_bits(value));
     lo = fmin(lo, p);
     hi = fmax(hi, p);
   }
@@ -182,7 +185,7 @@ __kernel void sdf_projected_bin(uint count, uint span, __global const float4* po
     }
     ++run_count;
     run_sum += sdf_fixed_value(p.w, shift);
-    run_min = min(run_min, as_uint(p.w));
+    run_min = min(run_min, sdf_value_bits(p.w));
   }
   if (run >= 0) sdf_table_add(keys, sums, table, bins, run, run_count, run_sum, run_min);
   sdf_table_flush(keys, sums, table, bins);

@@ -2,8 +2,9 @@
 /* Smoothing on projected points (paper 4.4), the per-point parts: where a point goes, which
  * cell of the octree it falls in, what it adds to a node's sum, and the weighted mean of the
  * nodes that a sphere gathers. The host (native/smoothing_projected.cpp) and the OpenCL
- * kernels (sdf_smooth_kernels.cl) both build the octree from these, so they make the same
- * tree; the CPU calls them as C++, the kernels as OpenCL C. */
+ * kernels (sdf_point_octree_kernels.cl builds the octree, sdf_smooth_kernels.cl gathers) both
+ * build it from these, so they make the same tree; the CPU calls them as C++, the kernels as
+ * OpenCL C. */
 #ifndef SDF_SMOOTH_PROJECTED_H
 #define SDF_SMOOTH_PROJECTED_H
 

@@ -234,7 +234,8 @@ RunValues run_values(const Points& points, const MortonOrder& order, int shift, 
   return runs;
 }
 
-// The nodes, breadth first (point_octree_rules above): a queue of nodes to test, children
+// The nodes, breadth first (the rules shared with the OpenCL builder, smoothing_projected.h):
+// a queue of nodes to test, children
 // in octant order. Work per tested node: eight binary searches (and a minimum over block
 // minima), so the loop is short next to the passes above.
 std::vector<PointOctreeNode> grow_nodes(const MortonOrder& order, const RunValues& runs,
@@ -401,7 +402,12 @@ std::vector<PointOctreeNode> build_point_octree(const glm::vec3* points, const f
                                                 std::size_t count,
                                                 const ProjectedOptions& options) {
   check_projected_options(options);
-  const ValueRange range = value_range(values, count, options.threads, [](float) { return false; });
+  const ValueRange range = value_range(values, count, options.threads, [](float x) {
+    return !std::isfinite(x) || x < 0.0f;
+  });
+  if (range.first_bad < count)
+    throw std::invalid_argument("value " + std::to_string(range.first_bad) +
+                                " is negative or not finite");
   const ArrayPoints input{points, values, count};
   return build_octree(input, summarize(input, options.threads),
                       point_fixed_shift(range.hi, count), options)

@@ -68,7 +68,8 @@ struct PointCube {
 
 // The fixed-point shift for sums of up to `count` values in [0, hi]: each value below
 // 2^(62 - bits of count), so no sum reaches 2^62; hi maps to at least 2^(61 - bits of count)
-// units (2^40 at 1.5M points), so a mean keeps float precision.
+// units (2^40 at 1.5M points), so a mean keeps float precision. A value below one unit (under
+// 2^-40 of the largest at 1.5M points) counts as 0 in the means: an SDF does not span that.
 int point_fixed_shift(float hi, std::size_t count);
 
 // A node of `count` points (> 0) whose fixed-point values sum to `sum`, with no children yet.
@@ -93,7 +94,8 @@ void check_projected_options(const ProjectedOptions& options);
 float cube_fraction_in_sphere(float side, float distance, float radius);
 
 // Octree over points with values (>= 0); nodes[0] is the root. Throws std::invalid_argument
-// for bad options (max_depth outside [0, 20], min_points outside [0, 1], node_size_ratio < 0).
+// for a negative or non-finite value and for bad options (max_depth outside [0, 20],
+// min_points outside [0, 1], node_size_ratio < 0).
 // Built on options.threads from the points in Morton order (a parallel radix sort; every node
 // is then a run of that order, its sum a difference of two prefix sums); the nodes do not
 // depend on the thread count.

@@ -361,29 +361,48 @@ CornerGroups group_corners(const Mesh& mesh, const UvIslands& islands, unsigned 
   const std::uint32_t keys = islands.merged.empty()
                                  ? static_cast<std::uint32_t>(mesh.vertices.size())
                                  : islands.merged_count;
-  // (group << 32 | corner), sorted stably by group: each group's corners stay in face order.
-  UninitializedVector<std::uint64_t> items(3 * m);
-  parallel_for(m, kFaceGrain, threads, [&](std::size_t begin, std::size_t end) {
-    for (std::size_t corner = 3 * begin; corner < 3 * end; ++corner) {
-      const std::uint32_t v = mesh.triangles[corner / 3][corner % 3];
-      const std::uint64_t k = islands.merged.empty() ? v : islands.merged[v];
-      items[corner] = k << 32 | corner;
-    }
-  });
+  auto key_of = [&](std::size_t corner) {
+    const std::uint32_t v = mesh.triangles[corner / 3][corner % 3];
+    return islands.merged.empty() ? v : islands.merged[v];
+  };
+  // A counting sort by group, stable, in two levels so that it runs in parallel: one radix
+  // pass by the group's top 8 bits into blocks, then each block on its own thread counts its
+  // groups (at most 2^shift of them), places their starts, and scatters its corners in order.
   int key_bits = 1;
   while (key_bits < 32 && (std::uint64_t{1} << key_bits) < keys) ++key_bits;
-  radix_sort_by_bits(items, 32, key_bits, threads);
+  const int block_bits = std::min(key_bits, 8);
+  const int shift = key_bits - block_bits;  // block of group k: k >> shift
+  UninitializedVector<std::uint64_t> items(3 * m);
+  parallel_for(m, kFaceGrain, threads, [&](std::size_t begin, std::size_t end) {
+    for (std::size_t corner = 3 * begin; corner < 3 * end; ++corner)
+      items[corner] = std::uint64_t{key_of(corner)} << 32 | corner;
+  });
+  radix_sort_by_bits(items, 32 + shift, block_bits, threads);
   CornerGroups groups;
   groups.corners.resize(3 * m);
-  groups.first.assign(std::size_t{keys} + 1, static_cast<std::uint32_t>(3 * m));
-  // Where each group starts: at the first corner of a larger group than the one before (the
-  // groups between, empty, start there too; those after the last, at the end).
-  parallel_for(3 * m, kFaceGrain, threads, [&](std::size_t begin, std::size_t end) {
-    for (std::size_t j = begin; j < end; ++j) {
-      groups.corners[j] = static_cast<std::uint32_t>(items[j]);
-      const std::uint64_t k = items[j] >> 32;
-      const std::uint64_t before = j == 0 ? 0 : (items[j - 1] >> 32) + 1;
-      for (std::uint64_t g = before; g <= k; ++g) groups.first[g] = static_cast<std::uint32_t>(j);
+  groups.first.resize(std::size_t{keys} + 1);
+  groups.first[keys] = static_cast<std::uint32_t>(3 * m);
+  const std::size_t blocks = std::size_t{1} << block_bits;
+  parallel_for(blocks, 1, threads, [&](std::size_t b0, std::size_t b1) {
+    auto first_of = [&](std::size_t block) {
+      return static_cast<std::size_t>(
+          std::lower_bound(items.begin(), items.end(), block,
+                           [&](std::uint64_t item, std::size_t b) { return (item >> (32 + shift)) < b; }) -
+          items.begin());
+    };
+    std::vector<std::uint32_t> at;
+    for (std::size_t b = b0; b < b1; ++b) {
+      const std::size_t lo = first_of(b), hi = first_of(b + 1);
+      const std::uint64_t k0 = std::uint64_t{b} << shift;
+      const std::uint64_t k1 = std::min<std::uint64_t>(keys, (std::uint64_t{b} + 1) << shift);
+      if (k0 >= k1) continue;
+      at.assign(k1 - k0 + 1, 0);
+      for (std::size_t j = lo; j < hi; ++j) ++at[(items[j] >> 32) - k0 + 1];
+      at[0] = static_cast<std::uint32_t>(lo);
+      for (std::size_t g = 1; g < at.size(); ++g) at[g] += at[g - 1];
+      for (std::uint64_t k = k0; k < k1; ++k) groups.first[k] = at[k - k0];
+      for (std::size_t j = lo; j < hi; ++j)
+        groups.corners[at[(items[j] >> 32) - k0]++] = static_cast<std::uint32_t>(items[j]);
     }
   });
   return groups;

@@ -59,7 +59,8 @@ float from_ordered_bits(std::uint32_t b) {
   return ProjectedBin::float_of((b & 0x80000000u) ? (b & 0x7fffffffu) : ~b);
 }
 
-// A small non-blocking write: `data` must stay unchanged until a later blocking read.
+// A small non-blocking write: `data` must stay unchanged until a later blocking read (the
+// level's bins: 16 bytes each, a few thousand at most with the default min_points).
 void write_small(DeviceState& s, const Buffer& buffer, const void* data, std::size_t bytes) {
   check(api()->clEnqueueWriteBuffer(s.queue, buffer.get(), CL_FALSE, 0, bytes, data, 0, nullptr,
                                     nullptr),
@@ -109,10 +110,19 @@ void smooth_on_device(const Device& device, DeviceState& s, cl_mem origins, cl_m
   Kernel project(program, "sdf_projected_points");
   Kernel split(program, "sdf_projected_bin");
   Kernel gather(program, "sdf_smooth_projected");
+  // The host arrays that transfers read or write without blocking, then the guard that waits
+  // for the queue before they go if an exception unwinds (declared after them: it runs first).
+  const std::uint32_t box_start[6] = {~0u, ~0u, ~0u, 0u, 0u, 0u};
+  std::uint32_t box_bits[6];
+  ProjectedBin root_bin;
+  std::vector<ProjectedBin> level_bins;
+  std::vector<cl_int> slot_of_bin, next_slot_of_bin;  // the level above's bins: slot or -1
+  std::vector<std::uint32_t> slot_nodes, next_slot_nodes;  // a level's branching nodes
+  std::vector<PointOctreeNode> nodes;
+  const FinishOnUnwind finish_on_unwind(s.queue);
   for (int it = 0; it < options.iterations; ++it) {
     // The points, their box and the root's sums.
-    const std::uint32_t box_start[6] = {~0u, ~0u, ~0u, 0u, 0u, 0u};
-    ProjectedBin root_bin = kEmptyBin;
+    root_bin = kEmptyBin;
     write_small(s, box, box_start, sizeof box_start);
     write_small(s, root, &root_bin, sizeof root_bin);
     cl_uint a = 0;
@@ -127,7 +137,6 @@ void smooth_on_device(const Device& device, DeviceState& s, cl_mem origins, cl_m
     project.arg(a++, box.get());
     project.arg(a++, root.get());
     launch(s, project, 1, &global, &local);
-    std::uint32_t box_bits[6];
     check(api()->clEnqueueReadBuffer(s.queue, box.get(), CL_FALSE, 0, sizeof box_bits, box_bits,
                                       0, nullptr, nullptr),
           "clEnqueueReadBuffer");
@@ -146,10 +155,10 @@ void smooth_on_device(const Device& device, DeviceState& s, cl_mem origins, cl_m
                   from_ordered_bits(box_bits[5])),
         options.max_depth);
     const double branch_above = options.min_points * static_cast<double>(root_bin.count);
-    std::vector<PointOctreeNode> nodes = {make_point_node(
-        cube.center, 0.5f * cube.side, root_bin.count, root_bin.sum(), shift)};
-    std::vector<std::uint32_t> slot_nodes;      // the branching nodes of this level
-    std::vector<cl_int> slot_of_bin = {-1};     // the level above's bins: their slot or -1
+    nodes = {make_point_node(cube.center, 0.5f * cube.side, root_bin.count, root_bin.sum(),
+                             shift)};
+    slot_nodes.clear();
+    slot_of_bin.assign(1, -1);
     if (point_node_branches(nodes[0], 0, root_bin.min(), options, branch_above)) {
       slot_of_bin[0] = 0;
       slot_nodes.push_back(0);
@@ -172,7 +181,7 @@ void smooth_on_device(const Device& device, DeviceState& s, cl_mem origins, cl_m
     split.local_arg(15, table * 4 * sizeof(cl_uint));
     split.arg(16, table);
     for (int level = 0; !slot_nodes.empty(); ++level) {
-      std::vector<ProjectedBin> level_bins(8 * slot_nodes.size(), kEmptyBin);
+      level_bins.assign(8 * slot_nodes.size(), kEmptyBin);
       const Buffer& slot_buffer = slots.at_least(s, bytes_of(slot_of_bin));
       const Buffer& bin_buffer = bins.at_least(s, bytes_of(level_bins));
       write_small(s, slot_buffer, slot_of_bin.data(), bytes_of(slot_of_bin));
@@ -182,8 +191,8 @@ void smooth_on_device(const Device& device, DeviceState& s, cl_mem origins, cl_m
       split.arg(13, bin_buffer.get());
       launch(s, split, 1, &global, &local);
       read(s, bin_buffer, bytes_of(level_bins), level_bins.data());
-      std::vector<cl_int> next_slot_of_bin(level_bins.size(), -1);
-      std::vector<std::uint32_t> next_slot_nodes;
+      next_slot_of_bin.assign(level_bins.size(), -1);
+      next_slot_nodes.clear();
       for (std::size_t slot = 0; slot < slot_nodes.size(); ++slot) {
         const std::uint32_t parent = slot_nodes[slot];
         const std::uint32_t first = static_cast<std::uint32_t>(nodes.size());
@@ -206,8 +215,7 @@ void smooth_on_device(const Device& device, DeviceState& s, cl_mem origins, cl_m
     }
     add_time(timings, "device: octree", clock.lap());
 
-    // Each point's gathered mean, into `next` (non-blocking upload: `nodes` lives until the
-    // clFinish below).
+    // Each point's gathered mean, into `next` (the nodes' upload does not block).
     Buffer node_buffer(s, bytes_of(nodes), nodes.data());
     gather.arg(2, node_buffer.get());
     gather.arg(3, points.get());
@@ -244,6 +252,19 @@ std::size_t working_bytes(std::size_t n) {  // besides the frames: values x2, po
   return n * (2 * sizeof(float) + 4 * sizeof(float) + sizeof(cl_int));
 }
 
+// Checks the input (std::invalid_argument) and reports progress 0; returns false, having
+// copied the values to `out`, where smoothing would leave them as they are.
+bool worth_smoothing(const float* values, std::size_t n, const ProjectedOptions& options,
+                     float* out, const ProgressFn& progress, ValueRange* range) {
+  *range = checked_projected_input(values, n, options);
+  if (n == 0 || range->lo == range->hi || options.iterations == 0) {
+    std::copy(values, values + n, out);
+    return false;
+  }
+  if (progress && !progress(0.0)) throw Cancelled();
+  return true;
+}
+
 }  // namespace
 
 PreparedProjected prepare_projected(const Device& device, const SamplePoints& points,
@@ -271,18 +292,15 @@ PreparedProjected prepare_projected(const Device& device, const SamplePoints& po
   return prepared;
 }
 
+
 void smooth_projected_opencl(const Device& device, const PreparedProjected& prepared,
                              const float* values, const ProjectedOptions& options, float* out,
                              const ProgressFn& progress, StageTimings* timings) {
   Stopwatch clock;
   const std::size_t n = prepared.count;
-  const ValueRange range = checked_projected_input(values, n, options);
-  if (n == 0 || range.lo == range.hi || options.iterations == 0) {
-    std::copy(values, values + n, out);
-    return;
-  }
+  ValueRange range;
+  if (!worth_smoothing(values, n, options, out, progress, &range)) return;
   add_time(timings, "checks", clock.lap());
-  if (progress && !progress(0.0)) throw Cancelled();
   check_fits(device, {working_bytes(n)});
   DeviceState& s = state_of(device);
   std::lock_guard<std::mutex> lock(s.mutex);
@@ -302,13 +320,9 @@ void smooth_projected_opencl(const Device& device, const Mesh& mesh, PointKind k
                              const ProgressFn& progress, StageTimings* timings) {
   Stopwatch clock;
   const std::size_t n = kind == PointKind::Faces ? mesh.triangles.size() : mesh.vertices.size();
-  const ValueRange range = checked_projected_input(values, n, options);
-  if (n == 0 || range.lo == range.hi || options.iterations == 0) {
-    std::copy(values, values + n, out);
-    return;
-  }
+  ValueRange range;
+  if (!worth_smoothing(values, n, options, out, progress, &range)) return;
   add_time(timings, "checks", clock.lap());
-  if (progress && !progress(0.0)) throw Cancelled();
   // Faces: centroids and inward normals only (sample_points' other arrays are the cast's).
   UninitializedVector<glm::vec3> origins, axes;
   SamplePoints vertex_points;

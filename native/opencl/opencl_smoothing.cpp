@@ -82,20 +82,20 @@ void filter_on_device(const Device& device, DeviceState& s, cl_program program,
 // faces spanning more than kMostTexelsPerDeviceFace texels off a device: each is one work
 // item, in double, which consumer GPUs run at 1/32 to 1/64 of float speed.)
 
-// A prepared texture's UVs and face islands on a device (for vertex values also its corner
-// groups and merged vertices), uploaded on its side queue while it cast. Released with the
+// A prepared texture's UVs and face islands on a device (for vertex values also its
+// triangles, corner groups and merged vertices), uploaded on its side queue while it cast. Released with the
 // prepared texture, unless the device failed since (its driver objects may be dead: set aside
 // like its state).
 struct TextureUploads {
   DeviceState* state = nullptr;
   cl_mem uvs = nullptr, face_island = nullptr;
-  cl_mem group_first = nullptr, corners = nullptr, merged = nullptr;  // vertex values
+  cl_mem triangles = nullptr, group_first = nullptr, corners = nullptr, merged = nullptr;
   TextureUploads() = default;
   TextureUploads(const TextureUploads&) = delete;
   TextureUploads& operator=(const TextureUploads&) = delete;
   ~TextureUploads() {
     if (!state || state->broken) return;
-    for (cl_mem mem : {uvs, face_island, group_first, corners, merged})
+    for (cl_mem mem : {uvs, face_island, triangles, group_first, corners, merged})
       if (mem) api()->clReleaseMemObject(mem);
   }
 };
@@ -145,20 +145,23 @@ TextureDeviceFn texture_on_device(const Device& device, const PreparedTexture* p
     const cl_mem face_island = uploads ? uploads->face_island : own_islands->get();
     Buffer value_buffer(s, n * sizeof(float), job.values);
     Buffer read_values(s, n * sizeof(float), nullptr);
-    std::unique_ptr<Buffer> triangles, samples, own_first, own_corners, own_merged;
-    cl_mem group_first = nullptr, corners = nullptr, merged = nullptr;
+    std::unique_ptr<Buffer> samples, own_triangles, own_first, own_corners, own_merged;
+    cl_mem triangles = nullptr, group_first = nullptr, corners = nullptr, merged = nullptr;
     if (!faces) {
-      triangles = std::make_unique<Buffer>(s, bytes_of(job.mesh->triangles), job.mesh->triangles.data());
       samples = std::make_unique<Buffer>(s, 3 * m * sizeof(float), nullptr);
       if (uploads && uploads->group_first) {
+        triangles = uploads->triangles;
         group_first = uploads->group_first;
         corners = uploads->corners;
         merged = uploads->merged;
       } else {
+        own_triangles = std::make_unique<Buffer>(s, bytes_of(job.mesh->triangles),
+                                                 job.mesh->triangles.data());
         own_first = std::make_unique<Buffer>(s, bytes_of(job.groups->first), job.groups->first.data());
         own_corners = std::make_unique<Buffer>(s, bytes_of(job.groups->corners), job.groups->corners.data());
         if (!job.islands->merged.empty())
           own_merged = std::make_unique<Buffer>(s, bytes_of(job.islands->merged), job.islands->merged.data());
+        triangles = own_triangles->get();
         group_first = own_first->get();
         corners = own_corners->get();
         merged = own_merged ? own_merged->get() : nullptr;
@@ -193,7 +196,7 @@ TextureDeviceFn texture_on_device(const Device& device, const PreparedTexture* p
     draw.arg(a++, static_cast<cl_int>(f.height));
     draw.arg(a++, uv_buffer);
     draw.arg(a++, value_buffer.get());
-    draw.arg(a++, triangles ? triangles->get() : cl_mem{nullptr});  // null: face values
+    draw.arg(a++, triangles);  // null: face values
     draw.arg(a++, f.lo);
     draw.arg(a++, f.hi);
     draw.arg(a++, face_island);
@@ -286,7 +289,9 @@ bool upload_prepared_texture(const Device& device, PreparedTexture& prepared, un
   const std::vector<std::uint32_t>& merged = prepared.islands.merged;
   const bool vertex_values = !groups.first.empty();
   const std::size_t group_bytes =
-      vertex_values ? bytes_of(groups.first) + bytes_of(groups.corners) + bytes_of(merged) : 0;
+      vertex_values ? bytes_of(prepared.mesh.triangles) + bytes_of(groups.first) +
+                          bytes_of(groups.corners) + bytes_of(merged)
+                    : 0;
   if (uv_bytes + island_bytes + group_bytes > device.global_memory / 4)
     return false;  // leave room to cast
   DeviceState& s = state_of(device);
@@ -320,6 +325,7 @@ bool upload_prepared_texture(const Device& device, PreparedTexture& prepared, un
     write_buffer(s.context, s.side_queue, staging, threads, mem, data, bytes);
   };
   if (vertex_values) {
+    upload(uploads->triangles, prepared.mesh.triangles.data(), bytes_of(prepared.mesh.triangles));
     upload(uploads->group_first, groups.first.data(), bytes_of(groups.first));
     upload(uploads->corners, groups.corners.data(), bytes_of(groups.corners));
     if (!merged.empty()) upload(uploads->merged, merged.data(), bytes_of(merged));

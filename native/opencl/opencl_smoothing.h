@@ -1,10 +1,11 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
 // The OpenCL version of texture-space smoothing (paper 4.4; projected points:
-// opencl_projected.h): the UV islands are found on the host; drawing, dilation, both blur
-// passes and reading face values back run on the device; vertex values are read back on the
-// host. The device code is kernels/sdf_smooth_texture.h, which the CPU version runs as C++, so
-// the results agree with the CPU's to float rounding (exp); on a device without double
-// precision texture smoothing runs on the CPU threads, since drawing needs double.
+// opencl_projected.h): the UV islands (and for vertex values the corners grouped by merged
+// vertex) are found on the host; drawing, dilation, both blur passes and reading the values
+// back run on the device. The device code is kernels/sdf_smooth_texture.h, which the CPU
+// version runs as C++, so the results agree with the CPU's to float rounding (exp); on a
+// device without double precision texture smoothing runs on the CPU threads, since drawing
+// needs double.
 #pragma once
 
 #include <vector>

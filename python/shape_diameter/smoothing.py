@@ -105,13 +105,13 @@ def smooth(
         name>' ('opencl:all' uses the first of its devices). OpenCL runs the same kernel code
         as the CPU (kernels/sdf_smooth_*.h): results agree within 1e-4 relative, and are
         usually the CPU's bits (the bilateral weights' exp, and sums on a device without
-        double precision, can differ in the last bits). 'projected' runs wholly on the device
-        (its octree built there, level by level, node for node the CPU's); 'texture' finds the UV islands on the host and draws,
-        dilates, blurs and reads face values back on the device (vertex values are read back
-        on the host; a device without double precision, or a face spanning more than 2^16
-        texels, leaves 'texture' to the CPU threads, with the same values).
-        'kring' and 'none' always run on the CPU. A device
-        name that matches nothing raises ValueError listing the devices.
+        double precision, can differ in the last bits). 'projected' runs wholly on the
+        device (its octree built there, level by level, node for node the CPU's); 'texture'
+        finds the UV islands on the host and draws, dilates, blurs and reads values back on
+        the device (a device without double precision, or a face spanning more than 2^16
+        texels, leaves 'texture' to the CPU threads, with the same values). 'kring' and
+        'none' always run on the CPU. A device name that matches nothing raises ValueError
+        listing the devices.
 
     Options of 'kring' (Gaussian over ring index on the mesh, duplicate positions merged):
         k: rings, int >= 0 (0 returns the values); default default_k(m).

@@ -226,6 +226,47 @@ TEST(UvIslands, SameAsTheSerialLabellingOnAMessyMesh) {
   }
 }
 
+TEST(CornerGroups, EachMergedVertexsCornersInFaceOrder) {
+  // Against a stable sort of (group, corner) pairs: meshes with few and many vertices (one
+  // block of groups, and 256 blocks of many groups each), vertices no face uses (empty groups,
+  // at the start, middle and end), with and without merging, on 1, 2 and 7 threads.
+  std::mt19937 rng(5);
+  for (int vertices : {5, 300, 70000}) {
+    test::Arrays a;
+    for (int v = 0; v < vertices; ++v)
+      a.vertices.insert(a.vertices.end(), {double(v % 17), double(v % 5), double(v / 17)});
+    std::uniform_int_distribution<std::int64_t> used(1, vertices - 2 > 1 ? vertices - 2 : 1);
+    for (int f = 0; f < 3 * vertices; ++f)
+      for (int c = 0; c < 3; ++c) a.triangles.push_back(used(rng));
+    const Mesh mesh = a.mesh();
+    const std::vector<float> uvs(6 * mesh.triangles.size(), 0.5f);
+    for (double tolerance : {-1.0, 1e-6}) {
+      const UvIslands islands = label_uv_islands(mesh, uvs.data(), tolerance, true, 2);
+      const std::size_t keys = islands.merged.empty() ? mesh.vertices.size() : islands.merged_count;
+      std::vector<std::pair<std::uint32_t, std::uint32_t>> expected;
+      for (std::uint32_t corner = 0; corner < 3 * mesh.triangles.size(); ++corner) {
+        const std::uint32_t v = mesh.triangles[corner / 3][corner % 3];
+        expected.push_back({islands.merged.empty() ? v : islands.merged[v], corner});
+      }
+      std::stable_sort(expected.begin(), expected.end(),
+                       [](auto x, auto y) { return x.first < y.first; });
+      for (unsigned threads : {1u, 2u, 7u}) {
+        const CornerGroups g = group_corners(mesh, islands, threads);
+        ASSERT_EQ(g.first.size(), keys + 1);
+        ASSERT_EQ(g.first.back(), expected.size());
+        ASSERT_EQ(g.first.front(), 0u);
+        for (std::size_t k = 0; k < keys; ++k) {
+          ASSERT_LE(g.first[k], g.first[k + 1]);
+          for (std::uint32_t j = g.first[k]; j < g.first[k + 1]; ++j)
+            ASSERT_EQ(expected[j].first, k) << vertices << " " << threads;
+        }
+        for (std::size_t j = 0; j < expected.size(); ++j)
+          ASSERT_EQ(g.corners[j], expected[j].second) << vertices << " " << threads;
+      }
+    }
+  }
+}
+
 TEST(TextureSmoothing, LaterFacesWinOverlapsAndCentroidsFillOnlyEmptyTexels) {
   // Three copies of one UV triangle (values 1, 2, 3: the last is drawn), then two faces far
   // smaller than a texel inside it (covered: they draw nothing) and two more at one empty

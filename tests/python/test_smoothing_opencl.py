@@ -69,6 +69,12 @@ def test_projected_octree_built_on_the_device_is_the_cpus_to_the_bit(spot, point
             cpu = sd.smooth(mv, mt, field, "projected", engine="cpu")
             opencl = sd.smooth(mv, mt, field, "projected", engine=DEVICE)
             np.testing.assert_array_equal(opencl, cpu, err_msg=f"scale {scale} spread {spread}")
+    # -0 among the values: a node's minimum is 0 (its bits are the largest of all floats).
+    field[::2] = -0.0
+    for options in [{"branch_on": "min"}, {"branch_on": "min", "node_size_ratio": 0.0}]:
+        cpu = sd.smooth(mv, mt, field, "projected", engine="cpu", **options)
+        opencl = sd.smooth(mv, mt, field, "projected", engine=DEVICE, **options)
+        np.testing.assert_array_equal(opencl, cpu, err_msg=f"-0 {options}")
 
 
 @pytest.mark.parametrize("points", ["faces", "vertices"])
