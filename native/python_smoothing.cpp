@@ -88,10 +88,6 @@ void require_corner_uvs(const Floats& uvs, const sdf::Mesh& mesh) {
     throw std::invalid_argument("uvs must have shape (m, 3, 2)");
 }
 
-py::array_t<float> to_array(const std::vector<float>& v) {
-  return py::array_t<float>(static_cast<py::ssize_t>(v.size()), v.data());
-}
-
 // Returns {"values": the smoothed values, "timings": seconds per stage}.
 py::dict smooth_kring(const Doubles& vertices, const Int64s& triangles, const Floats& values,
                       const std::string& points, int k, double sigma, double corner_angle,
@@ -235,10 +231,12 @@ sdf::TextureOptions texture_options(int width, int height, double radius, bool b
   return options;
 }
 
-// smooth_texture's results as the Python layer takes them: values, timings, image and mask.
-py::dict texture_result(const sdf::TextureSmoothing& out, bool return_image) {
+// smooth_texture's results as the Python layer takes them: values (written into `values` by
+// the native code), timings, image and mask.
+py::dict texture_result(const sdf::TextureSmoothing& out, py::array_t<float> values,
+                        bool return_image) {
   py::dict result;
-  result["values"] = to_array(out.values);
+  result["values"] = values;
   result["timings"] = sdf::timings_dict(out.timings);
   result["faces_outside"] = out.faces_outside;
   if (return_image) {
@@ -267,18 +265,21 @@ py::dict smooth_texture(const Doubles& vertices, const Int64s& triangles, const 
   const auto* device = device_for(engine);
   (void)device;  // unused without OpenCL
   const sdf::ProgressFn report = progress_from(progress);
+  py::array_t<float> smoothed(values.shape(0));
+  float* into = smoothed.mutable_data();
   sdf::TextureSmoothing out;
   {
     py::gil_scoped_release release;
 #ifdef SDF_HAVE_OPENCL
     if (device)
       out = sdf::cl::smooth_texture_opencl(*device, mesh, kind, v, uvs.data(), options,
-                                           return_image, report);
+                                           return_image, report, into);
     else
 #endif
-      out = sdf::smooth_texture(mesh, kind, v, uvs.data(), options, return_image, report);
+      out = sdf::smooth_texture(mesh, kind, v, uvs.data(), options, return_image, report, 0.0,
+                                1.0, nullptr, into);
   }
-  return texture_result(out, return_image);
+  return texture_result(out, smoothed, return_image);
 }
 
 // Texture smoothing's mesh-and-UV half (sdf::prepare_texture), and on an OpenCL engine the
@@ -336,18 +337,21 @@ py::dict smooth_texture_prepared(const sdf::PreparedTexture& prepared, const Flo
   const auto* device = device_for(engine);
   (void)device;  // unused without OpenCL
   const sdf::ProgressFn report = progress_from(progress);
+  py::array_t<float> smoothed(values.shape(0));
+  float* into = smoothed.mutable_data();
   sdf::TextureSmoothing out;
   {
     py::gil_scoped_release release;
 #ifdef SDF_HAVE_OPENCL
     if (device)
       out = sdf::cl::smooth_texture_opencl(*device, prepared, kind, v, options, return_image,
-                                           report);
+                                           report, into);
     else
 #endif
-      out = sdf::smooth_texture(prepared, kind, v, options, return_image, report);
+      out = sdf::smooth_texture(prepared, kind, v, options, return_image, report, 0.0, 1.0,
+                                nullptr, into);
   }
-  return texture_result(out, return_image);
+  return texture_result(out, smoothed, return_image);
 }
 
 py::tuple weld_vertices(const Doubles& vertices, const Int64s& triangles, double tolerance) {

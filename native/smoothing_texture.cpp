@@ -209,7 +209,7 @@ std::vector<float> filter_cpu(const TextureFilter& f, std::vector<std::int32_t>&
 void read_back_faces(const float* uvs, const std::vector<std::int32_t>& face_island, int width,
                      int height, const std::vector<std::int32_t>& island,
                      const std::vector<float>& blurred, float lo, float hi, unsigned threads,
-                     std::vector<float>& out) {
+                     float* out) {
   parallel_for(face_island.size(), kFaceGrain, threads, [&](std::size_t begin, std::size_t end) {
     for (std::uint32_t f = static_cast<std::uint32_t>(begin); f < end; ++f)
       out[f] = kern::sdf_texture_read_face(f, uvs, width, height, face_island[f], island.data(),
@@ -223,7 +223,7 @@ void read_back_faces(const float* uvs, const std::vector<std::int32_t>& face_isl
 void read_back_vertices(const Mesh& mesh, const float* uvs, const UvIslands& islands,
                         const CornerGroups& groups, int width, int height,
                         const std::vector<std::int32_t>& island, const std::vector<float>& blurred,
-                        float lo, float hi, unsigned threads, std::vector<float>& out) {
+                        float lo, float hi, unsigned threads, float* out) {
   const std::size_t m = mesh.triangles.size();
   UninitializedVector<float> samples(3 * m);
   parallel_for(m, kFaceGrain, threads, [&](std::size_t begin, std::size_t end) {
@@ -249,7 +249,7 @@ TextureSmoothing smooth_checked(const Mesh& mesh, PointKind kind, const float* v
                                 const ProgressFn& progress, double progress_from,
                                 double progress_to, const TextureDeviceFn& device,
                                 const UvIslands* given_islands, const CornerGroups* given_groups,
-                                Stopwatch& clock, StageTimings& timings) {
+                                float* into, Stopwatch& clock, StageTimings& timings) {
   const int width = options.width, height = options.height;
   if (!std::isfinite(options.radius))
     throw std::invalid_argument("radius must be a finite number of texels");
@@ -304,7 +304,14 @@ TextureSmoothing smooth_checked(const Mesh& mesh, PointKind kind, const float* v
   }
 
   TextureSmoothing out;
-  out.values.assign(values, values + n);
+  // The result starts as the input (points nothing reaches keep it), copied on the threads.
+  if (!into) {
+    out.values.resize(n);
+    into = out.values.data();
+  }
+  parallel_for(n, kTexelGrain, threads, [&](std::size_t begin, std::size_t end) {
+    std::copy(values + begin, values + end, into + begin);
+  });
   std::vector<std::int32_t> island;
   std::vector<float> blurred;
   if (device) {
@@ -318,7 +325,7 @@ TextureSmoothing smooth_checked(const Mesh& mesh, PointKind kind, const float* v
     job.groups = groups;
     job.filter = f;
     job.threads = threads;
-    device(job, keep_image, out.values, island, blurred, timings);
+    device(job, keep_image, into, island, blurred, timings);
     report(0.85);
     clock.lap();
   } else {
@@ -331,10 +338,10 @@ TextureSmoothing smooth_checked(const Mesh& mesh, PointKind kind, const float* v
     timings.emplace_back("filter", clock.lap());
     if (faces)
       read_back_faces(uvs, islands.face_island, width, height, island, blurred, lo, hi, threads,
-                      out.values);
+                      into);
     else
       read_back_vertices(mesh, uvs, islands, *groups, width, height, island, blurred, lo, hi,
-                         threads, out.values);
+                         threads, into);
   }
   report(1.0);
   if (!device) timings.emplace_back("read back", clock.lap());
@@ -411,7 +418,7 @@ CornerGroups group_corners(const Mesh& mesh, const UvIslands& islands, unsigned 
 TextureSmoothing smooth_texture(const Mesh& mesh, PointKind kind, const float* values,
                                 const float* uvs, const TextureOptions& options, bool keep_image,
                                 const ProgressFn& progress, double progress_from,
-                                double progress_to, const TextureDeviceFn& device) {
+                                double progress_to, const TextureDeviceFn& device, float* into) {
   Stopwatch clock;
   StageTimings timings;
   check_size(options);
@@ -421,8 +428,8 @@ TextureSmoothing smooth_texture(const Mesh& mesh, PointKind kind, const float* v
   const bool on_device = device && uv.largest_face_texels <= kMostTexelsPerDeviceFace;
   TextureSmoothing out = smooth_checked(mesh, kind, values, uvs, options, keep_image, progress,
                                         progress_from, progress_to,
-                                        on_device ? device : nullptr, nullptr, nullptr, clock,
-                                        timings);
+                                        on_device ? device : nullptr, nullptr, nullptr, into,
+                                        clock, timings);
   out.faces_outside = uv.faces_outside;
   return out;
 }
@@ -455,7 +462,7 @@ PreparedTexture prepare_texture(Mesh mesh, const float* uvs, const TextureOption
 TextureSmoothing smooth_texture(const PreparedTexture& prepared, PointKind kind,
                                 const float* values, const TextureOptions& options,
                                 bool keep_image, const ProgressFn& progress, double progress_from,
-                                double progress_to, const TextureDeviceFn& device) {
+                                double progress_to, const TextureDeviceFn& device, float* into) {
   Stopwatch clock;
   StageTimings timings;
   const UvIslands& islands = prepared.islands;
@@ -468,7 +475,7 @@ TextureSmoothing smooth_texture(const PreparedTexture& prepared, PointKind kind,
   TextureSmoothing out = smooth_checked(prepared.mesh, kind, values, prepared.uvs, options,
                                         keep_image, progress, progress_from, progress_to,
                                         on_device ? device : nullptr, &islands,
-                                        &prepared.groups, clock, timings);
+                                        &prepared.groups, into, clock, timings);
   out.faces_outside = prepared.faces_outside;
   return out;
 }

@@ -99,14 +99,14 @@ struct TextureJob {
   TextureFilter filter;                // sizes, dilation, blur, the values' range
   unsigned threads = 0;                // host threads the device's uploads may copy on
 };
-// Draws, dilates, blurs and reads back into `values` (which comes in holding the input), with
+// Draws, dilates, blurs and reads back into `values` (n floats, holding the input), with
 // the CPU's code (kernels/sdf_smooth_texture.h) and bits. Where `images` is true it also fills
 // `island` (dilated) and `blurred`, row-major: the kept image. Appends its stages'
 // seconds to `timings`. A device walks each face in one work item, so smooth_texture runs
 // it only where no face's UV box covers more than kMostTexelsPerDeviceFace texels (a low-poly
 // mesh on a large texture stays on the CPU threads, with the same values).
 using TextureDeviceFn = std::function<void(
-    const TextureJob& job, bool images, std::vector<float>& values,
+    const TextureJob& job, bool images, float* values,
     std::vector<std::int32_t>& island, std::vector<float>& blurred,
     StageTimings& timings)>;
 constexpr double kMostTexelsPerDeviceFace = 65536.0;
@@ -114,11 +114,14 @@ constexpr double kMostTexelsPerDeviceFace = 65536.0;
 // uvs: per face corner, (u, v) for corners 0, 1, 2 of face 0, then face 1, ... (6 floats a
 // face), finite. keep_image: fill image and mask (else they stay empty). Throws
 // std::invalid_argument for bad options, non-finite values or UVs. device: null runs
-// steps 2 to 5 on the CPU threads.
+// steps 2 to 5 on the CPU threads. into: where given (one float per point, not overlapping
+// values), the smoothed values go there and TextureSmoothing::values stays empty (the
+// Python binding's own array: no copy of a result that was 4 ms of page faults at 1.5M).
 TextureSmoothing smooth_texture(const Mesh& mesh, PointKind kind, const float* values,
                                 const float* uvs, const TextureOptions& options, bool keep_image,
                                 const ProgressFn& progress = nullptr, double progress_from = 0.0,
-                                double progress_to = 1.0, const TextureDeviceFn& device = nullptr);
+                                double progress_to = 1.0, const TextureDeviceFn& device = nullptr,
+                                float* into = nullptr);
 
 // What texture smoothing needs of the mesh and its UVs alone, made ahead of the values:
 // compute() makes it while a device casts, when the host would only wait. The mesh, the UVs
@@ -152,6 +155,6 @@ TextureSmoothing smooth_texture(const PreparedTexture& prepared, PointKind kind,
                                 const float* values, const TextureOptions& options,
                                 bool keep_image, const ProgressFn& progress = nullptr,
                                 double progress_from = 0.0, double progress_to = 1.0,
-                                const TextureDeviceFn& device = nullptr);
+                                const TextureDeviceFn& device = nullptr, float* into = nullptr);
 
 }  // namespace sdf

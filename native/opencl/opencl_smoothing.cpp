@@ -103,7 +103,7 @@ struct TextureUploads {
 // Steps 2 to 5 on `device` (TextureDeviceFn); the UVs and face islands from `prepared`'s
 // uploads where it has some that this device's state can read, else uploaded here.
 TextureDeviceFn texture_on_device(const Device& device, const PreparedTexture* prepared) {
-  return [&device, prepared](const TextureJob& job, bool images, std::vector<float>& out,
+  return [&device, prepared](const TextureJob& job, bool images, float* out,
                              std::vector<std::int32_t>& island, std::vector<float>& blurred,
                              StageTimings& timings) {
     DeviceState& s = state_of(device);
@@ -256,7 +256,7 @@ TextureDeviceFn texture_on_device(const Device& device, const PreparedTexture* p
                                        blurred.data(), 0, nullptr, nullptr),
             "clEnqueueReadBuffer");
     }
-    if (n > 0) read_buffer(s, read_values.get(), out.data(), n * sizeof(float));
+    if (n > 0) read_buffer(s, read_values.get(), out, n * sizeof(float));
     check(api()->clFinish(s.queue), "clFinish (download)");
     timings.emplace_back("device: download", clock.lap());
   };
@@ -267,17 +267,17 @@ TextureDeviceFn texture_on_device(const Device& device, const PreparedTexture* p
 TextureSmoothing smooth_texture_opencl(const Device& device, const Mesh& mesh, PointKind kind,
                                        const float* values, const float* uvs,
                                        const TextureOptions& options, bool keep_image,
-                                       const ProgressFn& progress) {
+                                       const ProgressFn& progress, float* into) {
   return smooth_texture(mesh, kind, values, uvs, options, keep_image, progress, 0.0, 1.0,
-                        device.fp64 ? texture_on_device(device, nullptr) : nullptr);
+                        device.fp64 ? texture_on_device(device, nullptr) : nullptr, into);
 }
 
 TextureSmoothing smooth_texture_opencl(const Device& device, const PreparedTexture& prepared,
                                        PointKind kind, const float* values,
                                        const TextureOptions& options, bool keep_image,
-                                       const ProgressFn& progress) {
+                                       const ProgressFn& progress, float* into) {
   return smooth_texture(prepared, kind, values, options, keep_image, progress, 0.0, 1.0,
-                        device.fp64 ? texture_on_device(device, &prepared) : nullptr);
+                        device.fp64 ? texture_on_device(device, &prepared) : nullptr, into);
 }
 
 bool upload_prepared_texture(const Device& device, PreparedTexture& prepared, unsigned threads) {

@@ -20,14 +20,16 @@ namespace sdf::cl {
 TextureSmoothing smooth_texture_opencl(const Device& device, const Mesh& mesh, PointKind kind,
                                        const float* values, const float* uvs,
                                        const TextureOptions& options, bool keep_image,
-                                       const ProgressFn& progress = nullptr);
+                                       const ProgressFn& progress = nullptr,
+                                       float* into = nullptr);
 
 // The same on a prepared texture, reading its UVs and islands on the device where
 // upload_prepared_texture put them there.
 TextureSmoothing smooth_texture_opencl(const Device& device, const PreparedTexture& prepared,
                                        PointKind kind, const float* values,
                                        const TextureOptions& options, bool keep_image,
-                                       const ProgressFn& progress = nullptr);
+                                       const ProgressFn& progress = nullptr,
+                                       float* into = nullptr);
 
 // Uploads the prepared UVs and face islands to `device` on a queue of the device's own beside
 // the one that casts (compute() calls it while the device casts), and keeps them in
