@@ -239,6 +239,7 @@ py::dict texture_result(const sdf::TextureSmoothing& out, py::array_t<float> val
   result["values"] = values;
   result["timings"] = sdf::timings_dict(out.timings);
   result["faces_outside"] = out.faces_outside;
+  result["kept_off_device"] = out.kept_off_device;
   if (return_image) {
     py::array_t<float> image({py::ssize_t(out.height), py::ssize_t(out.width)});
     py::array_t<bool> mask({py::ssize_t(out.height), py::ssize_t(out.width)});

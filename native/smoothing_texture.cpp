@@ -431,6 +431,7 @@ TextureSmoothing smooth_texture(const Mesh& mesh, PointKind kind, const float* v
                                         on_device ? device : nullptr, nullptr, nullptr, into,
                                         clock, timings);
   out.faces_outside = uv.faces_outside;
+  out.kept_off_device = device && !on_device;
   return out;
 }
 
@@ -477,6 +478,7 @@ TextureSmoothing smooth_texture(const PreparedTexture& prepared, PointKind kind,
                                         on_device ? device : nullptr, &islands,
                                         &prepared.groups, into, clock, timings);
   out.faces_outside = prepared.faces_outside;
+  out.kept_off_device = device && !on_device;
   return out;
 }
 

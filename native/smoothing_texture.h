@@ -66,6 +66,9 @@ struct TextureSmoothing {
   // Faces whose UVs lie wholly outside the [0, 1] square (UDIM tiles, offset layouts): they
   // cover no texel and keep their values.
   std::size_t faces_outside = 0;
+  // A device was given, but a face whose UV box covers more than kMostTexelsPerDeviceFace
+  // texels kept the work on the CPU threads (same values, a device's speed lost).
+  bool kept_off_device = false;
 };
 
 // Vertex values' read-back averages each merged vertex's corners (the copies of a vertex

@@ -92,11 +92,12 @@ void check_fits(const Device& device, const std::vector<std::size_t>& buffers, b
     largest = std::max<std::uint64_t>(largest, b);
   }
   if (largest > device.max_allocation || total > device.global_memory)
-    throw std::runtime_error("the mesh does not fit OpenCL device " + device.name +
-                             ": it needs " + (at_least ? "at least " : "") + mib(total) +
-                             " (largest buffer " + mib(largest) + "), the device has " +
-                             mib(device.global_memory) + " (largest buffer " +
-                             mib(device.max_allocation) + "); use engine='cpu'");
+    throw Error("the mesh does not fit OpenCL device " + device.name + ": it needs " +
+                    (at_least ? "at least " : "") + mib(total) + " (largest buffer " +
+                    mib(largest) + "), the device has " + mib(device.global_memory) +
+                    " (largest buffer " + mib(device.max_allocation) +
+                    "); use engine='cpu' (for texture smoothing, or a smaller texture_size)",
+                CL_MEM_OBJECT_ALLOCATION_FAILURE);
 }
 
 }  // namespace sdf::cl

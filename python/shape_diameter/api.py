@@ -13,6 +13,7 @@ import numpy as np
 from . import _core
 from .normalization import NORMALIZATIONS, normalize_values
 from .smoothing import (
+    DEVICE_ERRORS,
     check_smoothing,
     prepare_projected_for,
     prepare_texture_for,
@@ -41,10 +42,11 @@ class Result:
     the drivers), prepare (orientation, points, their Morton order, and with
     threads=0 the copy of the mesh the build reads; its steps follow as 'prepare: ...'),
     build, build wait, cast (cast and reduce, fused), fill, normalize, total; on OpenCL also
-    setup, upload and download; with smoothing, smooth, and for 'texture' 'beside cast' (the
-    mesh and UVs made ready, their UV islands, and on OpenCL the UVs' upload: on OpenCL done
-    during the cast, on the CPU after it; its steps follow as 'beside cast: mesh', 'beside
-    cast: islands', ...). With threads=0 the BVH builds beside 'prepare' (and on OpenCL
+    setup, upload and download; with smoothing, smooth (its steps follow as 'smooth: ...'),
+    and for 'texture' 'beside cast' (the mesh and UVs made ready, their UV islands, and on
+    OpenCL the UVs' upload: on OpenCL done during the cast, on the CPU after it; its steps
+    follow as 'beside cast: mesh', 'beside cast: islands', ...); for 'projected' on OpenCL,
+    'beside cast: upload' (the cast points' frames). With threads=0 the BVH builds beside 'prepare' (and on OpenCL
     beside the points' upload): 'build' is its own time, 'build wait' what it added to the
     wall time."""
     engine: str = "cpu"
@@ -56,6 +58,11 @@ class Result:
     flipped_faces: int = 0
     """Faces whose winding the computation reversed (orientation='auto' or 'flip'); the
     caller's arrays are never changed."""
+    reversed_faces: Optional[np.ndarray] = None
+    """bool per face: which ones it reversed (None when none was). The winding it cast and
+    smoothed on is `triangles` with those faces' corners swapped, e.g.
+    `t = triangles.copy(); t[r.reversed_faces] = t[r.reversed_faces][:, [0, 2, 1]]`:
+    smooth(vertices, t, r.raw, ...) then gives compute()'s smoothing."""
 
 
 def engines() -> list:
@@ -168,12 +175,12 @@ def _check_options(rays, cone_angle, sampling, points, normalize_method, engine,
 
 
 def _run_with_fallback(run, chosen, engine, what):
-    """run(chosen); with engine='auto', an OpenCL failure (RuntimeError) runs it again on the
-    CPU. Returns the result and the failure in one line ('<what><chosen> failed: ...'), or
-    None when there was none."""
+    """run(chosen); with engine='auto', an OpenCL failure (DEVICE_ERRORS: not a cancel from
+    a progress callback) runs it again on the CPU. Returns the result and the failure in one
+    line ('<what><chosen> failed: ...'), or None when there was none."""
     try:
         return run(chosen), None
-    except RuntimeError as error:
+    except DEVICE_ERRORS as error:
         if engine != "auto" or chosen == "cpu":
             raise
         return run("cpu"), f"{what}{chosen} failed: {error}".splitlines()[0]
@@ -337,7 +344,7 @@ def compute(
             return run_checked(
                 v, smooth_t, raw, points, smoothing, smoothing_resolved, int(threads),
                 None if progress is None else lambda f: progress(0.9 + 0.1 * f),
-                engine_name, ready, stages,
+                engine_name, ready, stages, stacklevel=6,
             )
 
         values, smoothing_fallback = _run_with_fallback(
@@ -361,6 +368,7 @@ def compute(
         rays=int(rays),
         device_memory=int(out["device_bytes"]),
         flipped_faces=int(out["flipped_faces"]),
+        reversed_faces=out["reversed"],
     )
 
 

@@ -205,8 +205,8 @@ def build_parser() -> argparse.ArgumentParser:
         default="none",
         help="smooth the SDF before colouring (paper 4.4): kring = Gaussian over mesh rings, "
         "projected = octree of points moved inward by half their SDF, texture = blur in the "
-        "UV layout (needs UVs in INPUT: OBJ vt, glTF TEXCOORD_0, PLY texture coordinates) "
-        "(default: none)",
+        "UV layout (needs UVs in INPUT: OBJ vt, glTF TEXCOORD_0 of a primitive with a "
+        "material, PLY texture coordinates) (default: none)",
     )
     parser.add_argument(
         "--k",
@@ -298,7 +298,8 @@ def _run(args) -> int:
             if uvs is None:
                 raise CommandError(
                     f"{args.input}: no UVs for every face (--smooth texture needs OBJ vt, "
-                    "glTF TEXCOORD_0 or PLY texture coordinates)"
+                    "glTF TEXCOORD_0 of a primitive with a material (trimesh reads no UVs "
+                    "without one), or PLY texture coordinates)"
                 )
         else:
             vertices, triangles = mesh_io.load_mesh(args.input)
@@ -404,18 +405,25 @@ def _report(args, vertices, triangles, result, output, io_seconds, total_seconds
 
 @contextlib.contextmanager
 def _progress_bar():
-    """A progress callback for compute(): a tqdm bar on stderr, or None.
+    """A progress callback for compute(): a tqdm bar on stderr, or a silent one.
 
-    Only on a terminal (a bar in a log file is noise) and only after half a
-    second, so quick runs print nothing. stdout is never touched.
+    The bar only on a terminal (a bar in a log file is noise) and only after
+    half a second, so quick runs print nothing. stdout is never touched. Always
+    a callback: native code runs without Python, which takes Ctrl-C (SIGINT) only
+    when the callback returns to it, so without one an interrupt would wait for
+    the whole computation.
     """
+
+    def silent(fraction: float) -> None:
+        pass
+
     if not sys.stderr.isatty():
-        yield None
+        yield silent
         return
     try:
         from tqdm import tqdm
     except ImportError:  # the bar is a nicety; run without it
-        yield None
+        yield silent
         return
     with tqdm(
         total=100,

@@ -22,6 +22,11 @@ from . import _core
 
 METHODS = ("none", "kring", "projected", "texture")
 
+# What engine='auto' takes for a failed device (and then runs on the CPU): the OpenCL
+# engine's own errors, including a device too small for the work. Any other exception, a
+# progress callback's cancel above all, propagates.
+DEVICE_ERRORS = (_core.OpenCLError,) if hasattr(_core, "OpenCLError") else ()
+
 # Every option of every method with its default. None means "chosen from the input" (k-ring:
 # k from the face count; texture: radius from the texture size), see smooth().
 OPTIONS = {
@@ -133,7 +138,9 @@ def smooth(
     Options of 'texture' (blur in the UV layout, islands kept apart):
         texture_size: int or (width, height), default 1024.
         radius: blur reach in texels (Gaussian deviation radius / 2); default
-            default_radius(texture_size); 0 for none.
+            default_radius(texture_size); 0 for none (face values then come back as they
+            were; vertex values still pass through the texel grid: each corner reads the
+            texels around its UV position, bilinearly).
         bilateral: also weigh by value difference (default False), with deviation range_sigma
             times (max - min) of the values (default 0.1).
         margin: texels of dilation around each island (default 2; use more for baking).
@@ -162,7 +169,7 @@ def smooth(
     chosen = _resolve_engine(engine) if method in ("projected", "texture") else "cpu"
     try:
         return run_checked(v, t, values, points, method, resolved, threads, progress, chosen)
-    except RuntimeError as error:
+    except DEVICE_ERRORS as error:
         if engine != "auto" or chosen == "cpu":
             raise
         warnings.warn(
@@ -255,12 +262,12 @@ def _weld_argument(o):
 
 
 def run_checked(v, t, values, points, method, o, threads, progress, engine="cpu",
-                prepared=None, timings=None):
+                prepared=None, timings=None, stacklevel=3):
     """smooth()'s work on arguments checked already (by smooth(), or by compute() on its own
     mesh and SDF), with the options `o` as check_smoothing returns them; prepared: from
     prepare_texture_for or prepare_projected_for on this mesh and these options (projected: on
     an OpenCL engine only), or None; timings: a dict the method's stages (seconds) are added
-    to, or None."""
+    to, or None; stacklevel: of its warnings, so that they name the caller's line."""
     if timings is None:
         timings = {}
     if method == "none":
@@ -308,7 +315,17 @@ def run_checked(v, t, values, points, method, o, threads, progress, engine="cpu"
             "layout): texture smoothing does not reach them and they keep their values; "
             "move each tile's UVs into the square to smooth them",
             RuntimeWarning,
-            stacklevel=3,
+            stacklevel=stacklevel,
+        )
+    if out["kept_off_device"]:
+        width, height = o["texture_size"]
+        warnings.warn(
+            f"texture smoothing ran on the CPU threads, not on {engine}: a face's UVs span "
+            f"more than 65536 texels at {width} x {height} (a device walks each face in one "
+            "work item; wrap-around faces of a spherical layout do this); the values are the "
+            "same, and a smaller texture_size keeps it on the device",
+            RuntimeWarning,
+            stacklevel=stacklevel,
         )
     if o["return_image"]:
         return TextureResult(out["values"], out["image"], out["mask"])

@@ -330,6 +330,12 @@ def test_faces_spanning_many_texels_are_drawn_on_the_cpu():
     assert "rasterise" in stages(512)
     has_double = next(e for e in sd.engines() if e["name"] == DEVICE)["double"]
     assert ("device: kernels" in stages(128)) == has_double
+    # ... and says so, naming the caller's line.
+    with pytest.warns(RuntimeWarning, match="ran on the CPU threads") as caught:
+        out = sd.smooth(v, t, values, "texture", uvs=uvs, texture_size=512, engine=DEVICE)
+    assert caught[0].filename == __file__
+    np.testing.assert_array_equal(
+        out, sd.smooth(v, t, values, "texture", uvs=uvs, texture_size=512, engine="cpu"))
 
 
 def test_kring_runs_on_the_cpu_whatever_the_engine(spot):
@@ -355,3 +361,27 @@ def test_opencl_all_smooths_on_its_first_device(spot, method):
     options = {"uvs": uvs, "texture_size": 256} if method == "texture" else {}
     np.testing.assert_array_equal(sd.smooth(v, t, faces, method, engine="opencl:all", **options),
                                   sd.smooth(v, t, faces, method, engine=DEVICE, **options))
+
+
+@pytest.mark.parametrize("method", ["projected", "texture"])
+def test_a_cancel_raising_runtime_error_is_not_taken_for_a_device_failure(spot, method,
+                                                                           monkeypatch):
+    """engine='auto' runs the work again on the CPU after an OpenCL failure only: a progress
+    callback's own exception, a RuntimeError included, propagates from compute() and
+    smooth() (they once took it for a device failure and ran on)."""
+    import shape_diameter.api as api
+    import shape_diameter.smoothing as smoothing
+
+    v, t, uvs, faces, _ = spot
+    monkeypatch.setattr(api, "_resolve_engine", lambda engine: DEVICE)
+    monkeypatch.setattr(smoothing, "_resolve_engine", lambda engine: DEVICE)
+
+    def cancel(fraction):
+        if fraction >= 0.95:
+            raise RuntimeError("cancelled by the user")
+
+    options = {"texture_size": 256} if method == "texture" else {}
+    with pytest.raises(RuntimeError, match="cancelled by the user"):
+        sd.compute(v, t, smoothing=method, uvs=uvs, smoothing_options=options, progress=cancel)
+    with pytest.raises(RuntimeError, match="cancelled by the user"):
+        sd.smooth(v, t, faces, method, uvs=uvs, progress=lambda f: cancel(1.0), **options)
