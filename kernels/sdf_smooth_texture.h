@@ -379,9 +379,14 @@ SDF_INLINE void sdf_blur_texel(int i, int count, size_t stride, SDF_GLOBAL const
 }
 
 /* A texel of an island after both passes: the weighted mean, clamped to the input's [lo, hi]
- * (the centre texel itself always counts, so weight > 0). */
+ * (the centre texel itself always counts, so weight > 0). Values near the float limit can
+ * overflow the float sums to inf - inf: such a NaN becomes lo here, on the host as on a
+ * device (whose fmax would drop it where the host's compare keeps it), and no blurred texel
+ * is NaN (the vertex read-back takes NaN for "no sample"). */
 SDF_INLINE float sdf_blur_normalize(float value_sum, float weight_sum, float lo, float hi) {
-  return sdf_min(hi, sdf_max(lo, value_sum / weight_sum));
+  float mean = value_sum / weight_sum;
+  if (mean != mean) return lo;
+  return sdf_min(hi, sdf_max(lo, mean));
 }
 
 SDF_KERNEL_END

@@ -304,14 +304,16 @@ TextureSmoothing smooth_checked(const Mesh& mesh, PointKind kind, const float* v
   }
 
   TextureSmoothing out;
-  // The result starts as the input (points nothing reaches keep it), copied on the threads.
+  // On the CPU threads the result starts as the input (points nothing reaches keep it),
+  // copied on the threads; a device reads every value back itself.
   if (!into) {
     out.values.resize(n);
     into = out.values.data();
   }
-  parallel_for(n, kTexelGrain, threads, [&](std::size_t begin, std::size_t end) {
-    std::copy(values + begin, values + end, into + begin);
-  });
+  if (!device)
+    parallel_for(n, kTexelGrain, threads, [&](std::size_t begin, std::size_t end) {
+      std::copy(values + begin, values + end, into + begin);
+    });
   std::vector<std::int32_t> island;
   std::vector<float> blurred;
   if (device) {

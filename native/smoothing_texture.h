@@ -102,10 +102,10 @@ struct TextureJob {
   TextureFilter filter;                // sizes, dilation, blur, the values' range
   unsigned threads = 0;                // host threads the device's uploads may copy on
 };
-// Draws, dilates, blurs and reads back into `values` (n floats, holding the input), with
-// the CPU's code (kernels/sdf_smooth_texture.h) and bits. Where `images` is true it also fills
-// `island` (dilated) and `blurred`, row-major: the kept image. Appends its stages'
-// seconds to `timings`. A device walks each face in one work item, so smooth_texture runs
+// Draws, dilates, blurs and reads back into `values` (n floats, each written; the input is
+// job.values), with the CPU's code (kernels/sdf_smooth_texture.h) and bits. Where `images` is
+// true it also fills `island` (dilated) and `blurred`, row-major: the kept image. Appends its
+// stages' seconds to `timings`. A device walks each face in one work item, so smooth_texture runs
 // it only where no face's UV box covers more than kMostTexelsPerDeviceFace texels (a low-poly
 // mesh on a large texture stays on the CPU threads, with the same values).
 using TextureDeviceFn = std::function<void(

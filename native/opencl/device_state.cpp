@@ -85,7 +85,8 @@ cl_program program_for(const Device& device, DeviceState& s, const std::string& 
 
 std::string mib(std::uint64_t bytes) { return std::to_string((bytes + (1 << 20) - 1) >> 20) + " MiB"; }
 
-void check_fits(const Device& device, const std::vector<std::size_t>& buffers, bool at_least) {
+void check_fits(const Device& device, const std::vector<std::size_t>& buffers, bool at_least,
+                const std::string& advice) {
   std::uint64_t total = 0, largest = 0;
   for (std::size_t b : buffers) {
     total += b;
@@ -96,7 +97,7 @@ void check_fits(const Device& device, const std::vector<std::size_t>& buffers, b
                     (at_least ? "at least " : "") + mib(total) + " (largest buffer " +
                     mib(largest) + "), the device has " + mib(device.global_memory) +
                     " (largest buffer " + mib(device.max_allocation) +
-                    "); use engine='cpu' (for texture smoothing, or a smaller texture_size)",
+                    "); use engine='cpu'" + (advice.empty() ? "" : " or " + advice),
                 CL_MEM_OBJECT_ALLOCATION_FAILURE);
 }
 

@@ -124,9 +124,11 @@ std::size_t bytes_of(const std::vector<T, Allocator>& v) {
 
 std::string mib(std::uint64_t bytes);
 
-// Refuses, before allocating anything, a scene that cannot fit the device.
-// at_least: `buffers` are only the first of a run's (the message says "at least").
+// Refuses, before allocating anything, a scene that cannot fit the device: throws Error
+// (CL_MEM_OBJECT_ALLOCATION_FAILURE; engine='auto' then runs on the CPU). at_least: `buffers`
+// are only the first of a run's (the message says "at least"). advice: what else would help,
+// after "use engine='cpu'".
 void check_fits(const Device& device, const std::vector<std::size_t>& buffers,
-                bool at_least = false);
+                bool at_least = false, const std::string& advice = "");
 
 }  // namespace sdf::cl

@@ -54,8 +54,8 @@ struct CastTimings {
 // Casts every point on `devices` (several: points are shared out dynamically; results are
 // identical to one device); `host_threads` (0: every core) put the results in mesh order.
 // Writes raw[i] (-1 when no ray was kept) and valid_rays[i].
-// Throws Error for OpenCL failures (naming the call and code) and std::runtime_error when
-// the scene does not fit a device's memory. Progress covers [progress_from, progress_to].
+// Throws Error for OpenCL failures (naming the call and code), also when the scene does not
+// fit a device's memory. Progress covers [progress_from, progress_to].
 // beside_cast (sdf.h's BesideCast) runs on the calling thread once the devices have started.
 CastTimings cast_opencl(const std::vector<const Device*>& devices, const SceneSource& scene,
                         const SamplePoints& points, const std::vector<std::uint32_t>& order,

@@ -36,7 +36,7 @@ PreparedProjected prepare_projected(const Device& device, const SamplePoints& po
 // As sdf::smooth_projected_into, on `device`, with the frames that `prepared` uploaded.
 // values: one per point, >= 0 (std::invalid_argument otherwise, as on the CPU). Throws
 // Error for OpenCL failures (also when the device failed since the upload: its state was
-// replaced) and std::runtime_error when the buffers do not fit the device.
+// replaced) and when the buffers do not fit the device.
 void smooth_projected_opencl(const Device& device, const PreparedProjected& prepared,
                              const float* values, const ProjectedOptions& options, float* out,
                              const ProgressFn& progress = nullptr, StageTimings* timings = nullptr);

@@ -126,7 +126,7 @@ TextureDeviceFn texture_on_device(const Device& device, const PreparedTexture* p
       sizes.insert(sizes.end(), {bytes_of(job.mesh->triangles), 3 * m * sizeof(float),
                                  bytes_of(job.groups->first), bytes_of(job.groups->corners),
                                  bytes_of(job.islands->merged)});
-    check_fits(device, sizes);
+    check_fits(device, sizes, false, "a smaller texture_size");
     std::lock_guard<std::mutex> lock(s.mutex);
     const FinishOnUnwind finish_on_unwind(s.queue);
     cl_program program = smoothing_program(device, s);

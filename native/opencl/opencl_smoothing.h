@@ -15,8 +15,8 @@
 
 namespace sdf::cl {
 
-// As sdf::smooth_texture, on `device` (throws Error for OpenCL failures and
-// std::runtime_error when the images do not fit the device).
+// As sdf::smooth_texture, on `device` (throws Error for OpenCL failures, also when the
+// images do not fit the device).
 TextureSmoothing smooth_texture_opencl(const Device& device, const Mesh& mesh, PointKind kind,
                                        const float* values, const float* uvs,
                                        const TextureOptions& options, bool keep_image,

@@ -344,7 +344,7 @@ def compute(
             return run_checked(
                 v, smooth_t, raw, points, smoothing, smoothing_resolved, int(threads),
                 None if progress is None else lambda f: progress(0.9 + 0.1 * f),
-                engine_name, ready, stages, stacklevel=6,
+                engine_name, ready, stages, stacklevel=5,
             )
 
         values, smoothing_fallback = _run_with_fallback(

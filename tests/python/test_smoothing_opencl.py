@@ -312,6 +312,7 @@ def test_a_prepared_texture_keeps_its_uvs_alive(spot):
     assert len(noise) == 8
 
 
+@pytest.mark.filterwarnings("ignore:no ray of any point:RuntimeWarning")  # a flat square
 def test_faces_spanning_many_texels_are_drawn_on_the_cpu():
     """A device walks each face in one work item: a face spanning more than 2^16 texels (two
     triangles over a 512 x 512 texture) leaves the method to the CPU threads, same values."""
@@ -336,6 +337,10 @@ def test_faces_spanning_many_texels_are_drawn_on_the_cpu():
     assert caught[0].filename == __file__
     np.testing.assert_array_equal(
         out, sd.smooth(v, t, values, "texture", uvs=uvs, texture_size=512, engine="cpu"))
+    with pytest.warns(RuntimeWarning, match="ran on the CPU threads") as caught:
+        sd.compute(v, t, rays=4, engine=DEVICE, smoothing="texture", uvs=uvs,
+                   smoothing_options={"texture_size": 512})
+    assert [w.filename for w in caught if "CPU threads" in str(w.message)] == [__file__]
 
 
 def test_kring_runs_on_the_cpu_whatever_the_engine(spot):
@@ -385,3 +390,19 @@ def test_a_cancel_raising_runtime_error_is_not_taken_for_a_device_failure(spot, 
         sd.compute(v, t, smoothing=method, uvs=uvs, smoothing_options=options, progress=cancel)
     with pytest.raises(RuntimeError, match="cancelled by the user"):
         sd.smooth(v, t, faces, method, uvs=uvs, progress=lambda f: cancel(1.0), **options)
+
+
+@pytest.mark.parametrize("points", ["faces", "vertices"])
+def test_texture_values_near_the_float_limit_blur_alike(spot, points):
+    """Values near the float limit overflow the blur's float sums (inf - inf): such texels take
+    the input's minimum on the host as on a device, and no texel is NaN (the vertex read-back
+    takes NaN for "no sample")."""
+    v, t, uvs, _, _ = spot
+    n = len(t) if points == "faces" else len(v)
+    values = np.where(np.arange(n) % 2 == 0, -3.4e38, 3.4e38).astype(np.float32)
+    options = {"texture_size": 64, "radius": 4, "return_image": True}
+    cpu = sd.smooth(v, t, values, "texture", uvs=uvs, points=points, engine="cpu", **options)
+    opencl = sd.smooth(v, t, values, "texture", uvs=uvs, points=points, engine=DEVICE, **options)
+    assert not np.isnan(cpu.image).any()
+    np.testing.assert_array_equal(opencl.image, cpu.image)
+    np.testing.assert_array_equal(opencl.values, cpu.values)
