@@ -729,7 +729,7 @@ def test_gil_is_released_while_computing():
         start = time.perf_counter()
         # 24 rays: about 0.6 s of casting on one thread here, well above the 0.2 s needed
         # to tell (8 rays fell to 0.2 s once the CPU engine got faster).
-        result = shape_diameter.compute(V, F, rays=24, threads=1)
+        result = shape_diameter.compute(V, F, rays=24, threads=1, engine="cpu")  # not a GPU
         end = time.perf_counter()
     finally:
         stop.set()
