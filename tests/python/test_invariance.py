@@ -269,8 +269,9 @@ def test_random_sampling_depends_on_the_seed_only(fandisk):
 @pytest.mark.parametrize("sampling", SAMPLINGS)
 def test_thread_count_does_not_change_the_result(fandisk, sampling, points):
     V, F = fandisk
-    one = shape_diameter.compute(V, F, sampling=sampling, points=points, threads=1)
-    two = shape_diameter.compute(V, F, sampling=sampling, points=points, threads=2)
+    # The CPU engine's threads (engine auto would take a GPU where there is one).
+    one = shape_diameter.compute(V, F, sampling=sampling, points=points, threads=1, engine="cpu")
+    two = shape_diameter.compute(V, F, sampling=sampling, points=points, threads=2, engine="cpu")
     assert "1 thread" in one.engine
     assert "2 thread" in two.engine
     _assert_identical(one, two)
