@@ -54,6 +54,25 @@ void write_buffer(cl_context context, cl_command_queue queue, Staging* staging, 
         "clEnqueueWriteBuffer");
 }
 
+void upload_new(DeviceState& s, cl_command_queue queue, Staging* staging, unsigned threads,
+                cl_mem& mem, const void* data, std::size_t bytes) {
+  cl_int err = CL_SUCCESS;
+  mem = api()->clCreateBuffer(s.context, CL_MEM_READ_ONLY, std::max<std::size_t>(bytes, 4),
+                              nullptr, &err);
+  if (err != CL_SUCCESS) mem = nullptr;
+  check(err, "clCreateBuffer");
+  write_buffer(s.context, queue, staging, threads, mem, data, bytes);
+}
+
+cl_command_queue side_queue(const Device& device, DeviceState& s) {
+  if (!s.side_queue) {
+    cl_int err = CL_SUCCESS;
+    s.side_queue = api()->clCreateCommandQueue(s.context, device.id, 0, &err);
+    check(err, "clCreateCommandQueue (side)");
+  }
+  return s.side_queue;
+}
+
 void read_buffer(DeviceState& s, cl_mem source, void* data, std::size_t bytes) {
   if (bytes == 0) return;
   if (s.stage_uploads && s.staging.worth(bytes) &&

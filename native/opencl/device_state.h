@@ -94,6 +94,15 @@ inline void write_buffer(DeviceState& s, cl_mem destination, const void* data,
                destination, data, bytes);
 }
 
+// A new read-only buffer, set into `mem` before anything can fail after its creation (its
+// owner releases it also when the write fails), holding `bytes` of `data` written as
+// write_buffer writes them on `queue` through `staging` (not waiting).
+void upload_new(DeviceState& s, cl_command_queue queue, Staging* staging, unsigned threads,
+                cl_mem& mem, const void* data, std::size_t bytes);
+
+// The state's side queue, made on first use. Call it holding s.side_mutex.
+cl_command_queue side_queue(const Device& device, DeviceState& s);
+
 // Reads `bytes` of `source` into `data` on the state's queue, waiting for them: through its
 // staging where uploads are staged and it is worth it (the copy out on s.copy_threads).
 void read_buffer(DeviceState& s, cl_mem source, void* data, std::size_t bytes);

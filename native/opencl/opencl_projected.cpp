@@ -237,15 +237,9 @@ void upload_frames(DeviceState& s, cl_command_queue queue, Staging* staging, uns
                    const glm::vec3* origins, const glm::vec3* axes, std::size_t n,
                    FramesOnDevice& frames) {
   static_assert(sizeof(glm::vec3) == 3 * sizeof(float), "vec3 is 3 packed floats (vload3)");
-  const std::size_t bytes = std::max<std::size_t>(n * sizeof(glm::vec3), 4);
-  cl_int err = CL_SUCCESS;
   frames.state = &s;
-  frames.origins = api()->clCreateBuffer(s.context, CL_MEM_READ_ONLY, bytes, nullptr, &err);
-  check(err, "clCreateBuffer");
-  frames.axes = api()->clCreateBuffer(s.context, CL_MEM_READ_ONLY, bytes, nullptr, &err);
-  check(err, "clCreateBuffer");
-  write_buffer(s.context, queue, staging, threads, frames.origins, origins, n * sizeof(glm::vec3));
-  write_buffer(s.context, queue, staging, threads, frames.axes, axes, n * sizeof(glm::vec3));
+  upload_new(s, queue, staging, threads, frames.origins, origins, n * sizeof(glm::vec3));
+  upload_new(s, queue, staging, threads, frames.axes, axes, n * sizeof(glm::vec3));
 }
 
 std::size_t working_bytes(std::size_t n) {  // besides the frames: values x2, points, bins
@@ -276,22 +270,17 @@ PreparedProjected prepare_projected(const Device& device, const SamplePoints& po
   DeviceState& s = state_of(device);
   auto frames = std::make_shared<FramesOnDevice>();
   std::lock_guard<std::mutex> lock(s.side_mutex);
-  cl_int err = CL_SUCCESS;
-  if (!s.side_queue) {
-    s.side_queue = api()->clCreateCommandQueue(s.context, device.id, 0, &err);
-    check(err, "clCreateCommandQueue (side)");
-  }
+  cl_command_queue queue = side_queue(device, s);
   // A failed call must not leave a write still reading the caller's arrays.
-  const FinishOnUnwind finish_on_unwind(s.side_queue);
+  const FinishOnUnwind finish_on_unwind(queue);
   Stopwatch clock;
-  upload_frames(s, s.side_queue, s.stage_uploads ? &s.side_staging : nullptr, threads,
+  upload_frames(s, queue, s.stage_uploads ? &s.side_staging : nullptr, threads,
                 points.origins.data(), points.axes.data(), n, *frames);
-  check(api()->clFinish(s.side_queue), "clFinish (side)");
+  check(api()->clFinish(queue), "clFinish (side)");
   prepared.timings.emplace_back("upload", clock.lap());
   prepared.on_device = std::move(frames);
   return prepared;
 }
-
 
 void smooth_projected_opencl(const Device& device, const PreparedProjected& prepared,
                              const float* values, const ProjectedOptions& options, float* out,

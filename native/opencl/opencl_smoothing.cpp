@@ -283,8 +283,7 @@ TextureSmoothing smooth_texture_opencl(const Device& device, const PreparedTextu
 bool upload_prepared_texture(const Device& device, PreparedTexture& prepared, unsigned threads) {
   if (!device.fp64 || prepared.largest_face_texels > kMostTexelsPerDeviceFace) return false;
   const std::size_t m = prepared.mesh.triangles.size();
-  const std::size_t uv_bytes = std::max<std::size_t>(6 * m * sizeof(float), 4);
-  const std::size_t island_bytes = std::max<std::size_t>(m * sizeof(std::int32_t), 4);
+  const std::size_t uv_bytes = 6 * m * sizeof(float), island_bytes = m * sizeof(std::int32_t);
   const CornerGroups& groups = prepared.groups;
   const std::vector<std::uint32_t>& merged = prepared.islands.merged;
   const bool vertex_values = !groups.first.empty();
@@ -295,35 +294,20 @@ bool upload_prepared_texture(const Device& device, PreparedTexture& prepared, un
   if (uv_bytes + island_bytes + group_bytes > device.global_memory / 4)
     return false;  // leave room to cast
   DeviceState& s = state_of(device);
-  const Api& cl = *api();
   auto uploads = std::make_shared<TextureUploads>();
   uploads->state = &s;
   std::lock_guard<std::mutex> lock(s.side_mutex);
-  cl_int err = CL_SUCCESS;
-  if (!s.side_queue) {
-    s.side_queue = cl.clCreateCommandQueue(s.context, device.id, 0, &err);
-    check(err, "clCreateCommandQueue (side)");
-  }
+  cl_command_queue queue = side_queue(device, s);
   // A failed call must not leave a write still reading the caller's arrays.
-  const FinishOnUnwind finish_on_unwind(s.side_queue);
-  uploads->uvs = cl.clCreateBuffer(s.context, CL_MEM_READ_ONLY, uv_bytes, nullptr, &err);
-  check(err, "clCreateBuffer");
-  uploads->face_island = cl.clCreateBuffer(s.context, CL_MEM_READ_ONLY, island_bytes, nullptr, &err);
-  check(err, "clCreateBuffer");
+  const FinishOnUnwind finish_on_unwind(queue);
   Stopwatch clock;
   Staging* staging = s.stage_uploads ? &s.side_staging : nullptr;
-  write_buffer(s.context, s.side_queue, staging, threads, uploads->uvs, prepared.uvs,
-               6 * m * sizeof(float));
-  write_buffer(s.context, s.side_queue, staging, threads, uploads->face_island,
-               prepared.islands.face_island.data(), m * sizeof(std::int32_t));
-  // Into `mem`, which `uploads` releases (also after a failed write).
+  // Into buffers that `uploads` releases (also after a failed write).
   auto upload = [&](cl_mem& mem, const void* data, std::size_t bytes) {
-    mem = cl.clCreateBuffer(s.context, CL_MEM_READ_ONLY, std::max<std::size_t>(bytes, 4), nullptr,
-                            &err);
-    if (err != CL_SUCCESS) mem = nullptr;
-    check(err, "clCreateBuffer");
-    write_buffer(s.context, s.side_queue, staging, threads, mem, data, bytes);
+    upload_new(s, queue, staging, threads, mem, data, bytes);
   };
+  upload(uploads->uvs, prepared.uvs, uv_bytes);
+  upload(uploads->face_island, prepared.islands.face_island.data(), island_bytes);
   if (vertex_values) {
     upload(uploads->triangles, prepared.mesh.triangles.data(), bytes_of(prepared.mesh.triangles));
     upload(uploads->group_first, groups.first.data(), bytes_of(groups.first));
@@ -331,7 +315,7 @@ bool upload_prepared_texture(const Device& device, PreparedTexture& prepared, un
     if (!merged.empty()) upload(uploads->merged, merged.data(), bytes_of(merged));
   }
   // Done before the smoothing's queue reads them (and before `prepared` may change).
-  check(cl.clFinish(s.side_queue), "clFinish (side)");
+  check(api()->clFinish(queue), "clFinish (side)");
   prepared.timings.emplace_back("upload", clock.lap());
   prepared.on_device = std::move(uploads);
   return true;
