@@ -327,6 +327,19 @@ ChunkSummary summarize(const Points& points, unsigned threads) {
   return summary;
 }
 
+// The range of values that must be lengths (finite, >= 0); throws std::invalid_argument naming
+// the first that is not.
+ValueRange length_range(const float* values, std::size_t n, unsigned threads) {
+  const ValueRange range = value_range(values, n, threads, [](float x) {
+    return !std::isfinite(x) || x < 0.0f;
+  });
+  if (range.first_bad < n)
+    throw std::invalid_argument("value " + std::to_string(range.first_bad) +
+                                " is negative or not finite (projected smoothing needs the "
+                                "SDF, a length >= 0)");
+  return range;
+}
+
 // The nodes, and the members in the Morton order they were built from (the CPU gather walks
 // the points in that order).
 struct PointOctree {
@@ -402,12 +415,7 @@ std::vector<PointOctreeNode> build_point_octree(const glm::vec3* points, const f
                                                 std::size_t count,
                                                 const ProjectedOptions& options) {
   check_projected_options(options);
-  const ValueRange range = value_range(values, count, options.threads, [](float x) {
-    return !std::isfinite(x) || x < 0.0f;
-  });
-  if (range.first_bad < count)
-    throw std::invalid_argument("value " + std::to_string(range.first_bad) +
-                                " is negative or not finite");
+  const ValueRange range = length_range(values, count, options.threads);
   const ArrayPoints input{points, values, count};
   return build_octree(input, summarize(input, options.threads),
                       point_fixed_shift(range.hi, count), options)
@@ -428,13 +436,7 @@ ValueRange checked_projected_input(const float* values, std::size_t n,
   if (options.iterations < 0)
     throw std::invalid_argument("iterations must be >= 0, got " +
                                 std::to_string(options.iterations));
-  const ValueRange range = value_range(values, n, options.threads, [](float x) {
-    return !std::isfinite(x) || x < 0.0f;
-  });
-  if (range.first_bad < n)
-    throw std::invalid_argument("value " + std::to_string(range.first_bad) +
-                                " is negative or not finite (projected smoothing needs the "
-                                "SDF, a length >= 0)");
+  const ValueRange range = length_range(values, n, options.threads);
   check_projected_options(options);  // even when there is nothing to do
   return range;
 }
