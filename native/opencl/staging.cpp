@@ -15,6 +15,15 @@ namespace {
 constexpr unsigned kCopyThreads = 8;
 constexpr std::size_t kCopyGrain = std::size_t{1} << 20;
 
+// Copies between a chunk and the caller's memory on up to `threads` (0: every core) threads.
+void copy(void* to, const void* from, std::size_t bytes, unsigned threads) {
+  parallel_for(bytes, kCopyGrain, std::min(kCopyThreads, resolve_threads(threads)),
+               [&](std::size_t begin, std::size_t end) {
+                 std::memcpy(static_cast<char*>(to) + begin,
+                             static_cast<const char*>(from) + begin, end - begin);
+               });
+}
+
 }  // namespace
 
 bool Staging::ready(cl_context context, cl_command_queue queue) {
@@ -50,17 +59,13 @@ bool Staging::write(cl_context context, cl_command_queue queue, cl_mem destinati
   if (!ready(context, queue)) return false;
   const Api& cl = *api();
   const char* from = static_cast<const char*>(data);
-  const unsigned copiers = std::min(kCopyThreads, resolve_threads(threads));
   for (std::size_t offset = 0; offset < bytes; offset += chunk_bytes_, next_ ^= 1) {
     const int slot = next_;
     const std::size_t size = std::min(chunk_bytes_, bytes - offset);
     wait(slot);  // its last DMA must be done before the chunk is overwritten
-    char* to = static_cast<char*>(host_[slot]);
-    parallel_for(size, kCopyGrain, copiers, [&](std::size_t begin, std::size_t end) {
-      std::memcpy(to + begin, from + offset + begin, end - begin);
-    });
-    check(cl.clEnqueueWriteBuffer(queue, destination, CL_FALSE, offset, size, to, 0, nullptr,
-                                  &pending_[slot]),
+    copy(host_[slot], from + offset, size, threads);
+    check(cl.clEnqueueWriteBuffer(queue, destination, CL_FALSE, offset, size, host_[slot], 0,
+                                  nullptr, &pending_[slot]),
           "clEnqueueWriteBuffer (staged)");
   }
   return true;
@@ -71,7 +76,6 @@ bool Staging::read(cl_context context, cl_command_queue queue, cl_mem source, vo
   if (!ready(context, queue)) return false;
   const Api& cl = *api();
   char* to = static_cast<char*>(data);
-  const unsigned copiers = std::min(kCopyThreads, resolve_threads(threads));
   auto queue_read = [&](std::size_t offset, int slot) {
     wait(slot);  // an upload's DMA out of the chunk must be done before it is overwritten
     check(cl.clEnqueueReadBuffer(queue, source, CL_FALSE, offset,
@@ -84,11 +88,7 @@ bool Staging::read(cl_context context, cl_command_queue queue, cl_mem source, vo
   for (std::size_t offset = 0; offset < bytes; offset += chunk_bytes_, slot ^= 1) {
     if (offset + chunk_bytes_ < bytes) queue_read(offset + chunk_bytes_, slot ^ 1);
     wait(slot);
-    const char* from = static_cast<const char*>(host_[slot]);
-    const std::size_t size = std::min(chunk_bytes_, bytes - offset);
-    parallel_for(size, kCopyGrain, copiers, [&](std::size_t begin, std::size_t end) {
-      std::memcpy(to + offset + begin, from + begin, end - begin);
-    });
+    copy(to + offset, host_[slot], std::min(chunk_bytes_, bytes - offset), threads);
   }
   next_ = slot;
   return true;
