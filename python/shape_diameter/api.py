@@ -13,11 +13,11 @@ import numpy as np
 from . import _core
 from .normalization import NORMALIZATIONS, normalize_values
 from .smoothing import (
-    DEVICE_ERRORS,
     check_smoothing,
     prepare_projected_for,
     prepare_texture_for,
     run_checked,
+    run_with_fallback,
 )
 
 SAMPLINGS = ("fibonacci", "random", "cgal")
@@ -46,9 +46,9 @@ class Result:
     and for 'texture' 'beside cast' (the mesh and UVs made ready, their UV islands, and on
     OpenCL the UVs' upload: on OpenCL done during the cast, on the CPU after it; its steps
     follow as 'beside cast: mesh', 'beside cast: islands', ...); for 'projected' on OpenCL,
-    'beside cast: upload' (the cast points' frames). With threads=0 the BVH builds beside 'prepare' (and on OpenCL
-    beside the points' upload): 'build' is its own time, 'build wait' what it added to the
-    wall time."""
+    'beside cast: upload' (the cast points' frames). With threads=0 the BVH builds beside
+    'prepare' (and on OpenCL beside the points' upload): 'build' is its own time, 'build
+    wait' what it added to the wall time."""
     engine: str = "cpu"
     """What ran, e.g. 'cpu (2 threads)'."""
     points: str = "faces"
@@ -174,16 +174,10 @@ def _check_options(rays, cone_angle, sampling, points, normalize_method, engine,
     _check_integer("seed", seed, 0, 2**32 - 1)
 
 
-def _run_with_fallback(run, chosen, engine, what):
-    """run(chosen); with engine='auto', an OpenCL failure (DEVICE_ERRORS: not a cancel from
-    a progress callback) runs it again on the CPU. Returns the result and the failure in one
-    line ('<what><chosen> failed: ...'), or None when there was none."""
-    try:
-        return run(chosen), None
-    except DEVICE_ERRORS as error:
-        if engine != "auto" or chosen == "cpu":
-            raise
-        return run("cpu"), f"{what}{chosen} failed: {error}".splitlines()[0]
+def _fallback_line(failed, failure):
+    """A device failure that engine='auto' ran past (run_with_fallback), told in one line
+    ('<failed> failed: ...'), or None when there was none."""
+    return None if failure is None else f"{failed} failed: {failure}".splitlines()[0]
 
 
 def compute(
@@ -303,7 +297,8 @@ def compute(
             orientation, bvh_quality, beside,
         )
 
-    out, fallback = _run_with_fallback(run, chosen, engine, "")
+    out, failure = run_with_fallback(run, chosen, engine)
+    fallback = _fallback_line(chosen, failure)
     if prepare_failure:
         raise prepare_failure[0]
     if out["fill"] == "no-value-anywhere":
@@ -347,10 +342,8 @@ def compute(
                 engine_name, ready, stages, stacklevel=5,
             )
 
-        values, smoothing_fallback = _run_with_fallback(
-            run_smoothing, smooth_engine, engine, "smoothing on "
-        )
-        fallback = smoothing_fallback or fallback
+        values, failure = run_with_fallback(run_smoothing, smooth_engine, engine)
+        fallback = _fallback_line(f"smoothing on {smooth_engine}", failure) or fallback
         timings["smooth"] = time.perf_counter() - clock
         timings.update({f"smooth: {k}": x for k, x in stages.items()})
     clock = time.perf_counter()

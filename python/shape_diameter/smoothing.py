@@ -27,6 +27,17 @@ METHODS = ("none", "kring", "projected", "texture")
 # progress callback's cancel above all, propagates.
 DEVICE_ERRORS = (_core.OpenCLError,) if hasattr(_core, "OpenCLError") else ()
 
+
+def run_with_fallback(run, chosen, engine):
+    """run(chosen); with engine='auto', a device failure (DEVICE_ERRORS) runs it again on the
+    CPU. Returns the result and that failure (None when there was none)."""
+    try:
+        return run(chosen), None
+    except DEVICE_ERRORS as error:
+        if engine != "auto" or chosen == "cpu":
+            raise
+        return run("cpu"), error
+
 # Every option of every method with its default. None means "chosen from the input" (k-ring:
 # k from the face count; texture: radius from the texture size), see smooth().
 OPTIONS = {
@@ -167,17 +178,18 @@ def smooth(
             f"{int((values < 0).sum())} values are negative"
         )
     chosen = _resolve_engine(engine) if method in ("projected", "texture") else "cpu"
-    try:
-        return run_checked(v, t, values, points, method, resolved, threads, progress, chosen)
-    except DEVICE_ERRORS as error:
-        if engine != "auto" or chosen == "cpu":
-            raise
+    out, failure = run_with_fallback(
+        lambda engine_name: run_checked(v, t, values, points, method, resolved, threads,
+                                        progress, engine_name, stacklevel=5),
+        chosen, engine,
+    )  # fmt: skip
+    if failure is not None:
         warnings.warn(
-            f"smoothing on {chosen} failed ({str(error).splitlines()[0]}); ran on the CPU",
+            f"smoothing on {chosen} failed ({str(failure).splitlines()[0]}); ran on the CPU",
             RuntimeWarning,
             stacklevel=2,
         )
-        return run_checked(v, t, values, points, method, resolved, threads, progress, "cpu")
+    return out
 
 
 def check_smoothing(
