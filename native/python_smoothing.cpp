@@ -45,12 +45,30 @@ sdf::PointKind kind_from(const std::string& points) {
   throw std::invalid_argument("points must be 'faces' or 'vertices', got '" + points + "'");
 }
 
-// values must hold one float per point of the kind.
-const float* point_values(const sdf::Mesh& mesh, sdf::PointKind kind, const Floats& values) {
-  const std::size_t n = kind == sdf::PointKind::Faces ? mesh.triangles.size() : mesh.vertices.size();
+// values must hold one float for each of n points.
+const float* values_of(const Floats& values, std::size_t n) {
   if (values.ndim() != 1 || static_cast<std::size_t>(values.shape(0)) != n)
     throw std::invalid_argument("values must have one entry per point (" + std::to_string(n) + ")");
   return values.data();
+}
+
+// ... one per point of the kind.
+const float* point_values(const sdf::Mesh& mesh, sdf::PointKind kind, const Floats& values) {
+  return values_of(values, kind == sdf::PointKind::Faces ? mesh.triangles.size()
+                                                         : mesh.vertices.size());
+}
+
+// A new array of n floats that fill(into) writes with the GIL released: the smoothing
+// functions write their results in place, no copy of them is made.
+template <class Fill>
+py::array_t<float> filled_array(py::ssize_t n, const Fill& fill) {
+  py::array_t<float> array(n);
+  float* into = array.mutable_data();
+  {
+    py::gil_scoped_release release;
+    fill(into);
+  }
+  return array;
 }
 
 // A callback run on the calling thread (which holds no GIL while native code runs); an
@@ -105,13 +123,9 @@ py::dict smooth_kring(const Doubles& vertices, const Int64s& triangles, const Fl
   options.weld_tolerance = weld_tolerance;
   options.threads = threads;
   const sdf::ProgressFn report = progress_from(progress);
-  // Written in place by the native code: no copy of the result.
-  py::array_t<float> out(values.shape(0));
-  float* o = out.mutable_data();
-  {
-    py::gil_scoped_release release;
-    sdf::smooth_kring_into(mesh, kind, v, options, o, report, 0.0, 1.0, &stages);
-  }
+  const py::array_t<float> out = filled_array(values.shape(0), [&](float* into) {
+    sdf::smooth_kring_into(mesh, kind, v, options, into, report, 0.0, 1.0, &stages);
+  });
   py::dict result;
   result["values"] = out;
   result["timings"] = sdf::timings_dict(stages);
@@ -147,18 +161,15 @@ py::array_t<float> smooth_projected(const Doubles& vertices, const Int64s& trian
   const auto* device = device_for(engine);
   (void)device;  // unused without OpenCL
   const sdf::ProgressFn report = progress_from(progress);
-  // Written in place by the native code: no copy of the result.
-  py::array_t<float> out(values.shape(0));
-  float* o = out.mutable_data();
   sdf::StageTimings stages;
-  {
-    py::gil_scoped_release release;
+  py::array_t<float> out = filled_array(values.shape(0), [&](float* into) {
 #ifdef SDF_HAVE_OPENCL
-    if (device) sdf::cl::smooth_projected_opencl(*device, mesh, kind, v, options, o, report, &stages);
-    else
+    if (device)
+      return sdf::cl::smooth_projected_opencl(*device, mesh, kind, v, options, into, report,
+                                              &stages);
 #endif
-      sdf::smooth_projected_into(mesh, kind, v, options, o, report, 0.0, 1.0, &stages);
-  }
+    sdf::smooth_projected_into(mesh, kind, v, options, into, report, 0.0, 1.0, &stages);
+  });
   if (!timings.is_none()) timings.attr("update")(sdf::timings_dict(stages));
   return out;
 }
@@ -195,22 +206,16 @@ py::array_t<float> smooth_projected_prepared(const sdf::cl::PreparedProjected& p
                                              unsigned threads, const py::object& progress,
                                              const std::string& engine,
                                              const py::object& timings) {
-  if (values.ndim() != 1 || static_cast<std::size_t>(values.shape(0)) != prepared.count)
-    throw std::invalid_argument("values must have one entry per point (" +
-                                std::to_string(prepared.count) + ")");
+  const float* v = values_of(values, prepared.count);
   const sdf::ProjectedOptions options = projected_options(iterations, max_depth, min_points,
                                                           node_size_ratio, branch_on, threads);
   const auto* device = device_for(engine);
   if (!device) throw std::invalid_argument("smooth_projected_prepared needs an OpenCL engine");
   const sdf::ProgressFn report = progress_from(progress);
-  py::array_t<float> out(values.shape(0));
-  float* o = out.mutable_data();
   sdf::StageTimings stages;
-  {
-    py::gil_scoped_release release;
-    sdf::cl::smooth_projected_opencl(*device, prepared, values.data(), options, o, report,
-                                     &stages);
-  }
+  py::array_t<float> out = filled_array(values.shape(0), [&](float* into) {
+    sdf::cl::smooth_projected_opencl(*device, prepared, v, options, into, report, &stages);
+  });
   if (!timings.is_none()) timings.attr("update")(sdf::timings_dict(stages));
   return out;
 }
@@ -231,12 +236,13 @@ sdf::TextureOptions texture_options(int width, int height, double radius, bool b
   return options;
 }
 
-// smooth_texture's results as the Python layer takes them: values (written into `values` by
-// the native code), timings, image and mask.
-py::dict texture_result(const sdf::TextureSmoothing& out, py::array_t<float> values,
-                        bool return_image) {
+// smooth_texture's results as the Python layer takes them: values (the smoothing writes them
+// into the array: `smooth(into)`), timings, image and mask.
+template <class Smooth>
+py::dict texture_result(py::ssize_t n, bool return_image, const Smooth& smooth) {
+  sdf::TextureSmoothing out;
   py::dict result;
-  result["values"] = values;
+  result["values"] = filled_array(n, [&](float* into) { out = smooth(into); });
   result["timings"] = sdf::timings_dict(out.timings);
   result["faces_outside"] = out.faces_outside;
   result["kept_off_device"] = out.kept_off_device;
@@ -266,21 +272,15 @@ py::dict smooth_texture(const Doubles& vertices, const Int64s& triangles, const 
   const auto* device = device_for(engine);
   (void)device;  // unused without OpenCL
   const sdf::ProgressFn report = progress_from(progress);
-  py::array_t<float> smoothed(values.shape(0));
-  float* into = smoothed.mutable_data();
-  sdf::TextureSmoothing out;
-  {
-    py::gil_scoped_release release;
+  return texture_result(values.shape(0), return_image, [&](float* into) {
 #ifdef SDF_HAVE_OPENCL
     if (device)
-      out = sdf::cl::smooth_texture_opencl(*device, mesh, kind, v, uvs.data(), options,
-                                           return_image, report, into);
-    else
+      return sdf::cl::smooth_texture_opencl(*device, mesh, kind, v, uvs.data(), options,
+                                            return_image, report, into);
 #endif
-      out = sdf::smooth_texture(mesh, kind, v, uvs.data(), options, return_image, report, 0.0,
-                                1.0, nullptr, into);
-  }
-  return texture_result(out, smoothed, return_image);
+    return sdf::smooth_texture(mesh, kind, v, uvs.data(), options, return_image, report, 0.0,
+                               1.0, nullptr, into);
+  });
 }
 
 // Texture smoothing's mesh-and-UV half (sdf::prepare_texture), and on an OpenCL engine the
@@ -338,21 +338,15 @@ py::dict smooth_texture_prepared(const sdf::PreparedTexture& prepared, const Flo
   const auto* device = device_for(engine);
   (void)device;  // unused without OpenCL
   const sdf::ProgressFn report = progress_from(progress);
-  py::array_t<float> smoothed(values.shape(0));
-  float* into = smoothed.mutable_data();
-  sdf::TextureSmoothing out;
-  {
-    py::gil_scoped_release release;
+  return texture_result(values.shape(0), return_image, [&](float* into) {
 #ifdef SDF_HAVE_OPENCL
     if (device)
-      out = sdf::cl::smooth_texture_opencl(*device, prepared, kind, v, options, return_image,
-                                           report, into);
-    else
+      return sdf::cl::smooth_texture_opencl(*device, prepared, kind, v, options, return_image,
+                                            report, into);
 #endif
-      out = sdf::smooth_texture(prepared, kind, v, options, return_image, report, 0.0, 1.0,
-                                nullptr, into);
-  }
-  return texture_result(out, smoothed, return_image);
+    return sdf::smooth_texture(prepared, kind, v, options, return_image, report, 0.0, 1.0,
+                               nullptr, into);
+  });
 }
 
 py::tuple weld_vertices(const Doubles& vertices, const Int64s& triangles, double tolerance) {
