@@ -291,7 +291,9 @@ bool upload_prepared_texture(const Device& device, PreparedTexture& prepared, un
       vertex_values ? bytes_of(prepared.mesh.triangles) + bytes_of(groups.first) +
                           bytes_of(groups.corners) + bytes_of(merged)
                     : 0;
-  if (uv_bytes + island_bytes + group_bytes > device.global_memory / 4)
+  // Counted as the buffers are made (upload_new: at least 4 bytes each).
+  if (std::max<std::size_t>(uv_bytes, 4) + std::max<std::size_t>(island_bytes, 4) + group_bytes >
+      device.global_memory / 4)
     return false;  // leave room to cast
   DeviceState& s = state_of(device);
   auto uploads = std::make_shared<TextureUploads>();
