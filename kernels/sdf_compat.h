@@ -115,6 +115,7 @@ using std::cos;
 using std::exp;
 using std::fabs;
 using std::floor;
+using std::isfinite;
 using std::ldexp;
 using std::fmax;
 using std::fmin;

@@ -98,7 +98,7 @@ std::vector<Box> part_boxes(const Mesh& mesh, const Parts& parts, unsigned threa
 
 void reverse_face(glm::uvec3& t) { std::swap(t.y, t.z); }
 
-OrientationReport orient_auto(Mesh& mesh, unsigned threads, bool fast_path,
+OrientationReport orient_auto(const Mesh& mesh, unsigned threads, bool fast_path,
                               StageTimings* steps) {
   StageClock step(steps);
   OrientationReport report;
@@ -144,9 +144,7 @@ OrientationReport orient_auto(Mesh& mesh, unsigned threads, bool fast_path,
     std::size_t mine = 0;
     for (std::size_t f = begin; f < end; ++f) {
       flip[f] = flip[f] ^ reverse_part[parts.part_of[f]];
-      if (!flip[f]) continue;
-      reverse_face(mesh.triangles[f]);
-      ++mine;
+      mine += flip[f] != 0;
     }
     flipped.fetch_add(mine, std::memory_order_relaxed);
   });
@@ -158,20 +156,34 @@ OrientationReport orient_auto(Mesh& mesh, unsigned threads, bool fast_path,
 
 }  // namespace
 
-OrientationReport orient(Mesh& mesh, Orientation mode, unsigned threads, StageTimings* steps) {
+OrientationReport decide_orientation(const Mesh& mesh, Orientation mode, unsigned threads,
+                                     StageTimings* steps) {
   if (mode == Orientation::AsIs) return OrientationReport{};
   if (mode == Orientation::Auto) return orient_auto(mesh, threads, true, steps);
-  parallel_for(mesh.triangles.size(), kGrain, threads, [&](std::size_t begin, std::size_t end) {
-    for (std::size_t f = begin; f < end; ++f) reverse_face(mesh.triangles[f]);
-  });
   OrientationReport report;
   report.flipped_faces = mesh.triangles.size();
   report.reversed.assign(mesh.triangles.size(), 1);
   return report;
 }
 
+void apply_orientation(Mesh& mesh, const OrientationReport& report, unsigned threads) {
+  if (report.flipped_faces == 0) return;
+  parallel_for(mesh.triangles.size(), kGrain, threads, [&](std::size_t begin, std::size_t end) {
+    for (std::size_t f = begin; f < end; ++f)
+      if (report.reversed[f]) reverse_face(mesh.triangles[f]);
+  });
+}
+
+OrientationReport orient(Mesh& mesh, Orientation mode, unsigned threads, StageTimings* steps) {
+  OrientationReport report = decide_orientation(mesh, mode, threads, steps);
+  apply_orientation(mesh, report, threads);
+  return report;
+}
+
 OrientationReport orient_auto_without_fast_path(Mesh& mesh, unsigned threads) {
-  return orient_auto(mesh, threads, false, nullptr);
+  OrientationReport report = orient_auto(mesh, threads, false, nullptr);
+  apply_orientation(mesh, report, threads);
+  return report;
 }
 
 }  // namespace sdf

@@ -42,6 +42,13 @@ struct OrientationReport {
 OrientationReport orient(Mesh& mesh, Orientation mode, unsigned threads = 0,
                          StageTimings* steps = nullptr);
 
+// What orient() would do, without doing it (the mesh is only read), and then doing it:
+// orient() is apply_orientation(mesh, decide_orientation(mesh, ...)). The OpenCL engine's
+// device-built tree casts while the orientation is decided (sdf.cpp).
+OrientationReport decide_orientation(const Mesh& mesh, Orientation mode, unsigned threads = 0,
+                                     StageTimings* steps = nullptr);
+void apply_orientation(Mesh& mesh, const OrientationReport& report, unsigned threads = 0);
+
 // Auto as orient() does it, but with step 1 always run. orient() skips it when no manifold
 // edge runs the same way in its two faces (it would reverse nothing); tests compare the two.
 OrientationReport orient_auto_without_fast_path(Mesh& mesh, unsigned threads = 0);

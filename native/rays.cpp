@@ -6,6 +6,7 @@
 #include <stdexcept>
 #include <string>
 
+#include "../kernels/sdf_face_point.h"
 #include "../kernels/sdf_rays.h"
 
 namespace sdf {
@@ -59,13 +60,6 @@ void cone_rays(const Cone& cone, glm::vec3 axis, glm::vec3 tangent, std::uint32_
   }
 }
 
-glm::vec3 fallback_tangent(glm::vec3 axis) {
-  // g = (1, 2, 3) / sqrt(14). Only an axis within ~1e-3 rad of +-g switches to a second
-  // direction (a cap no real normal hits by accident).
-  const glm::vec3 g(0.26726124f, 0.53452248f, 0.80178373f);
-  const glm::vec3 c = glm::cross(axis, g);
-  if (glm::dot(c, c) > 1e-6f) return glm::normalize(c);
-  return glm::normalize(glm::cross(axis, glm::vec3(-0.80178373f, 0.26726124f, 0.53452248f)));
-}
+glm::vec3 fallback_tangent(glm::vec3 axis) { return kern::sdf_fallback_tangent(axis); }
 
 }  // namespace sdf

@@ -14,16 +14,6 @@ namespace sdf {
 
 namespace {
 
-// The part of `edge` perpendicular to unit `axis`, normalised; fallback_tangent() when that
-// part vanishes (or the axis is zero).
-glm::vec3 tangent_from_edge(glm::vec3 axis, glm::vec3 edge) {
-  if (axis.x == 0.0f && axis.y == 0.0f && axis.z == 0.0f) return glm::vec3(0.0f);
-  const glm::vec3 unit_edge = detail::unit_or_zero(edge);
-  const glm::vec3 t = unit_edge - glm::dot(unit_edge, axis) * axis;
-  if (glm::length(t) > 1e-6f) return glm::normalize(t);
-  return fallback_tangent(axis);
-}
-
 // Items per parallel_for chunk for the per-point loops: small enough to balance, large enough
 // that handing out a chunk costs nothing next to its work.
 constexpr std::size_t kGrain = 1 << 14;
@@ -42,10 +32,9 @@ SamplePoints sample_points(const Mesh& mesh, PointKind kind, unsigned threads) {
       for (std::size_t f = begin; f < end; ++f) {
         prefetch_corners(mesh, f + kPrefetchFacesAhead);
         const glm::uvec3 t = mesh.triangles[f];
-        face_point(mesh, f, &points.origins[f], &points.axes[f]);
+        kern::sdf_face_point(mesh.vertices[t.x], mesh.vertices[t.y], mesh.vertices[t.z],
+                             &points.origins[f], &points.axes[f], &points.tangents[f]);
         points.own_face[f] = static_cast<std::int32_t>(f);
-        points.tangents[f] =
-            tangent_from_edge(points.axes[f], mesh.vertices[t.y] - mesh.vertices[t.x]);
       }
     });
   } else {
@@ -69,11 +58,11 @@ SamplePoints sample_points(const Mesh& mesh, PointKind kind, unsigned threads) {
     points.own_face.assign(n, -1);
     parallel_for(n, kGrain, threads, [&](std::size_t begin, std::size_t end) {
       for (std::size_t v = begin; v < end; ++v) {
-        points.axes[v] = -detail::unit_or_zero(normal_sum[v]);
+        points.axes[v] = -kern::sdf_unit_or_zero(normal_sum[v]);
         const glm::vec3 edge = next_corner[v] == kNone
                                    ? glm::vec3(0.0f)
                                    : mesh.vertices[next_corner[v]] - mesh.vertices[v];
-        points.tangents[v] = tangent_from_edge(points.axes[v], edge);
+        points.tangents[v] = kern::sdf_tangent_from_edge(points.axes[v], edge);
       }
     });
   }

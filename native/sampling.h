@@ -7,6 +7,7 @@
 #include <cstdint>
 #include <vector>
 
+#include "../kernels/sdf_face_point.h"
 #include "mesh.h"
 #include "uninitialized_vector.h"
 
@@ -36,28 +37,14 @@ struct SamplePoints {
 // `threads` as in Options (0 = every core); the result does not depend on it.
 SamplePoints sample_points(const Mesh& mesh, PointKind kind, unsigned threads = 0);
 
-namespace detail {
-
-// Unit vector, or zero when the direction is undefined (zero or not finite). Divided by its
-// largest component first: squaring a cross product (edge length to the fourth) would
-// overflow or underflow float for edges past ~4e9 or below ~5e-12 (found by fuzzing).
-inline glm::vec3 unit_or_zero(glm::vec3 v) {
-  const float big = std::max(std::fabs(v.x), std::max(std::fabs(v.y), std::fabs(v.z)));
-  if (!(big > 0.0f) || !std::isfinite(big)) return glm::vec3(0.0f);
-  v /= big;
-  return v / glm::length(v);
-}
-
-}  // namespace detail
-
 // One face's point as sample_points() makes it (it calls this): the centroid, and the unit
 // inward axis (zero for a zero-area face). For callers that need no tangent and no stored
 // arrays (projected smoothing recomputes them on the fly each iteration). Inline: called once
 // per face, a call cost as much as the arithmetic (measured at 1.5M faces).
 inline void face_point(const Mesh& mesh, std::size_t face, glm::vec3* origin, glm::vec3* axis) {
   const glm::uvec3 t = mesh.triangles[face];
-  *origin = (mesh.vertices[t.x] + mesh.vertices[t.y] + mesh.vertices[t.z]) * (1.0f / 3.0f);
-  *axis = -detail::unit_or_zero(face_area_normal(mesh, face));
+  kern::sdf_face_origin_axis(mesh.vertices[t.x], mesh.vertices[t.y], mesh.vertices[t.z], origin,
+                             axis);
 }
 
 // Point indices in Morton (Z-curve) order of their origins. Neighbouring points cast similar

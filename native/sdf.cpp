@@ -12,6 +12,8 @@
 #include "bvh8.h"
 #include "bvh_margin.h"
 #include "cpu_engine.h"
+#include "device_tree_keys.h"
+#include "orientation.h"
 #include "stopwatch.h"
 #ifdef SDF_HAVE_OPENCL
 #include "opencl/opencl_engine.h"
@@ -49,6 +51,9 @@ struct Plan {
 #endif
   BvhWidths widths;  // the BVH casters read (accel 'bvh')
   bool fast_build = false;
+  // The faces' points and the BVH made on the device (opencl/device_tree.h); the host only
+  // orients the mesh and sorts its faces.
+  bool tree_on_device = false;
 };
 
 Plan make_plan(const Options& options) {
@@ -67,6 +72,15 @@ Plan make_plan(const Options& options) {
     plan.fast_build = options.rays <= 64;
     for (const cl::Device* d : plan.devices) plan.fast_build = plan.fast_build && d->gpu;
   }
+  // Where the fast tree is wanted on GPUs that cast the binary tree a ray per work item: the
+  // device's tree (Morton splits everywhere, boxes made bottom up) takes about a millisecond
+  // there, and the host is left with orientation and one sort.
+  bool per_ray_gpus = true;
+  for (const cl::Device* d : plan.devices)
+    per_ray_gpus = per_ray_gpus && d->gpu && cl::cast_kernel_for(*d) == cl::CastKernel::BvhPerRay;
+  plan.tree_on_device =
+      options.accel == Accel::Bvh && options.points == PointKind::Faces &&
+      cl::tree_on_device(plan.fast_build && per_ray_gpus);
 #endif
   return plan;
 }
@@ -183,12 +197,9 @@ void cast_on_cpu(const Options& options, const Plan& plan, const Structures& bui
 #ifdef SDF_HAVE_OPENCL
 // The structure is finished from a device thread once the points are uploaded (build_scene):
 // their upload overlaps the build.
-void cast_on_opencl(const Options& options, const Plan& plan,
-                    const std::function<const Structures&()>& build_scene, const Mesh& mesh,
-                    const SamplePoints& points, const std::vector<std::uint32_t>& order,
-                    const Cone& cone, Output& out, const ProgressFn& progress,
-                    const std::function<void()>& beside_cast) {
-  const cl::SceneSource scene_source = [&] {
+cl::SceneSource scene_source(const Options& options, const Plan& plan,
+                             const std::function<const Structures&()>& build_scene) {
+  return [&options, &plan, build_scene] {
     const Structures& built = build_scene();
     cl::Scene scene;
     if (options.accel == Accel::Bvh) {
@@ -200,17 +211,23 @@ void cast_on_opencl(const Options& options, const Plan& plan,
     }
     return scene;
   };
+}
+
+void cast_on_opencl(const Options& options, const Plan& plan, const cl::CastInput& input,
+                    const Mesh& mesh, const Cone& cone, Output& out, const ProgressFn& progress,
+                    const std::function<void()>& beside_cast) {
   Stopwatch clock;
   const cl::CastTimings t = cl::cast_opencl(
-      plan.devices, scene_source, points, order, cone, minimum_closeness(mesh),
+      plan.devices, input, cone, minimum_closeness(mesh),
       options.threads, out.raw.data(), out.valid_rays.data(), progress, 0.05, 0.99,
       beside_cast);
   const double total = clock.lap();
   // Compile (or cache load) and set-up are what the device stages and the wait for the
   // structure leave of the total.
   out.timings.emplace_back(
-      "setup", std::max(0.0, total - t.upload - t.wait - t.cast - t.download));
+      "setup", std::max(0.0, total - t.upload - t.wait - t.build - t.cast - t.download));
   out.timings.emplace_back("upload", t.upload);
+  if (plan.tree_on_device) out.timings.emplace_back("build (device)", t.build);
   out.timings.emplace_back("cast", t.cast);
   out.timings.emplace_back("download", t.download);
   out.device_bytes = t.device_bytes;
@@ -219,6 +236,48 @@ void cast_on_opencl(const Options& options, const Plan& plan,
     out.engine += (out.engine.empty() ? "" : " + ") + std::string("opencl:") +
                   std::to_string(d->index) + " " + d->name;
   out.engine += std::string(" (") + accel_name(options.accel) + ")";
+}
+
+// Thrown from beside the cast when the orientation reverses faces: the cast read the mesh as
+// it was wound.
+struct ReverseFacesFirst {};
+
+// Casts `mesh` as it is wound while deciding its 'auto' orientation beside the cast (only
+// reading the mesh). Nothing to reverse: the cast stands (it is the cast of the oriented
+// mesh). Faces to reverse: the devices stop at their next launch (launches are kept short
+// while the orientation runs), the faces are reversed, and the mesh is cast again, keys and
+// all (the keys do not depend on winding: TreeKeys' boxes, area test and margin are the same
+// for a reversed face). Either way the values are those of casting the oriented mesh.
+void cast_speculatively(const Options& options, const Plan& plan, cl::CastInput input,
+                        Mesh& mesh, const Cone& cone, Output& out, const ProgressFn& progress,
+                        const std::function<void()>& beside_cast) {
+  StageTimings orientation_steps;
+  double orientation_seconds = 0.0;
+  input.beside_launch_seconds = 0.005;
+  auto orient_beside = [&] {
+    Stopwatch clock;
+    out.orientation = decide_orientation(mesh, Orientation::Auto, options.threads,
+                                         &orientation_steps);
+    orientation_seconds = clock.lap();
+    if (out.orientation.flipped_faces > 0) throw ReverseFacesFirst{};
+    if (beside_cast) beside_cast();
+  };
+  auto record_orientation = [&] {
+    out.timings.emplace_back("orientation (beside cast)", orientation_seconds);
+    for (const auto& [name, seconds] : orientation_steps) out.timings.emplace_back(name, seconds);
+  };
+  try {
+    cast_on_opencl(options, plan, input, mesh, cone, out, progress, orient_beside);
+    record_orientation();
+    return;
+  } catch (const ReverseFacesFirst&) {
+  }
+  record_orientation();
+  Stopwatch clock;
+  apply_orientation(mesh, out.orientation, options.threads);
+  out.timings.emplace_back("orientation: reverse faces, cast again", clock.lap());
+  input.beside_launch_seconds = 0.0;
+  cast_on_opencl(options, plan, input, mesh, cone, out, progress, beside_cast);
 }
 #endif
 
@@ -251,25 +310,42 @@ Output compute(Mesh mesh, const Options& options, const ProgressFn& progress,
   StageClock step(&steps);
   report(progress, 0.0);
   // The BVH builds beside orientation and sampling; the octree, which stores its triangles as
-  // they are wound, after them.
+  // they are wound, after them; a tree made on the device, there.
   std::unique_ptr<BackgroundBvh> background;
-  if (options.accel == Accel::Bvh) {
+  if (options.accel == Accel::Bvh && !plan.tree_on_device) {
     background = std::make_unique<BackgroundBvh>(mesh, options, plan.fast_build,
                                                  options.threads == 0);
     step.lap("prepare: start of the build");  // the copy of the mesh it reads
   }
   // `mesh` is the computation's own copy, wound outward; the caller's mesh is never changed.
+  // With a tree made on the device, 'auto' orientation is decided while the devices cast the
+  // mesh as it is wound (the common case: nothing to reverse); should faces need reversing,
+  // the cast stops and runs again on the oriented mesh (cast_speculatively).
+  const bool speculate = plan.tree_on_device && options.orientation == Orientation::Auto;
   StageTimings orientation_steps;
-  out.orientation = orient(mesh, options.orientation, options.threads, &orientation_steps);
-  step.lap("prepare: orientation");
-  for (const auto& [name, seconds] : orientation_steps)
-    steps.emplace_back("prepare: " + name, seconds);
-  const SamplePoints points = sample_points(mesh, options.points, options.threads);
-  step.lap("prepare: points");
-  const std::vector<std::uint32_t> order = spatial_order(points, options.threads);
-  out.raw.resize(points.size());
-  out.valid_rays.resize(points.size());
-  step.lap("prepare: order");
+  if (!speculate) {
+    out.orientation = orient(mesh, options.orientation, options.threads, &orientation_steps);
+    step.lap("prepare: orientation");
+    for (const auto& [name, seconds] : orientation_steps)
+      steps.emplace_back("prepare: " + name, seconds);
+  }
+  SamplePoints points;
+  std::vector<std::uint32_t> order;
+  TreeKeys keys;
+  if (plan.tree_on_device) {
+    StageTimings key_steps;
+    keys = make_tree_keys(mesh, options.threads, &key_steps);
+    step.lap("prepare: keys");
+    for (const auto& [name, seconds] : key_steps) steps.emplace_back("prepare: " + name, seconds);
+  } else {
+    points = sample_points(mesh, options.points, options.threads);
+    step.lap("prepare: points");
+    order = spatial_order(points, options.threads);
+    step.lap("prepare: order");
+  }
+  const std::size_t count = plan.tree_on_device ? mesh.triangles.size() : points.size();
+  out.raw.resize(count);
+  out.valid_rays.resize(count);
   out.timings.emplace_back("prepare", clock.lap());
   out.timings.insert(out.timings.end(), steps.begin(), steps.end());
   report(progress, 0.02);  // a cancel here unwinds through the background build's wait
@@ -288,6 +364,8 @@ Output compute(Mesh mesh, const Options& options, const ProgressFn& progress,
   if (beside_cast)
     timed_beside_cast = [&] {
       Stopwatch beside;
+      // The device makes the cast's points itself; the hook gets the host's, made here.
+      if (plan.tree_on_device) points = sample_points(mesh, options.points, options.threads);
       beside_cast(points);
       beside_seconds = beside.lap();
     };
@@ -298,8 +376,22 @@ Output compute(Mesh mesh, const Options& options, const ProgressFn& progress,
     if (timed_beside_cast) timed_beside_cast();
   } else {
 #ifdef SDF_HAVE_OPENCL
-    cast_on_opencl(options, plan, build_scene, mesh, points, order, cone, out, progress,
-                   timed_beside_cast);
+    cl::CastInput input;
+    if (plan.tree_on_device) {
+      input.mesh = &mesh;
+      input.keys = &keys;
+      input.order = keys.order.data();
+    } else {
+      input.scene = scene_source(options, plan, build_scene);
+      input.points = &points;
+      input.order = order.data();
+    }
+    input.size = count;
+    if (speculate) {
+      cast_speculatively(options, plan, input, mesh, cone, out, progress, timed_beside_cast);
+    } else {
+      cast_on_opencl(options, plan, input, mesh, cone, out, progress, timed_beside_cast);
+    }
 #endif
   }
   if (beside_cast) out.timings.emplace_back("beside cast", beside_seconds);

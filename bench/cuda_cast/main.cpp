@@ -119,6 +119,11 @@ int main(int argc, char** argv) {
     const std::vector<const sdf::cl::Device*> devices = sdf::cl::select_devices("opencl");
     sdf::cl::Scene scene;
     scene.bvh = &bvh;
+    sdf::cl::CastInput input;
+    input.scene = [&] { return scene; };
+    input.points = &points;
+    input.order = order.data();
+    input.size = n;
     const int runs = mode == "all" ? 3 : 1;
     double best = 1e30;
     Values cl;
@@ -126,8 +131,7 @@ int main(int argc, char** argv) {
     cl.valid.resize(n);
     for (int r = 0; r < runs; ++r) {
       const sdf::cl::CastTimings t =
-          sdf::cl::cast_opencl(devices, [&] { return scene; }, points, order, cone, tmin, 0,
-                               cl.raw.data(),
+          sdf::cl::cast_opencl(devices, input, cone, tmin, 0, cl.raw.data(),
                                cl.valid.data(), nullptr, 0.0, 1.0);
       best = std::min(best, t.cast);
     }

@@ -16,6 +16,7 @@
 
 #include "../../kernels/sdf_bvh4_traverse.h"
 #include "device_state.h"
+#include "device_tree.h"
 #include "program_cache.h"
 
 namespace sdf::cl {
@@ -33,6 +34,7 @@ struct WorkQueue {
   std::atomic<std::size_t> next{0};
   std::atomic<std::size_t> done{0};
   std::atomic<bool> stop{false};
+  std::atomic<bool> beside_running{false};  // the caller's beside_cast is running
   std::size_t total = 0;
 };
 
@@ -118,8 +120,8 @@ class SharedScene {
   std::exception_ptr failure_;
 };
 
-void run_device(const Device& device, SharedScene& shared_scene, const SamplePoints& points,
-                const std::vector<std::uint32_t>& order, const Cone& cone, float min_closeness,
+void run_device(const Device& device, SharedScene& shared_scene, const CastInput& input,
+                const Cone& cone, float min_closeness,
                 unsigned host_threads,
                 UninitializedVector<float>& raw_ordered,
                 UninitializedVector<std::int32_t>& valid_ordered,
@@ -129,25 +131,29 @@ void run_device(const Device& device, SharedScene& shared_scene, const SamplePoi
   DeviceState& s = state_of(device);
   std::lock_guard<std::mutex> device_lock(s.mutex);
   s.copy_threads = host_threads;
-  const std::size_t n = points.size();
+  const std::size_t n = input.size;
   const std::string options = build_options(device, cone.rays);
-
-  // The points, their order and the results first: they go to the device (and the program is
-  // compiled or loaded) while the scene may still be building on the host.
-  std::vector<std::size_t> sizes = {3 * n * sizeof(float),        3 * n * sizeof(float),
-                                    n * sizeof(std::int32_t),       n * sizeof(std::uint32_t),
-                                    n * sizeof(float),              n * sizeof(std::int32_t),
-                                    3 * n * sizeof(float)};
-  check_fits(device, sizes, true);
-  cl_program program = program_for(device, s, options);
-  Clock::time_point upload_start = Clock::now();
-  Buffer origins(s, sizes[0], points.origins.data());
-  Buffer axes(s, sizes[1], points.axes.data());
-  Buffer own_face(s, sizes[2], points.own_face.data());
-  Buffer order_buffer(s, sizes[3], order.data());
-  Buffer raw(s, sizes[4], nullptr);
-  Buffer valid(s, sizes[5], nullptr);
-  Buffer tangents(s, sizes[6], points.tangents.data());
+  const CastKernel choice = cast_kernel_for(device);
+  // The point arrays the kernel reads, and the tree.
+  cl_mem origins = nullptr, axes = nullptr, tangents = nullptr, own_face = nullptr,
+         order = nullptr, accel[3] = {nullptr, nullptr, nullptr};
+  const kern::SdfOctreeRoot* accel_root = nullptr;  // the octree's kernel takes it by value
+  std::unique_ptr<Buffer> owned[8];
+  std::unique_ptr<Kernel> kernel;
+  cl_program program = nullptr;
+  std::size_t points_per_group = 0;
+  // One work item per ray: points_per_group points of `rays` items each (on an H100, 4 was
+  // 2-4% faster than 8 and 7-9% faster than 2; 16 and 32 slower), fewer when registers limit
+  // the group size; otherwise the binary tree's per-point kernel.
+  auto binary_tree_kernel = [&] {
+    if (choice == CastKernel::BvhPerRay) {
+      kernel = std::make_unique<Kernel>(program, "sdf_cast_bvh_per_ray");
+      points_per_group = std::min<std::size_t>(4, kernel->max_group(device.id) / cone.rays);
+    }
+    if (points_per_group == 0) kernel = std::make_unique<Kernel>(program, "sdf_cast_bvh");
+  };
+  Buffer raw(s, n * sizeof(float), nullptr);
+  Buffer valid(s, n * sizeof(std::int32_t), nullptr);
   // The host's ray table (direction, angle) for deterministic samplings; random rays are
   // generated on the device and read none of it.
   std::vector<float> table(4 * std::max<std::size_t>(cone.local.size(), 1), 0.0f);
@@ -158,45 +164,100 @@ void run_device(const Device& device, SharedScene& shared_scene, const SamplePoi
     table[4 * i + 3] = cone.local_angle[i];
   }
   Buffer local_rays(s, table.size() * sizeof(float), table.data());
-  result.timings.upload += seconds_since(upload_start);
 
-  const Clock::time_point wait_start = Clock::now();
-  const Scene* scene_or_empty = shared_scene.get();
-  result.timings.wait = seconds_since(wait_start);
-  if (!scene_or_empty) {
-    check(cl.clFinish(s.queue), "clFinish (upload)");
-    work.stop = true;  // nothing to cast; cast_opencl fills the results
-    return;
-  }
-  if (work.stop.load()) return;  // cancelled (or another device failed) during the build
-  const Scene& scene = *scene_or_empty;
-  upload_start = Clock::now();
-  const std::size_t first_accel = sizes.size();
-  const CastKernel choice = cast_kernel_for(device);
-  // The 8-wide tree needs no depth check: its stack holds the deepest tree the builder makes
-  // (sdf_bvh8_traverse.h).
-  const bool wide8 = choice == CastKernel::Bvh8PerPoint && scene.bvh8;
-  const bool wide = !wide8 && choice == CastKernel::Bvh4PerPoint && scene.bvh4 &&
-                    scene.bvh4->depth <= SDF_BVH4_MAX_DEPTH;
-  if (wide8) {
-    sizes.push_back(bytes_of(scene.bvh8->nodes));
-    sizes.push_back(bytes_of(scene.bvh8->packets));
-  } else if (wide) {
-    sizes.push_back(bytes_of(scene.bvh4->nodes));
-    sizes.push_back(bytes_of(scene.bvh->triangles));
-  } else if (scene.bvh) {
-    sizes.push_back(bytes_of(scene.bvh->nodes));
-    sizes.push_back(bytes_of(scene.bvh->triangles));
+  if (input.keys) {
+    // Points and tree made here, from the mesh and the host's sort of its faces.
+    program = program_for(device, s, options);
+    DeviceTree tree = build_device_tree(device, s, program, *input.mesh, *input.keys);
+    result.timings.upload += tree.upload_seconds;
+    result.timings.build = tree.build_seconds;
+    origins = tree.origins->get();
+    axes = tree.axes->get();
+    tangents = tree.tangents->get();
+    own_face = tree.own_face->get();
+    order = tree.order->get();
+    accel[0] = tree.nodes->get();
+    accel[1] = tree.triangles->get();
+    result.timings.device_bytes = tree.peak_bytes;
+    std::unique_ptr<Buffer>* slot = owned;
+    for (auto* b : {&tree.origins, &tree.axes, &tree.tangents, &tree.own_face, &tree.order,
+                    &tree.nodes, &tree.triangles})
+      *slot++ = std::move(*b);
+    binary_tree_kernel();
   } else {
-    sizes.push_back(bytes_of(scene.octree->nodes));
-    sizes.push_back(bytes_of(scene.octree->leaves));
-    sizes.push_back(bytes_of(scene.octree->triangles));
-  }
-  check_fits(device, sizes);
-  for (std::size_t b : sizes) result.timings.device_bytes += b;
+    const SamplePoints& points = *input.points;
+    // The points, their order and the results first: they go to the device (and the program
+    // is compiled or loaded) while the scene may still be building on the host.
+    std::vector<std::size_t> sizes = {3 * n * sizeof(float),        3 * n * sizeof(float),
+                                      n * sizeof(std::int32_t),       n * sizeof(std::uint32_t),
+                                      n * sizeof(float),              n * sizeof(std::int32_t),
+                                      3 * n * sizeof(float)};
+    check_fits(device, sizes, true);
+    program = program_for(device, s, options);
+    Clock::time_point upload_start = Clock::now();
+    owned[0] = std::make_unique<Buffer>(s, sizes[0], points.origins.data());
+    owned[1] = std::make_unique<Buffer>(s, sizes[1], points.axes.data());
+    owned[2] = std::make_unique<Buffer>(s, sizes[2], points.own_face.data());
+    owned[3] = std::make_unique<Buffer>(s, sizes[3], input.order);
+    owned[4] = std::make_unique<Buffer>(s, sizes[6], points.tangents.data());
+    origins = owned[0]->get();
+    axes = owned[1]->get();
+    own_face = owned[2]->get();
+    order = owned[3]->get();
+    tangents = owned[4]->get();
+    result.timings.upload += seconds_since(upload_start);
 
-  std::unique_ptr<Buffer> accel0, accel1, accel2;
-  std::unique_ptr<Kernel> kernel;
+    const Clock::time_point wait_start = Clock::now();
+    const Scene* scene_or_empty = shared_scene.get();
+    result.timings.wait = seconds_since(wait_start);
+    if (!scene_or_empty) {
+      check(cl.clFinish(s.queue), "clFinish (upload)");
+      work.stop = true;  // nothing to cast; cast_opencl fills the results
+      return;
+    }
+    if (work.stop.load()) return;  // cancelled (or another device failed) during the build
+    const Scene& scene = *scene_or_empty;
+    upload_start = Clock::now();
+    const std::size_t first_accel = sizes.size();
+    // The 8-wide tree needs no depth check: its stack holds the deepest tree the builder
+    // makes (sdf_bvh8_traverse.h).
+    const bool wide8 = choice == CastKernel::Bvh8PerPoint && scene.bvh8;
+    const bool wide = !wide8 && choice == CastKernel::Bvh4PerPoint && scene.bvh4 &&
+                      scene.bvh4->depth <= SDF_BVH4_MAX_DEPTH;
+    std::vector<const void*> data;
+    if (wide8) {
+      sizes.push_back(bytes_of(scene.bvh8->nodes));
+      sizes.push_back(bytes_of(scene.bvh8->packets));
+      data = {scene.bvh8->nodes.data(), scene.bvh8->packets.data()};
+      kernel = std::make_unique<Kernel>(program, "sdf_cast_bvh8");
+    } else if (wide) {
+      sizes.push_back(bytes_of(scene.bvh4->nodes));
+      sizes.push_back(bytes_of(scene.bvh->triangles));
+      data = {scene.bvh4->nodes.data(), scene.bvh->triangles.data()};
+      kernel = std::make_unique<Kernel>(program, "sdf_cast_bvh4");
+    } else if (scene.bvh) {
+      sizes.push_back(bytes_of(scene.bvh->nodes));
+      sizes.push_back(bytes_of(scene.bvh->triangles));
+      data = {scene.bvh->nodes.data(), scene.bvh->triangles.data()};
+      binary_tree_kernel();
+    } else {
+      sizes.push_back(bytes_of(scene.octree->nodes));
+      sizes.push_back(bytes_of(scene.octree->leaves));
+      sizes.push_back(bytes_of(scene.octree->triangles));
+      data = {scene.octree->nodes.data(), scene.octree->leaves.data(),
+              scene.octree->triangles.data()};
+      kernel = std::make_unique<Kernel>(program, "sdf_cast_octree");
+    }
+    check_fits(device, sizes);
+    for (std::size_t b : sizes) result.timings.device_bytes += b;
+    for (std::size_t i = 0; i < data.size(); ++i) {
+      owned[5 + i] = std::make_unique<Buffer>(s, sizes[first_accel + i], data[i]);
+      accel[i] = owned[5 + i]->get();
+    }
+    result.timings.upload += seconds_since(upload_start);
+    if (!scene.bvh && !scene.bvh4 && !scene.bvh8) accel_root = &scene.octree->root;
+  }
+  const Clock::time_point upload_start = Clock::now();
   kern::SdfCastParams params{};
   params.rays = cone.rays;
   params.sampling = static_cast<int>(cone.sampling);
@@ -206,47 +267,14 @@ void run_device(const Device& device, SharedScene& shared_scene, const SamplePoi
   params.seed = cone.seed;
   params.tmin = min_closeness;
   cl_uint a = 0;
-  // One work item per ray: points_per_group points of `rays` items each (on an H100, 4 was
-  // 2-4% faster than 8 and 7-9% faster than 2; 16 and 32 slower), fewer when registers limit
-  // the group size.
-  std::size_t points_per_group = 0;
-  if (wide8) {
-    accel0 = std::make_unique<Buffer>(s, sizes[first_accel], scene.bvh8->nodes.data());
-    accel1 = std::make_unique<Buffer>(s, sizes[first_accel + 1], scene.bvh8->packets.data());
-    kernel = std::make_unique<Kernel>(program, "sdf_cast_bvh8");
-    kernel->arg(a++, accel0->get());
-    kernel->arg(a++, accel1->get());
-  } else if (wide) {
-    accel0 = std::make_unique<Buffer>(s, sizes[first_accel], scene.bvh4->nodes.data());
-    accel1 = std::make_unique<Buffer>(s, sizes[first_accel + 1], scene.bvh->triangles.data());
-    kernel = std::make_unique<Kernel>(program, "sdf_cast_bvh4");
-    kernel->arg(a++, accel0->get());
-    kernel->arg(a++, accel1->get());
-  } else if (scene.bvh) {
-    accel0 = std::make_unique<Buffer>(s, sizes[first_accel], scene.bvh->nodes.data());
-    accel1 = std::make_unique<Buffer>(s, sizes[first_accel + 1], scene.bvh->triangles.data());
-    if (choice == CastKernel::BvhPerRay) {
-      kernel = std::make_unique<Kernel>(program, "sdf_cast_bvh_per_ray");
-      points_per_group = std::min<std::size_t>(4, kernel->max_group(device.id) / cone.rays);
-    }
-    if (points_per_group == 0) kernel = std::make_unique<Kernel>(program, "sdf_cast_bvh");
-    kernel->arg(a++, accel0->get());
-    kernel->arg(a++, accel1->get());
-  } else {
-    accel0 = std::make_unique<Buffer>(s, sizes[first_accel], scene.octree->nodes.data());
-    accel1 = std::make_unique<Buffer>(s, sizes[first_accel + 1], scene.octree->leaves.data());
-    accel2 = std::make_unique<Buffer>(s, sizes[first_accel + 2], scene.octree->triangles.data());
-    kernel = std::make_unique<Kernel>(program, "sdf_cast_octree");
-    kernel->arg(a++, accel0->get());
-    kernel->arg(a++, accel1->get());
-    kernel->arg(a++, accel2->get());
-    kernel->arg(a++, scene.octree->root);
-  }
-  kernel->arg(a++, origins.get());
-  kernel->arg(a++, axes.get());
-  kernel->arg(a++, tangents.get());
-  kernel->arg(a++, own_face.get());
-  kernel->arg(a++, order_buffer.get());
+  for (cl_mem m : accel)
+    if (m) kernel->arg(a++, m);
+  if (accel_root) kernel->arg(a++, *accel_root);
+  kernel->arg(a++, origins);
+  kernel->arg(a++, axes);
+  kernel->arg(a++, tangents);
+  kernel->arg(a++, own_face);
+  kernel->arg(a++, order);
   kernel->arg(a++, local_rays.get());
   const cl_uint params_index = a++;
   kernel->arg(a++, raw.get());
@@ -317,21 +345,40 @@ void run_device(const Device& device, SharedScene& shared_scene, const SamplePoi
     }
     done_changed.notify_all();
     // Scale the next launch toward the target time, by at most 8x at once.
-    const double factor = std::clamp(kTargetSeconds / std::max(took, 1e-4), 0.5, 8.0);
+    const double target = input.beside_launch_seconds > 0.0 && work.beside_running.load()
+                              ? input.beside_launch_seconds
+                              : kTargetSeconds;
+    const double factor = std::clamp(target / std::max(took, 1e-4), 0.5, 8.0);
     chunk = std::clamp<std::size_t>(static_cast<std::size_t>(chunk * factor), 256, 1u << 22);
   }
 }
 
 }  // namespace
 
-CastTimings cast_opencl(const std::vector<const Device*>& devices, const SceneSource& scene,
-                        const SamplePoints& points, const std::vector<std::uint32_t>& order,
+bool tree_on_device(bool preferred) {
+  const char* forced = std::getenv("SDF_OPENCL_TREE");
+  if (!forced || !*forced) return preferred;
+  const std::string name = forced;
+  if (name == "device") return true;
+  if (name == "host") return false;
+  throw std::invalid_argument("SDF_OPENCL_TREE='" + name + "': use host or device");
+}
+
+CastTimings cast_opencl(const std::vector<const Device*>& devices, const CastInput& input,
                         const Cone& cone, float min_closeness, unsigned host_threads, float* raw,
                         std::int32_t* valid_rays, const ProgressFn& progress,
                         double progress_from, double progress_to,
                         const std::function<void()>& beside_cast) {
-  const std::size_t n = points.size();
-  SharedScene shared_scene(scene);
+  const std::size_t n = input.size;
+  const std::uint32_t* order = input.order;
+  SharedScene shared_scene(input.scene);
+  if (input.keys && input.keys->with_area == 0) {
+    // Every triangle has zero area: nothing to cast, nothing can be hit.
+    if (beside_cast) beside_cast();
+    std::fill(raw, raw + n, -1.0f);
+    std::fill(valid_rays, valid_rays + n, 0);
+    return CastTimings{};
+  }
   // The kernels write results in Morton order (contiguous per launch); scattered back below.
   UninitializedVector<float> raw_ordered(n);
   UninitializedVector<std::int32_t> valid_ordered(n);
@@ -344,7 +391,7 @@ CastTimings cast_opencl(const std::vector<const Device*>& devices, const SceneSo
   for (std::size_t i = 0; i < devices.size(); ++i) {
     threads.emplace_back([&, i] {
       try {
-        run_device(*devices[i], shared_scene, points, order, cone, min_closeness, host_threads,
+        run_device(*devices[i], shared_scene, input, cone, min_closeness, host_threads,
                    raw_ordered, valid_ordered, work, done_mutex, done_changed, results[i]);
       } catch (const Error&) {
         // An OpenCL call failed: the device may be lost, so the next run starts afresh.
@@ -362,7 +409,9 @@ CastTimings cast_opencl(const std::vector<const Device*>& devices, const SceneSo
   std::exception_ptr caller_failure;
   if (beside_cast) {
     try {
+      work.beside_running = true;
       beside_cast();
+      work.beside_running = false;
     } catch (...) {
       caller_failure = std::current_exception();  // rethrown once the devices have stopped
       work.stop = true;
@@ -397,11 +446,12 @@ CastTimings cast_opencl(const std::vector<const Device*>& devices, const SceneSo
     if (r.failure) std::rethrow_exception(r.failure);
     timings.upload = std::max(timings.upload, r.timings.upload);
     timings.wait = std::max(timings.wait, r.timings.wait);
+    timings.build = std::max(timings.build, r.timings.build);
     timings.cast = std::max(timings.cast, r.timings.cast);
     timings.download = std::max(timings.download, r.timings.download);
     timings.device_bytes = std::max(timings.device_bytes, r.timings.device_bytes);
   }
-  if (!shared_scene.get()) {
+  if (!input.keys && !shared_scene.get()) {
     // Every triangle has zero area: nothing was cast, nothing can be hit.
     std::fill(raw, raw + n, -1.0f);
     std::fill(valid_rays, valid_rays + n, 0);

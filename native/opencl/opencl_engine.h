@@ -12,6 +12,8 @@
 #include "../bvh.h"
 #include "../bvh4.h"
 #include "../bvh8.h"
+#include "../device_tree_keys.h"
+#include "../mesh.h"
 #include "../octree.h"
 #include "../parallel.h"
 #include "../rays.h"
@@ -48,7 +50,24 @@ using SceneSource = std::function<Scene()>;
 struct CastTimings {
   double upload = 0.0, cast = 0.0, download = 0.0;
   double wait = 0.0;  // for the scene, once the points were uploaded
+  double build = 0.0;  // of a tree made on the device (and its points)
   std::uint64_t device_bytes = 0;  // buffers on the device (the largest of several devices)
+};
+
+// What the devices cast: points sampled on the host (`points`, cast in `order` through the
+// tree `scene` gives), or, with `keys` set, the faces of `mesh`, each device making their
+// points and a BVH itself from the keys (device_tree.h). order (order_size points or faces)
+// is the host's (spatial) order either way, keys->order in the second case.
+struct CastInput {
+  SceneSource scene;
+  const SamplePoints* points = nullptr;
+  const std::uint32_t* order = nullptr;
+  std::size_t size = 0;
+  const Mesh* mesh = nullptr;
+  const TreeKeys* keys = nullptr;
+  // While beside_cast runs, launches of about this long (0: as always, about 100 ms), so that
+  // a failure there (or its verdict that the cast is moot) stops the devices soon.
+  double beside_launch_seconds = 0.0;
 };
 
 // Casts every point on `devices` (several: points are shared out dynamically; results are
@@ -57,12 +76,15 @@ struct CastTimings {
 // Throws Error for OpenCL failures (naming the call and code), also when the scene does not
 // fit a device's memory. Progress covers [progress_from, progress_to].
 // beside_cast (sdf.h's BesideCast) runs on the calling thread once the devices have started.
-CastTimings cast_opencl(const std::vector<const Device*>& devices, const SceneSource& scene,
-                        const SamplePoints& points, const std::vector<std::uint32_t>& order,
+CastTimings cast_opencl(const std::vector<const Device*>& devices, const CastInput& input,
                         const Cone& cone, float min_closeness, unsigned host_threads, float* raw,
                         std::int32_t* valid_rays, const ProgressFn& progress,
                         double progress_from, double progress_to,
                         const std::function<void()>& beside_cast = nullptr);
+
+// How the tree is made: SDF_OPENCL_TREE ('host' or 'device') when set, a test and benchmark
+// hook; otherwise `preferred`.
+bool tree_on_device(bool preferred);
 
 // Test hooks: build `source` for device `index` (the build log comes back in the Error), and
 // run the layout probe kernel, returning what it wrote.

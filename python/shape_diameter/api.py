@@ -48,7 +48,11 @@ class Result:
     follow as 'beside cast: mesh', 'beside cast: islands', ...); for 'projected' on OpenCL,
     'beside cast: upload' (the cast points' frames). With threads=0 the BVH builds beside
     'prepare' (and on OpenCL beside the points' upload): 'build' is its own time, 'build
-    wait' what it added to the wall time."""
+    wait' what it added to the wall time. Where a GPU makes the tree (bvh_quality 'fast' or
+    'auto' on GPUs, points 'faces'): 'build (device)' instead of 'build' and 'build wait';
+    'prepare' is the faces' sort, and 'auto' orientation runs beside the cast as
+    'orientation (beside cast)' with its steps ('orientation: edges', ...), and
+    'orientation: reverse faces, cast again' where it reversed faces."""
     engine: str = "cpu"
     """What ran, e.g. 'cpu (2 threads)'."""
     points: str = "faces"

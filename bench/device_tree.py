@@ -1,0 +1,79 @@
+# SPDX-License-Identifier: GPL-3.0-or-later
+"""The BVH made on the device against the host's, end to end: compute() on one OpenCL
+device with SDF_OPENCL_TREE=host and =device, alternating in one run, the fastest of --repeat
+calls of each by wall time, for each orientation (and for a mesh whose faces 'auto' must
+reverse); checks that both give the same values.
+
+    python bench/device_tree.py [ENGINE [MESH,MESH]] [--rays R] [--repeat N] [--rounds N]
+
+Prints one row a setting: wall time of each tree, their ratio, and the stages of each."""
+
+import argparse
+import os
+import sys
+import time
+
+import numpy as np
+
+sys.path.insert(0, os.path.dirname(__file__))
+from meshes import benchmark_meshes  # noqa: E402
+
+STAGES = ("prepare", "build", "build wait", "orientation (beside cast)",
+          "orientation: reverse faces, cast again", "build (device)", "upload", "cast",
+          "download")
+# (label, orientation, reverse every third face first): the last makes 'auto' reverse faces,
+# which on the device-tree path costs a second cast.
+SETTINGS = (("auto", "auto", False), ("as_is", "as_is", False),
+            ("auto, 1/3 reversed", "auto", True))
+
+
+def timed(v, f, tree, args, orientation):
+    import shape_diameter as sd
+
+    os.environ["SDF_OPENCL_TREE"] = tree
+    t0 = time.perf_counter()
+    r = sd.compute(v, f, rays=args.rays, engine=args.engine, orientation=orientation)
+    return (time.perf_counter() - t0) * 1e3, r
+
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("engine", nargs="?", default="opencl:0")
+    parser.add_argument("meshes", nargs="?", default="armadillo-x16,bunny00-x16")
+    parser.add_argument("--rays", type=int, default=30)
+    parser.add_argument("--repeat", type=int, default=5)
+    parser.add_argument("--rounds", type=int, default=2)
+    args = parser.parse_args()
+    wanted = args.meshes.split(",")
+    print("| mesh | faces | orientation | host tree ms | device tree ms | host/device | "
+          "host stages | device stages |")
+    print("|---|---:|---|---:|---:|---:|---|---|")
+    for name, v, f in benchmark_meshes():
+        if name not in wanted:
+            continue
+        for label, orientation, reverse in SETTINGS:
+            faces = f.copy()
+            if reverse:
+                faces[::3] = faces[::3, ::-1]
+            best = {}
+            for _ in range(args.rounds):
+                for tree in ("host", "device"):
+                    for _ in range(args.repeat):
+                        wall, r = timed(v, faces, tree, args, orientation)
+                        if tree not in best or wall < best[tree][0]:
+                            best[tree] = (wall, r)
+            host, device = best["host"], best["device"]
+            if not np.array_equal(host[1].raw, device[1].raw):
+                raise SystemExit(f"{name}: the device tree's values differ from the host tree's")
+
+            def stages(r):
+                return " ".join(f"{k} {r.timings[k] * 1e3:.1f}" for k in STAGES if k in r.timings)
+
+            print(f"| {name} | {len(f):,} | {label} | {host[0]:.1f} | {device[0]:.1f} | "
+                  f"{host[0] / device[0]:.2f} | {stages(host[1])} | {stages(device[1])} |",
+                  flush=True)
+    os.environ.pop("SDF_OPENCL_TREE", None)
+
+
+if __name__ == "__main__":
+    main()

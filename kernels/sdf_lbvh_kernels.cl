@@ -1,0 +1,145 @@
+/* SPDX-License-Identifier: GPL-3.0-or-later */
+/* A BVH built on the device, and the faces' points made there: the host sends the mesh and
+ * the faces in Morton order with their codes (native/device_tree_keys.h) instead of a tree
+ * and points of its own making.
+ *
+ * The tree is Karras's (2012): internal node i of the faces with area (n of them, sorted)
+ * finds the range of keys it covers and where that range splits from the keys alone, all
+ * nodes at once. Its layout is the host tree's (SdfBvhNode, children side by side): the two
+ * children of internal node i sit in slots 2i + 1 and 2i + 2, the root in slot 0. A node whose
+ * range holds at most SDF_LBVH_LEAF_SIZE triangles is written as a leaf of them (its subtree's
+ * slots stay unused). Boxes are made bottom up, one launch per level of height: a node's box
+ * is made in the launch after both children's, so every box read was written by an earlier
+ * launch. (A first version climbed in one launch, the second child to arrive at a node making
+ * its box from its sibling's: on an H100 a box could be read before its sibling's write had
+ * landed, and 1 in 1.2M faces' values differed.) Every box grows by the host's margin
+ * (bvh_margin.h), so this tree returns the hits of every other tree, bit for bit. */
+#include "sdf_face_point.h"
+#include "sdf_layout.h"
+
+#define SDF_LBVH_LEAF_SIZE 4
+
+/* The points of faces [0, faces): SamplePoints' arrays for points='faces'. */
+__kernel void sdf_face_points(__global const float* restrict vertices,
+                              __global const uint* restrict triangles, uint faces,
+                              __global float* restrict origins, __global float* restrict axes,
+                              __global float* restrict tangents, __global int* restrict own_face) {
+  uint f = get_global_id(0);
+  if (f >= faces) return;
+  uint3 t = vload3(f, triangles);
+  float3 origin, axis, tangent;
+  sdf_face_point(vload3(t.x, vertices), vload3(t.y, vertices), vload3(t.z, vertices), &origin,
+                 &axis, &tangent);
+  vstore3(origin, f, origins);
+  vstore3(axis, f, axes);
+  vstore3(tangent, f, tangents);
+  own_face[f] = (int)f;
+}
+
+/* Triangle record k (SdfTriangle as three 16-byte units) of face order[k], k < count, as the
+ * host writes them (bvh.cpp: write_triangles). */
+__kernel void sdf_lbvh_triangles(__global const float* restrict vertices,
+                                 __global const uint* restrict triangles,
+                                 __global const uint* restrict order, uint count,
+                                 __global float4* restrict tris) {
+  uint k = get_global_id(0);
+  if (k >= count) return;
+  uint f = order[k];
+  uint3 t = vload3(f, triangles);
+  float3 v0 = vload3(t.x, vertices);
+  float3 e1 = vload3(t.y, vertices) - v0, e2 = vload3(t.z, vertices) - v0;
+  tris[3 * k] = (float4)(v0, as_float((int)f));
+  tris[3 * k + 1] = (float4)(e1, 0.0f);
+  tris[3 * k + 2] = (float4)(e2, 0.0f);
+}
+
+/* Karras's delta: the length of the common prefix of keys i and j, the key being the code
+ * followed by the index (so equal codes still differ); -1 outside [0, n). */
+static inline int sdf_lbvh_delta(__global const uint* codes, int n, int i, int j) {
+  if (j < 0 || j >= n) return -1;
+  uint a = codes[i], b = codes[j];
+  if (a != b) return (int)clz(a ^ b);
+  return 32 + (int)clz((uint)i ^ (uint)j);
+}
+
+/* Internal node i < n - 1: its range of triangles (first, count) and its children (an
+ * internal node j as j, leaf k as ~k). slot_of holds where each node's record goes: leaves at
+ * [0, n), internal nodes at n + i. Marks the node not yet made (made_in: the launch of
+ * sdf_lbvh_level that made it). */
+__kernel void sdf_lbvh_inner(__global const uint* restrict codes, int n,
+                             __global int* restrict slot_of, __global int4* restrict inner,
+                             __global int* restrict made_in) {
+  int i = (int)get_global_id(0);
+  if (n == 1 && i == 0) slot_of[0] = 0;  /* one triangle: the root is its leaf */
+  if (i >= n - 1) return;
+  int d = sdf_lbvh_delta(codes, n, i, i + 1) > sdf_lbvh_delta(codes, n, i, i - 1) ? 1 : -1;
+  int below = sdf_lbvh_delta(codes, n, i, i - d);
+  int reach = 2;
+  while (sdf_lbvh_delta(codes, n, i, i + reach * d) > below) reach *= 2;
+  int l = 0;
+  for (int t = reach / 2; t >= 1; t /= 2)
+    if (sdf_lbvh_delta(codes, n, i, i + (l + t) * d) > below) l += t;
+  int j = i + l * d;
+  int shared = sdf_lbvh_delta(codes, n, i, j);
+  int s = 0;
+  int t = l;
+  do {
+    t = (t + 1) / 2;
+    if (sdf_lbvh_delta(codes, n, i, i + (s + t) * d) > shared) s += t;
+  } while (t > 1);
+  int split = i + s * d + min(d, 0);
+  int first = min(i, j), last = max(i, j);
+  int left = first == split ? ~split : split;
+  int right = last == split + 1 ? ~(split + 1) : split + 1;
+  slot_of[left < 0 ? ~left : n + left] = 2 * i + 1;
+  slot_of[right < 0 ? ~right : n + right] = 2 * i + 2;
+  inner[i] = (int4)(first, last - first + 1, left, right);
+  made_in[i] = INT_MAX;
+  if (i == 0) slot_of[n] = 0;
+}
+
+static inline void sdf_lbvh_store(__global float4* nodes, int slot, float3 lo, int first,
+                                  float3 hi, int count) {
+  nodes[2 * slot] = (float4)(lo, as_float(first));
+  nodes[2 * slot + 1] = (float4)(hi, as_float(count));
+}
+
+/* Leaf k < n, triangle order[k]: the corners' min and max made +0 at zero (as the host's
+ * boxes), grown by margin. Growing each leaf and taking unions gives the bits of growing the
+ * unions, as the host does: rounding is monotonic. */
+__kernel void sdf_lbvh_leaves(__global const float* restrict vertices,
+                              __global const uint* restrict triangles,
+                              __global const uint* restrict order, int n,
+                              __global const int* restrict slot_of, float margin,
+                              __global float4* restrict nodes) {
+  int k = (int)get_global_id(0);
+  if (k >= n) return;
+  uint3 t = vload3(order[k], triangles);
+  float3 a = vload3(t.x, vertices), b = vload3(t.y, vertices), c = vload3(t.z, vertices);
+  float3 lo = fmin(a, fmin(b, c)) + 0.0f, hi = fmax(a, fmax(b, c)) + 0.0f;
+  sdf_lbvh_store(nodes, slot_of[k], lo - margin, k, hi + margin, 1);
+}
+
+/* Launch `level` (1, 2, ...): every internal node whose children were both made before this
+ * launch (leaves count as made in launch 0) makes its record, a leaf of its range when that
+ * holds at most SDF_LBVH_LEAF_SIZE triangles. A child made in this very launch reads as not
+ * yet made (its made_in is INT_MAX or `level`), so no box is read in the launch that writes
+ * it. */
+__kernel void sdf_lbvh_level(int n, int level, __global const int* restrict slot_of,
+                             __global const int4* restrict inner, __global int* made_in,
+                             __global float4* nodes) {
+  int i = (int)get_global_id(0);
+  if (i >= n - 1 || made_in[i] != INT_MAX) return;
+  int4 node = inner[i];
+  if (node.z >= 0 && made_in[node.z] >= level) return;
+  if (node.w >= 0 && made_in[node.w] >= level) return;
+  float4 l_lo = nodes[2 * (2 * i + 1)], l_hi = nodes[2 * (2 * i + 1) + 1];
+  float4 r_lo = nodes[2 * (2 * i + 2)], r_hi = nodes[2 * (2 * i + 2) + 1];
+  float3 lo = fmin(l_lo.xyz, r_lo.xyz), hi = fmax(l_hi.xyz, r_hi.xyz);
+  int slot = slot_of[n + i];
+  if (node.y <= SDF_LBVH_LEAF_SIZE)
+    sdf_lbvh_store(nodes, slot, lo, node.x, hi, node.y);
+  else
+    sdf_lbvh_store(nodes, slot, lo, 2 * i + 1, hi, 0);
+  made_in[i] = level;
+}

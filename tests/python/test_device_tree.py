@@ -1,0 +1,174 @@
+# SPDX-License-Identifier: GPL-3.0-or-later
+"""The BVH and the faces' points made on the device (kernels/sdf_lbvh_kernels.cl): the same
+values as the CPU engine's, bit for bit, on every device and cast kernel, for meshes that
+stress the build (zero-area faces, faces that share one Morton cell, one triangle, faces to
+reverse). GPUs make this tree by default (engine 'auto'/'opencl', points 'faces'); the
+SDF_OPENCL_TREE hook forces it ('device') or the host's ('host') anywhere, PoCL included."""
+
+import warnings
+
+import numpy as np
+import pytest
+
+import shape_diameter as sd
+from shape_diameter.mesh_io import load_mesh
+
+from opencl_devices import OPENCL
+from test_opencl import DATA
+
+KERNELS = ["bvh_per_ray", "bvh_per_point"]
+
+
+def same_bits(a, b):
+    differ = np.flatnonzero((a.raw != b.raw) | (a.valid_rays != b.valid_rays))
+    assert differ.size == 0, f"{differ.size} of {a.raw.size} points differ, first {differ[:5]}"
+
+
+def on_device_tree(monkeypatch, v, f, engine, kernel="bvh_per_ray", **options):
+    monkeypatch.setenv("SDF_OPENCL_TREE", "device")
+    monkeypatch.setenv("SDF_OPENCL_KERNEL", kernel)
+    result = sd.compute(v, f, engine=engine, **options)
+    assert "build (device)" in result.timings and "build wait" not in result.timings
+    return result
+
+
+def clustered_mesh():
+    """A shell of 400 small triangles whose centres fall in a handful of Morton cells (equal
+    codes: the tree splits them by index), around a box that spreads the code range."""
+    rng = np.random.default_rng(3)
+    v, f = [], []
+    for k in range(400):
+        centre = np.array([0.5, 0.5, 0.5]) + 1e-5 * rng.standard_normal(3)
+        corners = centre + 0.05 * rng.standard_normal((3, 3))
+        f.append([len(v), len(v) + 1, len(v) + 2])
+        v.extend(corners)
+    box_v, box_f = load_mesh(DATA / "fandisk.obj")
+    f = np.vstack([np.array(f), box_f + len(v)])
+    v = np.vstack([np.array(v), box_v])
+    return v, f
+
+
+@pytest.mark.parametrize("engine", OPENCL)
+@pytest.mark.parametrize("kernel", KERNELS)
+@pytest.mark.parametrize("mesh", ["fandisk.obj", "teapot.obj", "spot.obj"])
+def test_device_tree_gives_the_cpu_engines_bits(monkeypatch, engine, kernel, mesh):
+    v, f = load_mesh(DATA / mesh)
+    cpu = sd.compute(v, f, engine="cpu")
+    same_bits(on_device_tree(monkeypatch, v, f, engine, kernel), cpu)
+
+
+@pytest.mark.parametrize("engine", OPENCL)
+def test_zero_area_and_clustered_faces(monkeypatch, engine):
+    v, f = clustered_mesh()
+    f = f.copy()
+    f[::9, 1] = f[::9, 0]  # zero-area faces among the rest: no triangle record, still a point
+    cpu = sd.compute(v, f, engine="cpu", orientation="as_is")
+    same_bits(on_device_tree(monkeypatch, v, f, engine, orientation="as_is"), cpu)
+
+
+@pytest.mark.parametrize("engine", OPENCL)
+def test_reversed_faces_are_oriented_before_the_points_are_made(monkeypatch, engine):
+    v, f = load_mesh(DATA / "spot.obj")
+    flipped = f.copy()
+    flipped[::3] = flipped[::3, ::-1]
+    cpu = sd.compute(v, flipped, engine="cpu")
+    device = on_device_tree(monkeypatch, v, flipped, engine)
+    assert device.flipped_faces == cpu.flipped_faces > 0
+    np.testing.assert_array_equal(device.reversed_faces, cpu.reversed_faces)
+    same_bits(device, cpu)
+    # The orientation was decided beside a cast of the mesh as wound, then the faces reversed
+    # and the mesh cast again.
+    assert "orientation: reverse faces, cast again" in device.timings
+
+
+@pytest.mark.parametrize("engine", OPENCL)
+def test_a_mesh_wound_right_is_cast_while_its_orientation_is_decided(monkeypatch, engine):
+    v, f = load_mesh(DATA / "spot.obj")
+    device = on_device_tree(monkeypatch, v, f, engine)
+    assert device.flipped_faces == 0
+    assert "orientation (beside cast)" in device.timings
+    assert "orientation: reverse faces, cast again" not in device.timings
+    assert not any(k.startswith("prepare: orientation") for k in device.timings)
+    same_bits(device, sd.compute(v, f, engine="cpu"))
+
+
+@pytest.mark.parametrize("orientation", ["flip", "as_is"])
+def test_other_orientations_are_applied_before_the_cast(monkeypatch, orientation):
+    v, f = load_mesh(DATA / "spot.obj")
+    cpu = sd.compute(v, f, engine="cpu", orientation=orientation)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", RuntimeWarning)  # 'flip' turns spot inside out
+        device = on_device_tree(monkeypatch, v, f, OPENCL[0], orientation=orientation)
+    assert "orientation (beside cast)" not in device.timings
+    same_bits(device, cpu)
+
+
+@pytest.mark.parametrize("engine", OPENCL)
+@pytest.mark.parametrize("faces", [1, 2, 4])
+def test_tiny_meshes(monkeypatch, engine, faces):
+    # One triangle (the root is its leaf), two facing each other, a tetrahedron.
+    v = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1], [1, 0, 1], [0, 1, 1]], float)
+    f = {1: [[0, 1, 2]], 2: [[0, 2, 1], [3, 4, 5]], 4: [[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]]}
+    f = np.array(f[faces])
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", RuntimeWarning)  # one triangle hits nothing
+        cpu = sd.compute(v, f, engine="cpu", orientation="as_is")
+        device = on_device_tree(monkeypatch, v, f, engine, orientation="as_is")
+    same_bits(device, cpu)
+    assert faces == 1 or (cpu.valid_rays > 0).any()
+
+
+@pytest.mark.parametrize("engine", OPENCL)
+def test_only_zero_area_faces_cast_nothing(monkeypatch, engine):
+    v = np.array([[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [2.0, 0.0, 0.0], [0.0, 1.0, 0.0]])
+    f = np.array([[0, 1, 2], [3, 3, 1], [0, 0, 0]])
+    monkeypatch.setenv("SDF_OPENCL_TREE", "device")
+    with pytest.warns(RuntimeWarning, match=r"no ray of any point"):
+        result = sd.compute(v, f, engine=engine)
+    assert (result.raw == 0).all() and (result.valid_rays == 0).all()
+
+
+@pytest.mark.parametrize("engine", OPENCL)
+def test_random_sampling_equals_the_host_trees_values(monkeypatch, engine):
+    # Random rays are made with the device's sin and cos, so the reference is the same device
+    # casting the host's tree: the same rays (seeded by face), the same nearest hits.
+    v, f = load_mesh(DATA / "teapot.obj")
+    options = dict(engine=engine, sampling="random", seed=11, rays=21)
+    monkeypatch.setenv("SDF_OPENCL_KERNEL", "bvh_per_ray")
+    monkeypatch.setenv("SDF_OPENCL_TREE", "host")
+    host = sd.compute(v, f, **options)
+    monkeypatch.setenv("SDF_OPENCL_TREE", "device")
+    same_bits(sd.compute(v, f, **options), host)
+
+
+@pytest.mark.parametrize("engine", OPENCL)
+def test_smoothing_inside_compute_gets_the_hosts_points(monkeypatch, engine):
+    # The device makes the cast's points; projected smoothing beside the cast needs them on
+    # the host too, and must smooth as after a host-made cast.
+    v, f = load_mesh(DATA / "spot.obj")
+    cpu = sd.compute(v, f, engine="cpu", smoothing="projected")
+    device = on_device_tree(monkeypatch, v, f, engine, smoothing="projected")
+    np.testing.assert_array_equal(device.raw, cpu.raw)
+    np.testing.assert_allclose(device.values, cpu.values, rtol=0, atol=0)
+
+
+def test_device_memory_stays_under_200_bytes_a_face(monkeypatch):
+    v, f = load_mesh(DATA / "bunny00.off")
+    result = on_device_tree(monkeypatch, v, f, OPENCL[0])
+    assert 0 < result.device_memory <= 200 * len(f)
+
+
+def test_an_unknown_tree_name_is_refused(monkeypatch):
+    v, f = load_mesh(DATA / "fandisk.obj")
+    monkeypatch.setenv("SDF_OPENCL_TREE", "gpu")
+    with pytest.raises(ValueError, match="SDF_OPENCL_TREE='gpu'"):
+        sd.compute(v, f, engine=OPENCL[0])
+
+
+def test_vertex_points_and_the_octree_keep_the_host_path(monkeypatch):
+    # The device makes face points only, and only the BVH.
+    v, f = load_mesh(DATA / "fandisk.obj")
+    monkeypatch.setenv("SDF_OPENCL_TREE", "device")
+    for options in (dict(points="vertices"), dict(accel="octree")):
+        result = sd.compute(v, f, engine=OPENCL[0], **options)
+        assert "build (device)" not in result.timings and "build" in result.timings
