@@ -43,6 +43,8 @@ def main():
     parser.add_argument("--rays", type=int, default=30)
     parser.add_argument("--repeat", type=int, default=5)
     parser.add_argument("--rounds", type=int, default=2)
+    parser.add_argument("--all-stages", action="store_true",
+                        help="after each row, every stage and step of the device tree's run")
     args = parser.parse_args()
     wanted = args.meshes.split(",")
     print("| mesh | faces | orientation | host tree ms | device tree ms | host/device | "
@@ -72,6 +74,8 @@ def main():
             print(f"| {name} | {len(f):,} | {label} | {host[0]:.1f} | {device[0]:.1f} | "
                   f"{host[0] / device[0]:.2f} | {stages(host[1])} | {stages(device[1])} |",
                   flush=True)
+            if args.all_stages:
+                print("    " + " ".join(f"{k} {x * 1e3:.1f}" for k, x in device[1].timings.items()))
     os.environ.pop("SDF_OPENCL_TREE", None)
 
 

@@ -1,7 +1,8 @@
 /* SPDX-License-Identifier: GPL-3.0-or-later */
-/* A BVH built on the device, and the faces' points made there: the host sends the mesh and
- * the faces in Morton order with their codes (native/device_tree_keys.h) instead of a tree
- * and points of its own making.
+/* A BVH built on the device, and the faces' points made there: the host sends the mesh alone
+ * instead of a tree and points of its own making. The faces' Morton codes and their sorted
+ * order are made here too (sdf_lbvh_extent, sdf_lbvh_codes, then sdf_sort_kernels.cl), as
+ * the host's native/device_tree_keys.h makes them (its fallback and the tests' reference).
  *
  * The tree is Karras's (2012): internal node i of the faces with area (n of them, sorted)
  * finds the range of keys it covers and where that range splits from the keys alone, all
@@ -17,7 +18,9 @@
 #include "sdf_face_point.h"
 #include "sdf_layout.h"
 
+#ifndef SDF_LBVH_LEAF_SIZE /* a build option may set it (benchmarks: SDF_OPENCL_EXTRA_OPTIONS) */
 #define SDF_LBVH_LEAF_SIZE 4
+#endif
 
 /* The points of faces [0, faces): SamplePoints' arrays for points='faces'. */
 __kernel void sdf_face_points(__global const float* restrict vertices,
@@ -34,6 +37,92 @@ __kernel void sdf_face_points(__global const float* restrict vertices,
   vstore3(axis, f, axes);
   vstore3(tangent, f, tangents);
   own_face[f] = (int)f;
+}
+
+/* Floats as ints that compare in the same order (negatives' magnitude bits flipped), for
+ * atomic minima and maxima; the mapping is its own inverse. */
+static inline int sdf_ordered_int(float x) {
+  int i = as_int(x);
+  return i >= 0 ? i : i ^ 0x7fffffff;
+}
+static inline float sdf_ordered_float(int i) { return as_float(i >= 0 ? i : i ^ 0x7fffffff); }
+
+/* Face f's box as the host's tree makes it (corners' min and max, made +0 at zero) and
+ * whether it has area (its cross product is not zero: the host's test, to the bit). */
+static inline int sdf_face_box(__global const float* vertices, __global const uint* triangles,
+                               uint f, float3* lo, float3* hi, float* edge) {
+  uint3 t = vload3(f, triangles);
+  float3 a = vload3(t.x, vertices), b = vload3(t.y, vertices), c = vload3(t.z, vertices);
+  float3 e1 = b - a, e2 = c - a;
+  float3 n = sdf_cross(e1, e2);
+  *lo = fmin(a, fmin(b, c)) + 0.0f;
+  *hi = fmax(a, fmax(b, c)) + 0.0f;
+  float3 m = fmax(fabs(e1), fabs(e2));
+  *edge = fmax(m.x, fmax(m.y, m.z));
+  return n.x != 0.0f || n.y != 0.0f || n.z != 0.0f;
+}
+
+/* The box of the faces with area (ordered ints: lo x, y, z, hi x, y, z), their longest edge
+ * component and their count, into extent[0..7] (which starts as INT_MAX x 3, INT_MIN x 3,
+ * 0, 0): per work group in local memory, then one atomic per group and entry. */
+__kernel void sdf_lbvh_extent(__global const float* restrict vertices,
+                              __global const uint* restrict triangles, uint faces,
+                              __global int* extent) {
+  __local int part[8];
+  uint lid = get_local_id(0), f = get_global_id(0);
+  if (lid < 8) part[lid] = lid < 3 ? INT_MAX : lid < 6 ? INT_MIN : 0;
+  barrier(CLK_LOCAL_MEM_FENCE);
+  float3 lo, hi;
+  float edge;
+  if (f < faces && sdf_face_box(vertices, triangles, f, &lo, &hi, &edge)) {
+    atomic_min(&part[0], sdf_ordered_int(lo.x));
+    atomic_min(&part[1], sdf_ordered_int(lo.y));
+    atomic_min(&part[2], sdf_ordered_int(lo.z));
+    atomic_max(&part[3], sdf_ordered_int(hi.x));
+    atomic_max(&part[4], sdf_ordered_int(hi.y));
+    atomic_max(&part[5], sdf_ordered_int(hi.z));
+    atomic_max(&part[6], as_int(edge)); /* >= 0: its bits order as it does */
+    atomic_inc(&part[7]);
+  }
+  barrier(CLK_LOCAL_MEM_FENCE);
+  if (lid < 3) atomic_min(&extent[lid], part[lid]);
+  else if (lid < 7) atomic_max(&extent[lid], part[lid]);
+  else if (lid == 7) atomic_add(&extent[7], part[7]);
+}
+
+static inline uint sdf_spread_bits_10(uint x) {
+  x &= 0x3ffu;
+  x = (x | x << 16) & 0x030000ffu;
+  x = (x | x << 8) & 0x0300f00fu;
+  x = (x | x << 4) & 0x030c30c3u;
+  x = (x | x << 2) & 0x09249249u;
+  return x;
+}
+
+/* Face f's sort key, as the host's make_tree_keys makes it: the 30-bit Morton code of its box
+ * centre in the box of faces with area, 2^30 (after every code) for a face without area. */
+__kernel void sdf_lbvh_codes(__global const float* restrict vertices,
+                             __global const uint* restrict triangles, uint faces,
+                             __global const int* restrict extent, __global uint* restrict keys,
+                             __global uint* restrict values) {
+  uint f = get_global_id(0);
+  if (f >= faces) return;
+  float3 all_lo = make_float3(sdf_ordered_float(extent[0]), sdf_ordered_float(extent[1]),
+                              sdf_ordered_float(extent[2]));
+  float3 all_hi = make_float3(sdf_ordered_float(extent[3]), sdf_ordered_float(extent[4]),
+                              sdf_ordered_float(extent[5]));
+  float3 scale = 1023.0f / fmax(all_hi - all_lo, (float3)(1e-30f));
+  float3 lo, hi;
+  float edge;
+  uint key = 1u << 30;
+  if (sdf_face_box(vertices, triangles, f, &lo, &hi, &edge)) {
+    float3 centre = (lo + hi) * 0.5f;
+    uint3 c = convert_uint3(clamp((centre - all_lo) * scale, 0.0f, 1023.0f));
+    key = sdf_spread_bits_10(c.x) | (sdf_spread_bits_10(c.y) << 1) |
+          (sdf_spread_bits_10(c.z) << 2);
+  }
+  keys[f] = key;
+  values[f] = f;
 }
 
 /* Triangle record k (SdfTriangle as three 16-byte units) of face order[k], k < count, as the

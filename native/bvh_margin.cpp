@@ -27,9 +27,14 @@ float bvh_box_margin(const Bvh& bvh, unsigned threads) {
   });
   const float edge = *std::max_element(chunk_edge.begin(), chunk_edge.end());
   const kern::SdfBvhNode& root = bvh.nodes[0];
-  const float coordinate =
-      std::max({std::fabs(root.lo_x), std::fabs(root.lo_y), std::fabs(root.lo_z),
-                std::fabs(root.hi_x), std::fabs(root.hi_y), std::fabs(root.hi_z)});
+  return tree_margin(glm::vec3(root.lo_x, root.lo_y, root.lo_z),
+                     glm::vec3(root.hi_x, root.hi_y, root.hi_z), edge);
+}
+
+float tree_margin(glm::vec3 lo, glm::vec3 hi, float edge) {
+  if (!(lo.x <= hi.x)) return 0.0f;
+  const float coordinate = std::max({std::fabs(lo.x), std::fabs(lo.y), std::fabs(lo.z),
+                                     std::fabs(hi.x), std::fabs(hi.y), std::fabs(hi.z)});
   // A hit lies within slack * (|e1| + |e2|) of its triangle on each axis: 4 x covers that
   // and the rounding of the triangle test itself.
   return 4.0f * SDF_BARYCENTRIC_SLACK * edge + std::ldexp(coordinate, -20) +

@@ -18,6 +18,10 @@
 
 namespace sdf {
 
+// The growth for a tree whose triangles' box is (lo, hi) and whose longest edge component
+// (of v1 - v0 and v2 - v0) is `edge`; 0 for no triangle (lo > hi). The formula below.
+float tree_margin(glm::vec3 lo, glm::vec3 hi, float edge);
+
 // The growth used by grow_boxes_to_cover_hits: 4 x the slack of the largest triangle edge
 // (per axis) plus 2^-20 of the largest coordinate (16 ulps and more at the scene's scale).
 float bvh_box_margin(const Bvh& bvh, unsigned threads = 0);

@@ -26,6 +26,7 @@
 #include "sdf.h"
 #ifdef SDF_HAVE_OPENCL
 #include "opencl/devices.h"
+#include "opencl/device_tree.h"
 #include "opencl/opencl_engine.h"
 #include "opencl/program_cache.h"
 #endif
@@ -369,6 +370,19 @@ PYBIND11_MODULE(_core, m) {
     py::gil_scoped_release release;
     return sdf::cl::probe_layout(index);
   });
+  m.def("opencl_tree_keys", [](const Doubles& vertices, const Int64s& triangles, int index) {
+    const sdf::Mesh mesh = to_mesh(vertices, triangles);
+    sdf::cl::TreeKeys keys;
+    {
+      py::gil_scoped_release release;
+      keys = sdf::cl::device_tree_keys(index, mesh);
+    }
+    return py::make_tuple(
+        py::array_t<std::uint32_t>(keys.order.size(), keys.order.data()),
+        py::array_t<std::uint32_t>(keys.codes.size(), keys.codes.data()), keys.with_area,
+        keys.margin);
+  }, "Test hook: the device-built tree's keys (order, codes, faces with area, margin) as "
+     "device `index` makes them.");
   m.def("opencl_build_source", [](int index, const std::string& source) {
     py::gil_scoped_release release;
     sdf::cl::build_source_for_test(index, source);

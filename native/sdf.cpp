@@ -12,10 +12,10 @@
 #include "bvh8.h"
 #include "bvh_margin.h"
 #include "cpu_engine.h"
-#include "device_tree_keys.h"
 #include "orientation.h"
 #include "stopwatch.h"
 #ifdef SDF_HAVE_OPENCL
+#include "opencl/device_tree.h"
 #include "opencl/opencl_engine.h"
 #endif
 
@@ -77,7 +77,8 @@ Plan make_plan(const Options& options) {
   // there, and the host is left with orientation and one sort.
   bool per_ray_gpus = true;
   for (const cl::Device* d : plan.devices)
-    per_ray_gpus = per_ray_gpus && d->gpu && cl::cast_kernel_for(*d) == cl::CastKernel::BvhPerRay;
+    per_ray_gpus = per_ray_gpus && d->gpu && cl::cast_kernel_for(*d) == cl::CastKernel::BvhPerRay &&
+                   cl::makes_trees(*d);
   plan.tree_on_device =
       options.accel == Accel::Bvh && options.points == PointKind::Faces &&
       cl::tree_on_device(plan.fast_build && per_ray_gpus);
@@ -245,9 +246,9 @@ struct ReverseFacesFirst {};
 // Casts `mesh` as it is wound while deciding its 'auto' orientation beside the cast (only
 // reading the mesh). Nothing to reverse: the cast stands (it is the cast of the oriented
 // mesh). Faces to reverse: the devices stop at their next launch (launches are kept short
-// while the orientation runs), the faces are reversed, and the mesh is cast again, keys and
-// all (the keys do not depend on winding: TreeKeys' boxes, area test and margin are the same
-// for a reversed face). Either way the values are those of casting the oriented mesh.
+// while the orientation runs), the faces are reversed, and the mesh is cast again (its tree
+// made again too: a millisecond). Either way the values are those of casting the oriented
+// mesh.
 void cast_speculatively(const Options& options, const Plan& plan, cl::CastInput input,
                         Mesh& mesh, const Cone& cone, Output& out, const ProgressFn& progress,
                         const std::function<void()>& beside_cast) {
@@ -331,13 +332,7 @@ Output compute(Mesh mesh, const Options& options, const ProgressFn& progress,
   }
   SamplePoints points;
   std::vector<std::uint32_t> order;
-  TreeKeys keys;
-  if (plan.tree_on_device) {
-    StageTimings key_steps;
-    keys = make_tree_keys(mesh, options.threads, &key_steps);
-    step.lap("prepare: keys");
-    for (const auto& [name, seconds] : key_steps) steps.emplace_back("prepare: " + name, seconds);
-  } else {
+  if (!plan.tree_on_device) {
     points = sample_points(mesh, options.points, options.threads);
     step.lap("prepare: points");
     order = spatial_order(points, options.threads);
@@ -379,8 +374,6 @@ Output compute(Mesh mesh, const Options& options, const ProgressFn& progress,
     cl::CastInput input;
     if (plan.tree_on_device) {
       input.mesh = &mesh;
-      input.keys = &keys;
-      input.order = keys.order.data();
     } else {
       input.scene = scene_source(options, plan, build_scene);
       input.points = &points;

@@ -3,62 +3,170 @@
 
 #include <algorithm>
 #include <chrono>
+#include <climits>
+#include <mutex>
+#include <string>
+#include <cstring>
 #include <vector>
 
 #include "../../kernels/sdf_layout.h"
+#include "../bvh_margin.h"
 
 namespace sdf::cl {
 
 namespace {
 
-// One item each over [0, count): groups of 64 on GPUs (NVIDIA's driver would otherwise pick a
-// divisor of the global size, down to 1); the driver's choice on CPUs.
-void launch_items(const Device& device, DeviceState& s, const Kernel& kernel, std::size_t count) {
-  const std::size_t local = 64;
+using Clock = std::chrono::steady_clock;
+
+double seconds_since(Clock::time_point t) {
+  return std::chrono::duration<double>(Clock::now() - t).count();
+}
+
+// One item each over [0, count): groups of `local` on GPUs (NVIDIA's driver would otherwise
+// pick a divisor of the global size, down to 1); the driver's choice on CPUs unless asked.
+void launch_items(const Device& device, DeviceState& s, const Kernel& kernel, std::size_t count,
+                  std::size_t local = 64, bool exact = false) {
   const std::size_t global = (std::max<std::size_t>(count, 1) + local - 1) / local * local;
   check(api()->clEnqueueNDRangeKernel(s.queue, kernel.get(), 1, nullptr, &global,
-                                      device.gpu ? &local : nullptr, 0, nullptr, nullptr),
+                                      device.gpu || exact ? &local : nullptr, 0, nullptr,
+                                      nullptr),
         "clEnqueueNDRangeKernel");
+}
+
+// Tiles of the sort kernels (SDF_SORT_GROUP in sdf_sort_kernels.cl).
+constexpr std::size_t kSortGroup = 256;
+
+// The faces' keys (Morton codes, 2^30 for faces without area) and values (face indices), in
+// `keys` and `values`, sorted stably by key on the device, and how many faces have area and
+// the tree's margin (bvh_margin.h), from the box of those faces and their longest edge
+// component. Waits for the device.
+void sort_faces_on_device(const Device& device, DeviceState& s, cl_program program,
+                          const Buffer& vertices, const Buffer& triangles, std::size_t faces,
+                          const Buffer& keys, const Buffer& values, std::size_t* with_area,
+                          float* margin) {
+  const cl_uint count = static_cast<cl_uint>(faces);
+  const int start_extent[8] = {INT_MAX, INT_MAX, INT_MAX, INT_MIN, INT_MIN, INT_MIN, 0, 0};
+  Buffer extent(s, sizeof start_extent, start_extent);
+  Kernel box(program, "sdf_lbvh_extent");
+  box.arg(0, vertices.get());
+  box.arg(1, triangles.get());
+  box.arg(2, count);
+  box.arg(3, extent.get());
+  launch_items(device, s, box, faces);
+  Kernel codes(program, "sdf_lbvh_codes");
+  codes.arg(0, vertices.get());
+  codes.arg(1, triangles.get());
+  codes.arg(2, count);
+  codes.arg(3, extent.get());
+  codes.arg(4, keys.get());
+  codes.arg(5, values.get());
+  launch_items(device, s, codes, faces);
+
+  const std::size_t tiles = (faces + kSortGroup - 1) / kSortGroup;
+  Buffer other_keys(s, faces * 4, nullptr), other_values(s, faces * 4, nullptr);
+  Buffer counts(s, tiles * 16 * 4, nullptr);
+  Kernel count_digits(program, "sdf_sort_count"), scan(program, "sdf_sort_scan"),
+      scatter(program, "sdf_sort_scatter");
+  const cl_uint entries = static_cast<cl_uint>(tiles * 16);
+  scan.arg(0, counts.get());
+  scan.arg(1, entries);
+  const Buffer* from[2] = {&keys, &values};
+  const Buffer* to[2] = {&other_keys, &other_values};
+  // 31-bit keys, 4 bits a pass: 8 passes, an even count, so the result ends where it began.
+  for (int shift = 0; shift < 31; shift += 4) {
+    count_digits.arg(0, from[0]->get());
+    count_digits.arg(1, count);
+    count_digits.arg(2, static_cast<cl_int>(shift));
+    count_digits.arg(3, counts.get());
+    launch_items(device, s, count_digits, faces, kSortGroup, true);
+    launch_items(device, s, scan, kSortGroup, kSortGroup, true);
+    scatter.arg(0, from[0]->get());
+    scatter.arg(1, from[1]->get());
+    scatter.arg(2, count);
+    scatter.arg(3, static_cast<cl_int>(shift));
+    scatter.arg(4, counts.get());
+    scatter.arg(5, to[0]->get());
+    scatter.arg(6, to[1]->get());
+    launch_items(device, s, scatter, faces, kSortGroup, true);
+    std::swap(from, to);
+  }
+  int found[8];
+  read_buffer(s, extent.get(), found, sizeof found);
+  auto as_float = [](int i) {
+    const int bits = i >= 0 ? i : i ^ 0x7fffffff;  // sdf_ordered_float
+    float x;
+    std::memcpy(&x, &bits, sizeof x);
+    return x;
+  };
+  *with_area = static_cast<std::size_t>(found[7]);
+  *margin = tree_margin(glm::vec3(as_float(found[0]), as_float(found[1]), as_float(found[2])),
+                        glm::vec3(as_float(found[3]), as_float(found[4]), as_float(found[5])),
+                        as_float(found[6]));
+}
+
+// Whether the device can run the sort's tiles (work groups of kSortGroup items).
+bool sorts_on_device(const Device& device, cl_program program) {
+  for (const char* name : {"sdf_sort_count", "sdf_sort_scan", "sdf_sort_scatter"})
+    if (Kernel(program, name).max_group(device.id) < kSortGroup) return false;
+  return true;
 }
 
 }  // namespace
 
+bool makes_trees(const Device& device) { return device.max_group >= kSortGroup; }
+
 DeviceTree build_device_tree(const Device& device, DeviceState& s, cl_program program,
-                             const Mesh& mesh, const TreeKeys& keys) {
-  const std::size_t faces = mesh.triangles.size(), n = keys.with_area;
-  const std::size_t slots = 2 * n - 1, inner = std::max<std::size_t>(n, 2) - 1;
-  // The build's buffers, then the points' (made once the build's scratch is released); the
-  // mesh stays until the points are made.
-  const std::vector<std::size_t> build = {
-      bytes_of(mesh.vertices), bytes_of(mesh.triangles), faces * 4, n * 4,  // mesh, order, codes
-      n * sizeof(kern::SdfTriangle), slots * sizeof(kern::SdfBvhNode),
-      slots * 4, inner * 16, inner * 4};  // slot_of, inner nodes, made_in
-  const std::vector<std::size_t> cast = {
-      bytes_of(mesh.vertices), bytes_of(mesh.triangles), faces * 4,
-      n * sizeof(kern::SdfTriangle), slots * sizeof(kern::SdfBvhNode),
-      3 * faces * 12, faces * 4,  // origins, axes, tangents; own_face
-      faces * 8};  // the cast's results
-  check_fits(device, build);
-  check_fits(device, cast);
+                             const Mesh& mesh, const std::function<void()>& uploaded) {
+  const std::size_t faces = mesh.triangles.size();
+  // Checked at the most faces can ask: the sort's, then the build's buffers (the mesh, the
+  // order, the codes, the records and nodes, slot_of, the inner nodes, made_in), then the
+  // points' and the results (the build's scratch released by then).
+  const std::size_t slots = 2 * faces, most_inner = faces;
+  const std::size_t mesh_bytes = bytes_of(mesh.vertices) + bytes_of(mesh.triangles);
+  const std::vector<std::vector<std::size_t>> phases = {
+      {mesh_bytes, 4 * faces * 4, (faces / kSortGroup + 1) * 64},
+      {mesh_bytes, faces * 4, faces * 4, faces * sizeof(kern::SdfTriangle),
+       slots * sizeof(kern::SdfBvhNode), slots * 4, most_inner * 16, most_inner * 4},
+      {mesh_bytes, faces * 4, faces * sizeof(kern::SdfTriangle), slots * sizeof(kern::SdfBvhNode),
+       3 * faces * 12, faces * 4, faces * 8}};
   DeviceTree tree;
-  for (const auto* sizes : {&build, &cast}) {
+  for (const auto& sizes : phases) {
+    check_fits(device, sizes);
     std::uint64_t total = 0;
-    for (std::size_t b : *sizes) total += b;
+    for (std::size_t b : sizes) total += b;
     tree.peak_bytes = std::max(tree.peak_bytes, total);
   }
 
-  using Clock = std::chrono::steady_clock;
   const Clock::time_point start = Clock::now();
   Buffer vertices(s, bytes_of(mesh.vertices), mesh.vertices.data());
   Buffer triangles(s, bytes_of(mesh.triangles), mesh.triangles.data());
-  tree.order = std::make_unique<Buffer>(s, faces * 4, keys.order.data());
+  check(api()->clFinish(s.queue), "clFinish (upload)");
+  tree.upload_seconds = seconds_since(start);
+  if (uploaded) uploaded();
+  const Clock::time_point build_start = Clock::now();
+
+  // The faces' order and codes (make_plan asks for a tree here only from devices whose work
+  // groups can hold the sort's tiles).
+  tree.order = std::make_unique<Buffer>(s, faces * 4, nullptr);
+  auto codes = std::make_unique<Buffer>(s, faces * 4, nullptr);
+  float margin = 0.0f;
+  if (sorts_on_device(device, program)) {
+    sort_faces_on_device(device, s, program, vertices, triangles, faces, *codes, *tree.order,
+                         &tree.with_area, &margin);
+  } else {
+    throw Error("OpenCL device '" + device.name + "' cannot run work groups of " +
+                    std::to_string(kSortGroup) + " items, which its tree's sort needs: "
+                    "set SDF_OPENCL_TREE=host (the host builds the tree)",
+                CL_INVALID_WORK_GROUP_SIZE);
+  }
+  const std::size_t n = tree.with_area;
+  if (n == 0) return tree;  // nothing can be hit: no tree, nothing to cast
+
+  const std::size_t inner = std::max<std::size_t>(n, 2) - 1;
   tree.triangles = std::make_unique<Buffer>(s, n * sizeof(kern::SdfTriangle), nullptr);
-  tree.nodes = std::make_unique<Buffer>(s, slots * sizeof(kern::SdfBvhNode), nullptr);
+  tree.nodes = std::make_unique<Buffer>(s, (2 * n - 1) * sizeof(kern::SdfBvhNode), nullptr);
   {
-    Buffer codes(s, n * 4, keys.codes.data());
-    check(api()->clFinish(s.queue), "clFinish (upload)");
-    tree.upload_seconds = std::chrono::duration<double>(Clock::now() - start).count();
-    Buffer slot_of(s, slots * 4, nullptr), inner_nodes(s, inner * 16, nullptr),
+    Buffer slot_of(s, (2 * n - 1) * 4, nullptr), inner_nodes(s, inner * 16, nullptr),
         made_in(s, inner * 4, nullptr);
     const cl_int count = static_cast<cl_int>(n);
     Kernel records(program, "sdf_lbvh_triangles");
@@ -69,7 +177,7 @@ DeviceTree build_device_tree(const Device& device, DeviceState& s, cl_program pr
     records.arg(4, tree.triangles->get());
     launch_items(device, s, records, n);
     Kernel karras(program, "sdf_lbvh_inner");
-    karras.arg(0, codes.get());
+    karras.arg(0, codes->get());
     karras.arg(1, count);
     karras.arg(2, slot_of.get());
     karras.arg(3, inner_nodes.get());
@@ -81,7 +189,7 @@ DeviceTree build_device_tree(const Device& device, DeviceState& s, cl_program pr
     leaves.arg(2, tree.order->get());
     leaves.arg(3, count);
     leaves.arg(4, slot_of.get());
-    leaves.arg(5, keys.margin);
+    leaves.arg(5, margin);
     leaves.arg(6, tree.nodes->get());
     launch_items(device, s, leaves, n);
     // One launch per level of height. Down any path the common prefix of a node's keys grows
@@ -99,6 +207,7 @@ DeviceTree build_device_tree(const Device& device, DeviceState& s, cl_program pr
       level.arg(1, static_cast<cl_int>(l));
       launch_items(device, s, level, inner);
     }
+    codes.reset();
     // Released here, freed by the driver once the kernels that read them have run.
   }
   tree.origins = std::make_unique<Buffer>(s, faces * 12, nullptr);
@@ -114,10 +223,30 @@ DeviceTree build_device_tree(const Device& device, DeviceState& s, cl_program pr
   points.arg(5, tree.tangents->get());
   points.arg(6, tree.own_face->get());
   launch_items(device, s, points, faces);
+  tree.host_order.resize(faces);
+  read_buffer(s, tree.order->get(), tree.host_order.data(), faces * 4);
   check(api()->clFinish(s.queue), "clFinish (device tree)");
-  tree.build_seconds =
-      std::chrono::duration<double>(Clock::now() - start).count() - tree.upload_seconds;
+  tree.build_seconds = seconds_since(build_start);
   return tree;
+}
+
+TreeKeys device_tree_keys(int index, const Mesh& mesh) {
+  const Device& device = *select_devices("opencl:" + std::to_string(index)).front();
+  DeviceState& s = state_of(device);
+  std::lock_guard<std::mutex> lock(s.mutex);
+  cl_program program = program_for(device, s, build_options(device, 30));
+  const std::size_t faces = mesh.triangles.size();
+  Buffer vertices(s, bytes_of(mesh.vertices), mesh.vertices.data());
+  Buffer triangles(s, bytes_of(mesh.triangles), mesh.triangles.data());
+  Buffer codes(s, faces * 4, nullptr), order(s, faces * 4, nullptr);
+  TreeKeys keys;
+  sort_faces_on_device(device, s, program, vertices, triangles, faces, codes, order,
+                       &keys.with_area, &keys.margin);
+  keys.order.resize(faces);
+  keys.codes.resize(keys.with_area);
+  read_buffer(s, order.get(), keys.order.data(), faces * 4);
+  read_buffer(s, codes.get(), keys.codes.data(), keys.with_area * 4);
+  return keys;
 }
 
 }  // namespace sdf::cl

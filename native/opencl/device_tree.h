@@ -1,33 +1,53 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
 // The faces' points and a BVH made on the device (kernels/sdf_lbvh_kernels.cl) from the mesh
-// and the host's TreeKeys, in place of a tree and points made on the host: the host then only
-// orients the mesh and sorts its faces. The tree has the host tree's layout and boxes grown by
-// the same margin, so the cast kernels read it unchanged and return the same values.
+// alone, in place of a tree and points made on the host: the faces' Morton codes, their sort
+// (kernels/sdf_sort_kernels.cl), Karras's tree over them, its boxes and the points. The tree
+// has the host tree's layout and boxes grown by the same margin, so the cast kernels read it
+// unchanged and return the same values.
 #pragma once
 
 #include <cstdint>
+#include <functional>
 #include <memory>
 
-#include "../device_tree_keys.h"
 #include "../mesh.h"
+#include "../uninitialized_vector.h"
 #include "device_state.h"
 
 namespace sdf::cl {
 
 // What the cast kernels read, on the device, made and waited for.
 struct DeviceTree {
-  // The points of every face (SamplePoints' arrays, face order) and the cast order.
+  // The points of every face (SamplePoints' arrays, face order) and the cast order: faces
+  // with area in Morton order, then the others.
   std::unique_ptr<Buffer> origins, axes, tangents, own_face, order;
   // The SdfBvhNode and SdfTriangle arrays.
   std::unique_ptr<Buffer> nodes, triangles;
+  UninitializedVector<std::uint32_t> host_order;  // `order`, read back: results go to faces
+  std::size_t with_area = 0;  // faces with area: 0 leaves nothing to cast (and no tree)
   std::uint64_t peak_bytes = 0;  // the most device memory held at once while making them
-  // Seconds for the uploads (the mesh, the order and the codes), then for the kernels.
+  // Seconds for the mesh's upload, then for the rest.
   double upload_seconds = 0.0, build_seconds = 0.0;
 };
 
-// keys.with_area must be at least 1. Throws Error when an OpenCL call fails or the buffers
-// cannot fit the device.
+// Whether `device` can make the tree: its sort needs work groups of 256 items.
+bool makes_trees(const Device& device);
+
+// Throws Error when an OpenCL call fails or the buffers cannot fit the device. uploaded, when
+// set, is called once the mesh is on the device (the host may then load its cores).
 DeviceTree build_device_tree(const Device& device, DeviceState& s, cl_program program,
-                             const Mesh& mesh, const TreeKeys& keys);
+                             const Mesh& mesh, const std::function<void()>& uploaded = nullptr);
+
+// The faces' sort as the device makes it: every face, those with area first in Morton order
+// of their box centres (ties in face order), then the others in face order; the codes of the
+// first `with_area`; the margin the tree's boxes grow by.
+struct TreeKeys {
+  UninitializedVector<std::uint32_t> order, codes;
+  std::size_t with_area = 0;
+  float margin = 0.0f;
+};
+
+// Test hook: the keys device `index` makes for `mesh`.
+TreeKeys device_tree_keys(int index, const Mesh& mesh);
 
 }  // namespace sdf::cl

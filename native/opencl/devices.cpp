@@ -77,6 +77,7 @@ Found enumerate() {
       d.global_memory = device_value<cl_ulong>(*cl, id, CL_DEVICE_GLOBAL_MEM_SIZE);
       d.max_allocation = device_value<cl_ulong>(*cl, id, CL_DEVICE_MAX_MEM_ALLOC_SIZE);
       d.compute_units = device_value<cl_uint>(*cl, id, CL_DEVICE_MAX_COMPUTE_UNITS);
+      d.max_group = device_value<std::size_t>(*cl, id, CL_DEVICE_MAX_WORK_GROUP_SIZE);
       d.fp64 = device_value<cl_device_fp_config>(*cl, id, CL_DEVICE_DOUBLE_FP_CONFIG) != 0;
       d.clock_mhz = device_value<cl_uint>(*cl, id, CL_DEVICE_MAX_CLOCK_FREQUENCY);
       // SDF_OPENCL_MAX_MEMORY (bytes) caps what the engine may use on every device: to leave

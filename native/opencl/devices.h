@@ -19,6 +19,7 @@ struct Device {
   bool fp64 = false;  // double precision (cl_khr_fp64): texture smoothing's drawing needs it
   std::uint64_t global_memory = 0, max_allocation = 0;
   std::uint32_t compute_units = 0, clock_mhz = 0;
+  std::size_t max_group = 0;  // work items a work group may hold (CL_DEVICE_MAX_WORK_GROUP_SIZE)
   // A rough throughput score to pick "the best" device: GPUs first, then units x clock.
   double score() const;
 };

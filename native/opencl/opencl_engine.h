@@ -12,7 +12,6 @@
 #include "../bvh.h"
 #include "../bvh4.h"
 #include "../bvh8.h"
-#include "../device_tree_keys.h"
 #include "../mesh.h"
 #include "../octree.h"
 #include "../parallel.h"
@@ -54,17 +53,15 @@ struct CastTimings {
   std::uint64_t device_bytes = 0;  // buffers on the device (the largest of several devices)
 };
 
-// What the devices cast: points sampled on the host (`points`, cast in `order` through the
-// tree `scene` gives), or, with `keys` set, the faces of `mesh`, each device making their
-// points and a BVH itself from the keys (device_tree.h). order (order_size points or faces)
-// is the host's (spatial) order either way, keys->order in the second case.
+// What the devices cast: points sampled on the host (`points`, cast in the spatial `order`
+// through the tree `scene` gives), or, with `mesh` set, its faces, each device making their
+// points, their order and a BVH itself (device_tree.h). size: points or faces.
 struct CastInput {
   SceneSource scene;
   const SamplePoints* points = nullptr;
   const std::uint32_t* order = nullptr;
   std::size_t size = 0;
   const Mesh* mesh = nullptr;
-  const TreeKeys* keys = nullptr;
   // While beside_cast runs, launches of about this long (0: as always, about 100 ms), so that
   // a failure there (or its verdict that the cast is moot) stops the devices soon.
   double beside_launch_seconds = 0.0;
