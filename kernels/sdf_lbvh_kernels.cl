@@ -9,7 +9,7 @@
  * nodes at once. Its layout is the host tree's (SdfBvhNode, children side by side): the two
  * children of internal node i sit in slots 2i + 1 and 2i + 2, the root in slot 0. A node whose
  * range holds at most SDF_LBVH_LEAF_SIZE triangles is written as a leaf of them (its subtree's
- * slots stay unused). Boxes are made bottom up, one launch per level of height: a node's box
+ * slots then stay unused). Boxes are made bottom up, one launch per level of height: a node's box
  * is made in the launch after both children's, so every box read was written by an earlier
  * launch. (A first version climbed in one launch, the second child to arrive at a node making
  * its box from its sibling's: on an H100 a box could be read before its sibling's write had
@@ -18,8 +18,13 @@
 #include "sdf_face_point.h"
 #include "sdf_layout.h"
 
-#ifndef SDF_LBVH_LEAF_SIZE /* a build option may set it (benchmarks: SDF_OPENCL_EXTRA_OPTIONS) */
-#define SDF_LBVH_LEAF_SIZE 4
+/* Leaves of one triangle (no node collapsed): on an H100 (1.21M faces, two runs) the cast took
+ * 48.9 ms with leaves of at most 1, 50.6-50.7 with 2, 53.4 with 3, 56.8 with 4, 63.0 with 6,
+ * 69.3 with 8 (64 rays: 109.3, 113.5-113.6, 119.2, 126.4, 140.1, 154.1): Morton ranges make
+ * looser leaves than SAH splits do. A build option may set it (benchmarks:
+ * SDF_OPENCL_EXTRA_OPTIONS="-DSDF_LBVH_LEAF_SIZE=4"). */
+#ifndef SDF_LBVH_LEAF_SIZE
+#define SDF_LBVH_LEAF_SIZE 1
 #endif
 
 /* The points of faces [0, faces): SamplePoints' arrays for points='faces'. */

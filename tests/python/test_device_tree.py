@@ -226,3 +226,12 @@ def test_vertex_points_and_the_octree_keep_the_host_path(monkeypatch):
     for options in (dict(points="vertices"), dict(accel="octree")):
         result = sd.compute(v, f, engine=OPENCL[0], **options)
         assert "build (device)" not in result.timings and "build" in result.timings
+
+
+@pytest.mark.parametrize("leaf_size", [2, 4])
+def test_leaves_of_several_triangles_give_the_same_bits(monkeypatch, leaf_size):
+    # The default leaf holds one triangle; the build option gathers small ranges into leaves.
+    v, f = load_mesh(DATA / "teapot.obj")
+    cpu = sd.compute(v, f, engine="cpu")
+    monkeypatch.setenv("SDF_OPENCL_EXTRA_OPTIONS", f"-DSDF_LBVH_LEAF_SIZE={leaf_size}")
+    same_bits(on_device_tree(monkeypatch, v, f, OPENCL[0]), cpu)
