@@ -75,7 +75,9 @@ def main():
                   f"{host[0] / device[0]:.2f} | {stages(host[1])} | {stages(device[1])} |",
                   flush=True)
             if args.all_stages:
-                print("    " + " ".join(f"{k} {x * 1e3:.1f}" for k, x in device[1].timings.items()))
+                print("    " + " ".join(f"{k} {x * 1e3:.1f}" for k, x in device[1].timings.items())
+                      + f" | device memory {device[1].device_memory / len(f):.0f} B/face (host tree "
+                      f"{host[1].device_memory / len(f):.0f})")
     os.environ.pop("SDF_OPENCL_TREE", None)
 
 

@@ -16,6 +16,7 @@
  * landed, and 1 in 1.2M faces' values differed.) Every box grows by the host's margin
  * (bvh_margin.h), so this tree returns the hits of every other tree, bit for bit. */
 #include "sdf_face_point.h"
+#include "sdf_morton.h"
 #include "sdf_layout.h"
 
 /* Leaves of one triangle (no node collapsed): on an H100 (1.21M faces, two runs) the cast took
@@ -93,15 +94,6 @@ __kernel void sdf_lbvh_extent(__global const float* restrict vertices,
   if (lid < 3) atomic_min(&extent[lid], part[lid]);
   else if (lid < 7) atomic_max(&extent[lid], part[lid]);
   else if (lid == 7) atomic_add(&extent[7], part[7]);
-}
-
-static inline uint sdf_spread_bits_10(uint x) {
-  x &= 0x3ffu;
-  x = (x | x << 16) & 0x030000ffu;
-  x = (x | x << 8) & 0x0300f00fu;
-  x = (x | x << 4) & 0x030c30c3u;
-  x = (x | x << 2) & 0x09249249u;
-  return x;
 }
 
 /* Face f's sort key, as the host's make_tree_keys makes it: the 30-bit Morton code of its box

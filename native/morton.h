@@ -5,17 +5,12 @@
 
 #include <cstdint>
 
+#include "../kernels/sdf_morton.h"
+
 namespace sdf {
 
 // The low 10 bits of x moved three apart (bit i to bit 3i): one axis of a 30-bit code.
-inline std::uint32_t spread_bits_10(std::uint32_t x) {
-  x &= 0x3ffu;
-  x = (x | x << 16) & 0x030000ffu;
-  x = (x | x << 8) & 0x0300f00fu;
-  x = (x | x << 4) & 0x030c30c3u;
-  x = (x | x << 2) & 0x09249249u;
-  return x;
-}
+inline std::uint32_t spread_bits_10(std::uint32_t x) { return kern::sdf_spread_bits_10(x); }
 
 // The low 21 bits of x moved three apart: one axis of a 63-bit code.
 inline std::uint64_t spread_bits_21(std::uint64_t x) {
