@@ -128,7 +128,10 @@ def main():
                 t = r["timings"]
                 cast = t["cast"]
                 row = dict(mesh=name, faces=faces, engine=r["engine"].split(" (")[0],
-                           accel=accel, build=t["build"] * 1e3, cast=cast * 1e3,
+                           accel=accel,
+                           # The host's tree, or the one a GPU makes ('build (device)').
+                           build=t.get("build", t.get("build (device)", 0.0)) * 1e3,
+                           cast=cast * 1e3,
                            total=r["wall"] * 1e3, mrays=faces * args.rays / cast / 1e6,
                            peak=r["peak_mib"], device=r["device_mib"])
                 if engine.startswith("opencl"):

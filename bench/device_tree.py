@@ -19,7 +19,7 @@ sys.path.insert(0, os.path.dirname(__file__))
 from meshes import benchmark_meshes  # noqa: E402
 
 STAGES = ("prepare", "build", "build wait", "orientation (beside cast)",
-          "orientation: reverse faces, cast again", "build (device)", "upload", "cast",
+          "cast (discarded)", "build (device)", "upload", "cast",
           "download")
 # (label, orientation, reverse every third face first): the last makes 'auto' reverse faces,
 # which on the device-tree path costs a second cast.

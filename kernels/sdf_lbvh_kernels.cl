@@ -1,8 +1,8 @@
 /* SPDX-License-Identifier: GPL-3.0-or-later */
 /* A BVH built on the device, and the faces' points made there: the host sends the mesh alone
  * instead of a tree and points of its own making. The faces' Morton codes and their sorted
- * order are made here too (sdf_lbvh_extent, sdf_lbvh_codes, then sdf_sort_kernels.cl), as
- * the host's native/device_tree_keys.h makes them (its fallback and the tests' reference).
+ * order are made here too (sdf_lbvh_extent, sdf_lbvh_codes, then sdf_sort_kernels.cl; the
+ * tests check them against a numpy reference).
  *
  * The tree is Karras's (2012): internal node i of the faces with area (n of them, sorted)
  * finds the range of keys it covers and where that range splits from the keys alone, all
@@ -96,7 +96,7 @@ __kernel void sdf_lbvh_extent(__global const float* restrict vertices,
   else if (lid == 7) atomic_add(&extent[7], part[7]);
 }
 
-/* Face f's sort key, as the host's make_tree_keys makes it: the 30-bit Morton code of its box
+/* Face f's sort key: the 30-bit Morton code of its box
  * centre in the box of faces with area, 2^30 (after every code) for a face without area. */
 __kernel void sdf_lbvh_codes(__global const float* restrict vertices,
                              __global const uint* restrict triangles, uint faces,

@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
 #include "sdf.h"
 
+#include <atomic>
 #include <future>
 #include <memory>
 #include <stdexcept>
@@ -52,11 +53,11 @@ struct Plan {
   BvhWidths widths;  // the BVH casters read (accel 'bvh')
   bool fast_build = false;
   // The faces' points and the BVH made on the device (opencl/device_tree.h); the host only
-  // orients the mesh and sorts its faces.
+  // orients the mesh, beside the cast.
   bool tree_on_device = false;
 };
 
-Plan make_plan(const Options& options) {
+Plan make_plan(const Options& options, [[maybe_unused]] std::size_t faces) {
   Plan plan;
   plan.fast_build = options.bvh_quality == BvhQuality::Fast;
   if (options.engine == "cpu") {
@@ -73,15 +74,15 @@ Plan make_plan(const Options& options) {
     for (const cl::Device* d : plan.devices) plan.fast_build = plan.fast_build && d->gpu;
   }
   // Where the fast tree is wanted on GPUs that cast the binary tree a ray per work item: the
-  // device's tree (Morton splits everywhere, boxes made bottom up) takes about a millisecond
-  // there, and the host is left with orientation and one sort.
+  // device's tree (the faces' Morton sort, Karras's tree, boxes bottom up) takes a few
+  // milliseconds there, and the host is left with the orientation.
   bool per_ray_gpus = true;
   for (const cl::Device* d : plan.devices)
     per_ray_gpus = per_ray_gpus && d->gpu && cl::cast_kernel_for(*d) == cl::CastKernel::BvhPerRay &&
                    cl::makes_trees(*d);
   plan.tree_on_device =
       options.accel == Accel::Bvh && options.points == PointKind::Faces &&
-      cl::tree_on_device(plan.fast_build && per_ray_gpus);
+      faces <= cl::kDeviceTreeMaxFaces && cl::tree_on_device(plan.fast_build && per_ray_gpus);
 #endif
   return plan;
 }
@@ -254,30 +255,35 @@ void cast_speculatively(const Options& options, const Plan& plan, cl::CastInput 
                         const std::function<void()>& beside_cast) {
   StageTimings orientation_steps;
   double orientation_seconds = 0.0;
-  input.beside_launch_seconds = 0.005;
+  std::atomic<bool> deciding{true};
+  input.short_launches = &deciding;
   auto orient_beside = [&] {
     Stopwatch clock;
     out.orientation = decide_orientation(mesh, Orientation::Auto, options.threads,
                                          &orientation_steps);
     orientation_seconds = clock.lap();
     if (out.orientation.flipped_faces > 0) throw ReverseFacesFirst{};
+    deciding = false;
     if (beside_cast) beside_cast();
   };
   auto record_orientation = [&] {
     out.timings.emplace_back("orientation (beside cast)", orientation_seconds);
     for (const auto& [name, seconds] : orientation_steps) out.timings.emplace_back(name, seconds);
   };
+  Stopwatch first;
   try {
     cast_on_opencl(options, plan, input, mesh, cone, out, progress, orient_beside);
     record_orientation();
     return;
   } catch (const ReverseFacesFirst&) {
   }
+  // What the first cast took until it stopped (its stages are not recorded), then the faces
+  // reversed and the stages of the cast that counts.
+  out.timings.emplace_back("cast (discarded)", first.lap());
   record_orientation();
-  Stopwatch clock;
   apply_orientation(mesh, out.orientation, options.threads);
-  out.timings.emplace_back("orientation: reverse faces, cast again", clock.lap());
-  input.beside_launch_seconds = 0.0;
+  out.timings.emplace_back("orientation: reverse faces", first.lap());
+  input.short_launches = nullptr;
   cast_on_opencl(options, plan, input, mesh, cone, out, progress, beside_cast);
 }
 #endif
@@ -305,7 +311,7 @@ Output compute(Mesh mesh, const Options& options, const ProgressFn& progress,
   Stopwatch clock;
   // The first OpenCL run of a process loads the drivers and lists their devices (50-130 ms
   // on the development machine's PoCL).
-  const Plan plan = make_plan(options);
+  const Plan plan = make_plan(options, mesh.triangles.size());
   if (!cpu) out.timings.emplace_back("devices", clock.lap());
   StageTimings steps;  // of 'prepare'
   StageClock step(&steps);

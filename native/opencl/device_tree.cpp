@@ -52,7 +52,7 @@ void sort_faces_on_device(const Device& device, DeviceState& s, cl_program progr
   box.arg(1, triangles.get());
   box.arg(2, count);
   box.arg(3, extent.get());
-  launch_items(device, s, box, faces);
+  launch_items(device, s, box, faces, 64, true);  // its local table needs 8 items a group
   Kernel codes(program, "sdf_lbvh_codes");
   codes.arg(0, vertices.get());
   codes.arg(1, triangles.get());
@@ -115,7 +115,7 @@ bool sorts_on_device(const Device& device, cl_program program) {
 
 bool makes_trees(const Device& device) { return device.max_group >= kSortGroup; }
 
-DeviceTree build_device_tree(const Device& device, DeviceState& s, cl_program program,
+DeviceTree build_device_tree(const Device& device, DeviceState& s, const std::string& options,
                              const Mesh& mesh, const std::function<void()>& uploaded) {
   const std::size_t faces = mesh.triangles.size();
   // Checked at the most faces can ask: the sort's, then the build's buffers (the mesh, the
@@ -143,6 +143,7 @@ DeviceTree build_device_tree(const Device& device, DeviceState& s, cl_program pr
   check(api()->clFinish(s.queue), "clFinish (upload)");
   tree.upload_seconds = seconds_since(start);
   if (uploaded) uploaded();
+  cl_program program = program_for(device, s, options);  // compiled (or loaded) meanwhile
   const Clock::time_point build_start = Clock::now();
 
   // The faces' order and codes (make_plan asks for a tree here only from devices whose work

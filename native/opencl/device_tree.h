@@ -9,6 +9,7 @@
 #include <cstdint>
 #include <functional>
 #include <memory>
+#include <string>
 
 #include "../mesh.h"
 #include "../uninitialized_vector.h"
@@ -30,12 +31,18 @@ struct DeviceTree {
   double upload_seconds = 0.0, build_seconds = 0.0;
 };
 
+// The most faces a device-made tree takes: its node indices (2 x slot + 1 in the kernels, as
+// in the traversal's 2 x first + 3) stay within 32-bit ints. Larger meshes keep the host's
+// tree.
+constexpr std::size_t kDeviceTreeMaxFaces = std::size_t{1} << 29;
+
 // Whether `device` can make the tree: its sort needs work groups of 256 items.
 bool makes_trees(const Device& device);
 
-// Throws Error when an OpenCL call fails or the buffers cannot fit the device. uploaded, when
-// set, is called once the mesh is on the device (the host may then load its cores).
-DeviceTree build_device_tree(const Device& device, DeviceState& s, cl_program program,
+// Throws Error when an OpenCL call fails or the buffers cannot fit the device. The program
+// (build options `options`) is built or loaded after the mesh's upload; uploaded, when set, is
+// called once the mesh is on the device (the host may then load its cores).
+DeviceTree build_device_tree(const Device& device, DeviceState& s, const std::string& options,
                              const Mesh& mesh, const std::function<void()>& uploaded = nullptr);
 
 // The faces' sort as the device makes it: every face, those with area first in Morton order

@@ -34,7 +34,6 @@ struct WorkQueue {
   std::atomic<std::size_t> next{0};
   std::atomic<std::size_t> done{0};
   std::atomic<bool> stop{false};
-  std::atomic<bool> beside_running{false};  // the caller's beside_cast is running
   std::atomic<bool> nothing_to_hit{false};  // every triangle has zero area
   std::size_t meshes_uploaded = 0;  // devices whose mesh is up (CastInput::mesh), under done_mutex
   std::size_t total = 0;
@@ -173,14 +172,14 @@ void run_device(const Device& device, SharedScene& shared_scene, const CastInput
 
   if (input.mesh) {
     // Points, order and tree made here, from the mesh alone.
-    program = program_for(device, s, options);
-    DeviceTree tree = build_device_tree(device, s, program, *input.mesh, [&] {
+    DeviceTree tree = build_device_tree(device, s, options, *input.mesh, [&] {
       {
         std::lock_guard<std::mutex> lock(done_mutex);
         ++work.meshes_uploaded;
       }
       done_changed.notify_all();
     });
+    program = program_for(device, s, options);  // built by now: a lookup
     result.timings.upload += tree.upload_seconds;
     result.timings.build = tree.build_seconds;
     result.timings.device_bytes = tree.peak_bytes;
@@ -190,8 +189,18 @@ void run_device(const Device& device, SharedScene& shared_scene, const CastInput
       return;
     }
     {
+      // Every device must cast the faces in one order: the ranges handed out are positions
+      // in it. Devices that round differently (no correctly rounded division) could sort
+      // differently: then this run fails (engine 'auto' then runs on the CPU).
       std::lock_guard<std::mutex> lock(work.order_mutex);
-      if (work.device_order.empty()) work.device_order = std::move(tree.host_order);
+      if (work.device_order.empty()) {
+        work.device_order = std::move(tree.host_order);
+      } else if (!std::equal(work.device_order.begin(), work.device_order.end(),
+                             tree.host_order.begin())) {
+        throw Error("OpenCL devices sorted the faces differently (their float rounding "
+                    "differs): cast on one of them, or set SDF_OPENCL_TREE=host",
+                    CL_INVALID_OPERATION);
+      }
     }
     origins = tree.origins->get();
     axes = tree.axes->get();
@@ -311,6 +320,7 @@ void run_device(const Device& device, SharedScene& shared_scene, const CastInput
   // Launches of about 100 ms on this device: short enough that a display driver's watchdog
   // never fires and progress and cancellation stay responsive, long enough to fill the device.
   constexpr double kTargetSeconds = 0.1;
+  constexpr double kShortSeconds = 0.005;  // CastInput::short_launches
   // The first launch holds 2048 points per compute unit: enough to fill a GPU with one work
   // item per point (2048 resident per unit on NVIDIA's), `rays` times more with the per-ray
   // kernel, and still short (about 12 ms for 270k points on an H100); starting at 4096 points
@@ -366,9 +376,8 @@ void run_device(const Device& device, SharedScene& shared_scene, const CastInput
     }
     done_changed.notify_all();
     // Scale the next launch toward the target time, by at most 8x at once.
-    const double target = input.beside_launch_seconds > 0.0 && work.beside_running.load()
-                              ? input.beside_launch_seconds
-                              : kTargetSeconds;
+    const double target =
+        input.short_launches && input.short_launches->load() ? kShortSeconds : kTargetSeconds;
     const double factor = std::clamp(target / std::max(took, 1e-4), 0.5, 8.0);
     chunk = std::clamp<std::size_t>(static_cast<std::size_t>(chunk * factor), 256, 1u << 22);
   }
@@ -424,16 +433,15 @@ CastTimings cast_opencl(const std::vector<const Device*>& devices, const CastInp
     // The host's work beside the cast waits for the meshes' uploads: their copies into pinned
     // memory run on host threads too, and beside a 16-thread orientation took 3-4 times as
     // long (H100 host, 1.21M faces: 1.8 -> 6.6 ms), delaying the cast itself.
+    // In steps: a device thread that fails sets `stop` without the mutex, so its notification
+    // can come between a check and the wait.
     std::unique_lock<std::mutex> lock(done_mutex);
-    done_changed.wait(lock, [&] {
-      return work.meshes_uploaded == devices.size() || work.stop.load();
-    });
+    while (work.meshes_uploaded < devices.size() && !work.stop.load())
+      done_changed.wait_for(lock, std::chrono::milliseconds(5));
   }
   if (beside_cast) {
     try {
-      work.beside_running = true;
       beside_cast();
-      work.beside_running = false;
     } catch (...) {
       caller_failure = std::current_exception();  // rethrown once the devices have stopped
       work.stop = true;

@@ -3,6 +3,7 @@
 // reduce in launches short enough for display watchdogs, read the values back.
 #pragma once
 
+#include <atomic>
 #include <cstdint>
 #include <functional>
 #include <string>
@@ -62,9 +63,9 @@ struct CastInput {
   const std::uint32_t* order = nullptr;
   std::size_t size = 0;
   const Mesh* mesh = nullptr;
-  // While beside_cast runs, launches of about this long (0: as always, about 100 ms), so that
-  // a failure there (or its verdict that the cast is moot) stops the devices soon.
-  double beside_launch_seconds = 0.0;
+  // While it points at true, launches of about 5 ms instead of 100, so that a verdict that
+  // the cast is moot (sdf.cpp: the orientation reverses faces) stops the devices soon.
+  const std::atomic<bool>* short_launches = nullptr;
 };
 
 // Casts every point on `devices` (several: points are shared out dynamically; results are

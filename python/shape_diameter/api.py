@@ -49,10 +49,11 @@ class Result:
     'beside cast: upload' (the cast points' frames). With threads=0 the BVH builds beside
     'prepare' (and on OpenCL beside the points' upload): 'build' is its own time, 'build
     wait' what it added to the wall time. Where a GPU makes the tree (bvh_quality 'fast' or
-    'auto' on GPUs, points 'faces'): 'build (device)' instead of 'build' and 'build wait';
-    'prepare' is the faces' sort, and 'auto' orientation runs beside the cast as
-    'orientation (beside cast)' with its steps ('orientation: edges', ...), and
-    'orientation: reverse faces, cast again' where it reversed faces."""
+    'auto' on GPUs, points 'faces'): 'build (device)' (the faces' sort, the tree and the
+    points) instead of 'build' and 'build wait', and 'auto' orientation runs beside the cast
+    as 'orientation (beside cast)' with its steps ('orientation: edges', ...); where it
+    reversed faces, 'cast (discarded)' (the cast of the mesh as wound, until it stopped) and
+    'orientation: reverse faces' come before the stages of the cast that counts."""
     engine: str = "cpu"
     """What ran, e.g. 'cpu (2 threads)'."""
     points: str = "faces"

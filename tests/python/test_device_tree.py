@@ -132,7 +132,7 @@ def test_reversed_faces_are_oriented_before_the_points_are_made(monkeypatch, eng
     same_bits(device, cpu)
     # The orientation was decided beside a cast of the mesh as wound, then the faces reversed
     # and the mesh cast again.
-    assert "orientation: reverse faces, cast again" in device.timings
+    assert {"cast (discarded)", "orientation: reverse faces", "cast"} <= set(device.timings)
 
 
 @pytest.mark.parametrize("engine", OPENCL)
@@ -141,7 +141,7 @@ def test_a_mesh_wound_right_is_cast_while_its_orientation_is_decided(monkeypatch
     device = on_device_tree(monkeypatch, v, f, engine)
     assert device.flipped_faces == 0
     assert "orientation (beside cast)" in device.timings
-    assert "orientation: reverse faces, cast again" not in device.timings
+    assert "cast (discarded)" not in device.timings
     assert not any(k.startswith("prepare: orientation") for k in device.timings)
     same_bits(device, sd.compute(v, f, engine="cpu"))
 
