@@ -448,10 +448,15 @@ CastTimings cast_opencl(const std::vector<const Device*>& devices, const CastInp
     }
   }
   {
+    // Progress at least once during the cast, also when the devices finished while the work
+    // beside it ran (a small mesh on a GPU): the caller sees the cast end and may still
+    // cancel there.
     std::unique_lock<std::mutex> lock(done_mutex);
-    while (work.done.load() < n && !work.stop.load()) {
-      done_changed.wait_for(lock, std::chrono::milliseconds(50));
+    bool reported = false;
+    while (!work.stop.load() && (work.done.load() < n || (progress && !reported))) {
+      if (work.done.load() < n) done_changed.wait_for(lock, std::chrono::milliseconds(50));
       if (!progress) continue;
+      reported = true;
       const double fraction = n ? static_cast<double>(work.done.load()) / n : 1.0;
       lock.unlock();
       bool keep_going = true;
