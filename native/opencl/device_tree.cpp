@@ -143,7 +143,8 @@ DeviceTree build_device_tree(const Device& device, DeviceState& s, const std::st
   check(api()->clFinish(s.queue), "clFinish (upload)");
   tree.upload_seconds = seconds_since(start);
   if (uploaded) uploaded();
-  cl_program program = program_for(device, s, options);  // compiled (or loaded) meanwhile
+  // Compiled (or loaded from the cache) here, once the host has started orienting the mesh.
+  cl_program program = program_for(device, s, options);
   const Clock::time_point build_start = Clock::now();
 
   // The faces' order and codes (make_plan asks for a tree here only from devices whose work

@@ -197,9 +197,13 @@ void run_device(const Device& device, SharedScene& shared_scene, const CastInput
         work.device_order = std::move(tree.host_order);
       } else if (!std::equal(work.device_order.begin(), work.device_order.end(),
                              tree.host_order.begin())) {
-        throw Error("OpenCL devices sorted the faces differently (their float rounding "
-                    "differs): cast on one of them, or set SDF_OPENCL_TREE=host",
-                    CL_INVALID_OPERATION);
+        // Not thrown: the device works, and a thrown Error would mark it broken.
+        result.failure = std::make_exception_ptr(
+            Error("OpenCL devices sorted the faces differently (their float rounding differs): "
+                  "cast on one of them, or set SDF_OPENCL_TREE=host",
+                  CL_INVALID_OPERATION));
+        work.stop = true;
+        return;
       }
     }
     origins = tree.origins->get();

@@ -52,8 +52,9 @@ class Result:
     'auto' on GPUs, points 'faces'): 'build (device)' (the faces' sort, the tree and the
     points) instead of 'build' and 'build wait', and 'auto' orientation runs beside the cast
     as 'orientation (beside cast)' with its steps ('orientation: edges', ...); where it
-    reversed faces, 'cast (discarded)' (the cast of the mesh as wound, until it stopped) and
-    'orientation: reverse faces' come before the stages of the cast that counts."""
+    reversed faces, 'cast (discarded)' (the cast of the mesh as wound, until it stopped: the
+    orientation's time is within it) and 'orientation: reverse faces' come before the stages
+    of the cast that counts."""
     engine: str = "cpu"
     """What ran, e.g. 'cpu (2 threads)'."""
     points: str = "faces"
