@@ -115,8 +115,7 @@ __kernel void sdf_lbvh_codes(__global const float* restrict vertices,
   if (sdf_face_box(vertices, triangles, f, &lo, &hi, &edge)) {
     float3 centre = (lo + hi) * 0.5f;
     uint3 c = convert_uint3(clamp((centre - all_lo) * scale, 0.0f, 1023.0f));
-    key = sdf_spread_bits_10(c.x) | (sdf_spread_bits_10(c.y) << 1) |
-          (sdf_spread_bits_10(c.z) << 2);
+    key = sdf_morton_30(c.x, c.y, c.z);
   }
   keys[f] = key;
   values[f] = f;

@@ -12,6 +12,9 @@ namespace sdf {
 // The low 10 bits of x moved three apart (bit i to bit 3i): one axis of a 30-bit code.
 inline std::uint32_t spread_bits_10(std::uint32_t x) { return kern::sdf_spread_bits_10(x); }
 
+// The 30-bit code of cell c (each axis in [0, 1023]).
+inline std::uint32_t morton_30(glm::uvec3 c) { return kern::sdf_morton_30(c.x, c.y, c.z); }
+
 // The low 21 bits of x moved three apart: one axis of a 63-bit code.
 inline std::uint64_t spread_bits_21(std::uint64_t x) {
   x &= 0x1fffffull;

@@ -95,8 +95,7 @@ std::vector<std::uint32_t> spatial_order(const SamplePoints& points, unsigned th
   parallel_for(n, kGrain, threads, [&](std::size_t begin, std::size_t end) {
     for (std::size_t i = begin; i < end; ++i) {
       const glm::uvec3 c = glm::uvec3((points.origins[i] - lo) * scale);
-      const std::uint64_t code =
-          spread_bits_10(c.x) | (spread_bits_10(c.y) << 1) | (spread_bits_10(c.z) << 2);
+      const std::uint64_t code = morton_30(c);
       keyed[i] = (code << 32) | i;
     }
   });

@@ -274,9 +274,7 @@ UninitializedVector<std::uint32_t> morton_order(const UninitializedVector<glm::v
   parallel_for(n, kBlock, threads, [&](std::size_t begin, std::size_t end) {
     for (std::size_t i = begin; i < end; ++i) {
       const glm::vec3 q = (positions[i] - lo) * scale;
-      const std::uint64_t code = spread_bits_10(static_cast<std::uint32_t>(q.x)) |
-                                 spread_bits_10(static_cast<std::uint32_t>(q.y)) << 1 |
-                                 spread_bits_10(static_cast<std::uint32_t>(q.z)) << 2;
+      const std::uint64_t code = morton_30(glm::uvec3(q));
       keyed[i] = code << 32 | i;
     }
   });
