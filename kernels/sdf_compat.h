@@ -139,6 +139,15 @@ SDF_INLINE float3 sdf_normalize(float3 v) {
   return make_float3(v.x * inv, v.y * inv, v.z * inv);
 }
 
+/* Floats as ints that compare in the same order (negatives' magnitude bits flipped), for
+ * atomic minima and maxima on the device and reading them back on the host; the mapping is
+ * its own inverse. */
+SDF_INLINE sdf_int32 sdf_ordered_int(float x) {
+  sdf_int32 i = sdf_as_int(x);
+  return i >= 0 ? i : i ^ 0x7fffffff;
+}
+SDF_INLINE float sdf_ordered_float(sdf_int32 i) { return sdf_as_float(i >= 0 ? i : i ^ 0x7fffffff); }
+
 SDF_KERNEL_END
 
 #endif /* SDF_COMPAT_H */

@@ -45,14 +45,6 @@ __kernel void sdf_face_points(__global const float* restrict vertices,
   own_face[f] = (int)f;
 }
 
-/* Floats as ints that compare in the same order (negatives' magnitude bits flipped), for
- * atomic minima and maxima; the mapping is its own inverse. */
-static inline int sdf_ordered_int(float x) {
-  int i = as_int(x);
-  return i >= 0 ? i : i ^ 0x7fffffff;
-}
-static inline float sdf_ordered_float(int i) { return as_float(i >= 0 ? i : i ^ 0x7fffffff); }
-
 /* Face f's box as the host's tree makes it (corners' min and max, made +0 at zero) and
  * whether it has area (its cross product is not zero: the host's test, to the bit). */
 static inline int sdf_face_box(__global const float* vertices, __global const uint* triangles,
@@ -199,9 +191,9 @@ __kernel void sdf_lbvh_leaves(__global const float* restrict vertices,
                               __global float4* restrict nodes) {
   int k = (int)get_global_id(0);
   if (k >= n) return;
-  uint3 t = vload3(order[k], triangles);
-  float3 a = vload3(t.x, vertices), b = vload3(t.y, vertices), c = vload3(t.z, vertices);
-  float3 lo = fmin(a, fmin(b, c)) + 0.0f, hi = fmax(a, fmax(b, c)) + 0.0f;
+  float3 lo, hi;
+  float edge;
+  sdf_face_box(vertices, triangles, order[k], &lo, &hi, &edge);
   sdf_lbvh_store(nodes, slot_of[k], lo - margin, k, hi + margin, 1);
 }
 

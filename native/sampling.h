@@ -37,8 +37,8 @@ struct SamplePoints {
 // `threads` as in Options (0 = every core); the result does not depend on it.
 SamplePoints sample_points(const Mesh& mesh, PointKind kind, unsigned threads = 0);
 
-// One face's point as sample_points() makes it (it calls this): the centroid, and the unit
-// inward axis (zero for a zero-area face). For callers that need no tangent and no stored
+// One face's point as sample_points() makes it (both from kernels/sdf_face_point.h): the
+// centroid, and the unit inward axis (zero for a zero-area face). For callers that need no tangent and no stored
 // arrays (projected smoothing recomputes them on the fly each iteration). Inline: called once
 // per face, a call cost as much as the arithmetic (measured at 1.5M faces).
 inline void face_point(const Mesh& mesh, std::size_t face, glm::vec3* origin, glm::vec3* axis) {

@@ -2,25 +2,18 @@
 #include "device_tree.h"
 
 #include <algorithm>
-#include <chrono>
 #include <climits>
 #include <mutex>
 #include <string>
-#include <cstring>
 #include <vector>
 
 #include "../../kernels/sdf_layout.h"
 #include "../bvh_margin.h"
+#include "../stopwatch.h"
 
 namespace sdf::cl {
 
 namespace {
-
-using Clock = std::chrono::steady_clock;
-
-double seconds_since(Clock::time_point t) {
-  return std::chrono::duration<double>(Clock::now() - t).count();
-}
 
 // One item each over [0, count): groups of `local` on GPUs (NVIDIA's driver would otherwise
 // pick a divisor of the global size, down to 1); the driver's choice on CPUs unless asked.
@@ -90,18 +83,16 @@ void sort_faces_on_device(const Device& device, DeviceState& s, cl_program progr
     launch_items(device, s, scatter, faces, kSortGroup, true);
     std::swap(from, to);
   }
-  int found[8];
+  std::int32_t found[8];
   read_buffer(s, extent.get(), found, sizeof found);
-  auto as_float = [](int i) {
-    const int bits = i >= 0 ? i : i ^ 0x7fffffff;  // sdf_ordered_float
-    float x;
-    std::memcpy(&x, &bits, sizeof x);
-    return x;
-  };
+  using kern::sdf_ordered_float;
   *with_area = static_cast<std::size_t>(found[7]);
-  *margin = tree_margin(glm::vec3(as_float(found[0]), as_float(found[1]), as_float(found[2])),
-                        glm::vec3(as_float(found[3]), as_float(found[4]), as_float(found[5])),
-                        as_float(found[6]));
+  *margin = tree_margin(
+      glm::vec3(sdf_ordered_float(found[0]), sdf_ordered_float(found[1]),
+                sdf_ordered_float(found[2])),
+      glm::vec3(sdf_ordered_float(found[3]), sdf_ordered_float(found[4]),
+                sdf_ordered_float(found[5])),
+      sdf_ordered_float(found[6]));  // a length >= 0: its bits as they are
 }
 
 // Whether the device can run the sort's tiles (work groups of kSortGroup items).
@@ -137,15 +128,15 @@ DeviceTree build_device_tree(const Device& device, DeviceState& s, const std::st
     tree.peak_bytes = std::max(tree.peak_bytes, total);
   }
 
-  const Clock::time_point start = Clock::now();
+  Stopwatch clock;
   Buffer vertices(s, bytes_of(mesh.vertices), mesh.vertices.data());
   Buffer triangles(s, bytes_of(mesh.triangles), mesh.triangles.data());
   check(api()->clFinish(s.queue), "clFinish (upload)");
-  tree.upload_seconds = seconds_since(start);
+  tree.upload_seconds = clock.lap();
   if (uploaded) uploaded();
   // Compiled (or loaded from the cache) here, once the host has started orienting the mesh.
   cl_program program = program_for(device, s, options);
-  const Clock::time_point build_start = Clock::now();
+  clock.lap();
 
   // The faces' order and codes (make_plan asks for a tree here only from devices whose work
   // groups can hold the sort's tiles).
@@ -228,7 +219,7 @@ DeviceTree build_device_tree(const Device& device, DeviceState& s, const std::st
   tree.host_order.resize(faces);
   read_buffer(s, tree.order->get(), tree.host_order.data(), faces * 4);
   check(api()->clFinish(s.queue), "clFinish (device tree)");
-  tree.build_seconds = seconds_since(build_start);
+  tree.build_seconds = clock.lap();
   return tree;
 }
 

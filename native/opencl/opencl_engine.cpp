@@ -143,7 +143,8 @@ void run_device(const Device& device, SharedScene& shared_scene, const CastInput
   cl_mem origins = nullptr, axes = nullptr, tangents = nullptr, own_face = nullptr,
          order = nullptr, accel[3] = {nullptr, nullptr, nullptr};
   const kern::SdfOctreeRoot* accel_root = nullptr;  // the octree's kernel takes it by value
-  std::unique_ptr<Buffer> owned[8];
+  DeviceTree tree;                                   // CastInput::mesh: the device's own
+  std::unique_ptr<Buffer> owned[8];                  // otherwise: the host's uploads
   std::unique_ptr<Kernel> kernel;
   cl_program program = nullptr;
   std::size_t points_per_group = 0;
@@ -172,7 +173,7 @@ void run_device(const Device& device, SharedScene& shared_scene, const CastInput
 
   if (input.mesh) {
     // Points, order and tree made here, from the mesh alone.
-    DeviceTree tree = build_device_tree(device, s, options, *input.mesh, [&] {
+    tree = build_device_tree(device, s, options, *input.mesh, [&] {
       {
         std::lock_guard<std::mutex> lock(done_mutex);
         ++work.meshes_uploaded;
@@ -213,10 +214,6 @@ void run_device(const Device& device, SharedScene& shared_scene, const CastInput
     order = tree.order->get();
     accel[0] = tree.nodes->get();
     accel[1] = tree.triangles->get();
-    std::unique_ptr<Buffer>* slot = owned;
-    for (auto* b : {&tree.origins, &tree.axes, &tree.tangents, &tree.own_face, &tree.order,
-                    &tree.nodes, &tree.triangles})
-      *slot++ = std::move(*b);
     binary_tree_kernel();
   } else {
     const SamplePoints& points = *input.points;
