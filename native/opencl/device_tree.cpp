@@ -95,19 +95,18 @@ void sort_faces_on_device(const Device& device, DeviceState& s, cl_program progr
       sdf_ordered_float(found[6]));  // a length >= 0: its bits as they are
 }
 
-// Whether the device can run the sort's tiles (work groups of kSortGroup items).
-bool sorts_on_device(const Device& device, cl_program program) {
-  for (const char* name : {"sdf_sort_count", "sdf_sort_scan", "sdf_sort_scatter"})
-    if (Kernel(program, name).max_group(device.id) < kSortGroup) return false;
-  return true;
-}
-
 }  // namespace
 
 bool makes_trees(const Device& device) { return device.max_group >= kSortGroup; }
 
 DeviceTree build_device_tree(const Device& device, DeviceState& s, const std::string& options,
                              const Mesh& mesh, const std::function<void()>& uploaded) {
+  // make_plan asks only such devices for a tree; SDF_OPENCL_TREE=device may ask any.
+  if (!makes_trees(device))
+    throw Error("OpenCL device '" + device.name + "' cannot run work groups of " +
+                    std::to_string(kSortGroup) + " items, which its tree's sort needs: "
+                    "set SDF_OPENCL_TREE=host (the host builds the tree)",
+                CL_INVALID_WORK_GROUP_SIZE);
   const std::size_t faces = mesh.triangles.size();
   // Checked at the most faces can ask: the sort's, then the build's buffers (the mesh, the
   // order, the codes, the records and nodes, slot_of, the inner nodes, made_in), then the
@@ -138,20 +137,12 @@ DeviceTree build_device_tree(const Device& device, DeviceState& s, const std::st
   cl_program program = program_for(device, s, options);
   clock.lap();
 
-  // The faces' order and codes (make_plan asks for a tree here only from devices whose work
-  // groups can hold the sort's tiles).
+  // The faces' order and codes.
   tree.order = std::make_unique<Buffer>(s, faces * 4, nullptr);
   auto codes = std::make_unique<Buffer>(s, faces * 4, nullptr);
   float margin = 0.0f;
-  if (sorts_on_device(device, program)) {
-    sort_faces_on_device(device, s, program, vertices, triangles, faces, *codes, *tree.order,
-                         &tree.with_area, &margin);
-  } else {
-    throw Error("OpenCL device '" + device.name + "' cannot run work groups of " +
-                    std::to_string(kSortGroup) + " items, which its tree's sort needs: "
-                    "set SDF_OPENCL_TREE=host (the host builds the tree)",
-                CL_INVALID_WORK_GROUP_SIZE);
-  }
+  sort_faces_on_device(device, s, program, vertices, triangles, faces, *codes, *tree.order,
+                       &tree.with_area, &margin);
   const std::size_t n = tree.with_area;
   if (n == 0) return tree;  // nothing can be hit: no tree, nothing to cast
 
