@@ -73,7 +73,8 @@ struct CastInput {
 // Writes raw[i] (-1 when no ray was kept) and valid_rays[i].
 // Throws Error for OpenCL failures (naming the call and code), also when the scene does not
 // fit a device's memory. Progress covers [progress_from, progress_to].
-// beside_cast (sdf.h's BesideCast) runs on the calling thread once the devices have started.
+// beside_cast (sdf.h's BesideCast) runs on the calling thread once the devices have started
+// (with input.mesh: once the mesh is on every device, its staging copies done).
 CastTimings cast_opencl(const std::vector<const Device*>& devices, const CastInput& input,
                         const Cone& cone, float min_closeness, unsigned host_threads, float* raw,
                         std::int32_t* valid_rays, const ProgressFn& progress,
