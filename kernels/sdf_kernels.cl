@@ -16,6 +16,7 @@
 #include "sdf_bvh_traverse.h"
 #include "sdf_bvh4_traverse.h"
 #include "sdf_bvh8_traverse.h"
+#include "sdf_face_point.h"
 #include "sdf_octree.h"
 #include "sdf_reduce.h"
 #include "sdf_smooth_projected.h"
@@ -43,23 +44,60 @@ static inline float3 sdf_cast_direction(SdfCastParams params,
   return sdf_to_world(dir_local, b1, b2, axis);
 }
 
+/* Where a point's rays start: the origin, the cone's axis (zero: the point casts no rays), the
+ * tangent the rays' azimuth starts from, and the face the rays skip. */
+typedef struct SdfRayStart {
+  float3 origin, axis, tangent;
+  int own;
+} SdfRayStart;
+
+/* Point p's start from the sampled points' arrays (points made on the host). */
+static inline SdfRayStart sdf_start_from_arrays(uint p, __global const float* restrict origins,
+                                                __global const float* restrict axes,
+                                                __global const float* restrict tangents,
+                                                __global const int* restrict own_face) {
+  SdfRayStart start;
+  start.origin = vload3(p, origins);
+  start.axis = vload3(p, axes);
+  start.tangent = vload3(p, tangents);
+  start.own = own_face[p];
+  return start;
+}
+
+/* Face p's point made from the mesh, by the function the host's sampling uses (so the same
+ * bits): with the tree made on the device (points 'faces'), the cast reads the mesh instead
+ * of the points' arrays, 40 bytes a face that then never exist on the device. */
+static inline SdfRayStart sdf_start_of_face(uint p, __global const float* restrict vertices,
+                                            __global const uint* restrict faces) {
+  SdfRayStart start;
+  uint3 t = vload3(p, faces);
+  sdf_face_point(vload3(t.x, vertices), vload3(t.y, vertices), vload3(t.z, vertices),
+                 &start.origin, &start.axis, &start.tangent);
+  start.own = (int)p;
+  return start;
+}
+
+#define SDF_START_FROM_ARRAYS(p) sdf_start_from_arrays(p, origins, axes, tangents, own_face)
+#define SDF_START_OF_FACE(p) sdf_start_of_face(p, vertices, faces)
+
 /* One work item per point: fetch the point and its ray frame (a point without an axis gets
  * -1 and no rays), ... SDF_KEEP each ray's hit in ray order ..., then reduce and store. */
-#define SDF_POINT_BEGIN                                                               \
+#define SDF_POINT_BEGIN(START)                                                        \
   uint gid = get_global_id(0);                                                        \
   if (gid >= params.count) return;                                                    \
   uint p = order[params.first + gid];                                                 \
-  float3 axis = vload3(p, axes);                                                      \
+  SdfRayStart start = START(p);                                                       \
+  float3 axis = start.axis;                                                           \
   uint out = params.first + gid;                                                      \
   if (axis.x == 0.0f && axis.y == 0.0f && axis.z == 0.0f) {                           \
     raw[out] = -1.0f;                                                                 \
     valid_rays[out] = 0;                                                              \
     return;                                                                           \
   }                                                                                   \
-  float3 origin = vload3(p, origins);                                                 \
-  int own = own_face[p];                                                              \
+  float3 origin = start.origin;                                                       \
+  int own = start.own;                                                                \
   float3 b1, b2;                                                                      \
-  sdf_frame(params.sampling, axis, vload3(p, tangents), &b1, &b2);                    \
+  sdf_frame(params.sampling, axis, start.tangent, &b1, &b2);                          \
   float lengths[SDF_MAX_RAYS];                                                        \
   float angles[SDF_MAX_RAYS];                                                         \
   int kept = 0;
@@ -76,8 +114,8 @@ static inline float3 sdf_cast_direction(SdfCastParams params,
   valid_rays[out] = kept;
 
 /* The per-point kernel of a structure whose traversal casts one ray at a time. */
-#define SDF_CAST_BODY(CLOSEST_HIT)                                                    \
-  SDF_POINT_BEGIN                                                                     \
+#define SDF_CAST_BODY(START, CLOSEST_HIT)                                             \
+  SDF_POINT_BEGIN(START)                                                              \
   for (int r = 0; r < params.rays; ++r) {                                             \
     float angle;                                                                      \
     float3 d = sdf_cast_direction(params, local_rays, r, p, axis, b1, b2, &angle);    \
@@ -93,7 +131,7 @@ static inline float3 sdf_cast_direction(SdfCastParams params,
  * (832k and 1.2M faces) this was 13-15% faster than one item per point; the opposite mapping
  * (a warp holding one ray index of neighbouring points) and Aila and Laine's while-while
  * loop measured the same within 3%. */
-#define SDF_CAST_PER_RAY_BODY(CLOSEST_HIT)                                            \
+#define SDF_CAST_PER_RAY_BODY(START, CLOSEST_HIT)                                     \
   uint lid = get_local_id(0);                                                         \
   uint group_points = get_local_size(0) / params.rays;                                \
   uint slot = lid / params.rays;                                                      \
@@ -102,16 +140,18 @@ static inline float3 sdf_cast_direction(SdfCastParams params,
   float t_kept = -1.0f;                                                               \
   float angle = 0.0f;                                                                 \
   uint p = 0;                                                                         \
-  float3 axis = make_float3(0.0f, 0.0f, 0.0f);                                        \
+  SdfRayStart start;                                                                  \
+  start.axis = make_float3(0.0f, 0.0f, 0.0f);                                         \
   if (gid < params.count && r < params.rays) {                                        \
     p = order[params.first + gid];                                                    \
-    axis = vload3(p, axes);                                                           \
+    start = START(p);                                                                 \
   }                                                                                   \
+  float3 axis = start.axis;                                                           \
   if (axis.x != 0.0f || axis.y != 0.0f || axis.z != 0.0f) {                           \
-    float3 origin = vload3(p, origins);                                               \
-    int own = own_face[p];                                                            \
+    float3 origin = start.origin;                                                     \
+    int own = start.own;                                                              \
     float3 b1, b2;                                                                    \
-    sdf_frame(params.sampling, axis, vload3(p, tangents), &b1, &b2);                  \
+    sdf_frame(params.sampling, axis, start.tangent, &b1, &b2);                        \
     float3 d = sdf_cast_direction(params, local_rays, r, p, axis, b1, b2, &angle);    \
     SdfHit hit = CLOSEST_HIT;                                                         \
     if (sdf_exit_hit(hit)) t_kept = hit.t;                                            \
@@ -156,24 +196,35 @@ static inline float3 sdf_cast_direction(SdfCastParams params,
   raw[out] = sdf_reduce(params.sampling, lengths, angles, kept, params.angle_floor);  \
   valid_rays[out] = kept;
 
-/* The per-point inputs and outputs every cast kernel takes after its acceleration structure.
- * restrict: nothing aliases, and NVIDIA's compiler then reads through the read-only cache. */
+/* The inputs and outputs every cast kernel takes after its acceleration structure and its
+ * points (SDF_ARRAY_POINTS or SDF_FACE_POINTS). restrict: nothing aliases, and NVIDIA's
+ * compiler then reads through the read-only cache. */
+#define SDF_RUN_ARGS                                                                       \
+  __global const uint* restrict order, __global const float4* restrict local_rays,         \
+      SdfCastParams params, __global float* restrict raw, __global int* restrict valid_rays
+
+/* The points as the host sampled them (SDF_START_FROM_ARRAYS). */
 #define SDF_POINT_ARGS                                                                     \
   __global const float* restrict origins, __global const float* restrict axes,             \
       __global const float* restrict tangents, __global const int* restrict own_face,      \
-      __global const uint* restrict order, __global const float4* restrict local_rays,     \
-      SdfCastParams params, __global float* restrict raw, __global int* restrict valid_rays
+      SDF_RUN_ARGS
+
+/* The faces' points, made from the mesh as they are cast (SDF_START_OF_FACE). */
+#define SDF_FACE_POINT_ARGS                                                                \
+  __global const float* restrict vertices, __global const uint* restrict faces, SDF_RUN_ARGS
 
 /* The binary BVH kernels take the nodes and triangles as float4 arrays (the SdfBvhNode and
  * SdfTriangle bytes): see sdf_bvh_closest_hit_units. */
 __kernel void sdf_cast_bvh(__global const float4* restrict nodes,
                            __global const float4* restrict tris, SDF_POINT_ARGS) {
-  SDF_CAST_BODY(sdf_bvh_closest_hit_units(nodes, tris, origin, d, params.tmin, own))
+  SDF_CAST_BODY(SDF_START_FROM_ARRAYS,
+                sdf_bvh_closest_hit_units(nodes, tris, origin, d, params.tmin, own))
 }
 
 __kernel void sdf_cast_bvh4(__global const SdfBvh4Node* restrict nodes,
                             __global const SdfTriangle* restrict tris, SDF_POINT_ARGS) {
-  SDF_CAST_BODY(sdf_bvh4_closest_hit(nodes, tris, origin, d, params.tmin, own))
+  SDF_CAST_BODY(SDF_START_FROM_ARRAYS,
+                sdf_bvh4_closest_hit(nodes, tris, origin, d, params.tmin, own))
 }
 
 /* One work item per point on the 8-wide BVH (CPU devices): SDF_CAST_BODY with the point's
@@ -181,7 +232,7 @@ __kernel void sdf_cast_bvh4(__global const SdfBvh4Node* restrict nodes,
  * kept in ray order, as SDF_CAST_BODY keeps them. */
 __kernel void sdf_cast_bvh8(__global const SdfBvh8Node* restrict nodes,
                             __global const SdfTrianglePacket4* restrict packets, SDF_POINT_ARGS) {
-  SDF_POINT_BEGIN
+  SDF_POINT_BEGIN(SDF_START_FROM_ARRAYS)
   for (int r = 0; r < params.rays; r += 2) {
     SdfHit hit[2];
     float angle[2];
@@ -205,14 +256,32 @@ __kernel void sdf_cast_bvh8(__global const SdfBvh8Node* restrict nodes,
 __kernel void sdf_cast_bvh_per_ray(__global const float4* restrict nodes,
                                    __global const float4* restrict tris, SDF_POINT_ARGS,
                                    __local float* ray_t, __local float* ray_angle) {
-  SDF_CAST_PER_RAY_BODY(sdf_bvh_closest_hit_units(nodes, tris, origin, d, params.tmin, own))
+  SDF_CAST_PER_RAY_BODY(SDF_START_FROM_ARRAYS,
+                        sdf_bvh_closest_hit_units(nodes, tris, origin, d, params.tmin, own))
+}
+
+/* The binary tree's two kernels on the faces' points, made from the mesh as they are cast (with
+ * the trees made on the device). */
+__kernel void sdf_cast_bvh_faces(__global const float4* restrict nodes,
+                                 __global const float4* restrict tris, SDF_FACE_POINT_ARGS) {
+  SDF_CAST_BODY(SDF_START_OF_FACE,
+                sdf_bvh_closest_hit_units(nodes, tris, origin, d, params.tmin, own))
+}
+
+__kernel void sdf_cast_bvh_per_ray_faces(__global const float4* restrict nodes,
+                                         __global const float4* restrict tris,
+                                         SDF_FACE_POINT_ARGS, __local float* ray_t,
+                                         __local float* ray_angle) {
+  SDF_CAST_PER_RAY_BODY(SDF_START_OF_FACE,
+                        sdf_bvh_closest_hit_units(nodes, tris, origin, d, params.tmin, own))
 }
 
 __kernel void sdf_cast_octree(__global const uint* restrict nodes,
                               __global const uint* restrict leaves,
                               __global const SdfTriangle* restrict tris, SdfOctreeRoot root,
                               SDF_POINT_ARGS) {
-  SDF_CAST_BODY(sdf_octree_closest_hit(nodes, leaves, tris, root, origin, d, params.tmin, own))
+  SDF_CAST_BODY(SDF_START_FROM_ARRAYS,
+                sdf_octree_closest_hit(nodes, leaves, tris, root, origin, d, params.tmin, own))
 }
 
 /* Writes the size and member offsets of every struct shared with the host, so a test can

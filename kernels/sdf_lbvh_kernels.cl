@@ -1,8 +1,9 @@
 /* SPDX-License-Identifier: GPL-3.0-or-later */
-/* A BVH built on the device, and the faces' points made there: the host sends the mesh alone
- * instead of a tree and points of its own making. The faces' Morton codes and their sorted
- * order are made here too (sdf_lbvh_extent, sdf_lbvh_codes, then sdf_sort_kernels.cl; the
- * tests check them against a numpy reference).
+/* A BVH built on the device: the host sends the mesh alone instead of a tree and points of its
+ * own making (the cast makes the faces' points from the mesh: sdf_start_of_face in
+ * sdf_kernels.cl). The faces' Morton codes and their sorted order are made here too
+ * (sdf_lbvh_extent, sdf_lbvh_codes, then sdf_sort_kernels.cl; the tests check them against a
+ * numpy reference).
  *
  * The tree is Karras's (2012): internal node i of the faces with area (n of them, sorted)
  * finds the range of keys it covers and where that range splits from the keys alone, all
@@ -15,9 +16,8 @@
  * its box from its sibling's: on an H100 a box could be read before its sibling's write had
  * landed, and 1 in 1.2M faces' values differed.) Every box grows by the host's margin
  * (bvh_margin.h), so this tree returns the hits of every other tree, bit for bit. */
-#include "sdf_face_point.h"
-#include "sdf_morton.h"
 #include "sdf_layout.h"
+#include "sdf_morton.h"
 
 /* Leaves of one triangle (no node collapsed): on an H100 (1.21M faces, two runs) the cast took
  * 48.9 ms with leaves of at most 1, 50.6-50.7 with 2, 53.4 with 3, 56.8 with 4, 63.0 with 6,
@@ -27,23 +27,6 @@
 #ifndef SDF_LBVH_LEAF_SIZE
 #define SDF_LBVH_LEAF_SIZE 1
 #endif
-
-/* The points of faces [0, faces): SamplePoints' arrays for points='faces'. */
-__kernel void sdf_face_points(__global const float* restrict vertices,
-                              __global const uint* restrict triangles, uint faces,
-                              __global float* restrict origins, __global float* restrict axes,
-                              __global float* restrict tangents, __global int* restrict own_face) {
-  uint f = get_global_id(0);
-  if (f >= faces) return;
-  uint3 t = vload3(f, triangles);
-  float3 origin, axis, tangent;
-  sdf_face_point(vload3(t.x, vertices), vload3(t.y, vertices), vload3(t.z, vertices), &origin,
-                 &axis, &tangent);
-  vstore3(origin, f, origins);
-  vstore3(axis, f, axes);
-  vstore3(tangent, f, tangents);
-  own_face[f] = (int)f;
-}
 
 /* Face f's box as the host's tree makes it (corners' min and max, made +0 at zero) and
  * whether it has area (its cross product is not zero: the host's test, to the bit). */

@@ -110,7 +110,9 @@ DeviceTree build_device_tree(const Device& device, DeviceState& s, const std::st
   const std::size_t faces = mesh.triangles.size();
   // Checked at the most faces can ask: the sort's, then the build's buffers (the mesh, the
   // order, the codes, the records and nodes, slot_of, the inner nodes, made_in), then the
-  // points' and the results (the build's scratch released by then).
+  // cast's (the mesh, the order, the records and nodes, the results; the build's scratch
+  // released by then). The cast makes the faces' points from the mesh as it goes, so they
+  // never take memory of their own.
   const std::size_t slots = 2 * faces, most_inner = faces;
   const std::size_t mesh_bytes = bytes_of(mesh.vertices) + bytes_of(mesh.triangles);
   const std::vector<std::vector<std::size_t>> phases = {
@@ -118,7 +120,7 @@ DeviceTree build_device_tree(const Device& device, DeviceState& s, const std::st
       {mesh_bytes, faces * 4, faces * 4, faces * sizeof(kern::SdfTriangle),
        slots * sizeof(kern::SdfBvhNode), slots * 4, most_inner * 16, most_inner * 4},
       {mesh_bytes, faces * 4, faces * sizeof(kern::SdfTriangle), slots * sizeof(kern::SdfBvhNode),
-       3 * faces * 12, faces * 4, faces * 8}};
+       faces * 8}};
   DeviceTree tree;
   for (const auto& sizes : phases) {
     check_fits(device, sizes);
@@ -128,8 +130,10 @@ DeviceTree build_device_tree(const Device& device, DeviceState& s, const std::st
   }
 
   Stopwatch clock;
-  Buffer vertices(s, bytes_of(mesh.vertices), mesh.vertices.data());
-  Buffer triangles(s, bytes_of(mesh.triangles), mesh.triangles.data());
+  tree.vertices = std::make_unique<Buffer>(s, bytes_of(mesh.vertices), mesh.vertices.data());
+  tree.faces = std::make_unique<Buffer>(s, bytes_of(mesh.triangles), mesh.triangles.data());
+  const Buffer& vertices = *tree.vertices;
+  const Buffer& triangles = *tree.faces;
   check(api()->clFinish(s.queue), "clFinish (upload)");
   tree.upload_seconds = clock.lap();
   if (uploaded) uploaded();
@@ -194,19 +198,6 @@ DeviceTree build_device_tree(const Device& device, DeviceState& s, const std::st
     codes.reset();
     // Released here, freed by the driver once the kernels that read them have run.
   }
-  tree.origins = std::make_unique<Buffer>(s, faces * 12, nullptr);
-  tree.axes = std::make_unique<Buffer>(s, faces * 12, nullptr);
-  tree.tangents = std::make_unique<Buffer>(s, faces * 12, nullptr);
-  tree.own_face = std::make_unique<Buffer>(s, faces * 4, nullptr);
-  Kernel points(program, "sdf_face_points");
-  points.arg(0, vertices.get());
-  points.arg(1, triangles.get());
-  points.arg(2, static_cast<cl_uint>(faces));
-  points.arg(3, tree.origins->get());
-  points.arg(4, tree.axes->get());
-  points.arg(5, tree.tangents->get());
-  points.arg(6, tree.own_face->get());
-  launch_items(device, s, points, faces);
   tree.host_order.resize(faces);
   read_buffer(s, tree.order->get(), tree.host_order.data(), faces * 4);
   check(api()->clFinish(s.queue), "clFinish (device tree)");

@@ -1,9 +1,9 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
-// The faces' points and a BVH made on the device (kernels/sdf_lbvh_kernels.cl) from the mesh
-// alone, in place of a tree and points made on the host: the faces' Morton codes, their sort
-// (kernels/sdf_sort_kernels.cl), Karras's tree over them, its boxes and the points. The tree
-// has the host tree's layout and boxes grown by the same margin, so the cast kernels read it
-// unchanged and return the same values.
+// A BVH made on the device (kernels/sdf_lbvh_kernels.cl) from the mesh alone, in place of a
+// tree and points made on the host: the faces' Morton codes, their sort
+// (kernels/sdf_sort_kernels.cl), Karras's tree over them and its boxes. The tree has the host
+// tree's layout and boxes grown by the same margin, so the cast kernels read it unchanged and
+// return the same values; the faces' points are made from the mesh by the cast itself.
 #pragma once
 
 #include <cstdint>
@@ -19,9 +19,9 @@ namespace sdf::cl {
 
 // What the cast kernels read, on the device, made and waited for.
 struct DeviceTree {
-  // The points of every face (SamplePoints' arrays, face order) and the cast order: faces
-  // with area in Morton order, then the others.
-  std::unique_ptr<Buffer> origins, axes, tangents, own_face, order;
+  // The mesh (the cast makes each face's point from it: sdf_start_of_face) and the cast
+  // order: faces with area in Morton order, then the others.
+  std::unique_ptr<Buffer> vertices, faces, order;
   // The SdfBvhNode and SdfTriangle arrays.
   std::unique_ptr<Buffer> nodes, triangles;
   UninitializedVector<std::uint32_t> host_order;  // `order`, read back: results go to faces

@@ -139,9 +139,10 @@ void run_device(const Device& device, SharedScene& shared_scene, const CastInput
   const std::size_t n = input.size;
   const std::string options = build_options(device, cone.rays);
   const CastKernel choice = cast_kernel_for(device);
-  // The point arrays the kernel reads, and the tree.
-  cl_mem origins = nullptr, axes = nullptr, tangents = nullptr, own_face = nullptr,
-         order = nullptr, accel[3] = {nullptr, nullptr, nullptr};
+  // What the kernel reads: the tree, the points (the host's arrays, or a device tree's mesh,
+  // which the kernel makes the faces' points from) and their order.
+  cl_mem accel[3] = {nullptr, nullptr, nullptr}, order = nullptr;
+  cl_mem points_in[4] = {nullptr, nullptr, nullptr, nullptr};
   const kern::SdfOctreeRoot* accel_root = nullptr;  // the octree's kernel takes it by value
   DeviceTree tree;                                   // CastInput::mesh: the device's own
   std::unique_ptr<Buffer> owned[8];                  // otherwise: the host's uploads
@@ -151,15 +152,14 @@ void run_device(const Device& device, SharedScene& shared_scene, const CastInput
   // One work item per ray: points_per_group points of `rays` items each (on an H100, 4 was
   // 2-4% faster than 8 and 7-9% faster than 2; 16 and 32 slower), fewer when registers limit
   // the group size; otherwise the binary tree's per-point kernel.
-  auto binary_tree_kernel = [&] {
+  auto binary_tree_kernel = [&](const std::string& suffix) {
     if (choice == CastKernel::BvhPerRay) {
-      kernel = std::make_unique<Kernel>(program, "sdf_cast_bvh_per_ray");
+      kernel = std::make_unique<Kernel>(program, ("sdf_cast_bvh_per_ray" + suffix).c_str());
       points_per_group = std::min<std::size_t>(4, kernel->max_group(device.id) / cone.rays);
     }
-    if (points_per_group == 0) kernel = std::make_unique<Kernel>(program, "sdf_cast_bvh");
+    if (points_per_group == 0)
+      kernel = std::make_unique<Kernel>(program, ("sdf_cast_bvh" + suffix).c_str());
   };
-  Buffer raw(s, n * sizeof(float), nullptr);
-  Buffer valid(s, n * sizeof(std::int32_t), nullptr);
   // The host's ray table (direction, angle) for deterministic samplings; random rays are
   // generated on the device and read none of it.
   std::vector<float> table(4 * std::max<std::size_t>(cone.local.size(), 1), 0.0f);
@@ -207,14 +207,12 @@ void run_device(const Device& device, SharedScene& shared_scene, const CastInput
         return;
       }
     }
-    origins = tree.origins->get();
-    axes = tree.axes->get();
-    tangents = tree.tangents->get();
-    own_face = tree.own_face->get();
+    points_in[0] = tree.vertices->get();
+    points_in[1] = tree.faces->get();
     order = tree.order->get();
     accel[0] = tree.nodes->get();
     accel[1] = tree.triangles->get();
-    binary_tree_kernel();
+    binary_tree_kernel("_faces");
   } else {
     const SamplePoints& points = *input.points;
     // The points, their order and the results first: they go to the device (and the program
@@ -231,11 +229,11 @@ void run_device(const Device& device, SharedScene& shared_scene, const CastInput
     owned[2] = std::make_unique<Buffer>(s, sizes[2], points.own_face.data());
     owned[3] = std::make_unique<Buffer>(s, sizes[3], input.order);
     owned[4] = std::make_unique<Buffer>(s, sizes[6], points.tangents.data());
-    origins = owned[0]->get();
-    axes = owned[1]->get();
-    own_face = owned[2]->get();
+    points_in[0] = owned[0]->get();  // origins, axes, tangents, own_face
+    points_in[1] = owned[1]->get();
+    points_in[2] = owned[4]->get();
+    points_in[3] = owned[2]->get();
     order = owned[3]->get();
-    tangents = owned[4]->get();
     result.timings.upload += seconds_since(upload_start);
 
     const Clock::time_point wait_start = Clock::now();
@@ -270,7 +268,7 @@ void run_device(const Device& device, SharedScene& shared_scene, const CastInput
       sizes.push_back(bytes_of(scene.bvh->nodes));
       sizes.push_back(bytes_of(scene.bvh->triangles));
       data = {scene.bvh->nodes.data(), scene.bvh->triangles.data()};
-      binary_tree_kernel();
+      binary_tree_kernel("");
     } else {
       sizes.push_back(bytes_of(scene.octree->nodes));
       sizes.push_back(bytes_of(scene.octree->leaves));
@@ -288,6 +286,9 @@ void run_device(const Device& device, SharedScene& shared_scene, const CastInput
     result.timings.upload += seconds_since(upload_start);
     if (!scene.bvh && !scene.bvh4 && !scene.bvh8) accel_root = &scene.octree->root;
   }
+  // The results, made last: a device tree's build no longer holds its scratch by now.
+  Buffer raw(s, n * sizeof(float), nullptr);
+  Buffer valid(s, n * sizeof(std::int32_t), nullptr);
   const Clock::time_point upload_start = Clock::now();
   kern::SdfCastParams params{};
   params.rays = cone.rays;
@@ -301,10 +302,8 @@ void run_device(const Device& device, SharedScene& shared_scene, const CastInput
   for (cl_mem m : accel)
     if (m) kernel->arg(a++, m);
   if (accel_root) kernel->arg(a++, *accel_root);
-  kernel->arg(a++, origins);
-  kernel->arg(a++, axes);
-  kernel->arg(a++, tangents);
-  kernel->arg(a++, own_face);
+  for (cl_mem m : points_in)
+    if (m) kernel->arg(a++, m);
   kernel->arg(a++, order);
   kernel->arg(a++, local_rays.get());
   const cl_uint params_index = a++;

@@ -212,6 +212,15 @@ def test_device_memory_stays_under_200_bytes_a_face(monkeypatch):
     assert 0 < result.device_memory <= 200 * len(f)
 
 
+def test_a_triangle_soup_stays_under_200_bytes_a_face(monkeypatch):
+    # Three vertices of its own a face: the mesh itself takes 48 bytes a face on the device.
+    v, f = load_mesh(DATA / "bunny00.off")
+    corners = v[f].reshape(-1, 3)
+    soup = np.arange(len(corners), dtype=np.int32).reshape(-1, 3)
+    result = on_device_tree(monkeypatch, corners, soup, OPENCL[0], orientation="as_is")
+    assert 0 < result.device_memory <= 200 * len(soup)
+
+
 def test_an_unknown_tree_name_is_refused(monkeypatch):
     v, f = load_mesh(DATA / "fandisk.obj")
     monkeypatch.setenv("SDF_OPENCL_TREE", "gpu")
