@@ -37,6 +37,8 @@ typedef float4 sdf_float4;
 #define sdf_load4(p, i) ((p)[i])
 typedef int4 sdf_int4;
 #define sdf_make_int4(a, b, c, d) ((int4)((a), (b), (c), (d)))
+typedef int2 sdf_int2;
+#define sdf_make_int2(a, b) ((int2)((a), (b)))
 #define sdf_as_int(x) as_int(x)
 #define sdf_as_float(x) as_float(x)
 /* Wide accumulators (sums over many terms): double where the device has it, as on the host. */
@@ -92,6 +94,8 @@ inline sdf_float4 sdf_load4(const sdf_float4* p, std::ptrdiff_t i) {
   std::memcpy(&v, reinterpret_cast<const char*>(p) + 16 * i, sizeof v);
   return v;
 }
+typedef glm::ivec2 sdf_int2;
+inline sdf_int2 sdf_make_int2(sdf_int32 a, sdf_int32 b) { return sdf_int2(a, b); }
 typedef glm::ivec4 sdf_int4;
 inline sdf_int4 sdf_make_int4(sdf_int32 a, sdf_int32 b, sdf_int32 c, sdf_int32 d) {
   return sdf_int4(a, b, c, d);
