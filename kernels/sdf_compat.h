@@ -121,6 +121,7 @@ using std::fabs;
 using std::floor;
 using std::isfinite;
 using std::ldexp;
+using std::fma;
 using std::fmax;
 using std::fmin;
 using std::sin;

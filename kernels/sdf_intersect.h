@@ -90,6 +90,20 @@ SDF_INLINE float sdf_box_entry_values(float3 lo, float3 hi, float3 o, float3 inv
   return t_near <= t_far ? t_near : INFINITY;
 }
 
+/* The same from o * inv_d (o_inv), each slab distance one fused multiply-add: lo * inv_d - o_inv
+ * rounds once where (lo - o) * inv_d rounds twice; bvh_margin.h's growth covers both. */
+SDF_INLINE float sdf_box_entry_fused(float3 lo, float3 hi, float3 o_inv, float3 inv_d,
+                                     float tmax) {
+  float tx0 = fma(lo.x, inv_d.x, -o_inv.x), tx1 = fma(hi.x, inv_d.x, -o_inv.x);
+  float ty0 = fma(lo.y, inv_d.y, -o_inv.y), ty1 = fma(hi.y, inv_d.y, -o_inv.y);
+  float tz0 = fma(lo.z, inv_d.z, -o_inv.z), tz1 = fma(hi.z, inv_d.z, -o_inv.z);
+  float t_near = sdf_max(sdf_max(sdf_min(tx0, tx1), sdf_min(ty0, ty1)),
+                         sdf_max(sdf_min(tz0, tz1), 0.0f));
+  float t_far = sdf_min(sdf_min(sdf_max(tx0, tx1), sdf_max(ty0, ty1)),
+                        sdf_min(sdf_max(tz0, tz1), tmax));
+  return t_near <= t_far ? t_near : INFINITY;
+}
+
 /* The same on a node in memory. */
 SDF_INLINE float sdf_box_entry(SDF_GLOBAL const SdfBvhNode* node, float3 o, float3 inv_d,
                                float tmax) {
