@@ -108,19 +108,21 @@ DeviceTree build_device_tree(const Device& device, DeviceState& s, const std::st
                     "set SDF_OPENCL_TREE=host (the host builds the tree)",
                 CL_INVALID_WORK_GROUP_SIZE);
   const std::size_t faces = mesh.triangles.size();
-  // Checked at the most faces can ask: the sort's, then the build's buffers (the mesh, the
-  // order, the codes, the records and nodes, slot_of, the inner nodes, made_in), then the
-  // cast's (the mesh, the order, the records and nodes, the results; the build's scratch
-  // released by then). The cast makes the faces' points from the mesh as it goes, so they
-  // never take memory of their own.
+  // Checked at the most faces can ask: the sort's buffers (the mesh, the order and codes and
+  // their second copies, the digit counts); the tree's (the mesh, the order, the codes, the
+  // nodes, slot_of, the inner nodes, made_in); the triangles' records, made once that scratch
+  // is freed (the mesh, the order, the nodes, the records); the cast's (the same and the
+  // results). The cast makes the faces' points from the mesh as it goes, so they never take
+  // memory of their own.
   const std::size_t slots = 2 * faces, most_inner = faces;
   const std::size_t mesh_bytes = bytes_of(mesh.vertices) + bytes_of(mesh.triangles);
+  const std::size_t node_bytes = slots * sizeof(kern::SdfBvhNode),
+                    record_bytes = faces * sizeof(kern::SdfTriangle);
   const std::vector<std::vector<std::size_t>> phases = {
       {mesh_bytes, 4 * faces * 4, (faces / kSortGroup + 1) * 64},
-      {mesh_bytes, faces * 4, faces * 4, faces * sizeof(kern::SdfTriangle),
-       slots * sizeof(kern::SdfBvhNode), slots * 4, most_inner * 16, most_inner * 4},
-      {mesh_bytes, faces * 4, faces * sizeof(kern::SdfTriangle), slots * sizeof(kern::SdfBvhNode),
-       faces * 8}};
+      {mesh_bytes, faces * 4, faces * 4, node_bytes, slots * 4, most_inner * 16,
+       most_inner * 4},
+      {mesh_bytes, faces * 4, node_bytes, record_bytes, faces * 8}};
   DeviceTree tree;
   for (const auto& sizes : phases) {
     check_fits(device, sizes);
@@ -151,19 +153,11 @@ DeviceTree build_device_tree(const Device& device, DeviceState& s, const std::st
   if (n == 0) return tree;  // nothing can be hit: no tree, nothing to cast
 
   const std::size_t inner = std::max<std::size_t>(n, 2) - 1;
-  tree.triangles = std::make_unique<Buffer>(s, n * sizeof(kern::SdfTriangle), nullptr);
   tree.nodes = std::make_unique<Buffer>(s, (2 * n - 1) * sizeof(kern::SdfBvhNode), nullptr);
   {
     Buffer slot_of(s, (2 * n - 1) * 4, nullptr), inner_nodes(s, inner * 16, nullptr),
         made_in(s, inner * 4, nullptr);
     const cl_int count = static_cast<cl_int>(n);
-    Kernel records(program, "sdf_lbvh_triangles");
-    records.arg(0, vertices.get());
-    records.arg(1, triangles.get());
-    records.arg(2, tree.order->get());
-    records.arg(3, static_cast<cl_uint>(n));
-    records.arg(4, tree.triangles->get());
-    launch_items(device, s, records, n);
     Kernel karras(program, "sdf_lbvh_inner");
     karras.arg(0, codes->get());
     karras.arg(1, count);
@@ -196,8 +190,17 @@ DeviceTree build_device_tree(const Device& device, DeviceState& s, const std::st
       launch_items(device, s, level, inner);
     }
     codes.reset();
-    // Released here, freed by the driver once the kernels that read them have run.
+    // The tree is waited for, so that its scratch is freed before the records take memory.
+    check(api()->clFinish(s.queue), "clFinish (device tree)");
   }
+  tree.triangles = std::make_unique<Buffer>(s, n * sizeof(kern::SdfTriangle), nullptr);
+  Kernel records(program, "sdf_lbvh_triangles");
+  records.arg(0, vertices.get());
+  records.arg(1, triangles.get());
+  records.arg(2, tree.order->get());
+  records.arg(3, static_cast<cl_uint>(n));
+  records.arg(4, tree.triangles->get());
+  launch_items(device, s, records, n);
   tree.host_order.resize(faces);
   read_buffer(s, tree.order->get(), tree.host_order.data(), faces * 4);
   check(api()->clFinish(s.queue), "clFinish (device tree)");
