@@ -78,7 +78,7 @@ SDF_INLINE SdfHit sdf_bvh4_closest_hit(SDF_GLOBAL const SdfBvh4Node* nodes,
                                        SDF_GLOBAL const SdfTriangle* tris, float3 o, float3 d,
                                        float tmin, sdf_int32 skip_id) {
   SdfHit hit = sdf_no_hit();
-  float3 inv = sdf_safe_inverse(d);
+  float3 inv = sdf_safe_inverse(d, o);
   float3 o_inv = make_float3(o.x * inv.x, o.y * inv.y, o.z * inv.z);
   int neg_x = inv.x < 0.0f, neg_y = inv.y < 0.0f, neg_z = inv.z < 0.0f;
   sdf_int32 stack_node[SDF_BVH4_STACK_SIZE];

@@ -107,7 +107,7 @@ SDF_INLINE SdfBvh8Ray sdf_bvh8_ray(float3 o, float3 d) {
   SdfBvh8Ray r;
   r.o = o;
   r.d = d;
-  r.inv = sdf_safe_inverse(d);
+  r.inv = sdf_safe_inverse(d, o);
   r.o_inv = make_float3(o.x * r.inv.x, o.y * r.inv.y, o.z * r.inv.z);
   r.near_x = r.inv.x < 0.0f ? SDF_BVH8_HI_X : SDF_BVH8_LO_X;
   r.far_x = r.inv.x < 0.0f ? SDF_BVH8_LO_X : SDF_BVH8_HI_X;

@@ -1,6 +1,7 @@
 /* SPDX-License-Identifier: GPL-3.0-or-later */
-/* Nearest-hit traversal of the packed BVH: near child first, far child on a short stack,
- * subtrees skipped once the best hit is nearer than their box. */
+/* Nearest-hit traversal of the packed BVH: leaf children tested at once, then the nearer inner
+ * child first, the farther on a short stack, subtrees skipped once the best hit is nearer
+ * than their box. */
 #ifndef SDF_BVH_TRAVERSE_H
 #define SDF_BVH_TRAVERSE_H
 
@@ -8,7 +9,9 @@
 
 SDF_KERNEL_BEGIN
 
-/* Deep enough for any tree the host builds: the builder stops splitting at this depth. */
+/* Deep enough for any tree: the host's builder stops splitting 4 levels short of it
+ * (bvh_sah.h), the device's LBVH is at most 31 + log2(faces) <= 60 levels high, and the
+ * stack holds fewer entries than the tree has levels. */
 #define SDF_BVH_STACK_SIZE 64
 
 /* The hits of leaf triangles [first, first + count) into *hit. */
@@ -26,7 +29,8 @@ SDF_INLINE void sdf_bvh_leaf_hits(SDF_GLOBAL const sdf_float4* tris, sdf_int32 f
 
 /* Finds the nearest triangle hit along o + t d with tmin < t, skipping triangle skip_id (the
  * point's own face; -1 for none). Returns the hit with t = INFINITY when nothing is hit.
- * nodes and tris are the SdfBvhNode and SdfTriangle arrays seen as 16-byte units.
+ * nodes and tris are the SdfBvhNode and SdfTriangle arrays seen as 16-byte units, the root in
+ * slot `root` (0 for the host's trees, SDF_LBVH_ROOT for the device's).
  *
  * Memory is read in 16-byte loads: a node as two (its box's lo with `first`, hi with `count`),
  * a triangle as three (v0 with id, e1, e2). On an H100 the per-ray kernel was bound by the L1
@@ -41,16 +45,16 @@ SDF_INLINE void sdf_bvh_leaf_hits(SDF_GLOBAL const sdf_float4* tris, sdf_int32 f
  * 30 rays) this cut the cast from 49.0 to 40.2 ms at 1.21M faces and from 34.1 to 27.8 at 832k
  * (64 rays: 110.5 to 97.0), against descending into leaves with 16-byte stack entries. */
 SDF_INLINE SdfHit sdf_bvh_closest_hit_units(SDF_GLOBAL const sdf_float4* nodes,
-                                            SDF_GLOBAL const sdf_float4* tris, float3 o,
-                                            float3 d, float tmin, sdf_int32 skip_id) {
+                                            SDF_GLOBAL const sdf_float4* tris, sdf_int32 root,
+                                            float3 o, float3 d, float tmin, sdf_int32 skip_id) {
   SdfHit hit = sdf_no_hit();
-  float3 inv_d = sdf_safe_inverse(d);
+  float3 inv_d = sdf_safe_inverse(d, o);
   /* Slab distances as one fused multiply-add each: on an H100 (1.21M faces, two runs) the
    * cast took 39.6 ms against 40.2 with (lo - o) * inv_d. */
   float3 o_inv = make_float3(o.x * inv_d.x, o.y * inv_d.y, o.z * inv_d.z);
   sdf_int2 stack[SDF_BVH_STACK_SIZE];
   int sp = 0;
-  sdf_float4 lo = sdf_load4(nodes, 0), hi = sdf_load4(nodes, 1);
+  sdf_float4 lo = sdf_load4(nodes, 2 * root), hi = sdf_load4(nodes, 2 * root + 1);
   if (sdf_box_entry_fused(make_float3(lo.x, lo.y, lo.z), make_float3(hi.x, hi.y, hi.z), o_inv,
                           inv_d, hit.t) == INFINITY)
     return hit;
@@ -112,7 +116,7 @@ SDF_INLINE SdfHit sdf_bvh_closest_hit(SDF_GLOBAL const SdfBvhNode* nodes,
                                       SDF_GLOBAL const SdfTriangle* tris, float3 o, float3 d,
                                       float tmin, sdf_int32 skip_id) {
   return sdf_bvh_closest_hit_units((SDF_GLOBAL const sdf_float4*)nodes,
-                                   (SDF_GLOBAL const sdf_float4*)tris, o, d, tmin, skip_id);
+                                   (SDF_GLOBAL const sdf_float4*)tris, 0, o, d, tmin, skip_id);
 }
 
 SDF_KERNEL_END

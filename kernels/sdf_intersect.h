@@ -76,13 +76,10 @@ SDF_INLINE void sdf_intersect_triangle(float3 o, float3 d, float tmin,
                        hit);
 }
 
-/* Entry distance of the ray into a node's box, or INFINITY when it misses the box or enters
- * beyond tmax. inv_d holds 1/d with zero components replaced by a huge finite value. */
-SDF_INLINE float sdf_box_entry_values(float3 lo, float3 hi, float3 o, float3 inv_d,
-                                      float tmax) {
-  float tx0 = (lo.x - o.x) * inv_d.x, tx1 = (hi.x - o.x) * inv_d.x;
-  float ty0 = (lo.y - o.y) * inv_d.y, ty1 = (hi.y - o.y) * inv_d.y;
-  float tz0 = (lo.z - o.z) * inv_d.z, tz1 = (hi.z - o.z) * inv_d.z;
+/* The entry distance from a box's slab distances along x, y and z (either end first), or
+ * INFINITY when the slabs do not overlap in [0, tmax]. */
+SDF_INLINE float sdf_slab_entry(float tx0, float tx1, float ty0, float ty1, float tz0, float tz1,
+                                float tmax) {
   float t_near = sdf_max(sdf_max(sdf_min(tx0, tx1), sdf_min(ty0, ty1)),
                          sdf_max(sdf_min(tz0, tz1), 0.0f));
   float t_far = sdf_min(sdf_min(sdf_max(tx0, tx1), sdf_max(ty0, ty1)),
@@ -90,18 +87,22 @@ SDF_INLINE float sdf_box_entry_values(float3 lo, float3 hi, float3 o, float3 inv
   return t_near <= t_far ? t_near : INFINITY;
 }
 
+/* Entry distance of the ray into a node's box, or INFINITY when it misses the box or enters
+ * beyond tmax. inv_d holds 1/d with zero components replaced by a huge finite value. */
+SDF_INLINE float sdf_box_entry_values(float3 lo, float3 hi, float3 o, float3 inv_d,
+                                      float tmax) {
+  return sdf_slab_entry((lo.x - o.x) * inv_d.x, (hi.x - o.x) * inv_d.x,
+                        (lo.y - o.y) * inv_d.y, (hi.y - o.y) * inv_d.y,
+                        (lo.z - o.z) * inv_d.z, (hi.z - o.z) * inv_d.z, tmax);
+}
+
 /* The same from o * inv_d (o_inv), each slab distance one fused multiply-add: lo * inv_d - o_inv
  * rounds once where (lo - o) * inv_d rounds twice; bvh_margin.h's growth covers both. */
 SDF_INLINE float sdf_box_entry_fused(float3 lo, float3 hi, float3 o_inv, float3 inv_d,
                                      float tmax) {
-  float tx0 = fma(lo.x, inv_d.x, -o_inv.x), tx1 = fma(hi.x, inv_d.x, -o_inv.x);
-  float ty0 = fma(lo.y, inv_d.y, -o_inv.y), ty1 = fma(hi.y, inv_d.y, -o_inv.y);
-  float tz0 = fma(lo.z, inv_d.z, -o_inv.z), tz1 = fma(hi.z, inv_d.z, -o_inv.z);
-  float t_near = sdf_max(sdf_max(sdf_min(tx0, tx1), sdf_min(ty0, ty1)),
-                         sdf_max(sdf_min(tz0, tz1), 0.0f));
-  float t_far = sdf_min(sdf_min(sdf_max(tx0, tx1), sdf_max(ty0, ty1)),
-                        sdf_min(sdf_max(tz0, tz1), tmax));
-  return t_near <= t_far ? t_near : INFINITY;
+  return sdf_slab_entry(fma(lo.x, inv_d.x, -o_inv.x), fma(hi.x, inv_d.x, -o_inv.x),
+                        fma(lo.y, inv_d.y, -o_inv.y), fma(hi.y, inv_d.y, -o_inv.y),
+                        fma(lo.z, inv_d.z, -o_inv.z), fma(hi.z, inv_d.z, -o_inv.z), tmax);
 }
 
 /* The same on a node in memory. */
@@ -111,8 +112,15 @@ SDF_INLINE float sdf_box_entry(SDF_GLOBAL const SdfBvhNode* node, float3 o, floa
                               make_float3(node->hi_x, node->hi_y, node->hi_z), o, inv_d, tmax);
 }
 
-SDF_INLINE float3 sdf_safe_inverse(float3 d) {
-  const float big = 1e30f;
+/* 1 / d, each zero component (|d| <= 1e-30) replaced by a huge value of its sign, for the ray
+ * o + t d. Slab tests take plane * inv - o * inv (or (plane - o) * inv), so o * big must stay
+ * finite: big is 1e30 within 1e8 units of the centre, 1e38 / |o| beyond (a fixed 1e30 overflowed
+ * past ~3e8 units and lost every ray along an axis). Past 1e8 units it stays big enough that
+ * a plane the ray's line runs beside, a float step from o or more, lies beyond every t: a step
+ * there is at least |o| * 6e-8, times big 6e30, and meshes span at most 1e30 (mesh.h). */
+SDF_INLINE float3 sdf_safe_inverse(float3 d, float3 o) {
+  float reach = sdf_max(1.0f, sdf_max(fabs(o.x), sdf_max(fabs(o.y), fabs(o.z))));
+  float big = sdf_min(1e30f, 1e38f / reach);
   return make_float3(fabs(d.x) > 1e-30f ? 1.0f / d.x : copysign(big, d.x),
                      fabs(d.y) > 1e-30f ? 1.0f / d.y : copysign(big, d.y),
                      fabs(d.z) > 1e-30f ? 1.0f / d.z : copysign(big, d.z));

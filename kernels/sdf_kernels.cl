@@ -197,7 +197,7 @@ static inline SdfRayStart sdf_start_of_face(uint p, __global const float* restri
   valid_rays[out] = kept;
 
 /* The inputs and outputs every cast kernel takes after its acceleration structure and its
- * points (SDF_ARRAY_POINTS or SDF_FACE_POINTS). restrict: nothing aliases, and NVIDIA's
+ * points (SDF_POINT_ARGS or SDF_FACE_POINT_ARGS). restrict: nothing aliases, and NVIDIA's
  * compiler then reads through the read-only cache. */
 #define SDF_RUN_ARGS                                                                       \
   __global const uint* restrict order, __global const float4* restrict local_rays,         \
@@ -218,7 +218,7 @@ static inline SdfRayStart sdf_start_of_face(uint p, __global const float* restri
 __kernel void sdf_cast_bvh(__global const float4* restrict nodes,
                            __global const float4* restrict tris, SDF_POINT_ARGS) {
   SDF_CAST_BODY(SDF_START_FROM_ARRAYS,
-                sdf_bvh_closest_hit_units(nodes, tris, origin, d, params.tmin, own))
+                sdf_bvh_closest_hit_units(nodes, tris, 0, origin, d, params.tmin, own))
 }
 
 __kernel void sdf_cast_bvh4(__global const SdfBvh4Node* restrict nodes,
@@ -257,7 +257,7 @@ __kernel void sdf_cast_bvh_per_ray(__global const float4* restrict nodes,
                                    __global const float4* restrict tris, SDF_POINT_ARGS,
                                    __local float* ray_t, __local float* ray_angle) {
   SDF_CAST_PER_RAY_BODY(SDF_START_FROM_ARRAYS,
-                        sdf_bvh_closest_hit_units(nodes, tris, origin, d, params.tmin, own))
+                        sdf_bvh_closest_hit_units(nodes, tris, 0, origin, d, params.tmin, own))
 }
 
 /* The binary tree's two kernels on the faces' points, made from the mesh as they are cast (with
@@ -265,7 +265,7 @@ __kernel void sdf_cast_bvh_per_ray(__global const float4* restrict nodes,
 __kernel void sdf_cast_bvh_faces(__global const float4* restrict nodes,
                                  __global const float4* restrict tris, SDF_FACE_POINT_ARGS) {
   SDF_CAST_BODY(SDF_START_OF_FACE,
-                sdf_bvh_closest_hit_units(nodes, tris, origin, d, params.tmin, own))
+                sdf_bvh_closest_hit_units(nodes, tris, SDF_LBVH_ROOT, origin, d, params.tmin, own))
 }
 
 __kernel void sdf_cast_bvh_per_ray_faces(__global const float4* restrict nodes,
@@ -273,7 +273,7 @@ __kernel void sdf_cast_bvh_per_ray_faces(__global const float4* restrict nodes,
                                          SDF_FACE_POINT_ARGS, __local float* ray_t,
                                          __local float* ray_angle) {
   SDF_CAST_PER_RAY_BODY(SDF_START_OF_FACE,
-                        sdf_bvh_closest_hit_units(nodes, tris, origin, d, params.tmin, own))
+                        sdf_bvh_closest_hit_units(nodes, tris, SDF_LBVH_ROOT, origin, d, params.tmin, own))
 }
 
 __kernel void sdf_cast_octree(__global const uint* restrict nodes,

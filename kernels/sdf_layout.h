@@ -74,6 +74,12 @@ typedef struct SdfCastParams {
   sdf_uint32 count;
 } SdfCastParams;
 
+/* The slot of the root of a tree made on the device (slot 0 stays unused): every pair of
+ * children then starts at an even slot, so its 64 bytes never straddle a 128-byte cache line
+ * (H100, 1.21M faces, three runs: cast 39.6 -> 38.7 ms; 832k 27.3 -> 26.75; 64 rays 89.4 ->
+ * 87.6). Trees made on the host keep the root in slot 0. */
+#define SDF_LBVH_ROOT 1
+
 /* How ray directions are chosen (see sdf_rays.h). */
 #define SDF_SAMPLING_FIBONACCI 0
 #define SDF_SAMPLING_RANDOM 1

@@ -7,11 +7,12 @@
  *
  * The tree is Karras's (2012): internal node i of the faces with area (n of them, sorted)
  * finds the range of keys it covers and where that range splits from the keys alone, all
- * nodes at once. Its layout is the host tree's (SdfBvhNode, children side by side): the two
- * children of internal node i sit in slots 2i + 1 and 2i + 2, the root in slot 0. A node whose
- * range holds at most SDF_LBVH_LEAF_SIZE triangles is written as a leaf of them (its subtree's
- * slots then stay unused). Boxes are made bottom up, one launch per level of height: a node's box
- * is made in the launch after both children's, so every box read was written by an earlier
+ * nodes at once. Its layout is the host tree's (SdfBvhNode, children side by side) shifted by
+ * one slot: the two children of internal node i sit in slots 2i + 2 and 2i + 3, the root in
+ * slot SDF_LBVH_ROOT = 1 (sdf_layout.h says why). A node whose range holds at most
+ * SDF_LBVH_LEAF_SIZE triangles is written as a leaf of them (its subtree's slots then stay
+ * unused). Boxes are made bottom up, one launch per level of height: a node's box is made in
+ * the launch after both children's, so every box read was written by an earlier
  * launch. (A first version climbed in one launch, the second child to arrive at a node making
  * its box from its sibling's: on an H100 a box could be read before its sibling's write had
  * landed, and 1 in 1.2M faces' values differed.) Every box grows by the host's margin
@@ -130,7 +131,7 @@ __kernel void sdf_lbvh_inner(__global const uint* restrict codes, int n,
                              __global int* restrict slot_of, __global int4* restrict inner,
                              __global int* restrict made_in) {
   int i = (int)get_global_id(0);
-  if (n == 1 && i == 0) slot_of[0] = 0;  /* one triangle: the root is its leaf */
+  if (n == 1 && i == 0) slot_of[0] = SDF_LBVH_ROOT;  /* one triangle: the root is its leaf */
   if (i >= n - 1) return;
   int d = sdf_lbvh_delta(codes, n, i, i + 1) > sdf_lbvh_delta(codes, n, i, i - 1) ? 1 : -1;
   int below = sdf_lbvh_delta(codes, n, i, i - d);
@@ -151,11 +152,11 @@ __kernel void sdf_lbvh_inner(__global const uint* restrict codes, int n,
   int first = min(i, j), last = max(i, j);
   int left = first == split ? ~split : split;
   int right = last == split + 1 ? ~(split + 1) : split + 1;
-  slot_of[left < 0 ? ~left : n + left] = 2 * i + 1;
-  slot_of[right < 0 ? ~right : n + right] = 2 * i + 2;
+  slot_of[left < 0 ? ~left : n + left] = 2 * i + 1 + SDF_LBVH_ROOT;
+  slot_of[right < 0 ? ~right : n + right] = 2 * i + 2 + SDF_LBVH_ROOT;
   inner[i] = (int4)(first, last - first + 1, left, right);
   made_in[i] = INT_MAX;
-  if (i == 0) slot_of[n] = 0;
+  if (i == 0) slot_of[n] = SDF_LBVH_ROOT;
 }
 
 static inline void sdf_lbvh_store(__global float4* nodes, int slot, float3 lo, int first,
@@ -193,13 +194,14 @@ __kernel void sdf_lbvh_level(int n, int level, __global const int* restrict slot
   int4 node = inner[i];
   if (node.z >= 0 && made_in[node.z] >= level) return;
   if (node.w >= 0 && made_in[node.w] >= level) return;
-  float4 l_lo = nodes[2 * (2 * i + 1)], l_hi = nodes[2 * (2 * i + 1) + 1];
-  float4 r_lo = nodes[2 * (2 * i + 2)], r_hi = nodes[2 * (2 * i + 2) + 1];
+  int left = 2 * i + 1 + SDF_LBVH_ROOT;
+  float4 l_lo = nodes[2 * left], l_hi = nodes[2 * left + 1];
+  float4 r_lo = nodes[2 * left + 2], r_hi = nodes[2 * left + 3];
   float3 lo = fmin(l_lo.xyz, r_lo.xyz), hi = fmax(l_hi.xyz, r_hi.xyz);
   int slot = slot_of[n + i];
   if (node.y <= SDF_LBVH_LEAF_SIZE)
     sdf_lbvh_store(nodes, slot, lo, node.x, hi, node.y);
   else
-    sdf_lbvh_store(nodes, slot, lo, 2 * i + 1, hi, 0);
+    sdf_lbvh_store(nodes, slot, lo, left, hi, 0);
   made_in[i] = level;
 }

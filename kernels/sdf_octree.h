@@ -53,7 +53,7 @@ SDF_INLINE SdfHit sdf_octree_closest_hit(SDF_GLOBAL const sdf_uint32* nodes,
                                          SDF_GLOBAL const SdfTriangle* tris, SdfOctreeRoot root,
                                          float3 o, float3 d, float tmin, sdf_int32 skip_id) {
   SdfHit hit = sdf_no_hit();
-  float3 inv_d = sdf_safe_inverse(d);
+  float3 inv_d = sdf_safe_inverse(d, o);
   sdf_uint32 stack_node[SDF_OCTREE_STACK_SIZE];
   float stack_lo[SDF_OCTREE_STACK_SIZE * 3];
   float stack_size[SDF_OCTREE_STACK_SIZE];

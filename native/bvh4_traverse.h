@@ -15,7 +15,7 @@ inline kern::SdfHit bvh4_closest_hit(const Bvh4& bvh, glm::vec3 o, glm::vec3 d, 
   kern::SdfHit hit{INFINITY, 0.0f, -1};
   if (bvh.empty()) return hit;
   const kern::SdfTriangle* tris = bvh.triangles->data();
-  const glm::vec3 inv = kern::sdf_safe_inverse(d);
+  const glm::vec3 inv = kern::sdf_safe_inverse(d, o);
   // Per axis, the plane a ray meets first is lo when it travels up the axis, hi otherwise;
   // choosing once per ray (not min/max per box) also makes empty slots (lo = +inf, hi = -inf)
   // give near > far.

@@ -101,7 +101,7 @@ class Ray {
  public:
   SDF_AVX2 Ray(const Bvh8& bvh, glm::vec3 o, glm::vec3 d, float tmin, std::int32_t skip_id)
       : bvh_(bvh), o_(o), d_(d), tmin_(tmin), skip_id_(skip_id) {
-    const glm::vec3 inv = kern::sdf_safe_inverse(d);
+    const glm::vec3 inv = kern::sdf_safe_inverse(d, o);
     // Per axis, the plane a ray meets first is lo when it travels up the axis, hi otherwise:
     // chosen once per ray as an offset into the node (empty slots then give near > far).
     constexpr std::size_t kLoX = offsetof(Bvh8Node, lo_x), kHiX = offsetof(Bvh8Node, hi_x);

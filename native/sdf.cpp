@@ -56,8 +56,8 @@ struct Plan {
   // item read it (H100, 1.21M faces, cast with leaves of 1 / 4: 'fast' tree 37.0 / 45.4 ms,
   // SAH 33.6 / 35.3); BvhConfig's default for the CPU's wide trees, whose leaves are packets.
   int max_leaf_size = BvhConfig{}.max_leaf_size;
-  // The faces' points and the BVH made on the device (opencl/device_tree.h); the host only
-  // orients the mesh, beside the cast.
+  // The BVH made on the device, the cast making the faces' points (opencl/device_tree.h); the
+  // host only orients the mesh, beside the cast.
   bool tree_on_device = false;
 };
 
@@ -80,14 +80,15 @@ Plan make_plan(const Options& options, [[maybe_unused]] std::size_t faces) {
   // Where the fast tree is wanted on GPUs that cast the binary tree a ray per work item: the
   // device's tree (the faces' Morton sort, Karras's tree, boxes bottom up) takes a few
   // milliseconds there, and the host is left with the orientation.
-  bool per_ray_gpus = true;
-  for (const cl::Device* d : plan.devices)
-    per_ray_gpus = per_ray_gpus && d->gpu && cl::cast_kernel_for(*d) == cl::CastKernel::BvhPerRay &&
-                   cl::makes_trees(*d);
+  bool per_ray_gpus = true, make_trees = true;
+  for (const cl::Device* d : plan.devices) {
+    per_ray_gpus = per_ray_gpus && d->gpu && cl::cast_kernel_for(*d) == cl::CastKernel::BvhPerRay;
+    make_trees = make_trees && cl::makes_trees(*d);
+  }
   if (per_ray_gpus) plan.max_leaf_size = 1;
-  plan.tree_on_device =
-      options.accel == Accel::Bvh && options.points == PointKind::Faces &&
-      faces <= cl::kDeviceTreeMaxFaces && cl::tree_on_device(plan.fast_build && per_ray_gpus);
+  plan.tree_on_device = options.accel == Accel::Bvh && options.points == PointKind::Faces &&
+                        faces <= cl::kDeviceTreeMaxFaces &&
+                        cl::tree_on_device(plan.fast_build && per_ray_gpus && make_trees);
 #endif
   return plan;
 }

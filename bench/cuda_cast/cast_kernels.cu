@@ -43,7 +43,7 @@ __device__ __forceinline__ SdfHit trav(const SdfBvhNode* __restrict__ nodes,
                                        float tmin, int skip_id, int2* sh, int stride,
                                        unsigned* cnt) {
   SdfHit hit = sdf_no_hit();
-  float3 inv_d = sdf_safe_inverse(d);
+  float3 inv_d = sdf_safe_inverse(d, o);
   int stack_node[SDF_BVH_STACK_SIZE];
   float stack_entry[SDF_BVH_STACK_SIZE];
   int sp = 0;
@@ -167,7 +167,7 @@ __global__ void __launch_bounds__(PPG * 32, MINB)
     SdfHit hit;
     if (V == 0) {
       hit = sdf_bvh_closest_hit_units(reinterpret_cast<const float4*>(nodes),
-                                      reinterpret_cast<const float4*>(tris), origin, d,
+                                      reinterpret_cast<const float4*>(tris), 0, origin, d,
                                       params.tmin, own);
     } else {
       hit = trav<SHS, COUNT, LDG4>(nodes, tris, origin, d, params.tmin, own, sh_stack + lid,

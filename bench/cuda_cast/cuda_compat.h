@@ -39,8 +39,10 @@ static __device__ __forceinline__ float3 operator*(float3 a, float s) {
  * restrict, which gives NVIDIA's OpenCL compiler the same LDG.E.128.CONSTANT). */
 typedef float4 sdf_float4;
 typedef int4 sdf_int4;
+typedef int2 sdf_int2;
 #define sdf_load4(p, i) __ldg((p) + (i))
 #define sdf_make_int4(a, b, c, d) make_int4((a), (b), (c), (d))
+#define sdf_make_int2(a, b) make_int2((a), (b))
 #define sdf_as_int(x) __float_as_int(x)
 #define sdf_as_float(x) __int_as_float(x)
 #define sdf_min(a, b) fminf((a), (b))

@@ -153,7 +153,8 @@ DeviceTree build_device_tree(const Device& device, DeviceState& s, const std::st
   if (n == 0) return tree;  // nothing can be hit: no tree, nothing to cast
 
   const std::size_t inner = std::max<std::size_t>(n, 2) - 1;
-  tree.nodes = std::make_unique<Buffer>(s, (2 * n - 1) * sizeof(kern::SdfBvhNode), nullptr);
+  // 2n - 1 nodes from slot SDF_LBVH_ROOT = 1 on.
+  tree.nodes = std::make_unique<Buffer>(s, 2 * n * sizeof(kern::SdfBvhNode), nullptr);
   {
     Buffer slot_of(s, (2 * n - 1) * 4, nullptr), inner_nodes(s, inner * 16, nullptr),
         made_in(s, inner * 4, nullptr);

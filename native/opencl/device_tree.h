@@ -31,9 +31,9 @@ struct DeviceTree {
   double upload_seconds = 0.0, build_seconds = 0.0;
 };
 
-// The most faces a device-made tree takes: its node indices (2 x slot + 1 in the kernels, as
-// in the traversal's 2 x first + 3) stay within 32-bit ints. Larger meshes keep the host's
-// tree.
+// The most faces a device-made tree takes: its slots (up to 2 x faces - 1, the root in slot 1)
+// keep the kernels' float4 indices (2 x slot + 1, and the traversal's 2 x first + 3) within
+// 32-bit ints. Larger meshes keep the host's tree.
 constexpr std::size_t kDeviceTreeMaxFaces = std::size_t{1} << 29;
 
 // Whether `device` can make the tree: its sort needs work groups of 256 items.

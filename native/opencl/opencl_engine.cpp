@@ -175,7 +175,7 @@ void run_device(const Device& device, SharedScene& shared_scene, const CastInput
   Buffer local_rays(s, table.size() * sizeof(float), table.data());
 
   if (input.mesh) {
-    // Points, order and tree made here, from the mesh alone.
+    // Order and tree made here, from the mesh alone (the kernel makes the faces' points).
     tree = build_device_tree(device, s, options, *input.mesh, [&] {
       {
         std::lock_guard<std::mutex> lock(done_mutex);
@@ -218,8 +218,8 @@ void run_device(const Device& device, SharedScene& shared_scene, const CastInput
     binary_tree_kernel("_faces");
   } else {
     const SamplePoints& points = *input.points;
-    // The points, their order and the results first: they go to the device (and the program
-    // is compiled or loaded) while the scene may still be building on the host.
+    // The points and their order first: they go to the device (and the program is compiled
+    // or loaded) while the scene may still be building on the host.
     std::vector<std::size_t> sizes = {3 * n * sizeof(float),        3 * n * sizeof(float),
                                       n * sizeof(std::int32_t),       n * sizeof(std::uint32_t),
                                       n * sizeof(float),              n * sizeof(std::int32_t),

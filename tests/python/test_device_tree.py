@@ -207,9 +207,11 @@ def test_smoothing_inside_compute_gets_the_hosts_points(monkeypatch, engine):
 
 
 def test_device_memory_stays_under_200_bytes_a_face(monkeypatch):
+    # 142 bytes a face: the mesh (about 18 here) and 124 (device_tree.cpp's phases); the bound
+    # keeps a little room and catches a buffer that outlives its phase.
     v, f = load_mesh(DATA / "bunny00.off")
     result = on_device_tree(monkeypatch, v, f, OPENCL[0])
-    assert 0 < result.device_memory <= 200 * len(f)
+    assert 0 < result.device_memory <= 150 * len(f)
 
 
 def test_a_triangle_soup_stays_under_200_bytes_a_face(monkeypatch):

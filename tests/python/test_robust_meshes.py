@@ -68,6 +68,30 @@ def test_far_beyond_everyday_scales_the_values_still_scale(scale):
     np.testing.assert_allclose(scaled.raw / scale, unit.raw, rtol=1e-4)
 
 
+@pytest.mark.parametrize("path", [
+    dict(engine="cpu"),
+    dict(engine="cpu", env={"SDF_CPU_NO_AVX2": "1"}),
+    dict(engine="opencl"),
+    dict(engine="opencl", env={"SDF_OPENCL_KERNEL": "bvh_per_ray", "SDF_OPENCL_TREE": "device"}),
+    dict(engine="opencl", env={"SDF_OPENCL_KERNEL": "bvh_per_ray", "SDF_OPENCL_TREE": "host"}),
+    dict(engine="opencl", accel="octree"),
+], ids=["cpu", "cpu-4-wide", "opencl", "opencl-device-tree", "opencl-binary", "octree"])
+def test_rays_along_an_axis_survive_far_from_the_origin(monkeypatch, path):
+    # A box's faces cast their first ray along their normal, so its direction has exactly
+    # zero components: their slab distances once took 1e30 x the origin, which overflowed past
+    # ~3e8 units and lost the ray.
+    for name, value in path.get("env", {}).items():
+        monkeypatch.setenv(name, value)
+    options = dict(engine=path["engine"], accel=path.get("accel", "bvh"))
+    vertices, triangles = box(1.0, 2.0, 3.0, 4)
+    unit = sd.compute(vertices, triangles, **options)
+    assert (unit.valid_rays == 30).all()
+    for scale in (1e9, 1e12):
+        scaled = sd.compute(vertices * scale, triangles, **options)
+        np.testing.assert_array_equal(scaled.valid_rays, unit.valid_rays)
+        np.testing.assert_allclose(scaled.raw / scale, unit.raw, rtol=1e-4)
+
+
 def test_a_mesh_wider_than_float_range_is_refused_readably():
     vertices = np.array([[1e300, 0, 0], [0, 1, 0], [0, 0, 1]], dtype=float)
     with pytest.raises(ValueError, match=r"spans 1e\+300 units on an axis"):
