@@ -49,8 +49,8 @@ class Result:
     'beside cast: upload' (the cast points' frames). With threads=0 the BVH builds beside
     'prepare' (and on OpenCL beside the points' upload): 'build' is its own time, 'build
     wait' what it added to the wall time. Where a GPU makes the tree (bvh_quality 'fast' or
-    'auto' on GPUs, points 'faces'): 'build (device)' (the faces' sort, the tree and the
-    points) instead of 'build' and 'build wait', and 'auto' orientation runs beside the cast
+    'auto' on GPUs, points 'faces'): 'build (device)' (the faces' sort and the tree; the
+    cast makes the faces' points) instead of 'build' and 'build wait', and 'auto' orientation runs beside the cast
     as 'orientation (beside cast)' with its steps ('orientation: edges', ...); where it
     reversed faces, 'cast (discarded)' (the cast of the mesh as wound, until it stopped: the
     orientation's time is within it) and 'orientation: reverse faces' come before the stages
