@@ -112,18 +112,25 @@ SDF_INLINE float sdf_box_entry(SDF_GLOBAL const SdfBvhNode* node, float3 o, floa
                               make_float3(node->hi_x, node->hi_y, node->hi_z), o, inv_d, tmax);
 }
 
-/* 1 / d, each zero component (|d| <= 1e-30) replaced by a huge value of its sign, for the ray
- * o + t d. Slab tests take plane * inv - o * inv (or (plane - o) * inv), so o * big must stay
- * finite: big is 1e30 within 1e8 units of the centre, 1e38 / |o| beyond (a fixed 1e30 overflowed
- * past ~3e8 units and lost every ray along an axis). Past 1e8 units it stays big enough that
- * a plane the ray's line runs beside, a float step from o or more, lies beyond every t: a step
- * there is at least |o| * 6e-8, times big 6e30, and meshes span at most 1e30 (mesh.h). */
+/* 1 / d for the ray o + t d, where a component is zero or so small (|1 / d| beyond `big`) that
+ * o * (1 / d) could overflow, a huge value of its sign instead: slab tests take
+ * plane * inv - o * inv (or (plane - o) * inv), so o * inv must stay finite. big is 1e30 within
+ * about 1e8 units of the centre, 1e38 / |o| beyond: a fixed 1e30 overflowed past ~3e8 units
+ * and lost every ray along an axis (and 1 / d of a component like 5e-29, a face's axis off by
+ * round-off, overflowed sooner). Treating such a component as zero is safe: the ray's line
+ * then stays within the boxes' margin (2^-20 of the largest coordinate, bvh_margin.h) of
+ * where it started on that axis, and every slab it runs inside is still at least margin * big,
+ * about 1e32, away. */
+SDF_INLINE float sdf_safe_inverse_1(float d, float big) {
+  float inv = 1.0f / d;
+  return fabs(d) > 1e-30f && fabs(inv) <= big ? inv : copysign(big, d);
+}
+
 SDF_INLINE float3 sdf_safe_inverse(float3 d, float3 o) {
   float reach = sdf_max(1.0f, sdf_max(fabs(o.x), sdf_max(fabs(o.y), fabs(o.z))));
   float big = sdf_min(1e30f, 1e38f / reach);
-  return make_float3(fabs(d.x) > 1e-30f ? 1.0f / d.x : copysign(big, d.x),
-                     fabs(d.y) > 1e-30f ? 1.0f / d.y : copysign(big, d.y),
-                     fabs(d.z) > 1e-30f ? 1.0f / d.z : copysign(big, d.z));
+  return make_float3(sdf_safe_inverse_1(d.x, big), sdf_safe_inverse_1(d.y, big),
+                     sdf_safe_inverse_1(d.z, big));
 }
 
 SDF_KERNEL_END

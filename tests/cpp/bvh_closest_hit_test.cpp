@@ -224,6 +224,38 @@ TEST(Bvh, ExitTestSeesTheFaceTheRayLeavesThrough) {
   EXPECT_GT(in.det, 0.0f);
 }
 
+TEST(Bvh, RaysAlongAnAxisAreNotLostFarFromTheCentre) {
+  // Two unit-thick plates 2e12 apart, 4e12 wide: rays go up from the lower plate's top face,
+  // along z, with x and y components that are zero or round-off small. o * (1 / d) once
+  // overflowed there (1e30 stood in for 1 / 0), and every box was missed.
+  test::Arrays a;
+  const float w = 2e12f, lo = -1e12f, hi = 1e12f;
+  for (float z : {lo, hi}) {
+    const int base = static_cast<int>(a.vertices.size() / 3);
+    a.vertices.insert(a.vertices.end(), {-w, -w, z, w, -w, z, w, w, z, -w, w, z});
+    a.triangles.insert(a.triangles.end(), {base, base + 1, base + 2, base, base + 2, base + 3});
+  }
+  Bvh bvh = build_bvh(a.mesh());
+  grow_boxes_to_cover_hits(bvh);
+  const Bvh4 wide = collapse_to_bvh4(bvh);
+  for (float tiny : {0.0f, 1e-31f, 5e-29f, 1e-27f, 1e-20f}) {
+    const glm::vec3 o(1e12f, -5e11f, lo);
+    const glm::vec3 d = glm::normalize(glm::vec3(tiny, -tiny, 1.0f));
+    const kern::SdfHit want = brute_force(bvh, o, d, 1.0f, -1);
+    ASSERT_NEAR(want.t, 2e12f, 1e6f) << "tiny " << tiny;
+    EXPECT_EQ(kern::sdf_bvh_closest_hit(bvh.nodes.data(), bvh.triangles.data(), o, d, 1.0f, -1).t,
+              want.t)
+        << "binary, tiny " << tiny;
+    EXPECT_EQ(bvh4_closest_hit(wide, o, d, 1.0f, -1).t, want.t) << "4-wide, tiny " << tiny;
+#if SDF_HAVE_BVH8
+    if (bvh8_supported()) {
+      const Bvh8 wide8 = collapse_to_bvh8(bvh);
+      EXPECT_EQ(bvh8_closest_hit_avx2(wide8, o, d, 1.0f, -1).t, want.t) << "8-wide, tiny " << tiny;
+    }
+#endif
+  }
+}
+
 }  // namespace
 }  // namespace sdf
 
