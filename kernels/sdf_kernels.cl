@@ -264,8 +264,8 @@ __kernel void sdf_cast_bvh_per_ray(__global const float4* restrict nodes,
  * the trees made on the device). */
 __kernel void sdf_cast_bvh_faces(__global const float4* restrict nodes,
                                  __global const float4* restrict tris, SDF_FACE_POINT_ARGS) {
-  SDF_CAST_BODY(SDF_START_OF_FACE,
-                sdf_bvh_closest_hit_units(nodes, tris, SDF_LBVH_ROOT, origin, d, params.tmin, own))
+  SDF_CAST_BODY(SDF_START_OF_FACE, sdf_bvh_closest_hit_units(nodes, tris, SDF_LBVH_ROOT, origin,
+                                                             d, params.tmin, own))
 }
 
 __kernel void sdf_cast_bvh_per_ray_faces(__global const float4* restrict nodes,
@@ -273,7 +273,8 @@ __kernel void sdf_cast_bvh_per_ray_faces(__global const float4* restrict nodes,
                                          SDF_FACE_POINT_ARGS, __local float* ray_t,
                                          __local float* ray_angle) {
   SDF_CAST_PER_RAY_BODY(SDF_START_OF_FACE,
-                        sdf_bvh_closest_hit_units(nodes, tris, SDF_LBVH_ROOT, origin, d, params.tmin, own))
+                        sdf_bvh_closest_hit_units(nodes, tris, SDF_LBVH_ROOT, origin, d,
+                                                  params.tmin, own))
 }
 
 __kernel void sdf_cast_octree(__global const uint* restrict nodes,

@@ -371,7 +371,7 @@ Output compute(Mesh mesh, const Options& options, const ProgressFn& progress,
   if (beside_cast)
     timed_beside_cast = [&] {
       Stopwatch beside;
-      // The device makes the cast's points itself; the hook gets the host's, made here.
+      // The device's cast makes its points itself; the hook gets the host's, made here.
       if (plan.tree_on_device) points = sample_points(mesh, options.points, options.threads);
       beside_cast(points);
       beside_seconds = beside.lap();

@@ -50,13 +50,14 @@ using SceneSource = std::function<Scene()>;
 struct CastTimings {
   double upload = 0.0, cast = 0.0, download = 0.0;
   double wait = 0.0;  // for the scene, once the points were uploaded
-  double build = 0.0;  // of a tree made on the device (and its points)
+  double build = 0.0;  // of a tree made on the device (the faces' sort and the tree)
   std::uint64_t device_bytes = 0;  // buffers on the device (the largest of several devices)
 };
 
 // What the devices cast: points sampled on the host (`points`, cast in the spatial `order`
 // through the tree `scene` gives), or, with `mesh` set, its faces, each device making their
-// points, their order and a BVH itself (device_tree.h). size: points or faces.
+// order and a BVH itself (device_tree.h) and its cast the faces' points. size: points or
+// faces.
 struct CastInput {
   SceneSource scene;
   const SamplePoints* points = nullptr;
