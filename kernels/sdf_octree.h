@@ -15,11 +15,13 @@ SDF_KERNEL_BEGIN
 
 #define SDF_OCTREE_POINTER_BITS 24
 #define SDF_OCTREE_MAX_POINTER ((1u << SDF_OCTREE_POINTER_BITS) - 1u)
-/* A ray crosses at most 4 octants of a cube (it crosses each of the 3 mid-planes once), so a
- * visit pops one entry and pushes at most 4: 3 more per level. 16 levels is the deepest tree
- * the builder accepts. */
+/* A ray in general position crosses at most 4 octants of a cube, but one lying in the cells'
+ * shared faces touches every cell on both sides (the entry test is inclusive, so it misses
+ * none): all 8 children when it runs along a line where four cells meet. A visit pops one
+ * entry and pushes at most 8: 7 more per level, 16 levels the deepest tree the builder
+ * accepts. */
 #define SDF_OCTREE_MAX_DEPTH 16
-#define SDF_OCTREE_STACK_SIZE (3 * SDF_OCTREE_MAX_DEPTH + 2)
+#define SDF_OCTREE_STACK_SIZE (7 * SDF_OCTREE_MAX_DEPTH + 1)
 
 SDF_INLINE sdf_uint32 sdf_octree_pointer(sdf_uint32 descriptor) { return descriptor >> 8; }
 SDF_INLINE sdf_uint32 sdf_octree_mask(sdf_uint32 descriptor) { return descriptor & 0xffu; }

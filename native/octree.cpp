@@ -8,33 +8,36 @@
 
 namespace sdf {
 
-bool triangle_overlaps_box(glm::vec3 center, glm::vec3 half, glm::vec3 v0, glm::vec3 v1,
-                           glm::vec3 v2) {
-  v0 -= center;
-  v1 -= center;
-  v2 -= center;
+// In double: the plane test's products are the cube of a length (edge x edge, then a point),
+// past float's range for a mesh ~1e13 wide (make_mesh accepts 1e30). An overflow made every
+// child reject a triangle its parent held (compute fuzzer).
+bool triangle_overlaps_box(glm::vec3 box_center, glm::vec3 box_half, glm::vec3 p0,
+                           glm::vec3 p1, glm::vec3 p2) {
+  const glm::dvec3 center(box_center), half(box_half);
+  const glm::dvec3 v0 = glm::dvec3(p0) - center, v1 = glm::dvec3(p1) - center,
+                   v2 = glm::dvec3(p2) - center;
   // Box axes: the triangle's bounds against the box's.
   for (int a = 0; a < 3; ++a) {
-    const float lo = std::min(v0[a], std::min(v1[a], v2[a]));
-    const float hi = std::max(v0[a], std::max(v1[a], v2[a]));
+    const double lo = std::min(v0[a], std::min(v1[a], v2[a]));
+    const double hi = std::max(v0[a], std::max(v1[a], v2[a]));
     if (lo > half[a] || hi < -half[a]) return false;
   }
-  const glm::vec3 e0 = v1 - v0, e1 = v2 - v1, e2 = v0 - v2;
+  const glm::dvec3 e0 = v1 - v0, e1 = v2 - v1, e2 = v0 - v2;
   // The nine cross products of the box axes with the edges.
-  const glm::vec3 edges[3] = {e0, e1, e2};
-  const glm::vec3 axes[3] = {{1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
-  for (const glm::vec3& e : edges) {
-    for (const glm::vec3& u : axes) {
-      const glm::vec3 axis = glm::cross(u, e);
-      const float p0 = glm::dot(v0, axis), p1 = glm::dot(v1, axis), p2 = glm::dot(v2, axis);
-      const float r = half.x * std::fabs(axis.x) + half.y * std::fabs(axis.y) +
-                      half.z * std::fabs(axis.z);
-      if (std::min(p0, std::min(p1, p2)) > r || std::max(p0, std::max(p1, p2)) < -r) return false;
+  const glm::dvec3 edges[3] = {e0, e1, e2};
+  const glm::dvec3 axes[3] = {{1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
+  for (const glm::dvec3& e : edges) {
+    for (const glm::dvec3& u : axes) {
+      const glm::dvec3 axis = glm::cross(u, e);
+      const double d0 = glm::dot(v0, axis), d1 = glm::dot(v1, axis), d2 = glm::dot(v2, axis);
+      const double r = half.x * std::fabs(axis.x) + half.y * std::fabs(axis.y) +
+                       half.z * std::fabs(axis.z);
+      if (std::min(d0, std::min(d1, d2)) > r || std::max(d0, std::max(d1, d2)) < -r) return false;
     }
   }
   // The triangle's plane against the box.
-  const glm::vec3 n = glm::cross(e0, e1);
-  const float r = half.x * std::fabs(n.x) + half.y * std::fabs(n.y) + half.z * std::fabs(n.z);
+  const glm::dvec3 n = glm::cross(e0, e1);
+  const double r = half.x * std::fabs(n.x) + half.y * std::fabs(n.y) + half.z * std::fabs(n.z);
   return std::fabs(glm::dot(n, v0)) <= r;
 }
 
@@ -69,6 +72,12 @@ class OctreeBuilder {
           children[octant].push_back(t);
       }
       if (!children[octant].empty()) mask |= 1u << octant;
+    }
+    // A node whose triangles all touch it only within its margin (the grown parent cell) has
+    // no child; mask 0 would read as a leaf with no leaf words behind its pointer.
+    if (mask == 0) {
+      make_leaf(node, tris);
+      return;
     }
     const std::uint32_t first = static_cast<std::uint32_t>(out_.nodes.size());
     const int count = __builtin_popcount(mask);
