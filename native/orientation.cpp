@@ -9,6 +9,7 @@
 
 #include "orientation_edges.h"
 #include "orientation_parts.h"
+#include "orientation_patches.h"
 #include "parallel.h"
 #include "stopwatch.h"
 #include "uninitialized_vector.h"
@@ -18,43 +19,6 @@ namespace sdf {
 namespace {
 
 constexpr std::size_t kGrain = 1 << 14;
-
-// Per face: reverse it (1) or not (0) so that faces agree with their manifold-edge
-// neighbours. Serial and in face order on purpose: where a patch cannot be oriented (a Moebius
-// strip) or its adjacency is one-sided (degenerate faces), the result depends on which face
-// is reached first, and it must not change.
-std::vector<char> propagate_flips(const Mesh& mesh, const EdgeNeighbours& edges) {
-  const std::size_t n = mesh.triangles.size();
-  std::vector<char> flip(n, 0), seen(n, 0);
-  std::vector<std::uint32_t> patch, queue;
-  for (std::uint32_t seed = 0; seed < n; ++seed) {
-    if (seen[seed]) continue;
-    patch.clear();
-    queue.assign(1, seed);
-    seen[seed] = 1;
-    while (!queue.empty()) {
-      const std::uint32_t f = queue.back();
-      queue.pop_back();
-      patch.push_back(f);
-      for (int k = 0; k < 3; ++k) {
-        const std::uint32_t g = edges.face[3 * std::size_t{f} + k];
-        if (g == kNoNeighbour || seen[g]) continue;  // a non-orientable patch keeps its first choice
-        seen[g] = 1;
-        flip[g] = flip[f] ^ edges.same[3 * std::size_t{f} + k];
-        queue.push_back(g);
-      }
-    }
-    // Keep the winding that most of the patch's area already has.
-    double kept = 0.0, reversed = 0.0;
-    bool any_reversed = false;
-    for (std::uint32_t f : patch) any_reversed |= flip[f] != 0;
-    if (!any_reversed) continue;  // the common case: the patch already agrees
-    for (std::uint32_t f : patch) (flip[f] ? reversed : kept) += glm::length(face_area_normal(mesh, f));
-    if (reversed > kept)
-      for (std::uint32_t f : patch) flip[f] ^= 1;
-  }
-  return flip;
-}
 
 struct Box {
   glm::dvec3 lo{1e300}, hi{-1e300};
@@ -109,7 +73,7 @@ OrientationReport orient_auto(const Mesh& mesh, unsigned threads, bool fast_path
     step.lap("orientation: edges");
     // Fast path: no manifold edge runs the same way in its two faces, so propagation would
     // reverse nothing (every patch already agrees).
-    flip = edges.any_same || !fast_path ? propagate_flips(mesh, edges) : std::vector<char>(n, 0);
+    flip = edges.any_same || !fast_path ? patch_flips(mesh, edges, threads) : std::vector<char>(n, 0);
   }
   step.lap("orientation: patches");
 

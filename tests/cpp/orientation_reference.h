@@ -77,6 +77,7 @@ inline std::vector<char> reference_consistent_flips(const Mesh& mesh) {
     bool any_reversed = false;
     for (std::uint32_t f : patch) any_reversed |= flip[f] != 0;
     if (!any_reversed) continue;
+    std::sort(patch.begin(), patch.end());  // areas summed in face order
     for (std::uint32_t f : patch) (flip[f] ? reversed : kept) += glm::length(face_area_normal(mesh, f));
     if (reversed > kept)
       for (std::uint32_t f : patch) flip[f] ^= 1;

@@ -1,0 +1,155 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
+#include "orientation_patches.h"
+
+#include <algorithm>
+#include <atomic>
+#include <cstdint>
+#include <utility>
+
+#include "concurrent_parity_union_find.h"
+#include "parallel.h"
+#include "prefetch.h"
+#include "uninitialized_vector.h"
+
+namespace sdf {
+
+namespace {
+
+constexpr std::size_t kGrain = 1 << 14;
+// Faces handled per batch of prefetches.
+constexpr std::size_t kBatch = 16;
+
+// Does face g list face f back, across an edge run the same way (`same`)?
+bool lists_back(const EdgeNeighbours& edges, std::uint32_t g, std::uint32_t f, char same) {
+  for (int k = 0; k < 3; ++k)
+    if (edges.face[3 * std::size_t{g} + k] == f && edges.same[3 * std::size_t{g} + k] == same)
+      return true;
+  return false;
+}
+
+}  // namespace
+
+std::vector<char> patch_flips_serial(const Mesh& mesh, const EdgeNeighbours& edges) {
+  const std::size_t n = mesh.triangles.size();
+  std::vector<char> flip(n, 0), seen(n, 0);
+  std::vector<std::uint32_t> patch, queue;
+  for (std::uint32_t seed = 0; seed < n; ++seed) {
+    if (seen[seed]) continue;
+    patch.clear();
+    queue.assign(1, seed);
+    seen[seed] = 1;
+    while (!queue.empty()) {
+      const std::uint32_t f = queue.back();
+      queue.pop_back();
+      patch.push_back(f);
+      for (int k = 0; k < 3; ++k) {
+        const std::uint32_t g = edges.face[3 * std::size_t{f} + k];
+        if (g == kNoNeighbour || seen[g]) continue;  // a non-orientable patch keeps its first choice
+        seen[g] = 1;
+        flip[g] = flip[f] ^ edges.same[3 * std::size_t{f} + k];
+        queue.push_back(g);
+      }
+    }
+    bool any_reversed = false;
+    for (std::uint32_t f : patch) any_reversed |= flip[f] != 0;
+    if (!any_reversed) continue;  // the common case: the patch already agrees
+    // Keep the winding that most of the patch's area already has; summed in face order, the
+    // order the parallel version sums in.
+    std::sort(patch.begin(), patch.end());
+    double kept = 0.0, reversed = 0.0;
+    for (std::uint32_t f : patch) (flip[f] ? reversed : kept) += glm::length(face_area_normal(mesh, f));
+    if (reversed > kept)
+      for (std::uint32_t f : patch) flip[f] ^= 1;
+  }
+  return flip;
+}
+
+std::optional<std::vector<char>> patch_flips_parallel(const Mesh& mesh,
+                                                      const EdgeNeighbours& edges,
+                                                      unsigned threads) {
+  const std::size_t n = mesh.triangles.size();
+  // Each manifold edge joins its two faces' sets, their bits differing where the edge runs
+  // the same way in both (one of them must be reversed).
+  ConcurrentParityUnionFind sets(n, threads);
+  std::atomic<bool> simple{true};
+  parallel_for(n, kGrain, threads, [&](std::size_t begin, std::size_t end) {
+    if (!simple.load(std::memory_order_relaxed)) return;
+    bool ok = true;
+    for (std::size_t first = begin; first < end; first += kBatch) {
+      const std::size_t last = std::min(end, first + kBatch);
+      for (std::size_t f = first; f < last; ++f)  // the neighbours' slots and words
+        for (int k = 0; k < 3; ++k) {
+          const std::uint32_t g = edges.face[3 * f + k];
+          if (g == kNoNeighbour) continue;
+          prefetch(&edges.face[3 * std::size_t{g}]);
+          sets.prefetch_word(g);
+        }
+      for (std::size_t f = first; f < last; ++f)
+        for (int k = 0; k < 3; ++k) {
+          const std::uint32_t g = edges.face[3 * f + k];
+          if (g == kNoNeighbour || g == f) continue;  // the serial walk skips itself too
+          const char same = edges.same[3 * f + k];
+          ok &= lists_back(edges, g, static_cast<std::uint32_t>(f), same);
+          if (f < g) ok &= sets.unite(static_cast<std::uint32_t>(f), g, same);
+        }
+    }
+    if (!ok) simple.store(false, std::memory_order_relaxed);
+  });
+  if (!simple.load()) return std::nullopt;
+
+  // A set's root is its smallest face, where the serial walk starts it: a face's bit is its
+  // flip. Sets with a face to reverse are weighed by area.
+  std::vector<char> flip(n);
+  UninitializedVector<std::uint32_t> root(n);
+  UninitializedVector<std::atomic<std::uint8_t>> weigh(n);
+  parallel_for(n, kGrain, threads, [&](std::size_t begin, std::size_t end) {
+    for (std::size_t f = begin; f < end; ++f) weigh[f].store(0, std::memory_order_relaxed);
+  });
+  parallel_for(n, kGrain, threads, [&](std::size_t begin, std::size_t end) {
+    for (std::size_t f = begin; f < end; ++f) {
+      const ConcurrentParityUnionFind::Found found = sets.find(static_cast<std::uint32_t>(f));
+      root[f] = found.root;
+      flip[f] = static_cast<char>(found.parity);
+      if (found.parity) weigh[found.root].store(1, std::memory_order_relaxed);
+    }
+  });
+  UninitializedVector<double> area(n);
+  parallel_for(n, kGrain, threads, [&](std::size_t begin, std::size_t end) {
+    for (std::size_t f = begin; f < end; ++f) {
+      prefetch_corners(mesh, f + kPrefetchFacesAhead);
+      if (weigh[root[f]].load(std::memory_order_relaxed))
+        area[f] = glm::length(face_area_normal(mesh, f));
+    }
+  });
+  // Sums in face order (serial: one sequential pass, most faces in one or few sets).
+  struct Sums {
+    double kept = 0.0, reversed = 0.0;
+  };
+  std::vector<Sums> sums;
+  UninitializedVector<std::uint32_t> slot(n);  // per weighed root, its entry in sums
+  for (std::size_t f = 0; f < n; ++f) {
+    const std::uint32_t r = root[f];
+    if (!weigh[r].load(std::memory_order_relaxed)) continue;
+    if (r == f) {  // the root comes first in face order
+      slot[r] = static_cast<std::uint32_t>(sums.size());
+      sums.emplace_back();
+    }
+    Sums& s = sums[slot[r]];
+    (flip[f] ? s.reversed : s.kept) += area[f];
+  }
+  parallel_for(n, kGrain, threads, [&](std::size_t begin, std::size_t end) {
+    for (std::size_t f = begin; f < end; ++f) {
+      const std::uint32_t r = root[f];
+      if (weigh[r].load(std::memory_order_relaxed) && sums[slot[r]].reversed > sums[slot[r]].kept)
+        flip[f] ^= 1;
+    }
+  });
+  return flip;
+}
+
+std::vector<char> patch_flips(const Mesh& mesh, const EdgeNeighbours& edges, unsigned threads) {
+  std::optional<std::vector<char>> flip = patch_flips_parallel(mesh, edges, threads);
+  return flip ? std::move(*flip) : patch_flips_serial(mesh, edges);
+}
+
+}  // namespace sdf

@@ -1,0 +1,125 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
+// Step 1 of orient(Auto), the patches: the parallel version (a union-find carrying each
+// face's winding relative to its set's root) must give the serial walk's flips face for face
+// wherever it accepts a mesh, and must refuse the meshes where only the walk's order defines
+// the result; both must match the first-written reference (orientation_reference.h).
+#include <gtest/gtest.h>
+
+#include <vector>
+
+#include "orientation_edges.h"
+#include "orientation_patches.h"
+#include "orientation_reference.h"
+#include "orientation_test_meshes.h"
+
+namespace sdf {
+namespace {
+
+std::size_t count_differing(const std::vector<char>& a, const std::vector<char>& b) {
+  std::size_t differing = a.size() == b.size() ? 0 : a.size() + b.size();
+  for (std::size_t f = 0; f < a.size() && f < b.size(); ++f) differing += (a[f] != 0) != (b[f] != 0);
+  return differing;
+}
+
+// Accepted by the parallel version on every thread count, with the serial flips.
+void expect_parallel_agrees(const test::Arrays& a) {
+  const Mesh mesh = a.mesh();
+  const EdgeNeighbours edges = manifold_edge_neighbours(mesh, 2, true);
+  const std::vector<char> serial = patch_flips_serial(mesh, edges);
+  EXPECT_EQ(count_differing(serial, test::reference_consistent_flips(mesh)), 0u);
+  for (unsigned threads : {1u, 2u, 5u}) {
+    SCOPED_TRACE(threads);
+    const std::optional<std::vector<char>> parallel = patch_flips_parallel(mesh, edges, threads);
+    ASSERT_TRUE(parallel.has_value());
+    EXPECT_EQ(count_differing(*parallel, serial), 0u);
+    EXPECT_EQ(count_differing(patch_flips(mesh, edges, threads), serial), 0u);
+  }
+}
+
+std::size_t count_flipped(const std::vector<char>& flip) {
+  std::size_t n = 0;
+  for (char c : flip) n += c != 0;
+  return n;
+}
+
+TEST(OrientationPatches, ScatteredFlipsAreUndone) {
+  test::Arrays a = test::torus(300, 200, 0.0, 21);  // 120k faces, shuffled
+  test::reverse_every(a, 3);
+  expect_parallel_agrees(a);
+  const Mesh mesh = a.mesh();
+  const std::vector<char> flip = patch_flips(mesh, manifold_edge_neighbours(mesh, 2), 2);
+  EXPECT_EQ(count_flipped(flip), mesh.triangles.size() / 3);  // the third reversed, no more
+}
+
+TEST(OrientationPatches, TheLargerAreaKeepsItsWinding) {
+  // Two of three faces reversed: the patch takes the reversed winding (the torus is then
+  // inside out; step 2 turns it back) and flips the third that was not.
+  test::Arrays a = test::torus(120, 80, 0.0, 22);
+  test::reverse_every(a, 3, 0);
+  test::reverse_every(a, 3, 1);
+  expect_parallel_agrees(a);
+  const Mesh mesh = a.mesh();
+  const std::vector<char> flip = patch_flips(mesh, manifold_edge_neighbours(mesh, 2), 2);
+  EXPECT_EQ(count_flipped(flip), mesh.triangles.size() / 3);
+  for (std::size_t f = 2; f < mesh.triangles.size(); f += 3) EXPECT_TRUE(flip[f]) << f;
+}
+
+TEST(OrientationPatches, ManyPatchesAndASeam) {
+  // Three tori in grid order and shuffled, one inside out, one with an unwelded seam (two
+  // patches in one part), faces flipped in each; and a soup of lone triangles (a patch each).
+  test::Arrays a = test::torus(60, 40, 0.0, 0);
+  test::reverse_every(a, 7);
+  test::Arrays inside_out = test::torus(30, 20, 3.0, 23);
+  test::reverse_every(inside_out, 1);
+  test::reverse_every(inside_out, 5, 2);
+  test::append(a, inside_out);
+  test::append(a, test::soup(3000, 4));
+  test::Arrays seam = test::torus(40, 30, -3.0, 0);
+  const std::int64_t base = static_cast<std::int64_t>(seam.vertices.size() / 3);
+  for (int j = 0; j < 30; ++j)
+    seam.vertices.insert(seam.vertices.end(), seam.vertices.begin() + 3 * j,
+                         seam.vertices.begin() + 3 * j + 3);
+  for (std::size_t f = 39 * 30 * 2; f < seam.triangles.size() / 3; ++f)
+    for (int k = 0; k < 3; ++k)
+      if (seam.triangles[3 * f + k] < 30) seam.triangles[3 * f + k] += base;
+  test::reverse_every(seam, 11, 3);
+  test::append(a, seam);
+  expect_parallel_agrees(a);
+}
+
+TEST(OrientationPatches, OnlyTheSerialWalkDefinesAwkwardMeshes) {
+  // A Moebius strip (no winding agrees all round) and degenerate faces whose adjacency is
+  // one-sided: the parallel version refuses; patch_flips falls back to the walk.
+  const Mesh mesh = test::awkward_mesh().mesh();
+  const EdgeNeighbours edges = manifold_edge_neighbours(mesh, 2, true);
+  EXPECT_FALSE(patch_flips_parallel(mesh, edges, 2).has_value());
+  const std::vector<char> serial = patch_flips_serial(mesh, edges);
+  EXPECT_EQ(count_differing(serial, test::reference_consistent_flips(mesh)), 0u);
+  EXPECT_EQ(count_differing(patch_flips(mesh, edges, 3), serial), 0u);
+}
+
+TEST(OrientationPatches, AMoebiusStripAloneIsRefused) {
+  test::Arrays strip;
+  const int quads = 24;
+  const double pi = std::acos(-1.0);
+  for (int i = 0; i < quads; ++i) {
+    const double u = 2 * pi * i / quads;
+    for (double s : {-0.2, 0.2})
+      strip.vertices.insert(strip.vertices.end(), {(1 + s * std::cos(u / 2)) * std::cos(u),
+                                                   (1 + s * std::cos(u / 2)) * std::sin(u),
+                                                   s * std::sin(u / 2)});
+  }
+  for (int i = 0; i < quads; ++i) {
+    const std::int64_t a0 = 2 * i, a1 = 2 * i + 1;
+    const bool last = i == quads - 1;
+    const std::int64_t b0 = last ? 1 : 2 * (i + 1), b1 = last ? 0 : 2 * (i + 1) + 1;
+    strip.triangles.insert(strip.triangles.end(), {a0, b0, b1, a0, b1, a1});
+  }
+  const Mesh mesh = strip.mesh();
+  const EdgeNeighbours edges = manifold_edge_neighbours(mesh, 2, true);
+  EXPECT_FALSE(patch_flips_parallel(mesh, edges, 2).has_value());
+  EXPECT_EQ(count_differing(patch_flips(mesh, edges, 2), patch_flips_serial(mesh, edges)), 0u);
+}
+
+}  // namespace
+}  // namespace sdf
