@@ -44,7 +44,7 @@ class ConcurrentParityUnionFind {
       if (p == x) return {x, parity};
       const std::uint64_t pw = word_[p].load(std::memory_order_relaxed);
       const std::uint32_t grand = parent(pw);
-      if (grand == p) return {p, parity ^ bit(w)};
+      if (grand == p) return {p, parity ^ bit(w)};  // p is the root: nothing to halve
       // Path halving; a plain store: x is no root, so no link writes its word.
       const std::uint32_t to_grand = bit(w) ^ bit(pw);
       word_[x].store(pack(grand, to_grand), std::memory_order_relaxed);

@@ -73,9 +73,9 @@ std::optional<std::vector<char>> patch_flips_parallel(const Mesh& mesh,
   ConcurrentParityUnionFind sets(n, threads);
   std::atomic<bool> simple{true};
   parallel_for(n, kGrain, threads, [&](std::size_t begin, std::size_t end) {
-    if (!simple.load(std::memory_order_relaxed)) return;
     bool ok = true;
-    for (std::size_t first = begin; first < end; first += kBatch) {
+    for (std::size_t first = begin; first < end && ok; first += kBatch) {
+      if (!simple.load(std::memory_order_relaxed)) return;  // refused elsewhere
       const std::size_t last = std::min(end, first + kBatch);
       for (std::size_t f = first; f < last; ++f)  // the neighbours' slots and words
         for (int k = 0; k < 3; ++k) {
@@ -87,7 +87,7 @@ std::optional<std::vector<char>> patch_flips_parallel(const Mesh& mesh,
       for (std::size_t f = first; f < last; ++f)
         for (int k = 0; k < 3; ++k) {
           const std::uint32_t g = edges.face[3 * f + k];
-          if (g == kNoNeighbour || g == f) continue;  // the serial walk skips itself too
+          if (g == kNoNeighbour || g == f) continue;  // (never itself; the walk would skip it)
           const char same = edges.same[3 * f + k];
           ok &= lists_back(edges, g, static_cast<std::uint32_t>(f), same);
           if (f < g) ok &= sets.unite(static_cast<std::uint32_t>(f), g, same);

@@ -18,8 +18,9 @@ std::vector<char> patch_flips(const Mesh& mesh, const EdgeNeighbours& edges, uns
 
 // The serial definition: patches grown from faces in face order, each face taking its
 // winding from the face that reached it first; a patch's areas summed in face order. Where a
-// patch cannot be oriented (a Moebius strip) or its adjacency is one-sided (degenerate faces),
-// the result depends on which face is reached first: only this order defines it.
+// patch cannot be oriented (a Moebius strip), or a face lists a neighbour that does not list
+// it back (a degenerate face using an edge twice lists the face across it), the result
+// depends on which face is reached first: only this order defines it.
 std::vector<char> patch_flips_serial(const Mesh& mesh, const EdgeNeighbours& edges);
 
 // The same result in parallel, for meshes where every neighbour lists its neighbour back and

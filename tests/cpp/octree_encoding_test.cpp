@@ -60,7 +60,7 @@ void expect_well_formed(const Octree& tree) {
   }
 }
 
-TEST(OctreeEncoding, MeshFarFromFloatsComfortIsWellFormed) {
+TEST(OctreeEncoding, MeshOf1e18UnitsIsWellFormed) {
   // Found by the compute fuzzer: a tetrahedron 1e18 wide. The overlap test's plane products
   // overflowed, every child refused the triangles, and the mask-0 node read as a leaf with no
   // words behind it (a wild triangle index in the cast).
@@ -160,8 +160,9 @@ TEST(OctreeEncoding, RejectsBadConfigs) {
 // A ray through a cube's centre touches all 8 octants there (the entry test is inclusive, so a
 // ray grazing a cell at one point visits it). Along the root's main diagonal every cell's
 // centre is on the ray, and pages meeting at the diagonal make the builder split every cell
-// along it down to the deepest level: 8 children at each of 16 levels, 7 more stack entries a
-// level (found by reading; the stack once held 3 a level, and ASan saw it overflow here).
+// along it down to the deepest level: up to 8 children pushed for each one popped, the stack
+// 112 entries deep here (the bound is 113; found by reading: the stack once held 50, and
+// UBSan saw it overflow here).
 TEST(OctreeClosestHit, RayDownTheDiagonalOfTheDeepestTree) {
   test::Arrays a;
   a.vertices = {-1, -1, -1, 1, 1, 1, 1, -1, -1, -1, 1, -1, -1, -1, 1};

@@ -87,9 +87,59 @@ TEST(OrientationPatches, ManyPatchesAndASeam) {
   expect_parallel_agrees(a);
 }
 
+TEST(OrientationPatches, ATieKeepsTheFirstFacesWinding) {
+  // A square of two triangles of equal area, one reversed: the areas tie, and the patch keeps
+  // the winding of its first face (where the walk starts, the union-find's root).
+  for (int reversed : {0, 1}) {
+    SCOPED_TRACE(reversed);
+    test::Arrays a;
+    a.vertices = {0, 0, 0, 1, 0, 0, 1, 1, 0, 0, 1, 0};
+    a.triangles = {0, 1, 2, 0, 2, 3};
+    test::reverse_every(a, 2, reversed);
+    expect_parallel_agrees(a);
+    const Mesh mesh = a.mesh();
+    const std::vector<char> flip = patch_flips(mesh, manifold_edge_neighbours(mesh, 2), 2);
+    EXPECT_EQ(flip, (std::vector<char>{0, 1}));
+  }
+}
+
+TEST(OrientationPatches, OneSidedAdjacencyIsRefused) {
+  // Face 0 lists face 1 across an edge; face 1 lists nothing back. The walk's patches then
+  // depend on which face comes first, so the parallel version must leave it to the walk.
+  test::Arrays a;
+  a.vertices = {0, 0, 0, 1, 0, 0, 0, 1, 0, 5, 5, 5, 6, 5, 5, 5, 6, 5};
+  a.triangles = {0, 1, 2, 3, 4, 5};
+  const Mesh mesh = a.mesh();
+  EdgeNeighbours edges;
+  edges.face = {1, kNoNeighbour, kNoNeighbour, kNoNeighbour, kNoNeighbour, kNoNeighbour};
+  edges.same = {0, 0, 0, 0, 0, 0};
+  edges.any_same = false;
+  EXPECT_FALSE(patch_flips_parallel(mesh, edges, 2).has_value());
+  // Listed back, the same pair is accepted.
+  edges.face[3] = 0;
+  EXPECT_TRUE(patch_flips_parallel(mesh, edges, 2).has_value());
+}
+
+TEST(OrientationPatches, AFaceUsingItsEdgeTwiceIsLeftToTheWalk) {
+  // (0, 1, 0) uses the edge 0-1 both ways, and so lists the face across it twice with
+  // opposite bits (that face lists it not at all): the parallel version refuses.
+  test::Arrays a;
+  a.vertices = {0, 0, 0, 1, 0, 0, 0, 1, 0};
+  for (const std::vector<std::int64_t>& faces :
+       {std::vector<std::int64_t>{0, 1, 0, 0, 1, 2}, std::vector<std::int64_t>{0, 1, 2, 0, 1, 0}}) {
+    a.triangles = faces;
+    const Mesh mesh = a.mesh();
+    const EdgeNeighbours edges = manifold_edge_neighbours(mesh, 2, true);
+    EXPECT_FALSE(patch_flips_parallel(mesh, edges, 2).has_value());
+    const std::vector<char> serial = patch_flips_serial(mesh, edges);
+    EXPECT_EQ(count_differing(serial, test::reference_consistent_flips(mesh)), 0u);
+    EXPECT_EQ(count_differing(patch_flips(mesh, edges, 2), serial), 0u);
+  }
+}
+
 TEST(OrientationPatches, OnlyTheSerialWalkDefinesAwkwardMeshes) {
-  // A Moebius strip (no winding agrees all round) and degenerate faces whose adjacency is
-  // one-sided: the parallel version refuses; patch_flips falls back to the walk.
+  // A Moebius strip (no winding agrees all round) among degenerate and non-manifold faces:
+  // the parallel version refuses; patch_flips falls back to the walk.
   const Mesh mesh = test::awkward_mesh().mesh();
   const EdgeNeighbours edges = manifold_edge_neighbours(mesh, 2, true);
   EXPECT_FALSE(patch_flips_parallel(mesh, edges, 2).has_value());
