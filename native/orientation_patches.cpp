@@ -97,39 +97,30 @@ std::optional<std::vector<char>> patch_flips_parallel(const Mesh& mesh,
   });
   if (!simple.load()) return std::nullopt;
 
-  // A set's root is its smallest face, where the serial walk starts it: a face's bit is its
-  // flip. Sets with a face to reverse are weighed by area.
+  // Per face: its set's root (the set's smallest face, where the serial walk starts it), its
+  // bit relative to the root (its flip) and its area.
   std::vector<char> flip(n);
   UninitializedVector<std::uint32_t> root(n);
-  UninitializedVector<std::atomic<std::uint8_t>> weigh(n);
-  parallel_for(n, kGrain, threads, [&](std::size_t begin, std::size_t end) {
-    for (std::size_t f = begin; f < end; ++f) weigh[f].store(0, std::memory_order_relaxed);
-  });
-  parallel_for(n, kGrain, threads, [&](std::size_t begin, std::size_t end) {
-    for (std::size_t f = begin; f < end; ++f) {
-      const ConcurrentParityUnionFind::Found found = sets.find(static_cast<std::uint32_t>(f));
-      root[f] = found.root;
-      flip[f] = static_cast<char>(found.parity);
-      if (found.parity) weigh[found.root].store(1, std::memory_order_relaxed);
-    }
-  });
-  UninitializedVector<double> area(n);
+  UninitializedVector<float> area(n);
   parallel_for(n, kGrain, threads, [&](std::size_t begin, std::size_t end) {
     for (std::size_t f = begin; f < end; ++f) {
       prefetch_corners(mesh, f + kPrefetchFacesAhead);
-      if (weigh[root[f]].load(std::memory_order_relaxed))
-        area[f] = glm::length(face_area_normal(mesh, f));
+      const ConcurrentParityUnionFind::Found found = sets.find(static_cast<std::uint32_t>(f));
+      root[f] = found.root;
+      flip[f] = static_cast<char>(found.parity);
+      area[f] = glm::length(face_area_normal(mesh, f));
     }
   });
-  // Sums in face order (serial: one sequential pass, most faces in one or few sets).
+  // Per set, the area that keeps its winding and the area that reverses it, summed in face
+  // order (serial: one sequential pass; most faces lie in few sets). A set whose faces all
+  // keep theirs sums 0 reversed and is left alone, as the walk leaves it.
   struct Sums {
     double kept = 0.0, reversed = 0.0;
   };
   std::vector<Sums> sums;
-  UninitializedVector<std::uint32_t> slot(n);  // per weighed root, its entry in sums
+  UninitializedVector<std::uint32_t> slot(n);  // per root, its set's entry in sums
   for (std::size_t f = 0; f < n; ++f) {
     const std::uint32_t r = root[f];
-    if (!weigh[r].load(std::memory_order_relaxed)) continue;
     if (r == f) {  // the root comes first in face order
       slot[r] = static_cast<std::uint32_t>(sums.size());
       sums.emplace_back();
@@ -139,9 +130,8 @@ std::optional<std::vector<char>> patch_flips_parallel(const Mesh& mesh,
   }
   parallel_for(n, kGrain, threads, [&](std::size_t begin, std::size_t end) {
     for (std::size_t f = begin; f < end; ++f) {
-      const std::uint32_t r = root[f];
-      if (weigh[r].load(std::memory_order_relaxed) && sums[slot[r]].reversed > sums[slot[r]].kept)
-        flip[f] ^= 1;
+      const Sums& s = sums[slot[root[f]]];
+      if (s.reversed > s.kept) flip[f] ^= 1;
     }
   });
   return flip;
