@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "orientation_edges.h"
+#include "orientation_nesting.h"
 #include "orientation_parts.h"
 #include "orientation_patches.h"
 #include "parallel.h"
@@ -20,18 +21,14 @@ namespace {
 
 constexpr std::size_t kGrain = 1 << 14;
 
-struct Box {
-  glm::dvec3 lo{1e300}, hi{-1e300};
-};
-
 // Bounding box of each part's face corners, from the vertices (read in order, where the
 // corners would be read scattered): the vertices of a part lie at its corners' positions
 // (orientation_parts.h). Min and max are exact, so the chunks' boxes merge to the same box in
 // any order; with many parts (more than a box per part per chunk would hold cheaply) one
 // serial pass does it.
-std::vector<Box> part_boxes(const Mesh& mesh, const Parts& parts, unsigned threads) {
+std::vector<PartBox> part_boxes(const Mesh& mesh, const Parts& parts, unsigned threads) {
   const std::size_t nv = mesh.vertices.size();
-  auto add_vertices = [&](std::vector<Box>& boxes, std::size_t begin, std::size_t end) {
+  auto add_vertices = [&](std::vector<PartBox>& boxes, std::size_t begin, std::size_t end) {
     for (std::size_t v = begin; v < end; ++v) {
       const std::uint32_t part = parts.part_of_root[parts.root_of_vertex[v]];
       if (part == kNoPart) continue;
@@ -41,18 +38,18 @@ std::vector<Box> part_boxes(const Mesh& mesh, const Parts& parts, unsigned threa
     }
   };
   const std::size_t chunks = (nv + kGrain - 1) / kGrain;
-  std::vector<Box> boxes(parts.count);
+  std::vector<PartBox> boxes(parts.count);
   if (parts.count > 64 || chunks < 2) {
     add_vertices(boxes, 0, nv);
     return boxes;
   }
-  std::vector<std::vector<Box>> chunk_boxes(chunks);
+  std::vector<std::vector<PartBox>> chunk_boxes(chunks);
   parallel_for(nv, kGrain, threads, [&](std::size_t begin, std::size_t end) {
-    std::vector<Box>& mine = chunk_boxes[begin / kGrain];
+    std::vector<PartBox>& mine = chunk_boxes[begin / kGrain];
     mine.resize(parts.count);
     add_vertices(mine, begin, end);
   });
-  for (const std::vector<Box>& chunk : chunk_boxes)
+  for (const std::vector<PartBox>& chunk : chunk_boxes)
     for (std::size_t p = 0; p < parts.count; ++p) {
       boxes[p].lo = glm::min(boxes[p].lo, chunk[p].lo);
       boxes[p].hi = glm::max(boxes[p].hi, chunk[p].hi);
@@ -80,13 +77,13 @@ OrientationReport orient_auto(const Mesh& mesh, unsigned threads, bool fast_path
   const Parts parts = find_parts(mesh, threads);
   report.parts = parts.count;
   step.lap("orientation: parts");
-  const std::vector<Box> boxes = part_boxes(mesh, parts, threads);
+  const std::vector<PartBox> boxes = part_boxes(mesh, parts, threads);
   // Signed volume of each part about its bounding-box centre, in double. The terms in
   // parallel; their sum in face order, as always, so that no rounding changes.
   UninitializedVector<double> term(n);
   parallel_for(n, kGrain, threads, [&](std::size_t begin, std::size_t end) {
     for (std::size_t f = begin; f < end; ++f) {
-      const Box& box = boxes[parts.part_of[f]];
+      const PartBox& box = boxes[parts.part_of[f]];
       const glm::dvec3 c = 0.5 * (box.lo + box.hi);
       const glm::uvec3 t = mesh.triangles[f];
       const glm::dvec3 p0 = glm::dvec3(mesh.vertices[t.x]) - c, p1 = glm::dvec3(mesh.vertices[t.y]) - c,
@@ -97,10 +94,30 @@ OrientationReport orient_auto(const Mesh& mesh, unsigned threads, bool fast_path
   });
   std::vector<double> volume(parts.count, 0.0);
   for (std::size_t f = 0; f < n; ++f) volume[parts.part_of[f]] += term[f];
-  std::vector<char> reverse_part(parts.count);
+  step.lap("orientation: volumes");
+  // A part's volume says 'inside out' when clearly negative, 'outward' when clearly positive.
+  std::vector<char> negative(parts.count), clear(parts.count);
   for (std::size_t p = 0; p < parts.count; ++p) {
     const double diagonal = glm::length(boxes[p].hi - boxes[p].lo);
-    reverse_part[p] = volume[p] < -1e-6 * diagonal * diagonal * diagonal;
+    const double threshold = 1e-6 * diagonal * diagonal * diagonal;
+    negative[p] = volume[p] < -threshold;
+    clear[p] = negative[p] || volume[p] > threshold;
+  }
+  // A part inside another (a hollow solid's inner wall, wound inward) keeps its winding
+  // relative to the innermost part around it: reversed only with it.
+  const std::vector<std::uint32_t> inside = enclosing_parts(mesh, parts, boxes, clear, threads);
+  std::vector<char> reverse_part(parts.count), decided(parts.count, 0);
+  std::vector<std::uint32_t> chain;
+  for (std::uint32_t p = 0; p < parts.count; ++p) {
+    std::uint32_t q = p;
+    chain.clear();
+    while (!decided[q] && inside[q] != kNoPart) {  // enclosers rank higher: no cycle
+      chain.push_back(q);
+      q = inside[q];
+    }
+    if (!decided[q]) reverse_part[q] = negative[q], decided[q] = 1;
+    for (auto it = chain.rbegin(); it != chain.rend(); ++it)
+      reverse_part[*it] = reverse_part[inside[*it]], decided[*it] = 1;
   }
   // flip[f] becomes whether face f is reversed.
   std::atomic<std::size_t> flipped{0};
@@ -114,7 +131,7 @@ OrientationReport orient_auto(const Mesh& mesh, unsigned threads, bool fast_path
   });
   report.flipped_faces = flipped.load();
   if (report.flipped_faces > 0) report.reversed.assign(flip.begin(), flip.end());
-  step.lap("orientation: volumes");
+  step.lap("orientation: nesting");
   return report;
 }
 

@@ -35,10 +35,15 @@ struct OrientationReport {
 //    negative (below -1e-6 of its bounding-box diagonal cubed) is reversed. Open parts are
 //    judged the same way: their volume is indicative, and only a clearly negative one is
 //    acted on (a flat sheet, volume 0, is left alone).
+// 3. Except a part that lies inside another (orientation_nesting.h: the inner wall of a hollow
+//    solid, a bubble): it keeps its winding relative to the innermost part around it, reversed
+//    only when that one is. A cavity wound inward stays so; a mesh wound inside out as a whole
+//    is turned outward as a whole; a separate solid inside another (an eye in a head) keeps
+//    the winding it was given.
 // Reverses faces in place (swapping two corners) and reports what it did. Runs on `threads`
 // (0 = every core); the result does not depend on the thread count.
 // steps: where given, Auto's steps' seconds are appended ('orientation: edges', 'patches',
-// 'parts', 'volumes').
+// 'parts', 'volumes', 'nesting').
 OrientationReport orient(Mesh& mesh, Orientation mode, unsigned threads = 0,
                          StageTimings* steps = nullptr);
 

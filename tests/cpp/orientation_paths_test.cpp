@@ -96,6 +96,73 @@ TEST(OrientationPaths, AwkwardMeshAgreesWithTheReference) {
   EXPECT_EQ(run(a, [](Mesh& m) { return orient(m, Orientation::Auto, 3); }).report.parts, 4u);
 }
 
+std::size_t flipped(const test::Arrays& a) {
+  return run(a, [](Mesh& m) { return orient(m, Orientation::Auto, 2); }).report.flipped_faces;
+}
+
+// A closed box of side `side` around the origin, wound outward unless `inward`.
+test::Arrays shell(double side, bool inward) {
+  test::Arrays a = test::box(side, side, side);
+  if (inward) reverse_every(a, 1);
+  return a;
+}
+
+TEST(OrientationPaths, AHollowSolidsInnerWallStaysInward) {
+  // A box with a toroidal cavity: the torus, wound inward, is the cavity's wall. Judged
+  // alone (negative volume) it was turned outward: thicknesses came out ~4x too large.
+  test::Arrays a = shell(6.0, false);
+  test::Arrays cavity = torus(60, 40, 0.0, 31);
+  reverse_every(cavity, 1);
+  test::append(a, cavity);
+  expect_all_paths_agree(a);
+  EXPECT_EQ(flipped(a), 0u);
+  // The whole solid inside out: turned outward as a whole, the cavity with it.
+  reverse_every(a, 1);
+  expect_all_paths_agree(a);
+  EXPECT_EQ(flipped(a), a.triangles.size() / 3);
+}
+
+TEST(OrientationPaths, ASolidInsideASolidKeepsItsWinding) {
+  // A torus wound outward inside a box: a separate solid (an eye in a head), or a cavity wound
+  // the wrong way; nothing tells them apart, so the winding given stands.
+  test::Arrays a = shell(6.0, false);
+  test::append(a, torus(60, 40, 0.0, 32));
+  expect_all_paths_agree(a);
+  EXPECT_EQ(flipped(a), 0u);
+}
+
+TEST(OrientationPaths, NestedShellsFollowTheOutermost) {
+  // Box 8 outward, box 6 inward (a cavity), a torus outward in the cavity (a solid again),
+  // and beside them an inside-out torus (alone: turned outward).
+  test::Arrays a = shell(8.0, false);
+  test::append(a, shell(6.0, true));
+  test::append(a, torus(40, 30, 0.0, 33));
+  test::Arrays beside = torus(40, 30, 10.0, 34);
+  reverse_every(beside, 1);
+  const std::size_t nested_faces = a.triangles.size() / 3;
+  test::append(a, beside);
+  expect_all_paths_agree(a);
+  EXPECT_EQ(flipped(a), a.triangles.size() / 3 - nested_faces);
+  // All inside out but the torus beside: the nest turns as a whole, the torus not at all.
+  reverse_every(a, 1);
+  expect_all_paths_agree(a);
+  EXPECT_EQ(flipped(a), nested_faces);
+}
+
+TEST(OrientationPaths, AnOpenBoxEnclosesNothing) {
+  // A box without its top around an inside-out torus: a ray leaving through the opening
+  // crosses the box an even number of times, so the torus is judged alone and turned.
+  test::Arrays a = shell(6.0, false);
+  // box(): the quad {4, 5, 7, 6} is the top (z = +side / 2), triangles 2 and 3.
+  a.triangles.erase(a.triangles.begin() + 6, a.triangles.begin() + 12);
+  const std::size_t box_faces = a.triangles.size() / 3;
+  test::Arrays inner = torus(40, 30, 0.0, 35);
+  reverse_every(inner, 1);
+  test::append(a, inner);
+  expect_all_paths_agree(a);
+  EXPECT_EQ(flipped(a), a.triangles.size() / 3 - box_faces);
+}
+
 TEST(OrientationPaths, TriangleSoupAgreesWithTheReference) {
   // Separate triangles, many overlapping: 20k parts, boxes and volumes per part.
   expect_all_paths_agree(test::soup(20000, 3));

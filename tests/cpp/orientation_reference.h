@@ -5,6 +5,7 @@
 #pragma once
 
 #include <algorithm>
+#include <cmath>
 #include <cstdint>
 #include <numeric>
 #include <tuple>
@@ -142,10 +143,65 @@ inline OrientationReport reference_orient_auto(Mesh& mesh) {
     const double v = glm::dot(p0, glm::cross(p1, p2)) / 6.0;
     volume[part] += flip[f] ? -v : v;
   }
+  // Nesting: part p lies in part q (at least 4 faces, volume clearly non-zero, a box holding
+  // p's and larger, or as large with a lower number) when three rays from the centroid of p's
+  // first face all cross q's faces an odd number of times; the smallest such q is p's.
+  const std::size_t parts = report.parts;
+  std::vector<double> threshold(parts), box_volume(parts);
+  std::vector<std::size_t> face_count(parts, 0), first_face(parts, mesh.triangles.size());
   for (std::size_t f = 0; f < mesh.triangles.size(); ++f) {
-    const std::uint32_t part = part_of[f];
-    const double diagonal = glm::length(hi[part] - lo[part]);
-    if (volume[part] < -1e-6 * diagonal * diagonal * diagonal) flip[f] ^= 1;
+    ++face_count[part_of[f]];
+    first_face[part_of[f]] = std::min(first_face[part_of[f]], f);
+  }
+  for (std::size_t p = 0; p < parts; ++p) {
+    const double diagonal = glm::length(hi[p] - lo[p]);
+    threshold[p] = 1e-6 * diagonal * diagonal * diagonal;
+    const glm::dvec3 e = hi[p] - lo[p];
+    box_volume[p] = e.x * e.y * e.z;
+  }
+  const glm::dvec3 rays[3] = {glm::normalize(glm::dvec3(0.5377, 0.8271, -0.1642)),
+                              glm::normalize(glm::dvec3(-0.7311, 0.2893, 0.6179)),
+                              glm::normalize(glm::dvec3(0.1937, -0.5861, -0.7868))};
+  auto corner = [&](std::size_t f, int k) { return glm::dvec3(mesh.vertices[mesh.triangles[f][k]]); };
+  std::vector<std::size_t> inside(parts, parts);
+  for (std::size_t p = 0; p < parts; ++p) {
+    const std::size_t pf = first_face[p];
+    const glm::dvec3 o = (corner(pf, 0) + corner(pf, 1) + corner(pf, 2)) / 3.0;
+    for (std::size_t q = 0; q < parts; ++q) {
+      if (q == p || face_count[q] < 4 || !(std::fabs(volume[q]) > threshold[q])) continue;
+      if (!(lo[q].x <= lo[p].x && lo[q].y <= lo[p].y && lo[q].z <= lo[p].z && hi[q].x >= hi[p].x &&
+            hi[q].y >= hi[p].y && hi[q].z >= hi[p].z))
+        continue;
+      if (!(box_volume[q] > box_volume[p] || (box_volume[q] == box_volume[p] && q < p))) continue;
+      bool odd = true;
+      for (const glm::dvec3& d : rays) {
+        std::size_t crossings = 0;
+        for (std::size_t f = 0; f < mesh.triangles.size(); ++f) {
+          if (part_of[f] != q) continue;
+          const glm::dvec3 a = corner(f, 0), e1 = corner(f, 1) - a, e2 = corner(f, 2) - a;
+          const glm::dvec3 pv = glm::cross(d, e2);
+          const double det = glm::dot(e1, pv);
+          if (det == 0.0) continue;
+          const glm::dvec3 s = o - a, qv = glm::cross(s, e1);
+          const double u = glm::dot(s, pv) / det, v = glm::dot(d, qv) / det;
+          crossings += u >= 0.0 && u <= 1.0 && v >= 0.0 && u + v <= 1.0 && glm::dot(e2, qv) / det > 0.0;
+        }
+        odd = odd && crossings % 2 == 1;
+      }
+      if (odd && (inside[p] == parts || box_volume[q] < box_volume[inside[p]] ||
+                  (box_volume[q] == box_volume[inside[p]] && q < inside[p])))
+        inside[p] = q;
+    }
+  }
+  // Outermost parts by their own volume; the others as the part around them.
+  std::vector<char> reverse_part(parts);
+  for (std::size_t p = 0; p < parts; ++p) {
+    std::size_t outermost = p;
+    while (inside[outermost] != parts) outermost = inside[outermost];
+    reverse_part[p] = volume[outermost] < -threshold[outermost];
+  }
+  for (std::size_t f = 0; f < mesh.triangles.size(); ++f) {
+    if (reverse_part[part_of[f]]) flip[f] ^= 1;
     if (flip[f]) {
       std::swap(mesh.triangles[f].y, mesh.triangles[f].z);
       ++report.flipped_faces;

@@ -98,6 +98,26 @@ def test_each_part_is_judged_on_its_own():
     np.testing.assert_array_equal(result.raw, clean.raw)
 
 
+def test_a_hollow_spheres_inner_wall_stays_inward():
+    # A shell between radii 1.5 and 2: the inner sphere, wound inward, is the cavity's wall.
+    # Judged on its own it was turned outward, and the wall measured ~2.3 instead of ~0.5.
+    outer_v, outer_t = icosphere(2.0, 3)
+    inner_v, inner_t = icosphere(1.5, 3)
+    vertices = np.concatenate([outer_v, inner_v])
+    shell = np.concatenate([outer_t, inner_t[:, [0, 2, 1]] + len(outer_v)])
+    result = sd.compute(vertices, shell)
+    assert result.flipped_faces == 0
+    as_is = sd.compute(vertices, shell, orientation="as_is")
+    np.testing.assert_array_equal(result.raw, as_is.raw)
+    # The wall is 0.5 thick: every face's value near it (the cone's slant rays measure a
+    # little more; the ray toward the far side of the cavity is an outlier and dropped).
+    assert 0.45 < np.median(result.raw) < 0.75
+    # The same shell inside out as a whole is turned outward as a whole.
+    turned = sd.compute(vertices, shell[:, [0, 2, 1]])
+    assert turned.flipped_faces == len(shell)
+    np.testing.assert_array_equal(turned.raw, as_is.raw)
+
+
 def test_a_flat_open_sheet_is_not_flipped_on_rounding():
     grid = np.array([[x, y, 0.0] for y in range(4) for x in range(4)], dtype=float)
     quads = [(y * 4 + x, y * 4 + x + 1, y * 4 + x + 5, y * 4 + x + 4)
