@@ -15,6 +15,7 @@
 #include "cpu_engine.h"
 #include "orientation.h"
 #include "stopwatch.h"
+#include "unit_scale.h"
 #ifdef SDF_HAVE_OPENCL
 #include "opencl/device_tree.h"
 #include "opencl/opencl_engine.h"
@@ -314,6 +315,9 @@ Output compute(Mesh mesh, const Options& options, const ProgressFn& progress,
 #ifndef SDF_HAVE_OPENCL
   if (!cpu) throw std::invalid_argument("this build of shape_diameter has no OpenCL engine");
 #endif
+  // A mesh far from unit size is computed scaled by a power of two (unit_scale.h).
+  const int exponent = unit_scale_exponent(mesh.max_extent);
+  if (exponent != 0) scale_mesh(mesh, exponent, options.threads);
   Output out;
   Stopwatch clock;
   // The first OpenCL run of a process loads the drivers and lists their devices (50-130 ms
@@ -373,7 +377,7 @@ Output compute(Mesh mesh, const Options& options, const ProgressFn& progress,
       Stopwatch beside;
       // The device's cast makes its points itself; the hook gets the host's, made here.
       if (plan.tree_on_device) points = sample_points(mesh, options.points, options.threads);
-      beside_cast(points);
+      beside_cast(exponent != 0 ? scaled_points(points, -exponent) : points);
       beside_seconds = beside.lap();
     };
   if (cpu) {
@@ -403,6 +407,7 @@ Output compute(Mesh mesh, const Options& options, const ProgressFn& progress,
   clock.lap();
 
   out.fill = fill_missing(mesh, options.points, out.raw.data(), out.valid_rays.data());
+  if (exponent != 0) scale_lengths(out.raw.data(), out.raw.size(), -exponent);
   out.timings.emplace_back("fill", clock.lap());
   report(progress, 1.0);
   return out;

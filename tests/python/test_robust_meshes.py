@@ -92,6 +92,29 @@ def test_rays_along_an_axis_survive_far_from_the_origin(monkeypatch, path):
         np.testing.assert_allclose(scaled.raw / scale, unit.raw, rtol=1e-4)
 
 
+@pytest.mark.parametrize("path", [
+    dict(engine="cpu"),
+    dict(engine="opencl"),
+    dict(engine="opencl", env={"SDF_OPENCL_KERNEL": "bvh_per_ray", "SDF_OPENCL_TREE": "device"}),
+    dict(engine="cpu", accel="octree"),
+], ids=["cpu", "opencl", "opencl-device-tree", "octree"])
+def test_any_accepted_scale_gives_the_same_values(monkeypatch, path):
+    # The triangle test's products reach a length cubed: a sphere 1e14 units wide (or 1e-15)
+    # once lost every ray, values all 0 (found by a new-user trial). Scaled inside compute()
+    # by a power of two to unit size, and back, the values are those of the unit sphere
+    # scaled, to the bit: float arithmetic commutes with powers of two.
+    for name, value in path.get("env", {}).items():
+        monkeypatch.setenv(name, value)
+    options = dict(engine=path["engine"], accel=path.get("accel", "bvh"))
+    vertices, triangles = icosphere(1.0, 2)
+    unit = sd.compute(vertices, triangles, **options)
+    assert (unit.valid_rays == 30).all()
+    for exponent in (-100, -60, -25, 35, 60, 98):
+        scaled = sd.compute(vertices * 2.0 ** exponent, triangles, **options)
+        np.testing.assert_array_equal(scaled.valid_rays, unit.valid_rays)
+        np.testing.assert_array_equal(scaled.raw, unit.raw * np.float32(2.0 ** exponent))
+
+
 def test_a_mesh_wider_than_float_range_is_refused_readably():
     vertices = np.array([[1e300, 0, 0], [0, 1, 0], [0, 0, 1]], dtype=float)
     with pytest.raises(ValueError, match=r"spans 1e\+300 units on an axis"):
