@@ -104,7 +104,8 @@ class OctreeBuilder {
     if (needed > SDF_OCTREE_MAX_POINTER)
       throw std::length_error(std::string("the octree needs more than 2^24 ") + what +
                               ", the limit of the paper's 24-bit child pointers; lower the "
-                              "octree's max_depth, raise its leaf_size, or use accel='bvh'");
+                              "octree's depth (octree_depth), raise its leaf size "
+                              "(octree_leaf_size), or use accel='bvh'");
   }
 
   const Mesh& mesh_;

@@ -200,7 +200,8 @@ void cast_on_cpu(const Options& options, const Plan& plan, const Structures& bui
   cast_cpu(scene, points, order, cone, minimum_closeness(mesh), options.threads, out.raw.data(),
            out.valid_rays.data(), progress, 0.05, 0.99);
   out.timings.emplace_back("cast", clock.lap());
-  out.engine = "cpu (" + std::to_string(resolve_threads(options.threads)) + " threads, " +
+  const unsigned threads = resolve_threads(options.threads);
+  out.engine = "cpu (" + std::to_string(threads) + (threads == 1 ? " thread, " : " threads, ") +
                accel_name(options.accel) + ")";
 }
 

@@ -102,7 +102,12 @@ cl_program program_for(const Device& device, DeviceState& s, const std::string& 
   return program;
 }
 
-std::string mib(std::uint64_t bytes) { return std::to_string((bytes + (1 << 20) - 1) >> 20) + " MiB"; }
+// Below 10 MiB in bytes: rounded to MiB, a need just over a small cap read "needs 1 MiB, the
+// device has 1 MiB".
+std::string mib(std::uint64_t bytes) {
+  if (bytes < (std::uint64_t{10} << 20)) return std::to_string(bytes) + " bytes";
+  return std::to_string((bytes + (1 << 20) - 1) >> 20) + " MiB";
+}
 
 void check_fits(const Device& device, const std::vector<std::size_t>& buffers, bool at_least,
                 const std::string& advice) {

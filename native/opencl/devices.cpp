@@ -3,10 +3,12 @@
 
 #include <algorithm>
 #include <cctype>
+#include <cerrno>
 #include <cstdlib>
 #include <cstring>
 #include <mutex>
 #include <stdexcept>
+#include <string>
 
 namespace sdf::cl {
 
@@ -35,6 +37,21 @@ T device_value(const Api& cl, cl_device_id d, cl_device_info what) {
   T value{};
   cl.clGetDeviceInfo(d, what, sizeof(T), &value, nullptr);
   return value;
+}
+
+// SDF_OPENCL_MAX_MEMORY's value: a plain count of bytes. strtoull alone read "1e9" as 1,
+// "2G" as 2, "abc" as 0 and "-5" as no cap at all.
+std::uint64_t memory_cap(const char* text) {
+  const std::string value(text);
+  char* end = nullptr;
+  errno = 0;
+  const unsigned long long bytes = std::strtoull(value.c_str(), &end, 10);
+  const bool digits = std::all_of(value.begin(), value.end(),
+                                  [](unsigned char c) { return std::isdigit(c) != 0; });
+  if (!digits || *end != '\0' || errno == ERANGE)
+    throw std::invalid_argument("SDF_OPENCL_MAX_MEMORY='" + value +
+                                "': give a number of bytes, digits only (e.g. 2000000000)");
+  return bytes;
 }
 
 struct Found {
@@ -83,7 +100,7 @@ Found enumerate() {
       // SDF_OPENCL_MAX_MEMORY (bytes) caps what the engine may use on every device: to leave
       // room for other programs, and to test the out-of-memory refusal on a small mesh.
       if (const char* cap = std::getenv("SDF_OPENCL_MAX_MEMORY"); cap && *cap) {
-        const std::uint64_t limit = std::strtoull(cap, nullptr, 10);
+        const std::uint64_t limit = memory_cap(cap);
         d.global_memory = std::min<std::uint64_t>(d.global_memory, limit);
         d.max_allocation = std::min<std::uint64_t>(d.max_allocation, limit);
       }

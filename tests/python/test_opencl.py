@@ -191,7 +191,24 @@ def test_a_mesh_too_large_for_the_device_is_refused_before_allocating():
         "    print(json.dumps(str(e)))\n"
     )
     message = run_python(code, SDF_OPENCL_MAX_MEMORY=1 << 20)
-    assert "does not fit" in message and "MiB" in message and "engine='cpu'" in message
+    assert "does not fit" in message and "engine='cpu'" in message
+    assert "the device has 1048576 bytes" in message  # small sizes in bytes, not rounded
+
+
+@pytest.mark.parametrize("cap", ["1e9", "2G", "abc", "-5", " 100", "99999999999999999999999"])
+def test_a_memory_cap_that_is_not_a_count_of_bytes_is_refused(cap):
+    # strtoull alone read "1e9" as 1 byte, "2G" as 2, "abc" as 0 and "-5" as no cap at all.
+    code = (
+        "import json, shape_diameter as sd\n"
+        "try:\n"
+        "    sd.compute([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]],\n"
+        "               [[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]], engine='opencl:0')\n"
+        "    print(json.dumps('no error'))\n"
+        "except ValueError as e:\n"
+        "    print(json.dumps(str(e)))\n"
+    )
+    message = run_python(code, SDF_OPENCL_MAX_MEMORY=cap)
+    assert f"SDF_OPENCL_MAX_MEMORY='{cap}'" in message and "digits only" in message
 
 
 def test_program_cache_skips_the_compiler_and_rebuilds_a_corrupt_entry(tmp_path):
