@@ -56,7 +56,8 @@ class Result:
     orientation's time is within it) and 'orientation: reverse faces' come before the stages
     of the cast that counts."""
     engine: str = "cpu"
-    """What ran, e.g. 'cpu (2 threads)'."""
+    """What ran, e.g. 'cpu (2 threads, bvh)' or 'opencl:0 <device name> (bvh)'; after an
+    'auto' fallback, with ' [fell back: <why>]'."""
     points: str = "faces"
     rays: int = 30
     device_memory: int = 0
@@ -164,7 +165,8 @@ def _check_engine(engine):
         names = ", ".join(["auto"] + [e["name"] for e in engines()])
         raise ValueError(
             f"unknown engine {engine!r}; available here: {names} (also 'opencl' for the best "
-            "OpenCL device, 'opencl:all' for every GPU, 'opencl:<part of a device name>')"
+            "OpenCL device, 'opencl:all' for every GPU (every OpenCL device where there is no "
+            "GPU), 'opencl:<part of a device name>')"
         )
 
 
@@ -223,9 +225,9 @@ def compute(
     normalize: 'linear' or 'log' for Result.normalized.
     engine: 'auto' (the best OpenCL GPU if there is one, else 'cpu'), 'cpu', 'opencl' (the
         best OpenCL device), 'opencl:N' (the N-th OpenCL device of engines()), 'opencl:all'
-        (every GPU, sharing the points; same results as one) or 'opencl:<part of a device
-        name>'. With 'auto', an OpenCL failure falls back to the CPU engine and
-        Result.engine says why.
+        (every GPU, sharing the points; same results as one; where there is no GPU, every
+        OpenCL device, e.g. PoCL's CPU device) or 'opencl:<part of a device name>'. With
+        'auto', an OpenCL failure falls back to the CPU engine and Result.engine says why.
     orientation: 'auto' (default: faces are made consistent with their neighbours, then each
         part whose signed volume is clearly negative is turned outward, e.g. meshes exported
         inside out), 'as_is' (trust the winding) or 'flip' (reverse every face).
@@ -245,8 +247,9 @@ def compute(
         OpenCL device, or the CPU; after an 'auto' fallback, the CPU; 'opencl:all': its first
         device), 'kring' on the CPU; with 'auto', an OpenCL smoothing failure also falls back
         to the CPU and Result.engine says so. uvs: per-corner (m, 3, 2) or per-vertex (n, 2)
-        texture coordinates, needed by 'texture'. smoothing_options: a dict of the method's options
-        (smooth()'s keyword options; return_image is smooth()'s alone).
+        texture coordinates, needed by 'texture' (checked whenever given). smoothing_options:
+        a dict of the method's options (smooth()'s keyword options; return_image is smooth()'s
+        alone).
 
     Points where no ray was kept (zero-area faces, rays escaping an open mesh, ...) take the
     mean of their neighbours' values (valid_rays == 0 marks them). Raises ValueError for bad

@@ -28,11 +28,13 @@ import numpy as np
 from . import __version__
 from .api import MAX_RAYS, compute
 from .colormap import colormap
+from .smoothing import DEVICE_ERRORS
 
 PROG = "shape-diameter"
 DEFAULT_SUFFIX = ".sdf.ply"
 # Exit statuses: 2 for anything wrong with what the user gave (options, input
-# file, output path), as argparse does; 1 when this machine is the problem.
+# file, output path), as argparse does; 1 when this machine is the problem (a missing
+# dependency, an OpenCL device that fails or is too small, memory, a failed write).
 EXIT_USAGE = 2
 EXIT_ENVIRONMENT = 1
 
@@ -114,8 +116,9 @@ def build_parser() -> argparse.ArgumentParser:
         "the mesh coloured by it (viridis: thin parts dark purple, thick parts yellow).",
         epilog="Reads OBJ, PLY, OFF, STL, glTF and GLB (polygons are triangulated; the "
         "meshes of a glTF scene are joined). Writes PLY, OBJ, OFF, GLB or STL, chosen by "
-        "the output suffix; STL keeps no colour. Exit status: 0 done, 2 bad option, input "
-        "or output path, 1 missing dependency or failed write.",
+        "the output suffix; STL keeps no colour; an existing OUTPUT is overwritten. Exit "
+        "status: 0 done, 2 bad option, input or output path, 1 missing dependency, OpenCL "
+        "device failure (e.g. too little device memory), out of memory or failed write.",
     )
     parser.add_argument("input", metavar="INPUT", help="mesh file to read")
     parser.add_argument(
@@ -263,6 +266,13 @@ def main(argv=None) -> int:
         return _fail(exc, EXIT_USAGE)
     except OSError as exc:  # e.g. the output could not be written
         return _fail(exc, EXIT_ENVIRONMENT)
+    except DEVICE_ERRORS as exc:
+        # The device, not the mesh. Its first line: a kernel's build log follows it; the
+        # advice is worded for the Python API.
+        line = (str(exc) or "OpenCL failed").splitlines()[0]
+        return _fail(line.replace("engine='cpu'", "--engine cpu"), EXIT_ENVIRONMENT)
+    except MemoryError:
+        return _fail("out of memory", EXIT_ENVIRONMENT)
     except KeyboardInterrupt:
         return _fail("interrupted", 130)
 
@@ -288,6 +298,7 @@ def _run(args) -> int:
     _check_writable_path(output, mesh_io.WRITE_SUFFIXES)
     if args.values:
         _check_writable_path(args.values, None)
+    _check_distinct(args.input, output, args.values)
 
     started = time.perf_counter()
     with warnings.catch_warnings():
@@ -372,6 +383,27 @@ def _check_writable_path(path: str, suffixes) -> None:
     folder = os.path.dirname(os.path.abspath(path))
     if not os.path.isdir(folder):
         raise CommandError(f"{path}: folder {folder} does not exist")
+
+
+def _check_distinct(source: str, output: str, values) -> None:
+    """Outputs are overwritten: never the input, and not one output by the other."""
+    if _same_file(output, source):
+        raise CommandError(f"{output}: is the input file; give another -o OUTPUT")
+    if values and _same_file(values, source):
+        raise CommandError(f"{values}: is the input file; give another --values FILE.npy")
+    if values and _same_file(values, output):
+        raise CommandError(f"{values}: is also the mesh output; give --values another file")
+
+
+def _same_file(a: str, b: str) -> bool:
+    """Whether two paths name one file: the same path once links are resolved, or (hard
+    links, case-insensitive file systems) the same existing file."""
+    if os.path.realpath(a) == os.path.realpath(b):
+        return True
+    try:
+        return os.path.samefile(a, b)
+    except OSError:  # one of them does not exist (yet)
+        return False
 
 
 def _report(args, vertices, triangles, result, output, io_seconds, total_seconds) -> dict:

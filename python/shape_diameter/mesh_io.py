@@ -29,6 +29,8 @@ import os
 import numpy as np
 import trimesh
 
+from .mesh_file_checks import check_complete, format_name
+
 # Formats ``save_colored`` writes. OFF goes through our own writer because
 # trimesh's OFF exporter drops colours; STL has no colour at all.
 WRITE_SUFFIXES = (".ply", ".obj", ".off", ".glb", ".stl")
@@ -47,6 +49,12 @@ def load_mesh(path) -> tuple[np.ndarray, np.ndarray]:
         raise ValueError(f"{path}: not a file")
     suffix = os.path.splitext(path)[1].lower()
     try:
+        check_complete(path, suffix)
+    except ValueError as exc:
+        raise ValueError(f"{path}: {exc}") from None
+    except OSError as exc:  # e.g. no permission to read it
+        raise ValueError(f"{path}: cannot read mesh ({exc.strerror or exc})") from exc
+    try:
         if suffix == ".obj":
             scene = trimesh.load(
                 io.BytesIO(_plain_obj(path)),
@@ -60,6 +68,12 @@ def load_mesh(path) -> tuple[np.ndarray, np.ndarray]:
             # skip_materials: textures are irrelevant here, and decoding them
             # needs Pillow, which the ``cli`` extra does not pull in.
             scene = trimesh.load(path, process=False, force="scene", skip_materials=True)
+    except ImportError as exc:
+        # trimesh guesses the encoding of text that is not UTF-8 with charset_normalizer,
+        # which it does not require: such bytes in a text format mean a broken file.
+        raise ValueError(
+            f"{path}: not a valid {format_name(suffix)} file (it is not text, or not UTF-8)"
+        ) from exc
     except Exception as exc:  # a parser fed a broken file fails in many ways
         reason = str(exc) or type(exc).__name__
         raise ValueError(f"{path}: cannot read mesh ({reason})") from exc

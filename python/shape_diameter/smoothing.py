@@ -19,6 +19,7 @@ from typing import Callable, NamedTuple, Optional
 import numpy as np
 
 from . import _core
+from .normalization import check_finite_float32, check_threads
 
 METHODS = ("none", "kring", "projected", "texture")
 
@@ -110,7 +111,8 @@ def smooth(
     values: (m,) for a value per face or (n,) for a value per vertex; finite reals.
     method: 'none' (a float32 copy), 'kring', 'projected' or 'texture'.
     uvs: per-corner texture coordinates, (m, 3, 2) (Blender's per-loop UVs, glTF/OBJ corner
-        UVs), or per-vertex (n, 2). Needed by 'texture'; the other methods ignore them.
+        UVs), or per-vertex (n, 2). Needed by 'texture'; the other methods ignore them, but
+        check them when given.
     points: 'faces' or 'vertices'; by default taken from len(values), and required when the
         mesh has as many vertices as faces.
     threads: CPU threads, 0 for every core. progress: called with the fraction done in [0, 1]
@@ -168,7 +170,7 @@ def smooth(
     values, points = _check_values(values, points, len(v), len(t))
     resolved = check_smoothing(method, options, uvs=uvs, face_count=len(t), vertex_count=len(v),
                                triangles=t)  # fmt: skip
-    threads = _check_threads(threads)
+    threads = check_threads(threads)
     if progress is not None and not callable(progress):
         raise ValueError("progress must be a callable taking a fraction in [0, 1], or None")
     _check_engine(engine)
@@ -195,10 +197,10 @@ def smooth(
 def check_smoothing(
     method, options, *, uvs=None, face_count=None, vertex_count=None, triangles=None
 ) -> dict:
-    """Checks a method name and its options (and that 'texture' has UVs of the right shape);
-    returns the options with every default filled in, and for 'texture' with the mesh's sizes
-    given, 'uvs': the checked UVs (per corner, float32, when the triangles are given too).
-    Raises ValueError."""
+    """Checks a method name and its options, and the UVs when given (needed by 'texture',
+    ignored by the other methods but checked all the same); returns the options with every
+    default filled in, and for 'texture' with the mesh's sizes given, 'uvs': the checked UVs
+    (per corner, float32, when the triangles are given too). Raises ValueError."""
     if not isinstance(method, str) or method not in METHODS:
         raise ValueError(f"smoothing method must be one of {METHODS}, got {method!r}")
     if options is None:
@@ -247,6 +249,10 @@ def check_smoothing(
             )
         if face_count is not None:
             o["uvs"] = _check_uvs(uvs, face_count, vertex_count, triangles)
+    if method != "texture" and uvs is not None and face_count is not None:
+        # Read by 'texture' only, but checked whenever given: a wrong argument should not pass
+        # unnoticed until the method changes.
+        _check_uvs(uvs, face_count, vertex_count)
     return o
 
 
@@ -384,14 +390,8 @@ def _check_values(values, points, n, m):
             f"values has {len(a)} entries, but points={points!r} needs {expected} (one per "
             f"{'face' if points == 'faces' else 'vertex'})"
         )
-    a = np.ascontiguousarray(a, dtype=np.float32)
-    bad = ~np.isfinite(a)
-    if bad.any():
-        raise ValueError(
-            f"values must be finite: {int(bad.sum())} are NaN or infinite, or too large for "
-            f"float32 (first: index {int(np.argmax(bad))})"
-        )
-    return a, points
+    check_finite_float32(a)
+    return np.ascontiguousarray(a, dtype=np.float32), points
 
 
 def _check_uvs(uvs, m, n, triangles=None):
@@ -425,12 +425,6 @@ def _resolve_engine(engine):
     from .api import _resolve_engine as resolve
 
     return resolve(engine)
-
-
-def _check_threads(threads):
-    if isinstance(threads, bool) or not isinstance(threads, (int, np.integer)) or threads < 0:
-        raise ValueError(f"threads must be a non-negative integer, got {threads!r}")
-    return int(threads)
 
 
 def _integer(name, value, lo, hi):

@@ -3,6 +3,7 @@
 
 import io
 import json
+import os
 import shutil
 import subprocess
 import sys
@@ -181,8 +182,17 @@ def _point_cloud(folder):
     return path
 
 
+def _truncated_off(folder):
+    # 60% of an ASCII OFF: once read as a mesh of fewer faces than its header declares.
+    path = folder / "truncated.off"
+    data = (DATA / "bunny00.off").read_bytes()
+    path.write_bytes(data[: int(len(data) * 0.6)])
+    return path
+
+
 PROCESS_FAILURES = {
     "missing file": lambda folder: [folder / "missing.obj"],
+    "truncated off": lambda folder: [_truncated_off(folder)],
     "garbage obj": lambda folder: [_garbage_obj(folder)],
     "truncated ply": lambda folder: [_truncated_ply(folder)],
     "negative rays": lambda folder: [DATA / "spot.obj", "--rays", "-5"],
@@ -236,6 +246,104 @@ def test_a_value_error_from_compute_is_one_line_and_status_2(tmp_path, capsys, m
     captured = capsys.readouterr()
     _assert_one_line_error(captured.err, captured.out)
     assert "cone_angle" in captured.err
+
+
+def test_truncated_off_says_so(tmp_path, capsys):
+    assert cli.main([str(_truncated_off(tmp_path)), "-o", str(tmp_path / "out.ply")]) == 2
+    captured = capsys.readouterr()
+    _assert_one_line_error(captured.err, captured.out)
+    assert "truncated OFF file: the header declares 75408 faces" in captured.err
+
+
+def test_a_file_not_of_its_format_says_so(tmp_path, capsys):
+    # A PLY renamed .stl once failed with "No module named 'charset_normalizer'".
+    renamed = tmp_path / "horse.stl"
+    shutil.copy(DATA / "horse.ply", renamed)
+    assert cli.main([str(renamed), "-o", str(tmp_path / "out.ply")]) == 2
+    captured = capsys.readouterr()
+    _assert_one_line_error(captured.err, captured.out)
+    assert "not a valid STL file (it looks like a PLY file)" in captured.err
+
+
+def _no_compute(*args, **kwargs):
+    raise AssertionError("compute() ran: the paths should have been refused first")
+
+
+@pytest.mark.parametrize("case", ["output", "output spelled otherwise", "values", "hard link",
+                                  "values is output"])  # fmt: skip
+def test_outputs_never_overwrite_the_input_or_each_other(tmp_path, capsys, monkeypatch, case):
+    source = tmp_path / "in.obj"
+    shutil.copy(DATA / "spot.obj", source)
+    (tmp_path / "sub").mkdir()
+    monkeypatch.setattr(cli, "compute", _no_compute)
+    monkeypatch.chdir(tmp_path)
+    if case == "hard link":
+        (tmp_path / "link.obj").hardlink_to(source)
+    argv = {
+        "output": ["in.obj", "-o", "in.obj"],
+        "output spelled otherwise": [str(source), "-o", "sub/../in.obj"],
+        "values": ["in.obj", "-o", "out.ply", "--values", "./in.obj"],
+        "hard link": ["in.obj", "-o", "link.obj"],
+        "values is output": ["in.obj", "-o", "out.ply", "--values", "out.ply"],
+    }[case]
+    assert cli.main(argv) == 2
+    captured = capsys.readouterr()
+    _assert_one_line_error(captured.err, captured.out)
+    assert ("is also the mesh output" if case == "values is output" else "is the input file") in (
+        captured.err
+    )
+    assert source.read_bytes() == (DATA / "spot.obj").read_bytes()
+    assert not (tmp_path / "out.ply").exists()
+
+
+def test_an_opencl_failure_is_one_line_and_status_1(tmp_path, capsys, monkeypatch):
+    # A RuntimeError the command did not catch: it once printed a traceback.
+    from shape_diameter import _core
+
+    if not hasattr(_core, "OpenCLError"):
+        pytest.skip("built without OpenCL")
+
+    def failing_compute(*args, **kwargs):
+        raise _core.OpenCLError("OpenCL clBuildProgram failed: CL_BUILD_PROGRAM_FAILURE on X; "
+                                "build log:\nerror: line 1\nerror: line 2")  # fmt: skip
+
+    monkeypatch.setattr(cli, "compute", failing_compute)
+    assert cli.main([str(DATA / "suzanne.obj"), "-o", str(tmp_path / "out.ply")]) == 1
+    captured = capsys.readouterr()
+    _assert_one_line_error(captured.err, captured.out)
+    assert "clBuildProgram failed" in captured.err and "error: line" not in captured.err
+
+
+def test_out_of_memory_is_one_line_and_status_1(tmp_path, capsys, monkeypatch):
+    def failing_compute(*args, **kwargs):
+        raise MemoryError()
+
+    monkeypatch.setattr(cli, "compute", failing_compute)
+    assert cli.main([str(DATA / "suzanne.obj"), "-o", str(tmp_path / "out.ply")]) == 1
+    captured = capsys.readouterr()
+    _assert_one_line_error(captured.err, captured.out)
+    assert "out of memory" in captured.err
+
+
+def test_a_device_too_small_is_one_line_and_status_1(tmp_path):
+    if not any(e["name"].startswith("opencl") for e in shape_diameter.engines()):
+        pytest.skip("no OpenCL device")
+    done = subprocess.run(
+        [sys.executable, "-m", "shape_diameter.cli", str(DATA / "bunny00.off"), "-o",
+         str(tmp_path / "x.ply"), "--engine", "opencl:0"],
+        check=False, capture_output=True, text=True, timeout=120,
+        env={**os.environ, "SDF_OPENCL_MAX_MEMORY": "100000"},
+    )  # fmt: skip
+    assert done.returncode == 1
+    _assert_one_line_error(done.stderr, done.stdout)
+    assert "does not fit OpenCL device" in done.stderr and "use --engine cpu" in done.stderr
+
+
+def test_help_documents_exit_statuses_and_overwriting(capsys):
+    assert cli.main(["--help"]) == 0
+    text = " ".join(capsys.readouterr().out.split())
+    assert "an existing OUTPUT is overwritten" in text
+    assert "1 missing dependency, OpenCL device failure" in text
 
 
 def test_compute_warnings_are_one_line(tmp_path, capsys):
@@ -331,7 +439,7 @@ def test_engine_accel_and_orientation_options_reach_compute(tmp_path, capsys):
                  "--accel", "octree", "--orientation", "auto", "--threads", "1", "--json"])
     assert code == 0
     report = json.loads(capsys.readouterr().out)
-    assert report["engine"] == "cpu (1 threads, octree)"
+    assert report["engine"] == "cpu (1 thread, octree)"
     assert report["flipped_faces"] == report["faces"]  # the horse is inside out
 
 

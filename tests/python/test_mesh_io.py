@@ -181,6 +181,66 @@ def test_truncated_binary_ply_is_refused(tmp_path, spot):
         load_mesh(path)
 
 
+def _ascii_copy(tmp_path, spot, suffix):
+    """spot as an ASCII OFF or PLY file (trimesh writes both)."""
+    path = tmp_path / f"whole{suffix}"
+    options = {"encoding": "ascii"} if suffix == ".ply" else {}
+    trimesh.Trimesh(*spot, process=False).export(path, **options)
+    return path
+
+
+@pytest.mark.parametrize("suffix", [".off", ".ply"])
+@pytest.mark.parametrize("kept", [0.3, 0.6, 0.9, None])
+def test_truncated_ascii_off_and_ply_are_refused(tmp_path, spot, suffix, kept):
+    # trimesh once read them as a smaller mesh without a word. Cut in the vertices, in the
+    # faces, or (None) just before the last index of the last face.
+    data = _ascii_copy(tmp_path, spot, suffix).read_bytes().rstrip()
+    path = tmp_path / f"truncated{suffix}"
+    path.write_bytes(data[: int(len(data) * kept) if kept else data.rindex(b" ")])
+    expected = "vertices" if kept == 0.3 else "faces" if kept else "last face"
+    with pytest.raises(ValueError, match=rf"{re.escape(str(path))}: truncated .*{expected}"):
+        load_mesh(path)
+
+
+def test_whole_ascii_off_and_ply_still_read(tmp_path, spot):
+    for suffix in (".off", ".ply"):
+        vertices, triangles = load_mesh(_ascii_copy(tmp_path, spot, suffix))
+        np.testing.assert_allclose(vertices, spot[0], atol=1e-6)
+        np.testing.assert_array_equal(triangles, spot[1])
+
+
+def _whole_binary_stl(tmp_path, spot):
+    path = tmp_path / "whole.stl"
+    trimesh.Trimesh(*spot, process=False).export(path)
+    return path.read_bytes()
+
+
+NOT_THAT_FORMAT = {
+    # The name, its bytes, and what the message says. These once failed with "No module
+    # named 'charset_normalizer'" (trimesh's guess at the encoding of text that is none).
+    "random.off": (lambda tmp, spot: np.random.default_rng(0).bytes(5000),
+                   r"not a valid OFF file \(it is not text\)"),
+    "random.stl": (lambda tmp, spot: np.random.default_rng(0).bytes(5000),
+                   "not a valid STL file .*header declares"),
+    "truncated.stl": (lambda tmp, spot: _whole_binary_stl(tmp, spot)[:-1],
+                      ("not a valid STL file .*declares 5856 triangles, 292884 bytes, the file "
+                       "has 292883")),
+    "ply.stl": (lambda tmp, spot: (DATA / "horse.ply").read_bytes(),
+                r"not a valid STL file \(it looks like a PLY file\)"),
+    "obj.off": (lambda tmp, spot: (DATA / "spot.obj").read_bytes(),
+                r"not a valid OFF file \(no OFF header\)"),
+}  # fmt: skip
+
+
+@pytest.mark.parametrize("name", sorted(NOT_THAT_FORMAT))
+def test_a_file_not_of_its_format_says_so(tmp_path, spot, name):
+    content, message = NOT_THAT_FORMAT[name]
+    path = tmp_path / name
+    path.write_bytes(content(tmp_path, spot))
+    with pytest.raises(ValueError, match=f"{re.escape(str(path))}: {message}"):
+        load_mesh(path)
+
+
 def test_point_cloud_is_refused_as_such(tmp_path):
     path = tmp_path / "cloud.ply"
     trimesh.PointCloud(np.random.default_rng(0).random((20, 3))).export(path)

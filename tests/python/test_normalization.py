@@ -32,9 +32,8 @@ def test_range_shape_and_thread_count():
     assert one.shape == (1000, 3) and one.min() == 0.0 and one.max() == 1.0
 
 
-def test_constant_and_nan_map_to_zero():
+def test_constant_maps_to_zero():
     np.testing.assert_array_equal(sd.normalize(np.full(5, 2.5), "linear"), np.zeros(5))
-    np.testing.assert_array_equal(sd.normalize(np.array([1.0, np.nan, 3.0]), "log"), np.zeros(3))
 
 
 def test_unknown_method():
@@ -42,11 +41,25 @@ def test_unknown_method():
         sd.normalize(np.ones(3), "cubic")
 
 
-def test_infinite_values_as_numpy_had_them():
-    # An infinite value makes the range infinite: numpy gave 0 for the finite values and NaN
-    # for the infinite one (inf / inf), and so does the native version.
-    for values in ([0.0, 1.0, np.inf], [-np.inf, 0.0], [np.inf, np.inf]):
-        v = np.array(values)
-        with np.errstate(invalid="ignore"):
-            expected = numpy_normalize(v, "linear")
-        np.testing.assert_array_equal(sd.normalize(v, "linear"), expected)
+@pytest.mark.parametrize("method", ["linear", "log"])
+@pytest.mark.parametrize(
+    "values",
+    [[1.0, np.nan, 3.0], [1.0, np.inf, 3.0], [-np.inf, 0.0], [0.0, 1e308, -1e308], [[0.0, 4e38]]],
+    ids=["nan", "inf", "-inf", "beyond float32", "beyond float32 2-D"],
+)
+def test_values_not_finite_in_float32_are_refused_as_smooth_refuses_them(values, method):
+    # A NaN or an infinite value has no range to map (they once gave 0 everywhere, or NaN),
+    # and float64 values beyond float32 overflowed the range: smooth()'s rule and message.
+    with pytest.raises(ValueError, match="values must be finite: .* too large for float32"):
+        sd.normalize(np.array(values), method)
+
+
+@pytest.mark.parametrize("threads", [-1, 2**40, 1.5, True, "2"])
+def test_a_bad_thread_count_is_a_value_error(threads):
+    with pytest.raises(ValueError, match=r"threads must be an integer in \[0, 4096\]"):
+        sd.normalize(np.ones(3), "linear", threads=threads)
+
+
+def test_values_that_are_not_numbers_are_a_value_error():
+    with pytest.raises(ValueError, match="values must be real numbers"):
+        sd.normalize(np.array(["1", "2"]), "linear")

@@ -415,6 +415,29 @@ def test_texture_needs_uvs(spot):
         smooth(v, t, faces, "texture")
 
 
+@pytest.mark.parametrize("method", ["none", "kring", "projected"])
+def test_uvs_are_checked_whenever_given(spot, method):
+    # Only 'texture' reads them, but a wrong argument was once ignored by the other methods.
+    v, t, uvs, faces, _ = spot
+    cases = [
+        ("abc", "uvs must be real numbers"),
+        (uvs[:10], r"uvs must have shape \(5856, 3, 2\) \(per face corner\) or \(2930, 2\)"),
+        (np.full_like(uvs, np.nan), "uvs must be finite"),
+    ]
+    for bad, message in cases:
+        with pytest.raises(ValueError, match=message):
+            shape_diameter.compute(v, t, rays=4, smoothing=method, uvs=bad)
+        with pytest.raises(ValueError, match=message):
+            smooth(v, t, faces, method, uvs=bad)
+    # Valid UVs change nothing for these methods.
+    plain = shape_diameter.compute(v, t, rays=4, smoothing=method)
+    with_uvs = shape_diameter.compute(v, t, rays=4, smoothing=method, uvs=uvs)
+    np.testing.assert_array_equal(plain.values, with_uvs.values)
+    per_vertex = np.zeros((len(v), 2))
+    np.testing.assert_array_equal(smooth(v, t, faces, method, uvs=per_vertex),
+                                  smooth(v, t, faces, method))  # fmt: skip
+
+
 def test_default_radius_follows_the_paper():
     assert default_radius(256) == 2.0
     assert default_radius(1024) == 8.0
@@ -477,6 +500,7 @@ def test_errors_name_the_problem(spot):
         (dict(method="none", k=1), "unknown option for smoothing 'none': k"),
         (dict(method="kring", points="edges"), "points must be 'faces' or 'vertices'"),
         (dict(method="kring", threads=-1), "threads"),
+        (dict(method="kring", threads=2**40), r"threads must be an integer in \[0, 4096\]"),
         (dict(method="kring", progress=3), "progress must be a callable"),
     ]
     for kwargs, message in cases:
