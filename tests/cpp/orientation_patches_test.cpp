@@ -36,6 +36,15 @@ void expect_parallel_agrees(const test::Arrays& a) {
   }
 }
 
+// Refused by the parallel version; patch_flips then gives the walk's flips, the reference's.
+void expect_left_to_the_walk(const Mesh& mesh) {
+  const EdgeNeighbours edges = manifold_edge_neighbours(mesh, 2, true);
+  EXPECT_FALSE(patch_flips_parallel(mesh, edges, 2).has_value());
+  const std::vector<char> serial = patch_flips_serial(mesh, edges);
+  EXPECT_EQ(count_differing(serial, test::reference_consistent_flips(mesh)), 0u);
+  EXPECT_EQ(count_differing(patch_flips(mesh, edges, 3), serial), 0u);
+}
+
 std::size_t count_flipped(const std::vector<char>& flip) {
   std::size_t n = 0;
   for (char c : flip) n += c != 0;
@@ -128,47 +137,18 @@ TEST(OrientationPatches, AFaceUsingItsEdgeTwiceIsLeftToTheWalk) {
   for (const std::vector<std::int64_t>& faces :
        {std::vector<std::int64_t>{0, 1, 0, 0, 1, 2}, std::vector<std::int64_t>{0, 1, 2, 0, 1, 0}}) {
     a.triangles = faces;
-    const Mesh mesh = a.mesh();
-    const EdgeNeighbours edges = manifold_edge_neighbours(mesh, 2, true);
-    EXPECT_FALSE(patch_flips_parallel(mesh, edges, 2).has_value());
-    const std::vector<char> serial = patch_flips_serial(mesh, edges);
-    EXPECT_EQ(count_differing(serial, test::reference_consistent_flips(mesh)), 0u);
-    EXPECT_EQ(count_differing(patch_flips(mesh, edges, 2), serial), 0u);
+    expect_left_to_the_walk(a.mesh());
   }
 }
 
 TEST(OrientationPatches, OnlyTheSerialWalkDefinesAwkwardMeshes) {
   // A Moebius strip (no winding agrees all round) among degenerate and non-manifold faces:
   // the parallel version refuses; patch_flips falls back to the walk.
-  const Mesh mesh = test::awkward_mesh().mesh();
-  const EdgeNeighbours edges = manifold_edge_neighbours(mesh, 2, true);
-  EXPECT_FALSE(patch_flips_parallel(mesh, edges, 2).has_value());
-  const std::vector<char> serial = patch_flips_serial(mesh, edges);
-  EXPECT_EQ(count_differing(serial, test::reference_consistent_flips(mesh)), 0u);
-  EXPECT_EQ(count_differing(patch_flips(mesh, edges, 3), serial), 0u);
+  expect_left_to_the_walk(test::awkward_mesh().mesh());
 }
 
 TEST(OrientationPatches, AMoebiusStripAloneIsRefused) {
-  test::Arrays strip;
-  const int quads = 24;
-  const double pi = std::acos(-1.0);
-  for (int i = 0; i < quads; ++i) {
-    const double u = 2 * pi * i / quads;
-    for (double s : {-0.2, 0.2})
-      strip.vertices.insert(strip.vertices.end(), {(1 + s * std::cos(u / 2)) * std::cos(u),
-                                                   (1 + s * std::cos(u / 2)) * std::sin(u),
-                                                   s * std::sin(u / 2)});
-  }
-  for (int i = 0; i < quads; ++i) {
-    const std::int64_t a0 = 2 * i, a1 = 2 * i + 1;
-    const bool last = i == quads - 1;
-    const std::int64_t b0 = last ? 1 : 2 * (i + 1), b1 = last ? 0 : 2 * (i + 1) + 1;
-    strip.triangles.insert(strip.triangles.end(), {a0, b0, b1, a0, b1, a1});
-  }
-  const Mesh mesh = strip.mesh();
-  const EdgeNeighbours edges = manifold_edge_neighbours(mesh, 2, true);
-  EXPECT_FALSE(patch_flips_parallel(mesh, edges, 2).has_value());
-  EXPECT_EQ(count_differing(patch_flips(mesh, edges, 2), patch_flips_serial(mesh, edges)), 0u);
+  expect_left_to_the_walk(test::moebius_strip(0.0).mesh());
 }
 
 }  // namespace

@@ -63,6 +63,28 @@ inline void reverse_every(Arrays& a, std::size_t step, std::size_t offset = 0) {
     std::swap(a.triangles[3 * f + 1], a.triangles[3 * f + 2]);
 }
 
+// A Moebius strip of 24 quads along a twisted band around (0, y, 0): no winding agrees all
+// round.
+inline Arrays moebius_strip(double y) {
+  Arrays strip;
+  const int quads = 24;
+  const double pi = std::acos(-1.0);
+  for (int i = 0; i < quads; ++i) {
+    const double u = 2 * pi * i / quads;
+    for (double s : {-0.2, 0.2})
+      strip.vertices.insert(strip.vertices.end(),
+                            {(1 + s * std::cos(u / 2)) * std::cos(u),
+                             (1 + s * std::cos(u / 2)) * std::sin(u) + y, s * std::sin(u / 2)});
+  }
+  for (int i = 0; i < quads; ++i) {
+    const std::int64_t a0 = 2 * i, a1 = 2 * i + 1;
+    const bool last = i == quads - 1;
+    const std::int64_t b0 = last ? 1 : 2 * (i + 1), b1 = last ? 0 : 2 * (i + 1) + 1;
+    strip.triangles.insert(strip.triangles.end(), {a0, b0, b1, a0, b1, a1});
+  }
+  return strip;
+}
+
 // A torus inside out, one with a seam of duplicated vertices (an unwelded UV seam: equal
 // positions, other indices, so two patches in one part), degenerate faces, an edge shared by
 // three faces, and a Moebius strip (no consistent winding: the first face reached decides).
@@ -84,24 +106,7 @@ inline Arrays awkward_mesh() {
   // Degenerate and non-manifold faces on the first torus: (a, a, b), (a, b, a), a third
   // face on an edge, and a face using its edge twice.
   a.triangles.insert(a.triangles.end(), {0, 0, 1, 2, 3, 2, 10, 11, 0, 11, 10, 5, 40, 41, 40});
-  // A Moebius strip: 24 quads along a twisted band.
-  Arrays strip;
-  const int quads = 24;
-  const double pi = std::acos(-1.0);
-  for (int i = 0; i < quads; ++i) {
-    const double u = 2 * pi * i / quads;
-    for (double s : {-0.2, 0.2})
-      strip.vertices.insert(strip.vertices.end(),
-                            {(1 + s * std::cos(u / 2)) * std::cos(u),
-                             (1 + s * std::cos(u / 2)) * std::sin(u) + 6.0, s * std::sin(u / 2)});
-  }
-  for (int i = 0; i < quads; ++i) {
-    const std::int64_t a0 = 2 * i, a1 = 2 * i + 1;
-    const bool last = i == quads - 1;
-    const std::int64_t b0 = last ? 1 : 2 * (i + 1), b1 = last ? 0 : 2 * (i + 1) + 1;
-    strip.triangles.insert(strip.triangles.end(), {a0, b0, b1, a0, b1, a1});
-  }
-  append(a, strip);
+  append(a, moebius_strip(6.0));
   return a;
 }
 
