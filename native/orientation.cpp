@@ -105,7 +105,8 @@ OrientationReport orient_auto(const Mesh& mesh, unsigned threads, bool fast_path
   }
   // A part inside another (a hollow solid's inner wall, wound inward) keeps its winding
   // relative to the innermost part around it: reversed only with it.
-  const std::vector<std::uint32_t> inside = enclosing_parts(mesh, parts, boxes, clear, threads);
+  const std::vector<std::uint32_t> inside =
+      enclosing_parts(mesh, parts, boxes, volume, clear, threads);
   std::vector<char> reverse_part(parts.count), decided(parts.count, 0);
   std::vector<std::uint32_t> chain;
   for (std::uint32_t p = 0; p < parts.count; ++p) {

@@ -38,8 +38,10 @@ struct OrientationReport {
 // 3. Except a part that lies inside another (orientation_nesting.h: the inner wall of a hollow
 //    solid, a bubble): it keeps its winding relative to the innermost part around it, reversed
 //    only when that one is. A cavity wound inward stays so; a mesh wound inside out as a whole
-//    is turned outward as a whole; a separate solid inside another (an eye in a head) keeps
-//    the winding it was given.
+//    is turned outward as a whole. A separate solid inside another (an eye inside a closed
+//    head) is treated alike: right when the two were wound alike, but an eye wound inside out
+//    inside a head wound outward stays inside out (its winding alone cannot tell it from a
+//    cavity's wall).
 // Reverses faces in place (swapping two corners) and reports what it did. Runs on `threads`
 // (0 = every core); the result does not depend on the thread count.
 // steps: where given, Auto's steps' seconds are appended ('orientation: edges', 'patches',

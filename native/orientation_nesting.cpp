@@ -2,6 +2,7 @@
 #include "orientation_nesting.h"
 
 #include <algorithm>
+#include <cmath>
 #include <atomic>
 #include <utility>
 
@@ -19,9 +20,9 @@ const glm::dvec3 kRays[3] = {glm::normalize(glm::dvec3(0.5377, 0.8271, -0.1642))
                              glm::normalize(glm::dvec3(-0.7311, 0.2893, 0.6179)),
                              glm::normalize(glm::dvec3(0.1937, -0.5861, -0.7868))};
 
-// Does the ray o + t d, t > 0, cross the triangle (a, b, c)? Moller-Trumbore in double; a ray
-// through an edge may count for both faces there, which makes that ray's count even: it then
-// says "not inside", never "inside" wrongly.
+// Does the ray o + t d, t > 0, cross the triangle (a, b, c)? Moller-Trumbore in double. A ray
+// through an edge may count for both faces there and turn its count's parity; requiring all
+// three rays to agree makes a wrong answer need such a hit on every one.
 bool crosses(glm::dvec3 o, glm::dvec3 d, glm::dvec3 a, glm::dvec3 b, glm::dvec3 c) {
   const glm::dvec3 e1 = b - a, e2 = c - a, p = glm::cross(d, e2);
   const double det = glm::dot(e1, p);
@@ -41,55 +42,121 @@ bool box_holds(const PartBox& outer, const PartBox& inner) {
          glm::all(glm::greaterThanEqual(outer.hi, inner.hi));
 }
 
-double box_volume(const PartBox& b) {
-  const glm::dvec3 e = b.hi - b.lo;
-  return e.x * e.y * e.z;
-}
+// Past this many triangle tests in all the step gives up (enclosing_parts), and past this
+// many filings of boxes in the grid below.
+constexpr double kMaxTests = 1e8;
+constexpr std::size_t kMaxFiled = std::size_t{1} << 25;
+
+// The enclosers' boxes filed in a uniform grid by the cells they overlap: an encloser of P
+// holds P's box, so it is filed in the cell of P's low corner. Keeps the search from
+// comparing every part with every encloser (tens of thousands of separate closed parts).
+class BoxGrid {
+ public:
+  BoxGrid(const std::vector<PartBox>& boxes, const std::vector<std::uint32_t>& items) {
+    for (std::uint32_t q : items) {
+      lo_ = glm::min(lo_, boxes[q].lo);
+      hi_ = glm::max(hi_, boxes[q].hi);
+    }
+    // About two cells an item, at most 64 a side.
+    const double want = std::cbrt(2.0 * static_cast<double>(items.size()));
+    cells_ = std::max(1, std::min(64, static_cast<int>(std::ceil(want))));
+    const glm::dvec3 size = glm::max(hi_ - lo_, glm::dvec3(1e-300));
+    scale_ = static_cast<double>(cells_) / size;
+    std::vector<std::size_t> count(static_cast<std::size_t>(cells_) * cells_ * cells_ + 1, 0);
+    auto each_cell = [&](std::uint32_t q, auto&& visit) {
+      const glm::ivec3 a = cell(boxes[q].lo), b = cell(boxes[q].hi);
+      for (int z = a.z; z <= b.z; ++z)
+        for (int y = a.y; y <= b.y; ++y)
+          for (int x = a.x; x <= b.x; ++x) visit(index(x, y, z));
+    };
+    for (std::uint32_t q : items) each_cell(q, [&](std::size_t c) { ++count[c + 1]; });
+    for (std::size_t c = 1; c < count.size(); ++c) count[c] += count[c - 1];
+    if (count.back() > kMaxFiled) return;  // huge boxes by the thousand: not worth it
+    ok_ = true;
+    first_ = count;
+    filed_.resize(count.back());
+    for (std::uint32_t q : items) each_cell(q, [&](std::size_t c) { filed_[count[c]++] = q; });
+  }
+  // Whether the boxes were filed (not too many cells in all).
+  bool ok() const { return ok_; }
+  // The items whose boxes overlap the cell of point p (none if p is outside the grid).
+  template <class Visit>
+  void at(glm::dvec3 p, Visit&& visit) const {
+    if (glm::any(glm::lessThan(p, lo_)) || glm::any(glm::greaterThan(p, hi_))) return;
+    const glm::ivec3 c = cell(p);
+    const std::size_t i = index(c.x, c.y, c.z);
+    for (std::size_t k = first_[i]; k < first_[i + 1]; ++k) visit(filed_[k]);
+  }
+
+ private:
+  glm::ivec3 cell(glm::dvec3 p) const {
+    const glm::dvec3 f = glm::floor((p - lo_) * scale_);
+    return glm::clamp(glm::ivec3(glm::max(f, glm::dvec3(-1.0))), glm::ivec3(0), glm::ivec3(cells_ - 1));
+  }
+  std::size_t index(int x, int y, int z) const {
+    return (static_cast<std::size_t>(z) * cells_ + y) * cells_ + x;
+  }
+  glm::dvec3 lo_{1e300}, hi_{-1e300}, scale_{1.0};
+  int cells_ = 1;
+  bool ok_ = false;
+  std::vector<std::size_t> first_;
+  std::vector<std::uint32_t> filed_;
+};
+
 
 }  // namespace
 
 std::vector<std::uint32_t> enclosing_parts(const Mesh& mesh, const Parts& parts,
                                            const std::vector<PartBox>& boxes,
+                                           const std::vector<double>& volume,
                                            const std::vector<char>& encloser, unsigned threads) {
   const std::size_t n = mesh.triangles.size(), count = parts.count;
   std::vector<std::uint32_t> inside(count, kNoPart);
-  std::vector<std::uint32_t> candidates;  // parts that can enclose
+  if (count < 2) return inside;  // the common case: nothing to do
+  // Each part's faces, in face order (a counting sort by part).
+  std::vector<std::size_t> first(count + 1, 0);
+  for (std::size_t f = 0; f < n; ++f) ++first[parts.part_of[f] + 1];
+  for (std::size_t p = 0; p < count; ++p) first[p + 1] += first[p];
+  std::vector<std::uint32_t> candidates;  // parts that can enclose: fewer faces close nothing
   for (std::uint32_t p = 0; p < count; ++p)
-    if (encloser[p]) candidates.push_back(p);
-  if (count < 2 || candidates.empty()) return inside;  // the common case: nothing to do
+    if (encloser[p] && first[p + 1] - first[p] >= 4) candidates.push_back(p);
+  if (candidates.empty()) return inside;
 
-  // An encloser ranks above what it encloses (a larger box, or the lower part number for
-  // equal boxes), so no chain of enclosers comes back to where it started.
+  // An encloser holds more volume than what it encloses (or as much, with a lower number),
+  // so no chain of enclosers comes back to where it started.
   auto ranks_above = [&](std::uint32_t q, std::uint32_t p) {
-    const double vq = box_volume(boxes[q]), vp = box_volume(boxes[p]);
+    const double vq = std::fabs(volume[q]), vp = std::fabs(volume[p]);
     return vq > vp || (vq == vp && q < p);
   };
   // Pairs (inner, outer) whose boxes nest, in inner-part order.
+  const BoxGrid grid(boxes, candidates);
+  if (!grid.ok()) return inside;
   const std::size_t chunks = (count + kGrain - 1) / kGrain;
   std::vector<std::vector<std::pair<std::uint32_t, std::uint32_t>>> chunk_pairs(chunks);
   parallel_for(count, kGrain, threads, [&](std::size_t begin, std::size_t end) {
     auto& mine = chunk_pairs[begin / kGrain];
     for (std::size_t p = begin; p < end; ++p)
-      for (std::uint32_t q : candidates)
+      grid.at(boxes[p].lo, [&](std::uint32_t q) {
         if (q != p && box_holds(boxes[q], boxes[p]) && ranks_above(q, p))
           mine.emplace_back(static_cast<std::uint32_t>(p), q);
+      });
   });
   std::vector<std::pair<std::uint32_t, std::uint32_t>> pairs;
-  for (const auto& c : chunk_pairs) pairs.insert(pairs.end(), c.begin(), c.end());
-  if (pairs.empty()) return inside;
+  double tests = 0.0;
+  for (const auto& c : chunk_pairs) {
+    for (const auto& pair : c) tests += static_cast<double>(first[pair.second + 1] - first[pair.second]);
+    pairs.insert(pairs.end(), c.begin(), c.end());
+  }
+  if (pairs.empty() || tests > kMaxTests) return inside;
 
-  // Each part's faces, in face order (a counting sort by part).
-  std::vector<std::size_t> first(count + 1, 0);
-  for (std::size_t f = 0; f < n; ++f) ++first[parts.part_of[f] + 1];
-  for (std::size_t p = 0; p < count; ++p) first[p + 1] += first[p];
   std::vector<std::uint32_t> faces(n);
   {
     std::vector<std::size_t> at(first.begin(), first.end() - 1);
     for (std::size_t f = 0; f < n; ++f) faces[at[parts.part_of[f]]++] = static_cast<std::uint32_t>(f);
   }
   auto corner = [&](std::uint32_t f, int k) { return glm::dvec3(mesh.vertices[mesh.triangles[f][k]]); };
-  for (const auto& [p, q] : pairs) {
-    if (first[q + 1] - first[q] < 4) continue;  // fewer faces close nothing
+  for (const auto& pair : pairs) {
+    const std::uint32_t p = pair.first, q = pair.second;  // (a lambda below uses q)
     // From the centroid of p's first face, along each ray, count q's faces crossed.
     const std::uint32_t probe_face = faces[first[p]];
     const glm::dvec3 o = (corner(probe_face, 0) + corner(probe_face, 1) + corner(probe_face, 2)) / 3.0;
@@ -105,12 +172,8 @@ std::vector<std::uint32_t> enclosing_parts(const Mesh& mesh, const Parts& parts,
     });
     const bool enclosed = (crossings[0].load() & 1) && (crossings[1].load() & 1) &&
                           (crossings[2].load() & 1);
-    if (!enclosed) continue;
-    // The innermost: the smallest box (the lower part number on a tie).
-    std::uint32_t& best = inside[p];
-    const double v = box_volume(boxes[q]);
-    if (best == kNoPart || v < box_volume(boxes[best]) || (v == box_volume(boxes[best]) && q < best))
-      best = q;
+    // The innermost: the encloser of least volume (ranks_above orders them strictly).
+    if (enclosed && (inside[p] == kNoPart || ranks_above(inside[p], q))) inside[p] = q;
   }
   return inside;
 }

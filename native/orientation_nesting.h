@@ -17,15 +17,20 @@ struct PartBox {
   glm::dvec3 lo{1e300}, hi{-1e300};
 };
 
-// Per part, the innermost other part that encloses it, or kNoPart. Only parts of at least 4
-// faces whose signed volume is clearly non-zero (`encloser[p]`) can enclose. P lies inside Q
-// when Q's box holds P's and each of three rays from a point of P crosses Q's faces an odd
-// number of times (a closed surface is crossed an odd number of times by any ray from a
-// point inside it; rays that disagree, as from inside an open bowl, or that graze an edge,
-// say no). Innermost: the encloser with the smallest box. Parallel over `threads`; the result
-// does not depend on the thread count.
+// Per part, the innermost other part that encloses it, or kNoPart. `volume` is each part's
+// signed volume, `encloser[p]` whether part p can enclose (its volume clearly non-zero); it
+// also needs 4 faces or more. P lies inside Q when Q encloses more volume than P (or as much,
+// with a lower number), Q's box holds P's, and each of three rays from the centroid of P's
+// first face crosses Q's faces an odd number of times (any ray from a point inside a closed
+// surface crosses it an odd number of times; rays that disagree, as from inside an open
+// bowl, say no). Innermost: the encloser of least volume.
+// The crossing tests cost P's enclosers' faces each; past 1e8 of them in all (thousands of
+// bubbles inside a million faces) the step gives up and returns no nesting (parts are then
+// judged alone, as before this step existed). Parallel over `threads`; the result does not
+// depend on the thread count.
 std::vector<std::uint32_t> enclosing_parts(const Mesh& mesh, const Parts& parts,
                                            const std::vector<PartBox>& boxes,
+                                           const std::vector<double>& volume,
                                            const std::vector<char>& encloser, unsigned threads);
 
 }  // namespace sdf

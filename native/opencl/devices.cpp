@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cctype>
 #include <cerrno>
+#include <cstdint>
 #include <cstdlib>
 #include <cstring>
 #include <mutex>
@@ -39,19 +40,16 @@ T device_value(const Api& cl, cl_device_id d, cl_device_info what) {
   return value;
 }
 
-// SDF_OPENCL_MAX_MEMORY's value: a plain count of bytes. strtoull alone read "1e9" as 1,
-// "2G" as 2, "abc" as 0 and "-5" as no cap at all.
-std::uint64_t memory_cap(const char* text) {
+// SDF_OPENCL_MAX_MEMORY's value into *bytes: a plain count of bytes, or false. strtoull alone
+// read "1e9" as 1 byte, "2G" as 2, "abc" as 0 and "-5" as no cap at all.
+bool read_memory_cap(const char* text, std::uint64_t* bytes) {
   const std::string value(text);
-  char* end = nullptr;
+  if (value.empty() || !std::all_of(value.begin(), value.end(),
+                                    [](unsigned char c) { return std::isdigit(c) != 0; }))
+    return false;
   errno = 0;
-  const unsigned long long bytes = std::strtoull(value.c_str(), &end, 10);
-  const bool digits = std::all_of(value.begin(), value.end(),
-                                  [](unsigned char c) { return std::isdigit(c) != 0; });
-  if (!digits || *end != '\0' || errno == ERANGE)
-    throw std::invalid_argument("SDF_OPENCL_MAX_MEMORY='" + value +
-                                "': give a number of bytes, digits only (e.g. 2000000000)");
-  return bytes;
+  *bytes = std::strtoull(value.c_str(), nullptr, 10);
+  return errno != ERANGE;
 }
 
 struct Found {
@@ -61,6 +59,16 @@ struct Found {
 
 Found enumerate() {
   Found found;
+  // SDF_OPENCL_MAX_MEMORY (bytes) caps what the engine may use on every device: to leave room
+  // for other programs, and to test the out-of-memory refusal on a small mesh. A value that
+  // is no count of bytes makes OpenCL unavailable, saying why ('auto' then runs on the CPU).
+  std::uint64_t cap = UINT64_MAX;
+  if (const char* text = std::getenv("SDF_OPENCL_MAX_MEMORY"); text && *text &&
+      !read_memory_cap(text, &cap)) {
+    found.why = std::string("SDF_OPENCL_MAX_MEMORY='") + text +
+                "' is not a number of bytes (digits only, e.g. 2000000000)";
+    return found;
+  }
   const Api* cl = api(&found.why);
   if (!cl) return found;
   cl_uint platform_count = 0;
@@ -97,13 +105,8 @@ Found enumerate() {
       d.max_group = device_value<std::size_t>(*cl, id, CL_DEVICE_MAX_WORK_GROUP_SIZE);
       d.fp64 = device_value<cl_device_fp_config>(*cl, id, CL_DEVICE_DOUBLE_FP_CONFIG) != 0;
       d.clock_mhz = device_value<cl_uint>(*cl, id, CL_DEVICE_MAX_CLOCK_FREQUENCY);
-      // SDF_OPENCL_MAX_MEMORY (bytes) caps what the engine may use on every device: to leave
-      // room for other programs, and to test the out-of-memory refusal on a small mesh.
-      if (const char* cap = std::getenv("SDF_OPENCL_MAX_MEMORY"); cap && *cap) {
-        const std::uint64_t limit = memory_cap(cap);
-        d.global_memory = std::min<std::uint64_t>(d.global_memory, limit);
-        d.max_allocation = std::min<std::uint64_t>(d.max_allocation, limit);
-      }
+      d.global_memory = std::min<std::uint64_t>(d.global_memory, cap);
+      d.max_allocation = std::min<std::uint64_t>(d.max_allocation, cap);
       found.devices.push_back(d);
     }
   }

@@ -122,6 +122,22 @@ TEST(OrientationPaths, AHollowSolidsInnerWallStaysInward) {
   EXPECT_EQ(flipped(a), a.triangles.size() / 3);
 }
 
+TEST(OrientationPaths, ACavityWithTheSolidsBoxStaysInward) {
+  // An octahedral cavity whose corners touch the cube's faces: the two boxes are equal, and
+  // the larger volume (not the box) says which encloses which, in either order of the parts.
+  test::Arrays cavity;
+  cavity.vertices = {3, 0, 0, -3, 0, 0, 0, 3, 0, 0, -3, 0, 0, 0, 3, 0, 0, -3};
+  cavity.triangles = {0, 2, 4, 2, 1, 4, 1, 3, 4, 3, 0, 4, 2, 0, 5, 1, 2, 5, 3, 1, 5, 0, 3, 5};
+  reverse_every(cavity, 1);  // wound inward (the list above is outward)
+  test::Arrays cube_first = shell(6.0, false), cavity_first = cavity;
+  test::append(cube_first, cavity);
+  test::append(cavity_first, shell(6.0, false));
+  for (const test::Arrays& a : {cube_first, cavity_first}) {
+    expect_all_paths_agree(a);
+    EXPECT_EQ(flipped(a), 0u);
+  }
+}
+
 TEST(OrientationPaths, ASolidInsideASolidKeepsItsWinding) {
   // A torus wound outward inside a box: a separate solid (an eye in a head), or a cavity wound
   // the wrong way; nothing tells them apart, so the winding given stands.

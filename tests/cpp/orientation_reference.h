@@ -143,11 +143,11 @@ inline OrientationReport reference_orient_auto(Mesh& mesh) {
     const double v = glm::dot(p0, glm::cross(p1, p2)) / 6.0;
     volume[part] += flip[f] ? -v : v;
   }
-  // Nesting: part p lies in part q (at least 4 faces, volume clearly non-zero, a box holding
-  // p's and larger, or as large with a lower number) when three rays from the centroid of p's
-  // first face all cross q's faces an odd number of times; the smallest such q is p's.
+  // Nesting: part p lies in part q (at least 4 faces, volume clearly non-zero and larger than
+  // p's, or as large with a lower number, a box holding p's) when three rays from the centroid
+  // of p's first face all cross q's faces an odd number of times; the least such q is p's.
   const std::size_t parts = report.parts;
-  std::vector<double> threshold(parts), box_volume(parts);
+  std::vector<double> threshold(parts);
   std::vector<std::size_t> face_count(parts, 0), first_face(parts, mesh.triangles.size());
   for (std::size_t f = 0; f < mesh.triangles.size(); ++f) {
     ++face_count[part_of[f]];
@@ -156,8 +156,6 @@ inline OrientationReport reference_orient_auto(Mesh& mesh) {
   for (std::size_t p = 0; p < parts; ++p) {
     const double diagonal = glm::length(hi[p] - lo[p]);
     threshold[p] = 1e-6 * diagonal * diagonal * diagonal;
-    const glm::dvec3 e = hi[p] - lo[p];
-    box_volume[p] = e.x * e.y * e.z;
   }
   const glm::dvec3 rays[3] = {glm::normalize(glm::dvec3(0.5377, 0.8271, -0.1642)),
                               glm::normalize(glm::dvec3(-0.7311, 0.2893, 0.6179)),
@@ -172,7 +170,8 @@ inline OrientationReport reference_orient_auto(Mesh& mesh) {
       if (!(lo[q].x <= lo[p].x && lo[q].y <= lo[p].y && lo[q].z <= lo[p].z && hi[q].x >= hi[p].x &&
             hi[q].y >= hi[p].y && hi[q].z >= hi[p].z))
         continue;
-      if (!(box_volume[q] > box_volume[p] || (box_volume[q] == box_volume[p] && q < p))) continue;
+      const double vq = std::fabs(volume[q]), vp = std::fabs(volume[p]);
+      if (!(vq > vp || (vq == vp && q < p))) continue;
       bool odd = true;
       for (const glm::dvec3& d : rays) {
         std::size_t crossings = 0;
@@ -188,9 +187,8 @@ inline OrientationReport reference_orient_auto(Mesh& mesh) {
         }
         odd = odd && crossings % 2 == 1;
       }
-      if (odd && (inside[p] == parts || box_volume[q] < box_volume[inside[p]] ||
-                  (box_volume[q] == box_volume[inside[p]] && q < inside[p])))
-        inside[p] = q;
+      const double vi = inside[p] == parts ? 0.0 : std::fabs(volume[inside[p]]);
+      if (odd && (inside[p] == parts || vq < vi || (vq == vi && q > inside[p]))) inside[p] = q;
     }
   }
   // Outermost parts by their own volume; the others as the part around them.

@@ -198,17 +198,23 @@ def test_a_mesh_too_large_for_the_device_is_refused_before_allocating():
 @pytest.mark.parametrize("cap", ["1e9", "2G", "abc", "-5", " 100", "99999999999999999999999"])
 def test_a_memory_cap_that_is_not_a_count_of_bytes_is_refused(cap):
     # strtoull alone read "1e9" as 1 byte, "2G" as 2, "abc" as 0 and "-5" as no cap at all.
+    # OpenCL is then unavailable, saying why; the CPU engine and engine='auto' still work.
     code = (
         "import json, shape_diameter as sd\n"
+        "v = [[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]]\n"
+        "t = [[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]]\n"
+        "auto = sd.compute(v, t).engine\n"
+        "names = [e['name'] for e in sd.engines()]\n"
         "try:\n"
-        "    sd.compute([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]],\n"
-        "               [[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]], engine='opencl:0')\n"
-        "    print(json.dumps('no error'))\n"
+        "    sd.compute(v, t, engine='opencl:0')\n"
+        "    error = 'no error'\n"
         "except ValueError as e:\n"
-        "    print(json.dumps(str(e)))\n"
+        "    error = str(e)\n"
+        "print(json.dumps([auto, names, error]))\n"
     )
-    message = run_python(code, SDF_OPENCL_MAX_MEMORY=cap)
-    assert f"SDF_OPENCL_MAX_MEMORY='{cap}'" in message and "digits only" in message
+    auto, names, error = run_python(code, SDF_OPENCL_MAX_MEMORY=cap)
+    assert auto.startswith("cpu (") and names == ["cpu"]
+    assert f"SDF_OPENCL_MAX_MEMORY='{cap}'" in error and "digits only" in error
 
 
 def test_program_cache_skips_the_compiler_and_rebuilds_a_corrupt_entry(tmp_path):

@@ -3,6 +3,7 @@
 unwelded patches and holes give finite values everywhere, with valid rays on the faces that
 can see the other side."""
 
+import warnings
 from pathlib import Path
 
 import numpy as np
@@ -113,6 +114,18 @@ def test_any_accepted_scale_gives_the_same_values(monkeypatch, path):
         scaled = sd.compute(vertices * 2.0 ** exponent, triangles, **options)
         np.testing.assert_array_equal(scaled.valid_rays, unit.valid_rays)
         np.testing.assert_array_equal(scaled.raw, unit.raw * np.float32(2.0 ** exponent))
+
+
+def test_smoothing_that_drifts_far_from_unit_size_says_so():
+    vertices, triangles = icosphere(1.0, 2)
+    with pytest.warns(RuntimeWarning, match="smoothing 'projected' on a mesh .* unreliable"):
+        sd.compute(vertices * 1e12, triangles, smoothing="projected")
+    # k-ring smoothing keeps to the values, scaled exactly with the mesh: no warning.
+    unit = sd.compute(vertices, triangles, smoothing="kring")
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        far = sd.compute(vertices * 2.0**60, triangles, smoothing="kring")
+    np.testing.assert_allclose(far.values / 2.0**60, unit.values, rtol=1e-6)
 
 
 def test_a_mesh_wider_than_float_range_is_refused_readably():
