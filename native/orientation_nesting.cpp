@@ -42,9 +42,7 @@ bool box_holds(const PartBox& outer, const PartBox& inner) {
          glm::all(glm::greaterThanEqual(outer.hi, inner.hi));
 }
 
-// Past this many triangle tests in all the step gives up (enclosing_parts), and past this
-// many filings of boxes in the grid below.
-constexpr double kMaxTests = 1e8;
+// Past this many filings of boxes in the grid below, the step gives up (enclosing_parts).
 constexpr std::size_t kMaxFiled = std::size_t{1} << 25;
 
 // The enclosers' boxes filed in a uniform grid by the cells they overlap: an encloser of P
@@ -104,6 +102,78 @@ class BoxGrid {
 };
 
 
+// Per probe, bit r set when ray r from it crosses the faces an odd number of times. Each
+// ray's probes are filed in a grid on the plane across the ray, so a face is tested only
+// against the probes its shadow on that plane can cover: one pass over the faces for all
+// probes (a thousand bubbles in a sphere of 82k faces: 1.08 s -> ms).
+std::vector<std::uint32_t> odd_crossings(const Mesh& mesh, const std::uint32_t* faces,
+                                         std::size_t face_count,
+                                         const std::vector<glm::dvec3>& probes,
+                                         unsigned threads) {
+  const std::size_t count = probes.size();
+  std::vector<std::uint32_t> odd(count, 0);
+  const int side = std::max(1, static_cast<int>(std::ceil(std::sqrt(static_cast<double>(count)))));
+  for (int r = 0; r < 3; ++r) {
+    const glm::dvec3 d = kRays[r];
+    const glm::dvec3 u = glm::normalize(glm::cross(d, glm::dvec3(1.0, 0.0, 0.0)));
+    const glm::dvec3 w = glm::cross(d, u);
+    auto across = [&](glm::dvec3 x) { return glm::dvec2(glm::dot(x, u), glm::dot(x, w)); };
+    // The probes across the ray, filed by cell.
+    std::vector<glm::dvec2> at(count);
+    glm::dvec2 lo(1e300), hi(-1e300);
+    for (std::size_t i = 0; i < count; ++i) {
+      at[i] = across(probes[i]);
+      lo = glm::min(lo, at[i]);
+      hi = glm::max(hi, at[i]);
+    }
+    const glm::dvec2 scale = static_cast<double>(side) / glm::max(hi - lo, glm::dvec2(1e-300));
+    auto cell = [&](glm::dvec2 x) {
+      const glm::dvec2 c = glm::clamp(glm::floor((x - lo) * scale), glm::dvec2(0.0),
+                                      glm::dvec2(static_cast<double>(side - 1)));
+      return glm::ivec2(c);
+    };
+    std::vector<std::uint32_t> start(static_cast<std::size_t>(side) * side + 1, 0), filed(count);
+    for (std::size_t i = 0; i < count; ++i) {
+      const glm::ivec2 c = cell(at[i]);
+      ++start[static_cast<std::size_t>(c.y) * side + c.x + 1];
+    }
+    for (std::size_t c = 1; c < start.size(); ++c) start[c] += start[c - 1];
+    {
+      std::vector<std::uint32_t> next(start.begin(), start.end() - 1);
+      for (std::size_t i = 0; i < count; ++i) {
+        const glm::ivec2 c = cell(at[i]);
+        filed[next[static_cast<std::size_t>(c.y) * side + c.x]++] = static_cast<std::uint32_t>(i);
+      }
+    }
+    std::vector<std::atomic<std::uint32_t>> crossings(count);
+    for (auto& c : crossings) c.store(0, std::memory_order_relaxed);
+    parallel_for(face_count, kGrain, threads, [&](std::size_t begin, std::size_t end) {
+      for (std::size_t i = begin; i < end; ++i) {
+        const glm::uvec3 t = mesh.triangles[faces[i]];
+        const glm::dvec3 a(mesh.vertices[t.x]), b(mesh.vertices[t.y]), c(mesh.vertices[t.z]);
+        const glm::dvec2 pa = across(a), pb = across(b), pc = across(c);
+        const glm::dvec2 flo = glm::min(pa, glm::min(pb, pc)), fhi = glm::max(pa, glm::max(pb, pc));
+        if (glm::any(glm::lessThan(fhi, lo)) || glm::any(glm::greaterThan(flo, hi))) continue;
+        const glm::ivec2 c0 = cell(flo), c1 = cell(fhi);
+        for (int y = c0.y; y <= c1.y; ++y)
+          for (int x = c0.x; x <= c1.x; ++x) {
+            const std::size_t cell_index = static_cast<std::size_t>(y) * side + x;
+            for (std::uint32_t k = start[cell_index]; k < start[cell_index + 1]; ++k) {
+              const std::uint32_t probe = filed[k];
+              const glm::dvec2 pt = at[probe];
+              if (glm::any(glm::lessThan(pt, flo)) || glm::any(glm::greaterThan(pt, fhi))) continue;
+              if (crosses(probes[probe], d, a, b, c))
+                crossings[probe].fetch_add(1, std::memory_order_relaxed);
+            }
+          }
+      }
+    });
+    for (std::size_t i = 0; i < count; ++i)
+      odd[i] |= (crossings[i].load(std::memory_order_relaxed) & 1u) << r;
+  }
+  return odd;
+}
+
 }  // namespace
 
 std::vector<std::uint32_t> enclosing_parts(const Mesh& mesh, const Parts& parts,
@@ -142,38 +212,36 @@ std::vector<std::uint32_t> enclosing_parts(const Mesh& mesh, const Parts& parts,
       });
   });
   std::vector<std::pair<std::uint32_t, std::uint32_t>> pairs;
-  double tests = 0.0;
-  for (const auto& c : chunk_pairs) {
-    for (const auto& pair : c) tests += static_cast<double>(first[pair.second + 1] - first[pair.second]);
-    pairs.insert(pairs.end(), c.begin(), c.end());
-  }
-  if (pairs.empty() || tests > kMaxTests) return inside;
+  for (const auto& c : chunk_pairs) pairs.insert(pairs.end(), c.begin(), c.end());
+  if (pairs.empty()) return inside;
 
   std::vector<std::uint32_t> faces(n);
   {
     std::vector<std::size_t> at(first.begin(), first.end() - 1);
     for (std::size_t f = 0; f < n; ++f) faces[at[parts.part_of[f]]++] = static_cast<std::uint32_t>(f);
   }
-  auto corner = [&](std::uint32_t f, int k) { return glm::dvec3(mesh.vertices[mesh.triangles[f][k]]); };
-  for (const auto& pair : pairs) {
-    const std::uint32_t p = pair.first, q = pair.second;  // (a lambda below uses q)
-    // From the centroid of p's first face, along each ray, count q's faces crossed.
-    const std::uint32_t probe_face = faces[first[p]];
-    const glm::dvec3 o = (corner(probe_face, 0) + corner(probe_face, 1) + corner(probe_face, 2)) / 3.0;
-    std::atomic<std::uint64_t> crossings[3] = {0, 0, 0};
-    parallel_for(first[q + 1] - first[q], kGrain, threads, [&](std::size_t begin, std::size_t end) {
-      std::uint64_t mine[3] = {0, 0, 0};
-      for (std::size_t i = first[q] + begin; i < first[q] + end; ++i) {
-        const std::uint32_t f = faces[i];
-        const glm::dvec3 a = corner(f, 0), b = corner(f, 1), c = corner(f, 2);
-        for (int r = 0; r < 3; ++r) mine[r] += crosses(o, kRays[r], a, b, c);
-      }
-      for (int r = 0; r < 3; ++r) crossings[r].fetch_add(mine[r], std::memory_order_relaxed);
-    });
-    const bool enclosed = (crossings[0].load() & 1) && (crossings[1].load() & 1) &&
-                          (crossings[2].load() & 1);
-    // The innermost: the encloser of least volume (ranks_above orders them strictly).
-    if (enclosed && (inside[p] == kNoPart || ranks_above(inside[p], q))) inside[p] = q;
+  // Grouped by encloser: one pass over its faces counts the crossings of every probe.
+  std::stable_sort(pairs.begin(), pairs.end(),
+                   [](const auto& a, const auto& b) { return a.second < b.second; });
+  std::vector<glm::dvec3> probes;
+  for (std::size_t g = 0; g < pairs.size();) {
+    const std::uint32_t q = pairs[g].second;
+    std::size_t g_end = g;
+    while (g_end < pairs.size() && pairs[g_end].second == q) ++g_end;
+    probes.clear();
+    for (std::size_t k = g; k < g_end; ++k) {  // the centroid of each inner part's first face
+      const glm::uvec3 t = mesh.triangles[faces[first[pairs[k].first]]];
+      probes.push_back((glm::dvec3(mesh.vertices[t.x]) + glm::dvec3(mesh.vertices[t.y]) +
+                        glm::dvec3(mesh.vertices[t.z])) / 3.0);
+    }
+    const std::vector<std::uint32_t> odd = odd_crossings(
+        mesh, faces.data() + first[q], first[q + 1] - first[q], probes, threads);
+    for (std::size_t k = g; k < g_end; ++k) {
+      const std::uint32_t p = pairs[k].first;
+      // The innermost: the encloser of least volume (ranks_above orders them strictly).
+      if (odd[k - g] == 7u && (inside[p] == kNoPart || ranks_above(inside[p], q))) inside[p] = q;
+    }
+    g = g_end;
   }
   return inside;
 }

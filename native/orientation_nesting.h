@@ -24,10 +24,10 @@ struct PartBox {
 // first face crosses Q's faces an odd number of times (any ray from a point inside a closed
 // surface crosses it an odd number of times; rays that disagree, as from inside an open
 // bowl, say no). Innermost: the encloser of least volume.
-// The crossing tests cost P's enclosers' faces each; past 1e8 of them in all (thousands of
-// bubbles inside a million faces) the step gives up and returns no nesting (parts are then
-// judged alone, as before this step existed). Parallel over `threads`; the result does not
-// depend on the thread count.
+// Each encloser's faces are read once for all the parts that may lie in it. With more than
+// 2^25 grid filings of enclosers' boxes (thousands of large closed parts around each other)
+// the step gives up and returns no nesting (parts are then judged alone, as before this step
+// existed). Parallel over `threads`; the result does not depend on the thread count.
 std::vector<std::uint32_t> enclosing_parts(const Mesh& mesh, const Parts& parts,
                                            const std::vector<PartBox>& boxes,
                                            const std::vector<double>& volume,

@@ -138,6 +138,30 @@ TEST(OrientationPaths, ACavityWithTheSolidsBoxStaysInward) {
   }
 }
 
+TEST(OrientationPaths, ManyCavitiesInOneSolid) {
+  // 27 small boxes in a large one, every other wound inward (cavities) or outward (solids
+  // inside): one encloser for many parts, its faces read once for all of them.
+  test::Arrays a = shell(20.0, false);
+  int k = 0;
+  for (int x = -1; x <= 1; ++x)
+    for (int y = -1; y <= 1; ++y)
+      for (int z = -1; z <= 1; ++z, ++k) {
+        test::Arrays small = test::box(1.0 + 0.1 * k / 27.0, 1.0, 1.3);
+        if (k % 2) reverse_every(small, 1);
+        for (std::size_t i = 0; i < small.vertices.size(); i += 3) {
+          small.vertices[i] += 5.0 * x + 0.3 * y;
+          small.vertices[i + 1] += 5.0 * y + 0.2 * z;
+          small.vertices[i + 2] += 5.0 * z + 0.1 * x;
+        }
+        test::append(a, small);
+      }
+  expect_all_paths_agree(a);
+  EXPECT_EQ(flipped(a), 0u);
+  reverse_every(a, 1);
+  expect_all_paths_agree(a);
+  EXPECT_EQ(flipped(a), a.triangles.size() / 3);
+}
+
 TEST(OrientationPaths, ASolidInsideASolidKeepsItsWinding) {
   // A torus wound outward inside a box: a separate solid (an eye in a head), or a cavity wound
   // the wrong way; nothing tells them apart, so the winding given stands.
