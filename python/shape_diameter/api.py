@@ -18,6 +18,7 @@ from .smoothing import (
     prepare_texture_for,
     run_checked,
     run_with_fallback,
+    unit_scale_exponent,
 )
 
 SAMPLINGS = ("fibonacci", "random", "cgal")
@@ -283,6 +284,7 @@ def compute(
     # the UVs and islands uploaded); on a device, projected smoothing's point frames uploaded
     # from the cast's own points (oriented as the cast saw the mesh).
     prepared, prepare_failure = [], []
+    far_from_unit_size = smoothing == "projected" and unit_scale_exponent(v) != 0
 
     def run(engine_name):
         prepared.clear()
@@ -300,8 +302,9 @@ def compute(
                 prepare_failure.append(error)
 
         beside = None
-        if smoothing == "texture" or (smoothing == "projected" and engine_name != "cpu"):
-            beside = prepare
+        if smoothing == "texture" or (smoothing == "projected" and engine_name != "cpu"
+                                      and not far_from_unit_size):
+            beside = prepare  # (projected far from unit size runs scaled: smoothing.py)
         return _core.compute(
             v, t, int(rays), float(cone_angle), sampling, int(seed), points, int(threads),
             cast_progress, engine_name, accel, int(octree_depth), int(octree_leaf_size),
@@ -326,18 +329,6 @@ def compute(
         timings.update({f"beside cast: {k}": x for k, x in prepared[0].timings.items()})
     raw = out["raw"]
     values = raw.copy()
-    if smoothing in ("projected", "texture") and len(v):
-        # The cast scales a mesh far from unit size (exactly); smoothing works on the mesh as
-        # given, in float, and drifts there (projected: 7% at 1e10 units, up to 66% beyond).
-        width = float(np.max(v.max(axis=0) - v.min(axis=0)))
-        if not 2.0**-20 <= width <= 2.0**30:
-            warnings.warn(
-                f"smoothing '{smoothing}' on a mesh {width:.3g} units wide is unreliable (it "
-                "computes in 32-bit floats on the mesh as given); scale the mesh to between "
-                "1e-6 and 1e9 units first",
-                RuntimeWarning,
-                stacklevel=2,
-            )
     if smoothing != "none":
         clock = time.perf_counter()
         smooth_engine = "cpu" if fallback else chosen

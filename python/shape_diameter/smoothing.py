@@ -279,6 +279,17 @@ def _weld_argument(o):
     return -1.0 if o["weld_tolerance"] is None else o["weld_tolerance"]
 
 
+def unit_scale_exponent(v) -> int:
+    """The power of two that brings a mesh far from unit size (wider than 2^30 or narrower
+    than 2^-20 units) to a width in [1, 2); 0 for other meshes (the core's rule, unit_scale.h)."""
+    if not len(v):
+        return 0
+    width = float(np.max(np.max(v, axis=0) - np.min(v, axis=0)))
+    if width <= 0.0 or 2.0**-20 <= width <= 2.0**30:
+        return 0
+    return 1 - math.frexp(width)[1]
+
+
 def run_checked(v, t, values, points, method, o, threads, progress, engine="cpu",
                 prepared=None, timings=None, stacklevel=3):
     """smooth()'s work on arguments checked already (by smooth(), or by compute() on its own
@@ -301,6 +312,15 @@ def run_checked(v, t, values, points, method, o, threads, progress, engine="cpu"
         )
         timings.update(out["timings"])
         return out["values"]
+    if method == "projected" and prepared is None:
+        # It moves points along the mesh in 32-bit floats: far from unit size (7% off at 1e10
+        # units) it runs on the mesh and values scaled by a power of two, as compute()'s cast
+        # does, and scales back (exact).
+        exponent = unit_scale_exponent(v)
+        if exponent:
+            scaled = run_checked(np.ldexp(v, exponent), t, np.ldexp(values, exponent), points,
+                                 method, o, threads, progress, engine, None, timings, stacklevel)
+            return np.ldexp(scaled, -exponent)
     if method == "projected" and prepared is not None:
         return _core.smooth_projected_prepared(
             prepared, values, o["iterations"], o["max_depth"], o["min_points"],
