@@ -11,6 +11,7 @@ the scripting API:
 """
 
 import threading
+import warnings
 from dataclasses import dataclass, field, fields
 
 import bpy
@@ -137,7 +138,7 @@ class Options:
             raise UserError(f"The output attribute names must differ: {', '.join(names)}")
         if self.smoothing not in SMOOTHING_METHODS:
             raise UserError(f"smoothing must be one of {SMOOTHING_METHODS}, got {self.smoothing!r}")
-        if self.bake_image and not self.image_name.replace("{object}", ""):
+        if self.bake_image and not self.image_name.strip():  # "{object}" alone is a name
             raise UserError("The image name is empty")
         if self.smoothing != "none" and not core.supports("smoothing"):
             raise UserError("This build of the core has no smoothing")
@@ -192,6 +193,13 @@ def _mode_problem(ob):
 
 def _attribute_problem(ob, options):
     for name, data_type, domain in options.outputs():
+        # Blender keeps vertex group names apart from attributes and refuses an attribute
+        # of a group's name (found by a trial: it failed only after the computation).
+        if ob.vertex_groups.get(name) is not None:
+            return (
+                f"{ob.name}: a vertex group is named {name!r}; rename it, or choose another "
+                "name for the result"
+            )
         existing = ob.data.attributes.get(name)
         if existing is not None and (existing.data_type, existing.domain) != (data_type, domain):
             return (
@@ -212,12 +220,12 @@ def prepare(depsgraph, objects, options, for_writing=True):
     if not objects:
         raise UserError("Nothing selected: select one or more mesh objects")
     meshes = [ob for ob in objects if ob.type == "MESH"]
-    warnings = []
+    notices = []  # (not `warnings`: the module is used below)
     others = [f"{ob.name} ({ob.type.lower()})" for ob in objects if ob.type != "MESH"]
     if not meshes:
         raise UserError(f"Not a mesh: {', '.join(others)}")
     if others:
-        warnings.append(f"Skipped what is not a mesh: {', '.join(others)}")
+        notices.append(f"Skipped what is not a mesh: {', '.join(others)}")
 
     tasks = {}
     for ob in meshes:
@@ -266,11 +274,11 @@ def prepare(depsgraph, objects, options, for_writing=True):
         raise UserError("Several objects would bake into one image: put {object} in the image name")
     for task in tasks.values():
         if task.shared_by:
-            warnings.append(
+            notices.append(
                 f"{task.object_name} shares its mesh with {', '.join(task.shared_by)}: "
                 f"computed once, from {task.object_name}"
             )
-    return list(tasks.values()), warnings
+    return list(tasks.values()), notices
 
 
 def _corner_uvs(ob, me, options, flipped):
@@ -343,17 +351,22 @@ def compute(tasks, options, progress=None, cancelled=None):
                 if options.points == "faces"
                 else task.normalized
             )
-            task.image = core.bake(
-                mesh.vertices,
-                mesh.triangles,
-                per_point,
-                options.points,
-                task.corner_uvs,
-                options.texture_size,
-                radius,
-                options.bake_margin,
-                step,
-            )
+            # The bake's warnings (e.g. faces whose UVs lie wholly outside [0, 1], left out of
+            # the image) reach the user as the run's warnings, not on stderr.
+            with warnings.catch_warnings(record=True) as caught:
+                warnings.simplefilter("always")
+                task.image = core.bake(
+                    mesh.vertices,
+                    mesh.triangles,
+                    per_point,
+                    options.points,
+                    task.corner_uvs,
+                    options.texture_size,
+                    radius,
+                    options.bake_margin,
+                    step,
+                )
+            task.warnings.extend(f"{task.object_name} (bake): {w.message}" for w in caught)
         task.valid_rays = result.valid_rays
         if len(result.valid_rays) and not np.any(result.valid_rays):
             task.warnings.append(

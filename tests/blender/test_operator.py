@@ -236,6 +236,20 @@ def test_scripting_api():
     assert [e["name"] for e in api.engines()][0] == shape_diameter.engines()[0]["name"]
 
 
+def test_a_vertex_group_of_the_results_name_is_refused_first():
+    # Blender cannot make an attribute of a vertex group's name: this failed only after the
+    # computation, with Blender's own error.
+    api = addon_module("api")
+    bpy.ops.mesh.primitive_cube_add()
+    ob = bpy.context.active_object
+    ob.vertex_groups.new(name="sdf")
+    before = snapshot(ob.data)
+    with pytest.raises(api.UserError, match="a vertex group is named 'sdf'"):
+        api.compute_object(ob)
+    assert snapshot(ob.data) == before
+    assert (api.compute_object(ob, attribute_name="thickness").values > 0).all()
+
+
 def test_an_open_sheet_gives_zeros_and_a_warning():
     api = addon_module("api")
     bpy.ops.mesh.primitive_plane_add()

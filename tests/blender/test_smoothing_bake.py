@@ -133,3 +133,18 @@ def test_bake_through_a_chosen_uv_map_and_the_api():
     pixels = image_pixels(bpy.data.images["flat spot"])
     covered = pixels[..., 3] > 0
     assert covered[:28, :28].any() and not covered[36:, :].any() and not covered[:, 36:].any()
+
+
+def test_a_bake_of_uvs_outside_the_square_warns_and_takes_the_object_name():
+    # UVs moved one tile up and right (a UDIM layout): the bake leaves those faces out, which
+    # the run's warnings say (it went to stderr only); "{object}" alone names the image after
+    # the object (it was refused as empty).
+    api = addon_module("api")
+    ob = import_obj("spot.obj")
+    uv = np.empty(len(ob.data.loops) * 2, dtype=np.float32)
+    ob.data.uv_layers[0].data.foreach_get("uv", uv)
+    ob.data.uv_layers[0].data.foreach_set("uv", uv + 1.0)
+    result = api.compute_object(ob, rays=8, bake_image=True, texture_size=32, image_name="{object}")
+    assert result.image == "spot"
+    assert any("(bake)" in w and "outside the [0, 1] square" in w for w in result.warnings)
+
