@@ -12,8 +12,9 @@ The add-on's modules live under `bl_ext.<repository>.shape_diameter`; installed 
 
 It does what the operator object.shape_diameter does, synchronously, and raises instead of
 reporting: ValueError (process.UserError, a subclass) for anything the user can fix, with the
-message the operator would report; nothing is written then. The native package itself is
-`import shape_diameter` (numpy in, numpy out).
+message the operator would report; nothing is written then; Cancelled when a `progress`
+callback returns False. The native package itself is `import shape_diameter` (numpy in,
+numpy out).
 """
 
 from dataclasses import dataclass, field
@@ -24,6 +25,7 @@ import numpy as np
 from . import core, operators, process
 
 UserError = process.UserError
+Cancelled = process.Cancelled  # a progress callback returned False
 CoreUnavailable = core.CoreUnavailable
 
 
@@ -51,7 +53,7 @@ def engines():
     return core.engines()
 
 
-def compute_objects(objects, *, depsgraph=None, write=True, **options):
+def compute_objects(objects, *, depsgraph=None, write=True, progress=None, **options):
     """Computes every mesh object in `objects` together and writes their attributes (all or
     none). Options, with the operator's names: rays=30, cone_angle=120.0 (degrees),
     sampling='fibonacci', seed=0, points='faces', normalize='linear', engine=None (the
@@ -62,7 +64,11 @@ def compute_objects(objects, *, depsgraph=None, write=True, **options):
     color_name='sdf_color' (empty: not written), bake_image=False, uv_map='' (the active one),
     image_name='{object}_sdf', bake_margin=4, use_modifiers=False, apply_scale=True; and any
     further keyword that shape_diameter.compute() accepts. write=False computes without
-    writing. The baked image is ObjectResult.image: bpy.data.images[result.image]."""
+    writing. progress: called now and then with the fraction done (0 to 1); returning False
+    stops the run, which raises Cancelled having written nothing. The baked image is
+    ObjectResult.image: bpy.data.images[result.image]."""
+    if progress is not None and not callable(progress):
+        raise UserError("progress must be a callable taking the fraction done, or None")
     context = bpy.context
     if options.get("engine") in (None, "DEFAULT"):
         options["engine"] = operators.resolve_engine(context, "DEFAULT")
@@ -70,7 +76,14 @@ def compute_objects(objects, *, depsgraph=None, write=True, **options):
     if depsgraph is None:
         depsgraph = context.evaluated_depsgraph_get()
     tasks, _warnings = process.prepare(depsgraph, objects, opts, for_writing=write)
-    process.compute(tasks, opts)
+    stopped = []
+
+    def report(fraction):
+        if progress(fraction) is False:
+            stopped.append(True)
+
+    process.compute(tasks, opts, progress=report if progress else None,
+                    cancelled=lambda: bool(stopped))
     if write:
         process.write(bpy.data, tasks, opts)
     domain = "POINT" if opts.points == "vertices" else "FACE"

@@ -250,6 +250,21 @@ def test_a_vertex_group_of_the_results_name_is_refused_first():
     assert (api.compute_object(ob, attribute_name="thickness").values > 0).all()
 
 
+def test_the_api_reports_progress_and_stops_when_asked():
+    # progress= once collided with the keyword the API passes on (TypeError).
+    api = addon_module("api")
+    ob = import_obj("spot.obj")
+    seen = []
+    api.compute_object(ob, rays=8, progress=seen.append)
+    assert seen and seen[-1] == 1.0 and all(0.0 <= f <= 1.0 for f in seen)
+    before = snapshot(ob.data)
+    with pytest.raises(api.Cancelled):
+        api.compute_object(ob, rays=8, attribute_name="other", progress=lambda f: False)
+    assert snapshot(ob.data) == before
+    with pytest.raises(api.UserError, match="progress must be a callable"):
+        api.compute_object(ob, progress=3)
+
+
 def test_an_open_sheet_gives_zeros_and_a_warning():
     api = addon_module("api")
     bpy.ops.mesh.primitive_plane_add()
