@@ -52,7 +52,7 @@ def _redraw(context):
             area.tag_redraw()
 
 
-@props.with_options
+@props.operator_options
 class OBJECT_OT_shape_diameter(bpy.types.Operator):
     """Compute the Shape Diameter Function (local thickness) of the selected meshes into
     attributes and a color attribute"""

@@ -265,12 +265,31 @@ def stored_engine_property(store, with_default, description):
     return EnumProperty(name="Engine", description=description, items=items, get=get, set=set)
 
 
+def _skip_save(prop):
+    """The same property definition with SKIP_SAVE: an operator then starts from the defaults
+    every time instead of the previous call's values (a script's bpy.ops call that left out
+    orientation='flip' still flipped, found by a trial). The panel passes every option."""
+    keywords = dict(prop.keywords)
+    keywords["options"] = set(keywords.get("options", set())) | {"SKIP_SAVE"}
+    return prop.function(**keywords)
+
+
 def with_options(cls, engine=None):
     """Class decorator: adds every option (and the engine) to the class's annotations."""
     annotations = dict(inspect.get_annotations(cls))
     annotations.update(options())
     annotations["engine"] = engine or engine_property()
     cls.__annotations__ = annotations
+    return cls
+
+
+def operator_options(cls):
+    """with_options for an operator: its options start from the defaults at every call."""
+    with_options(cls)
+    cls.__annotations__ = {
+        name: _skip_save(prop) if name in (*options(), "engine") else prop
+        for name, prop in cls.__annotations__.items()
+    }
     return cls
 
 

@@ -250,6 +250,19 @@ def test_a_vertex_group_of_the_results_name_is_refused_first():
     assert (api.compute_object(ob, attribute_name="thickness").values > 0).all()
 
 
+def test_the_operator_starts_from_its_defaults_at_every_call():
+    # Called with undo (as the UI does), the operator once reused the previous call's options
+    # for those a call left out (a trial's orientation='flip' stuck: every value 0).
+    bpy.ops.mesh.primitive_uv_sphere_add()
+    ob = bpy.context.active_object
+    done = bpy.ops.object.shape_diameter("EXEC_DEFAULT", True, attribute_name="first", rays=4)
+    assert done == {"FINISHED"} and "first" in ob.data.attributes
+    assert bpy.ops.object.shape_diameter("EXEC_DEFAULT", True) == {"FINISHED"}
+    assert "sdf" in ob.data.attributes  # the default name, not the previous call's
+    np.testing.assert_allclose(  # and the default 30 rays, not 4
+        attribute_array(ob.data, "sdf"), reference_face_values(ob), rtol=1e-5)
+
+
 def test_the_api_reports_progress_and_stops_when_asked():
     # progress= once collided with the keyword the API passes on (TypeError).
     api = addon_module("api")
