@@ -84,6 +84,8 @@ def compute_objects(objects, *, depsgraph=None, write=True, progress=None, **opt
 
     process.compute(tasks, opts, progress=report if progress else None,
                     cancelled=lambda: bool(stopped))
+    if stopped:  # a False from the last callback, after which nothing checked
+        raise Cancelled()
     if write:
         process.write(bpy.data, tasks, opts)
     domain = "POINT" if opts.points == "vertices" else "FACE"

@@ -97,6 +97,11 @@ def has(name):
         return False
 
 
+def uv_faces_outside(uvs):
+    """Faces whose UVs (m, 3, 2) lie wholly outside the [0, 1] square: a bake leaves them out."""
+    return load().smoothing.uv_faces_outside(uvs)
+
+
 def bake(vertices, triangles, values, points, uvs, size, radius, margin, progress=None):
     """The field rasterised through per-corner uvs (m, 3, 2) into a (size, size, 4) float32
     RGBA image in Blender's pixel order (row 0 at v = 0): the value in R, G and B, alpha 1

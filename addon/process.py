@@ -11,7 +11,6 @@ the scripting API:
 """
 
 import threading
-import warnings
 from dataclasses import dataclass, field, fields
 
 import bpy
@@ -220,7 +219,7 @@ def prepare(depsgraph, objects, options, for_writing=True):
     if not objects:
         raise UserError("Nothing selected: select one or more mesh objects")
     meshes = [ob for ob in objects if ob.type == "MESH"]
-    notices = []  # (not `warnings`: the module is used below)
+    notices = []
     others = [f"{ob.name} ({ob.type.lower()})" for ob in objects if ob.type != "MESH"]
     if not meshes:
         raise UserError(f"Not a mesh: {', '.join(others)}")
@@ -351,22 +350,28 @@ def compute(tasks, options, progress=None, cancelled=None):
                 if options.points == "faces"
                 else task.normalized
             )
-            # The bake's warnings (e.g. faces whose UVs lie wholly outside [0, 1], left out of
-            # the image) reach the user as the run's warnings, not on stderr.
-            with warnings.catch_warnings(record=True) as caught:
-                warnings.simplefilter("always")
-                task.image = core.bake(
-                    mesh.vertices,
-                    mesh.triangles,
-                    per_point,
-                    options.points,
-                    task.corner_uvs,
-                    options.texture_size,
-                    radius,
-                    options.bake_margin,
-                    step,
+            task.image = core.bake(
+                mesh.vertices,
+                mesh.triangles,
+                per_point,
+                options.points,
+                task.corner_uvs,
+                options.texture_size,
+                radius,
+                options.bake_margin,
+                step,
+            )
+            # Faces whose UVs lie wholly outside [0, 1] are left out of the image (the image
+            # came out empty for a UDIM layout, without a word). Counted here rather than by
+            # catching the core's warning: warnings.catch_warnings is process-wide, and this
+            # runs on a worker thread.
+            outside = core.uv_faces_outside(task.corner_uvs)
+            if outside > 0.01 * len(mesh.triangles):
+                task.warnings.append(
+                    f"{task.object_name} (bake): {outside} of {len(mesh.triangles)} faces have "
+                    "UVs wholly outside the [0, 1] square (UDIM tiles or an offset layout) and "
+                    "are left out of the image; move each tile's UVs into the square"
                 )
-            task.warnings.extend(f"{task.object_name} (bake): {w.message}" for w in caught)
         task.valid_rays = result.valid_rays
         if len(result.valid_rays) and not np.any(result.valid_rays):
             task.warnings.append(

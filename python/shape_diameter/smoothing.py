@@ -279,6 +279,15 @@ def _weld_argument(o):
     return -1.0 if o["weld_tolerance"] is None else o["weld_tolerance"]
 
 
+def uv_faces_outside(uvs) -> int:
+    """Faces whose per-corner UVs (m, 3, 2) lie wholly outside the [0, 1] square (UDIM tiles
+    or an offset layout): texture smoothing and bakes leave them out. The core's rule
+    (smoothing_texture.cpp), for callers that report it themselves."""
+    uv = np.asarray(uvs, dtype=np.float32).reshape(-1, 3, 2)
+    lo, hi = uv.min(axis=1), uv.max(axis=1)
+    return int(np.count_nonzero((hi < 0.0).any(axis=1) | (lo > 1.0).any(axis=1)))
+
+
 def unit_scale_exponent(v) -> int:
     """The power of two that brings a mesh far from unit size (wider than 2^30 or narrower
     than 2^-20 units) to a width in [1, 2); 0 for other meshes (the core's rule, unit_scale.h)."""
@@ -317,6 +326,12 @@ def run_checked(v, t, values, points, method, o, threads, progress, engine="cpu"
         # units) it runs on the mesh and values scaled by a power of two, as compute()'s cast
         # does, and scales back (exact).
         exponent = unit_scale_exponent(v)
+        width = float(np.ptp(v, axis=0).max()) if exponent else 0.0
+        if width > 1e30:  # the core's limit, which the scaled mesh would no longer meet
+            raise ValueError(
+                f"the mesh spans {width:.3g} units on an axis, more than the 1e30 that 32-bit "
+                "floats leave room for; scale it down"
+            )
         if exponent:
             scaled = run_checked(np.ldexp(v, exponent), t, np.ldexp(values, exponent), points,
                                  method, o, threads, progress, engine, None, timings, stacklevel)

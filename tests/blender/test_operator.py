@@ -274,6 +274,9 @@ def test_the_api_reports_progress_and_stops_when_asked():
     with pytest.raises(api.Cancelled):
         api.compute_object(ob, rays=8, attribute_name="other", progress=lambda f: False)
     assert snapshot(ob.data) == before
+    with pytest.raises(api.Cancelled):  # a stop at the very last call writes nothing either
+        api.compute_object(ob, rays=8, attribute_name="other", progress=lambda f: f < 1.0)
+    assert snapshot(ob.data) == before
     with pytest.raises(api.UserError, match="progress must be a callable"):
         api.compute_object(ob, progress=3)
 

@@ -134,6 +134,14 @@ def test_smoothing_far_from_unit_size_gives_the_scaled_values(engine):
                                           err_msg=f"{smoothing} at 2^{exponent}")
 
 
+def test_projected_smoothing_refuses_a_mesh_wider_than_float_range():
+    # Scaled first, such a mesh passed the core's check and came back as zeros (a review).
+    vertices, triangles = box(1.0, 1.0, 1.0, 2)
+    values = np.ones(len(triangles), dtype=np.float32)
+    with pytest.raises(ValueError, match=r"spans 1e\+31 units on an axis"):
+        sd.smooth(vertices * 1e31, triangles, values, "projected")
+
+
 def test_a_mesh_wider_than_float_range_is_refused_readably():
     vertices = np.array([[1e300, 0, 0], [0, 1, 0], [0, 0, 1]], dtype=float)
     with pytest.raises(ValueError, match=r"spans 1e\+300 units on an axis"):
