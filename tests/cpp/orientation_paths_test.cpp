@@ -107,6 +107,16 @@ test::Arrays shell(double side, bool inward) {
   return a;
 }
 
+// Every path agrees and reverses nothing; with every face reversed, every path agrees and
+// turns the whole mesh back (the enclosed parts with the parts around them).
+void expect_kept_and_turned_as_a_whole(test::Arrays a) {
+  expect_all_paths_agree(a);
+  EXPECT_EQ(flipped(a), 0u);
+  reverse_every(a, 1);
+  expect_all_paths_agree(a);
+  EXPECT_EQ(flipped(a), a.triangles.size() / 3);
+}
+
 TEST(OrientationPaths, AHollowSolidsInnerWallStaysInward) {
   // A box with a toroidal cavity: the torus, wound inward, is the cavity's wall. Judged
   // alone (negative volume) it was turned outward: thicknesses came out ~4x too large.
@@ -114,12 +124,7 @@ TEST(OrientationPaths, AHollowSolidsInnerWallStaysInward) {
   test::Arrays cavity = torus(60, 40, 0.0, 31);
   reverse_every(cavity, 1);
   test::append(a, cavity);
-  expect_all_paths_agree(a);
-  EXPECT_EQ(flipped(a), 0u);
-  // The whole solid inside out: turned outward as a whole, the cavity with it.
-  reverse_every(a, 1);
-  expect_all_paths_agree(a);
-  EXPECT_EQ(flipped(a), a.triangles.size() / 3);
+  expect_kept_and_turned_as_a_whole(a);
 }
 
 TEST(OrientationPaths, ACavityWithTheSolidsBoxStaysInward) {
@@ -155,11 +160,7 @@ TEST(OrientationPaths, ManyCavitiesInOneSolid) {
         }
         test::append(a, small);
       }
-  expect_all_paths_agree(a);
-  EXPECT_EQ(flipped(a), 0u);
-  reverse_every(a, 1);
-  expect_all_paths_agree(a);
-  EXPECT_EQ(flipped(a), a.triangles.size() / 3);
+  expect_kept_and_turned_as_a_whole(a);
 }
 
 TEST(OrientationPaths, ASolidInsideASolidKeepsItsWinding) {
