@@ -2,8 +2,8 @@
 #include "orientation_nesting.h"
 
 #include <algorithm>
-#include <cmath>
 #include <atomic>
+#include <cmath>
 #include <utility>
 
 #include "parallel.h"
@@ -100,7 +100,6 @@ class BoxGrid {
   std::vector<std::size_t> first_;
   std::vector<std::uint32_t> filed_;
 };
-
 
 // Per probe, bit r set when ray r from it crosses the faces an odd number of times. Each
 // ray's probes are filed in a grid on the plane across the ray, so a face is tested only

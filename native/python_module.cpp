@@ -24,6 +24,7 @@
 #include "python_cast_points.h"
 #include "python_timings.h"
 #include "sdf.h"
+#include "unit_scale.h"
 #ifdef SDF_HAVE_OPENCL
 #include "opencl/devices.h"
 #include "opencl/device_tree.h"
@@ -405,6 +406,8 @@ PYBIND11_MODULE(_core, m) {
   m.def("sample_points", &sample_points, py::arg("vertices"), py::arg("triangles"),
         py::arg("points"));
   m.def("hardware_threads", [] { return sdf::resolve_threads(0); });
+  // compute()'s rule for meshes far from unit size, for the smoothing that runs outside it.
+  m.def("unit_scale_exponent", &sdf::unit_scale_exponent, py::arg("max_extent"));
   m.attr("MAX_RAYS") = sdf::kMaxRays;
   bind_smoothing(m);
 }

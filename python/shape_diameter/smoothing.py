@@ -288,15 +288,15 @@ def uv_faces_outside(uvs) -> int:
     return int(np.count_nonzero((hi < 0.0).any(axis=1) | (lo > 1.0).any(axis=1)))
 
 
+def mesh_width(v) -> float:
+    """The largest side of the vertices' bounding box (0 for no vertex)."""
+    return float(np.ptp(v, axis=0).max()) if len(v) else 0.0
+
+
 def unit_scale_exponent(v) -> int:
-    """The power of two that brings a mesh far from unit size (wider than 2^30 or narrower
-    than 2^-20 units) to a width in [1, 2); 0 for other meshes (the core's rule, unit_scale.h)."""
-    if not len(v):
-        return 0
-    width = float(np.max(np.max(v, axis=0) - np.min(v, axis=0)))
-    if width <= 0.0 or 2.0**-20 <= width <= 2.0**30:
-        return 0
-    return 1 - math.frexp(width)[1]
+    """The power of two that brings a mesh far from unit size to a width in [1, 2); 0 for
+    other meshes: compute()'s own rule (unit_scale.h)."""
+    return _core.unit_scale_exponent(mesh_width(v))
 
 
 def run_checked(v, t, values, points, method, o, threads, progress, engine="cpu",
@@ -325,8 +325,8 @@ def run_checked(v, t, values, points, method, o, threads, progress, engine="cpu"
         # It moves points along the mesh in 32-bit floats: far from unit size (7% off at 1e10
         # units) it runs on the mesh and values scaled by a power of two, as compute()'s cast
         # does, and scales back (exact).
-        exponent = unit_scale_exponent(v)
-        width = float(np.ptp(v, axis=0).max()) if exponent else 0.0
+        width = mesh_width(v)
+        exponent = _core.unit_scale_exponent(width)
         if width > 1e30:  # the core's limit, which the scaled mesh would no longer meet
             raise ValueError(
                 f"the mesh spans {width:.3g} units on an axis, more than the 1e30 that 32-bit "
