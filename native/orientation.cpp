@@ -66,11 +66,12 @@ OrientationReport orient_auto(const Mesh& mesh, unsigned threads, bool fast_path
   const std::size_t n = mesh.triangles.size();
   std::vector<char> flip;
   {
-    const EdgeNeighbours edges = manifold_edge_neighbours(mesh, threads, !fast_path);
+    const EdgeUses edges(mesh, threads);
     step.lap("orientation: edges");
     // Fast path: no manifold edge runs the same way in its two faces, so propagation would
     // reverse nothing (every patch already agrees).
-    flip = edges.any_same || !fast_path ? patch_flips(mesh, edges, threads) : std::vector<char>(n, 0);
+    flip = edges.any_same() || !fast_path ? patch_flips(mesh, edges, threads)
+                                          : std::vector<char>(n, 0);
   }
   step.lap("orientation: patches");
 

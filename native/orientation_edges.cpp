@@ -20,6 +20,8 @@ namespace {
 // one bucket (tens of KiB for a million faces: it stays in cache) and matches its edges.
 constexpr int kBucketBits = 9;
 constexpr std::size_t kFacesPerBlock = 1 << 15;
+// Pairs of faces joined per batch of prefetches (EdgeUses::join_patches).
+constexpr std::size_t kJoinBatch = 16;
 
 // One use of an edge by a face, in the bucket of the edge's lower vertex.
 struct EdgeUse {
@@ -94,8 +96,40 @@ UseBuckets uses_by_bucket(const Mesh& mesh, unsigned threads) {
   return out;
 }
 
-// Level two, first half: one bucket's uses ordered by lower vertex (a stable counting sort).
-void sort_by_low(EdgeUse* first, EdgeUse* last, std::size_t vertices,
+// Calls visit(edge, edge_end) for each edge's run of uses in [first, last), a bucket sorted
+// by lower vertex, then higher vertex, then face.
+template <class Visit>
+void for_each_edge(const EdgeUse* first, const EdgeUse* last, Visit&& visit) {
+  for (const EdgeUse* edge = first; edge != last;) {
+    const EdgeUse* edge_end = edge;
+    while (edge_end != last && edge_end->low() == edge->low() &&
+           edge_end->high == edge->high)
+      ++edge_end;
+    visit(edge, edge_end);
+    edge = edge_end;
+  }
+}
+
+// Calls link(use, other) for each use of the edge [edge, edge_end) that exactly one use of
+// another face shares. Within the edge's run of s uses (by face), a use of face g has
+// s - (uses of g) uses of other faces; when that is one, it is the one outside g's run.
+template <class Link>
+void match_uses(const EdgeUse* edge, const EdgeUse* edge_end, Link&& link) {
+  const std::ptrdiff_t s = edge_end - edge;
+  for (const EdgeUse* run = edge; run != edge_end;) {
+    const EdgeUse* run_end = run;
+    while (run_end != edge_end && run_end->face == run->face) ++run_end;
+    if (s - (run_end - run) == 1) {
+      const EdgeUse& other = run == edge ? *run_end : *edge;
+      for (const EdgeUse* u = run; u != run_end; ++u) link(*u, other);
+    }
+    run = run_end;
+  }
+}
+
+// Level two: one bucket's uses ordered by lower vertex (a stable counting sort), then each
+// lower vertex's by higher vertex and face.
+void sort_bucket(EdgeUse* first, EdgeUse* last, std::size_t vertices,
                  std::vector<std::uint32_t>& counts, std::vector<EdgeUse>& scratch) {
   counts.assign(vertices + 1, 0);
   for (EdgeUse* u = first; u != last; ++u) ++counts[u->low() + 1];
@@ -103,83 +137,120 @@ void sort_by_low(EdgeUse* first, EdgeUse* last, std::size_t vertices,
   scratch.resize(static_cast<std::size_t>(last - first));
   for (EdgeUse* u = first; u != last; ++u) scratch[counts[u->low()]++] = *u;
   std::copy(scratch.begin(), scratch.end(), first);
-}
-
-// Level two, second half: calls link(use, other) for each use of an edge in [first, last)
-// (the uses of one lower vertex) that exactly one use of another face shares. Sorted by edge,
-// then face: within an edge's run of s uses, a use of face g has s - (uses of g) uses of
-// other faces; when that is one, it is the one outside g's run.
-template <class Link>
-void match_uses(EdgeUse* first, EdgeUse* last, Link&& link) {
-  std::sort(first, last, [](const EdgeUse& a, const EdgeUse& b) {
-    return std::tie(a.high, a.face) < std::tie(b.high, b.face);
-  });
-  for (EdgeUse* edge = first; edge != last;) {
-    EdgeUse* edge_end = edge;
-    while (edge_end != last && edge_end->high == edge->high) ++edge_end;
-    const std::ptrdiff_t s = edge_end - edge;
-    for (EdgeUse* run = edge; run != edge_end;) {
-      EdgeUse* run_end = run;
-      while (run_end != edge_end && run_end->face == run->face) ++run_end;
-      if (s - (run_end - run) == 1) {
-        const EdgeUse& other = run == edge ? *run_end : *edge;
-        for (EdgeUse* u = run; u != run_end; ++u) link(*u, other);
-      }
-      run = run_end;
-    }
-    edge = edge_end;
+  for (EdgeUse* list = first; list != last;) {
+    EdgeUse* list_end = list;
+    while (list_end != last && list_end->low() == list->low()) ++list_end;
+    std::sort(list, list_end, [](const EdgeUse& a, const EdgeUse& b) {
+      return std::tie(a.high, a.face) < std::tie(b.high, b.face);
+    });
+    list = list_end;
   }
 }
 
-// match_uses over every lower vertex, in parallel by bucket; sorts the buckets first when
-// asked (the first pass).
-template <class Link>
-void match_all(UseBuckets& buckets, std::size_t vertex_count, bool sort_first, unsigned threads,
-               Link&& link) {
+// Calls visit(first, last) for each bucket's uses, in parallel.
+template <class Visit>
+void for_each_bucket(const UseBuckets& buckets, unsigned threads, Visit&& visit) {
+  if (buckets.offsets.empty()) return;
   parallel_for(buckets.offsets.size() - 1, 4, threads, [&](std::size_t b0, std::size_t b1) {
-    std::vector<std::uint32_t> counts;
-    std::vector<EdgeUse> scratch;
-    for (std::size_t b = b0; b < b1; ++b) {
-      EdgeUse* first = buckets.uses.data() + buckets.offsets[b];
-      EdgeUse* last = buckets.uses.data() + buckets.offsets[b + 1];
-      if (sort_first) {
-        const std::size_t vertices =
-            std::min(vertex_count, (b + 1) << buckets.shift) - (b << buckets.shift);
-        sort_by_low(first, last, vertices, counts, scratch);
-      }
-      for (EdgeUse* list = first; list != last;) {
-        EdgeUse* list_end = list;
-        while (list_end != last && list_end->low() == list->low()) ++list_end;
-        match_uses(list, list_end, link);
-        list = list_end;
-      }
-    }
+    for (std::size_t b = b0; b < b1; ++b)
+      visit(buckets.uses.data() + buckets.offsets[b], buckets.uses.data() + buckets.offsets[b + 1]);
   });
 }
 
 }  // namespace
 
-EdgeNeighbours manifold_edge_neighbours(const Mesh& mesh, unsigned threads, bool always_list) {
-  const std::size_t n = mesh.triangles.size(), nv = mesh.vertices.size();
-  EdgeNeighbours out;
-  if (n == 0 || nv == 0) return out;
-  UseBuckets buckets = uses_by_bucket(mesh, threads);
-  // First only whether some pair disagrees: no scattered writes per face in the common case.
+struct EdgeUses::Buckets : UseBuckets {};
+
+EdgeUses::EdgeUses(const Mesh& mesh, unsigned threads)
+    : buckets_(std::make_unique<Buckets>()), faces_(mesh.triangles.size()) {
+  const std::size_t nv = mesh.vertices.size();
+  if (faces_ == 0 || nv == 0) return;
+  static_cast<UseBuckets&>(*buckets_) = uses_by_bucket(mesh, threads);
+  const std::size_t bucket_count = buckets_->offsets.size() - 1;
+  // Sorted, and at once whether some pair disagrees: no scattered writes per face in the
+  // common case.
   std::atomic<bool> any_same{false};
-  match_all(buckets, nv, true, threads, [&](const EdgeUse& use, const EdgeUse& other) {
-    if (use.forward() == other.forward()) any_same.store(true, std::memory_order_relaxed);
+  parallel_for(bucket_count, 4, threads, [&](std::size_t b0, std::size_t b1) {
+    std::vector<std::uint32_t> counts;
+    std::vector<EdgeUse> scratch;
+    bool mine = false;
+    for (std::size_t b = b0; b < b1; ++b) {
+      EdgeUse* first = buckets_->uses.data() + buckets_->offsets[b];
+      EdgeUse* last = buckets_->uses.data() + buckets_->offsets[b + 1];
+      const std::size_t vertices =
+          std::min(nv, (b + 1) << buckets_->shift) - (b << buckets_->shift);
+      sort_bucket(first, last, vertices, counts, scratch);
+      for_each_edge(first, last, [&](const EdgeUse* edge, const EdgeUse* edge_end) {
+        match_uses(edge, edge_end, [&](const EdgeUse& use, const EdgeUse& other) {
+          mine |= use.forward() == other.forward();
+        });
+      });
+    }
+    if (mine) any_same.store(true, std::memory_order_relaxed);
   });
-  out.any_same = any_same.load();
-  if (!out.any_same && !always_list) return out;
-  out.face.assign(3 * n, kNoNeighbour);
-  out.same.assign(3 * n, 0);
-  // Each use belongs to one lower vertex, so no two tasks write the same slot.
-  match_all(buckets, nv, false, threads, [&](const EdgeUse& use, const EdgeUse& other) {
-    const std::size_t slot = 3 * std::size_t{use.face} + use.corner();
-    out.face[slot] = other.face;
-    out.same[slot] = use.forward() == other.forward();
+  any_same_ = any_same.load();
+}
+
+EdgeUses::~EdgeUses() = default;
+
+EdgeNeighbours EdgeUses::neighbours(unsigned threads) const {
+  EdgeNeighbours out;
+  out.face.resize(3 * faces_);
+  out.same.resize(3 * faces_);
+  parallel_for(3 * faces_, std::size_t{1} << 16, threads, [&](std::size_t begin, std::size_t end) {
+    std::fill(out.face.begin() + begin, out.face.begin() + end, kNoNeighbour);
+    std::fill(out.same.begin() + begin, out.same.begin() + end, 0);
+  });
+  // Each use belongs to one edge, so no two tasks write the same slot.
+  for_each_bucket(*buckets_, threads, [&](const EdgeUse* first, const EdgeUse* last) {
+    for_each_edge(first, last, [&](const EdgeUse* edge, const EdgeUse* edge_end) {
+      match_uses(edge, edge_end, [&](const EdgeUse& use, const EdgeUse& other) {
+        const std::size_t slot = 3 * std::size_t{use.face} + use.corner();
+        out.face[slot] = other.face;
+        out.same[slot] = use.forward() == other.forward();
+      });
+    });
   });
   return out;
+}
+
+bool EdgeUses::join_patches(ConcurrentParityUnionFind& sets, unsigned threads) const {
+  std::atomic<bool> ok{true};
+  for_each_bucket(*buckets_, threads, [&](const EdgeUse* first, const EdgeUse* last) {
+    if (!ok.load(std::memory_order_relaxed)) return;  // refused elsewhere
+    bool mine = true;
+    // Pairs are joined in batches, their faces' words prefetched as they are found: the
+    // faces of a vertex's edges lie anywhere in the face order.
+    struct Pair {
+      std::uint32_t a, b, differ;
+    };
+    Pair batch[kJoinBatch];
+    std::size_t held = 0;
+    auto join_held = [&] {
+      for (std::size_t i = 0; i < held; ++i)
+        mine &= sets.unite(batch[i].a, batch[i].b, batch[i].differ);
+      held = 0;
+    };
+    for_each_edge(first, last, [&](const EdgeUse* edge, const EdgeUse* edge_end) {
+      const std::ptrdiff_t s = edge_end - edge;
+      if (s == 2 && edge[0].face != edge[1].face) {  // the lists' mutual pair
+        sets.prefetch_word(edge[0].face);
+        sets.prefetch_word(edge[1].face);
+        batch[held++] = {edge[0].face, edge[1].face, edge[0].forward() == edge[1].forward()};
+        if (held == kJoinBatch) join_held();
+      } else if (s > 2) {  // links here are one-sided: a run of s - 1 uses of one face
+        for (const EdgeUse* run = edge; run != edge_end;) {
+          const EdgeUse* run_end = run;
+          while (run_end != edge_end && run_end->face == run->face) ++run_end;
+          mine &= run_end - run != s - 1;
+          run = run_end;
+        }
+      }
+    });
+    join_held();
+    if (!mine) ok.store(false, std::memory_order_relaxed);
+  });
+  return ok.load();
 }
 
 }  // namespace sdf

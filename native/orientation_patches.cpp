@@ -2,7 +2,6 @@
 #include "orientation_patches.h"
 
 #include <algorithm>
-#include <atomic>
 #include <cstdint>
 #include <utility>
 
@@ -16,16 +15,6 @@ namespace sdf {
 namespace {
 
 constexpr std::size_t kGrain = 1 << 14;
-// Faces handled per batch of prefetches.
-constexpr std::size_t kBatch = 16;
-
-// Does face g list face f back, across an edge run the same way (`same`)?
-bool lists_back(const EdgeNeighbours& edges, std::uint32_t g, std::uint32_t f, char same) {
-  for (int k = 0; k < 3; ++k)
-    if (edges.face[3 * std::size_t{g} + k] == f && edges.same[3 * std::size_t{g} + k] == same)
-      return true;
-  return false;
-}
 
 }  // namespace
 
@@ -64,38 +53,11 @@ std::vector<char> patch_flips_serial(const Mesh& mesh, const EdgeNeighbours& edg
   return flip;
 }
 
-std::optional<std::vector<char>> patch_flips_parallel(const Mesh& mesh,
-                                                      const EdgeNeighbours& edges,
+std::optional<std::vector<char>> patch_flips_parallel(const Mesh& mesh, const EdgeUses& edges,
                                                       unsigned threads) {
   const std::size_t n = mesh.triangles.size();
-  // Each manifold edge joins its two faces' sets, their bits differing where the edge runs
-  // the same way in both (one of them must be reversed).
   ConcurrentParityUnionFind sets(n, threads);
-  std::atomic<bool> simple{true};
-  parallel_for(n, kGrain, threads, [&](std::size_t begin, std::size_t end) {
-    bool ok = true;
-    for (std::size_t first = begin; first < end && ok; first += kBatch) {
-      if (!simple.load(std::memory_order_relaxed)) return;  // refused elsewhere
-      const std::size_t last = std::min(end, first + kBatch);
-      for (std::size_t f = first; f < last; ++f)  // the neighbours' slots and words
-        for (int k = 0; k < 3; ++k) {
-          const std::uint32_t g = edges.face[3 * f + k];
-          if (g == kNoNeighbour) continue;
-          prefetch(&edges.face[3 * std::size_t{g}]);
-          sets.prefetch_word(g);
-        }
-      for (std::size_t f = first; f < last; ++f)
-        for (int k = 0; k < 3; ++k) {
-          const std::uint32_t g = edges.face[3 * f + k];
-          if (g == kNoNeighbour || g == f) continue;  // (never itself; the walk would skip it)
-          const char same = edges.same[3 * f + k];
-          ok &= lists_back(edges, g, static_cast<std::uint32_t>(f), same);
-          if (f < g) ok &= sets.unite(static_cast<std::uint32_t>(f), g, same);
-        }
-    }
-    if (!ok) simple.store(false, std::memory_order_relaxed);
-  });
-  if (!simple.load()) return std::nullopt;
+  if (!edges.join_patches(sets, threads)) return std::nullopt;
 
   // Per face: its set's root (the set's smallest face, where the serial walk starts it), its
   // bit relative to the root (its flip) and its area.
@@ -137,9 +99,9 @@ std::optional<std::vector<char>> patch_flips_parallel(const Mesh& mesh,
   return flip;
 }
 
-std::vector<char> patch_flips(const Mesh& mesh, const EdgeNeighbours& edges, unsigned threads) {
+std::vector<char> patch_flips(const Mesh& mesh, const EdgeUses& edges, unsigned threads) {
   std::optional<std::vector<char>> flip = patch_flips_parallel(mesh, edges, threads);
-  return flip ? std::move(*flip) : patch_flips_serial(mesh, edges);
+  return flip ? std::move(*flip) : patch_flips_serial(mesh, edges.neighbours(threads));
 }
 
 }  // namespace sdf

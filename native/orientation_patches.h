@@ -14,7 +14,7 @@ namespace sdf {
 
 // Parallel over `threads` (0 = every core) where it can, serial where it must (below); the
 // result does not depend on the thread count.
-std::vector<char> patch_flips(const Mesh& mesh, const EdgeNeighbours& edges, unsigned threads);
+std::vector<char> patch_flips(const Mesh& mesh, const EdgeUses& edges, unsigned threads);
 
 // The serial definition: patches grown from faces in face order, each face taking its
 // winding from the face that reached it first; a patch's areas summed in face order. Where a
@@ -25,10 +25,10 @@ std::vector<char> patch_flips_serial(const Mesh& mesh, const EdgeNeighbours& edg
 
 // The same result in parallel, for meshes where every neighbour lists its neighbour back and
 // every patch can be oriented: a patch is then a connected set of faces and each face's
-// winding relative to the patch's first face is fixed, whatever reaches it first. nullopt
-// for any other mesh.
-std::optional<std::vector<char>> patch_flips_parallel(const Mesh& mesh,
-                                                      const EdgeNeighbours& edges,
+// winding relative to the patch's first face is fixed, whatever reaches it first. Made from
+// the edge uses straight away (EdgeUses::join_patches), without the lists. nullopt for any
+// other mesh.
+std::optional<std::vector<char>> patch_flips_parallel(const Mesh& mesh, const EdgeUses& edges,
                                                       unsigned threads);
 
 }  // namespace sdf

@@ -24,8 +24,8 @@ std::size_t count_differing(const std::vector<char>& a, const std::vector<char>&
 // Accepted by the parallel version on every thread count, with the serial flips.
 void expect_parallel_agrees(const test::Arrays& a) {
   const Mesh mesh = a.mesh();
-  const EdgeNeighbours edges = manifold_edge_neighbours(mesh, 2, true);
-  const std::vector<char> serial = patch_flips_serial(mesh, edges);
+  const EdgeUses edges(mesh, 2);
+  const std::vector<char> serial = patch_flips_serial(mesh, edges.neighbours(2));
   EXPECT_EQ(count_differing(serial, test::reference_consistent_flips(mesh)), 0u);
   for (unsigned threads : {1u, 2u, 5u}) {
     SCOPED_TRACE(threads);
@@ -38,9 +38,9 @@ void expect_parallel_agrees(const test::Arrays& a) {
 
 // Refused by the parallel version; patch_flips then gives the walk's flips, the reference's.
 void expect_left_to_the_walk(const Mesh& mesh) {
-  const EdgeNeighbours edges = manifold_edge_neighbours(mesh, 2, true);
+  const EdgeUses edges(mesh, 2);
   EXPECT_FALSE(patch_flips_parallel(mesh, edges, 2).has_value());
-  const std::vector<char> serial = patch_flips_serial(mesh, edges);
+  const std::vector<char> serial = patch_flips_serial(mesh, edges.neighbours(3));
   EXPECT_EQ(count_differing(serial, test::reference_consistent_flips(mesh)), 0u);
   EXPECT_EQ(count_differing(patch_flips(mesh, edges, 3), serial), 0u);
 }
@@ -56,7 +56,7 @@ TEST(OrientationPatches, ScatteredFlipsAreUndone) {
   test::reverse_every(a, 3);
   expect_parallel_agrees(a);
   const Mesh mesh = a.mesh();
-  const std::vector<char> flip = patch_flips(mesh, manifold_edge_neighbours(mesh, 2), 2);
+  const std::vector<char> flip = patch_flips(mesh, EdgeUses(mesh, 2), 2);
   EXPECT_EQ(count_flipped(flip), mesh.triangles.size() / 3);  // the third reversed, no more
 }
 
@@ -68,7 +68,7 @@ TEST(OrientationPatches, TheLargerAreaKeepsItsWinding) {
   test::reverse_every(a, 3, 1);
   expect_parallel_agrees(a);
   const Mesh mesh = a.mesh();
-  const std::vector<char> flip = patch_flips(mesh, manifold_edge_neighbours(mesh, 2), 2);
+  const std::vector<char> flip = patch_flips(mesh, EdgeUses(mesh, 2), 2);
   EXPECT_EQ(count_flipped(flip), mesh.triangles.size() / 3);
   for (std::size_t f = 2; f < mesh.triangles.size(); f += 3) EXPECT_TRUE(flip[f]) << f;
 }
@@ -107,26 +107,82 @@ TEST(OrientationPatches, ATieKeepsTheFirstFacesWinding) {
     test::reverse_every(a, 2, reversed);
     expect_parallel_agrees(a);
     const Mesh mesh = a.mesh();
-    const std::vector<char> flip = patch_flips(mesh, manifold_edge_neighbours(mesh, 2), 2);
+    const std::vector<char> flip = patch_flips(mesh, EdgeUses(mesh, 2), 2);
     EXPECT_EQ(flip, (std::vector<char>{0, 1}));
   }
 }
 
-TEST(OrientationPatches, OneSidedAdjacencyIsRefused) {
-  // Face 0 lists face 1 across an edge; face 1 lists nothing back. The walk's patches then
-  // depend on which face comes first, so the parallel version must leave it to the walk.
-  test::Arrays a;
-  a.vertices = {0, 0, 0, 1, 0, 0, 0, 1, 0, 5, 5, 5, 6, 5, 5, 5, 6, 5};
-  a.triangles = {0, 1, 2, 3, 4, 5};
-  const Mesh mesh = a.mesh();
-  EdgeNeighbours edges;
-  edges.face = {1, kNoNeighbour, kNoNeighbour, kNoNeighbour, kNoNeighbour, kNoNeighbour};
-  edges.same = {0, 0, 0, 0, 0, 0};
-  edges.any_same = false;
-  EXPECT_FALSE(patch_flips_parallel(mesh, edges, 2).has_value());
-  // Listed back, the same pair is accepted.
-  edges.face[3] = 0;
-  EXPECT_TRUE(patch_flips_parallel(mesh, edges, 2).has_value());
+// What join_patches must accept, defined on the lists: every listed neighbour lists its face
+// back with the same bit, and no cycle of lists asks a face to be both ways (a walk that
+// gives each face a bit meets no contradiction).
+bool lists_define_patches(const EdgeNeighbours& edges) {
+  const std::size_t n = edges.face.size() / 3;
+  for (std::size_t slot = 0; slot < 3 * n; ++slot) {
+    const std::uint32_t g = edges.face[slot];
+    if (g == kNoNeighbour) continue;
+    bool listed_back = false;
+    for (int k = 0; k < 3; ++k)
+      listed_back |= edges.face[3 * std::size_t{g} + k] == slot / 3 &&
+                     edges.same[3 * std::size_t{g} + k] == edges.same[slot];
+    if (!listed_back) return false;
+  }
+  std::vector<int> bit(n, -1);
+  for (std::size_t seed = 0; seed < n; ++seed) {
+    if (bit[seed] >= 0) continue;
+    std::vector<std::size_t> queue{seed};
+    bit[seed] = 0;
+    while (!queue.empty()) {
+      const std::size_t f = queue.back();
+      queue.pop_back();
+      for (int k = 0; k < 3; ++k) {
+        const std::uint32_t g = edges.face[3 * f + k];
+        if (g == kNoNeighbour) continue;
+        const int want = bit[f] ^ edges.same[3 * f + k];
+        if (bit[g] < 0) {
+          bit[g] = want;
+          queue.push_back(g);
+        } else if (bit[g] != want) {
+          return false;
+        }
+      }
+    }
+  }
+  return true;
+}
+
+TEST(OrientationPatches, JoiningAcceptsExactlyWhatTheListsDefine) {
+  // join_patches reads the edge uses, not the lists: it must accept a mesh exactly when the
+  // lists made from the same uses are mutual and orientable.
+  auto mesh_of = [](std::vector<double> vertices, std::vector<std::int64_t> triangles) {
+    test::Arrays a;
+    a.vertices = std::move(vertices);
+    a.triangles = std::move(triangles);
+    return a;
+  };
+  const std::vector<double> square = {0, 0, 0, 1, 0, 0, 1, 1, 0, 0, 1, 0, 0, 0, 1};
+  test::Arrays reversed_torus = test::torus(30, 20, 0.0, 5);
+  test::reverse_every(reversed_torus, 3);
+  const std::vector<std::pair<const char*, test::Arrays>> cases = {
+      {"reversed torus", reversed_torus},
+      {"awkward", test::awkward_mesh()},
+      {"moebius", test::moebius_strip(0.0)},
+      {"edge used twice", mesh_of(square, {0, 1, 0, 0, 1, 2})},
+      {"duplicate face, same winding", mesh_of(square, {0, 1, 2, 0, 1, 2})},
+      {"duplicate face, opposite winding", mesh_of(square, {0, 1, 2, 0, 2, 1})},
+      {"fin of three faces", mesh_of(square, {0, 1, 2, 1, 0, 3, 0, 1, 4})},
+      {"two faces sharing two edges both ways", mesh_of(square, {0, 1, 2, 1, 0, 2})},
+      {"a face's corners repeated", mesh_of(square, {0, 0, 0, 0, 1, 2, 2, 1, 3})},
+  };
+  for (const auto& [name, arrays] : cases) {
+    SCOPED_TRACE(name);
+    const Mesh mesh = arrays.mesh();
+    const EdgeUses edges(mesh, 2);
+    const bool defined = lists_define_patches(edges.neighbours(2));
+    for (unsigned threads : {1u, 3u}) {
+      ConcurrentParityUnionFind sets(mesh.triangles.size(), threads);
+      EXPECT_EQ(edges.join_patches(sets, threads), defined) << threads << " threads";
+    }
+  }
 }
 
 TEST(OrientationPatches, AFaceUsingItsEdgeTwiceIsLeftToTheWalk) {

@@ -60,7 +60,7 @@ void expect_all_paths_agree(const test::Arrays& a) {
 }
 
 bool some_edge_disagrees(const test::Arrays& a) {
-  return manifold_edge_neighbours(a.mesh(), 2).any_same;
+  return EdgeUses(a.mesh(), 2).any_same();
 }
 
 TEST(OrientationPaths, ConsistentMeshTakesTheFastPathAndAgrees) {
