@@ -57,8 +57,9 @@ def compute_objects(objects, *, depsgraph=None, write=True, progress=None, **opt
     """Computes every mesh object in `objects` together and writes their attributes (all or
     none). Options, with the operator's names: rays=30, cone_angle=120.0 (degrees),
     sampling='fibonacci', seed=0, points='faces', normalize='linear', engine=None (the
-    preferences' default engine; or 'auto', or a name from engines()), orientation='auto'
-    ('as_is', 'flip'), accel='bvh' or 'octree', smoothing='none', 'kring' (smoothing_rings=0: automatic), 'projected'
+    preferences' default engine; or 'auto', 'opencl' (the best OpenCL device), or a name
+    from engines()), orientation='auto' ('as_is', 'flip'), accel='bvh' or 'octree',
+    smoothing='none', 'kring' (smoothing_rings=0: automatic), 'projected'
     (smoothing_iterations=1) or 'texture' (texture_size=1024, texture_radius=0: automatic;
     needs a UV map), attribute_name='sdf', normalized_name='sdf_normalized',
     color_name='sdf_color' (empty: not written), bake_image=False, uv_map='' (the active one),

@@ -97,6 +97,22 @@ def test_object_scale(scale, apply_scale, factor):
         assert abs(np.median(ratio) - 1.0) < 0.005 and np.abs(ratio - 1.0).max() < 0.04
 
 
+def test_the_operator_runs_on_the_best_opencl_device_or_a_chosen_one():
+    # The engine menu refused 'opencl' (the best device), which shape_diameter.compute()
+    # takes. An OpenCL device is needed: CI installs PoCL (scripts/setup.sh), as for
+    # tests/python/test_opencl.py, so none is a failure.
+    operators = addon_module("operators")
+    devices = [e["name"] for e in shape_diameter.engines() if e["name"].startswith("opencl:")]
+    assert devices, "no OpenCL device here: install pocl-opencl-icd"
+    ob = uv_sphere(radius=1.0, segments=32, rings=16)
+    # Fibonacci sampling: every OpenCL device computes the CPU engine's bits (README).
+    expected = reference_face_values(ob, rays=16, engine="cpu")
+    for engine in ("opencl", devices[-1]):
+        assert run(engine=engine, rays=16) == {"FINISHED"}
+        assert ", opencl:" in operators.last_run["text"], operators.last_run["text"]
+        np.testing.assert_allclose(attribute_array(ob.data, "sdf"), expected, rtol=1e-6)
+
+
 def test_suzanne_with_quads_and_ngons():
     ob = suzanne_with_ngons()
     me = ob.data
