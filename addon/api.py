@@ -60,14 +60,15 @@ def compute_objects(objects, *, depsgraph=None, write=True, progress=None, **opt
     preferences' default engine; or 'auto', 'opencl' (the best OpenCL device), or a name
     from engines()), orientation='auto' ('as_is', 'flip'), accel='bvh' or 'octree',
     smoothing='none', 'kring' (smoothing_rings=0: automatic), 'projected'
-    (smoothing_iterations=1) or 'texture' (texture_size=1024, texture_radius=0: automatic;
-    needs a UV map), attribute_name='sdf', normalized_name='sdf_normalized',
-    color_name='sdf_color' (empty: not written), bake_image=False, uv_map='' (the active one),
-    image_name='{object}_sdf', bake_margin=4, use_modifiers=False, apply_scale=True; and any
-    further keyword that shape_diameter.compute() accepts. write=False computes without
-    writing. progress: called now and then with the fraction done (0 to 1); returning False
-    stops the run, which raises Cancelled having written nothing. The baked image is
-    ObjectResult.image: bpy.data.images[result.image]."""
+    (smoothing_iterations=1) or 'texture' (texture_size=1024, an integer in [16, 16384];
+    texture_radius=0: automatic, or texels in [0, 1024]; needs a UV map), attribute_name='sdf',
+    normalized_name='sdf_normalized', color_name='sdf_color' (empty: not written),
+    bake_image=False, uv_map='' (the active one), image_name='{object}_sdf', bake_margin=4,
+    use_modifiers=False, apply_scale=True; and any further keyword that
+    shape_diameter.compute() accepts. write=False computes without writing. progress: called
+    now and then with the fraction done (0 to 1); returning False stops the run, which raises
+    Cancelled having written nothing. The baked image is ObjectResult.image:
+    bpy.data.images[result.image]."""
     if progress is not None and not callable(progress):
         raise UserError("progress must be a callable taking the fraction done, or None")
     context = bpy.context

@@ -33,6 +33,12 @@ class Cancelled(Exception):
 
 SMOOTHING_METHODS = ("none", "kring", "projected", "texture")
 
+# The texture's side and blur radius in texels, as the operator's properties bound them
+# (props.py); the API checks the same bounds before any work (the core takes sizes from 1,
+# and would refuse a bad one only in the bake, after the cast).
+TEXTURE_SIZE_RANGE = (16, 16384)
+TEXTURE_RADIUS_RANGE = (0.0, 1024.0)
+
 
 @dataclass
 class Options:
@@ -121,6 +127,23 @@ class Options:
         if self.color_name:
             out.append((self.color_name, "BYTE_COLOR", "POINT" if on_vertices else "CORNER"))
         return out
+
+    def check_values(self):
+        """The numbers the core sees only late (the bake runs after the cast), checked up
+        front, for dry runs too. Raises UserError naming the option and its range."""
+        lo, hi = TEXTURE_SIZE_RANGE
+        size = self.texture_size
+        integer = isinstance(size, (int, np.integer)) and not isinstance(size, bool)
+        if not integer or not lo <= size <= hi:
+            raise UserError(f"texture_size must be an integer in [{lo}, {hi}], got {size!r}")
+        lo, hi = TEXTURE_RADIUS_RANGE
+        radius = self.texture_radius
+        number = isinstance(radius, (int, float, np.integer, np.floating))
+        if not number or isinstance(radius, bool) or not lo <= radius <= hi:  # NaN fails too
+            raise UserError(
+                f"texture_radius must be a number in [{lo:g}, {hi:g}] texels (0: 2 per 256 "
+                f"texels of the texture), got {radius!r}"
+            )
 
     def check(self):
         if self.points not in ("faces", "vertices"):
@@ -213,6 +236,7 @@ def prepare(depsgraph, objects, options, for_writing=True):
     """Tasks for the mesh objects among `objects`, plus warnings (skipped objects). Raises
     UserError, having changed nothing, when the run cannot go ahead. for_writing=False (a
     dry run of the scripting API) skips the checks of the attributes to be written."""
+    options.check_values()
     if for_writing:
         options.check()
     objects = list(objects)

@@ -12,7 +12,7 @@ import math
 import bpy
 from bpy.props import BoolProperty, EnumProperty, FloatProperty, IntProperty, StringProperty
 
-from . import core
+from . import core, process
 
 # Blender keeps only pointers to the strings of dynamic enum items: the lists must stay alive
 # (docs.blender.org/api/current/bpy.props.html#bpy.props.EnumProperty, "items" warning).
@@ -207,16 +207,16 @@ def options():
             description="Size in texels of the texture used by texture smoothing and the bake "
             "(square)",
             default=1024,
-            min=16,
-            max=16384,
+            min=process.TEXTURE_SIZE_RANGE[0],
+            max=process.TEXTURE_SIZE_RANGE[1],
             soft_max=8192,
         ),
         "texture_radius": FloatProperty(
             name="Radius",
             description="Texture smoothing: blur reach in texels (0: 2 per 256 texels, paper)",
             default=0.0,
-            min=0.0,
-            max=1024.0,
+            min=process.TEXTURE_RADIUS_RANGE[0],
+            max=process.TEXTURE_RADIUS_RANGE[1],
         ),
         "bake_image": BoolProperty(
             name="Bake Image",

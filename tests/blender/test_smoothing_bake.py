@@ -6,7 +6,14 @@ import bpy
 import numpy as np
 import pytest
 import shape_diameter
-from helpers import addon_module, attribute_array, import_obj, run, world_triangles
+from helpers import (
+    addon_module,
+    attribute_array,
+    import_obj,
+    run,
+    snapshot_all,
+    world_triangles,
+)
 
 
 def corner_uvs(ob, name=None):
@@ -150,3 +157,35 @@ def test_a_bake_of_uvs_outside_the_square_warns_and_takes_the_object_name():
     assert result.image == "spot"
     assert any("(bake)" in w and "outside the [0, 1] square" in w for w in result.warnings)
 
+
+BAD_TEXTURE_OPTIONS = [
+    ({"texture_size": 8}, r"texture_size must be an integer in \[16, 16384\], got 8"),
+    ({"texture_size": 0}, r"texture_size must be an integer in \[16, 16384\], got 0"),
+    ({"texture_size": 16385}, r"texture_size must be an integer in \[16, 16384\], got 16385"),
+    ({"texture_size": 1024.0}, r"texture_size must be an integer in \[16, 16384\], got 1024.0"),
+    ({"texture_size": "1024"}, r"texture_size must be an integer in \[16, 16384\], got '1024'"),
+    ({"texture_size": True}, r"texture_size must be an integer in \[16, 16384\], got True"),
+    ({"texture_radius": -1.0}, r"texture_radius must be a number in \[0, 1024\].*got -1.0"),
+    ({"texture_radius": float("nan")}, r"texture_radius must be a number in \[0, 1024\]"),
+]
+
+
+@pytest.mark.parametrize("what", [{"bake_image": True}, {"smoothing": "texture"},
+                                  {"bake_image": True, "write": False}],
+                         ids=["bake", "texture-smoothing", "dry-run"])
+@pytest.mark.parametrize("bad, message", BAD_TEXTURE_OPTIONS,
+                         ids=[repr(next(iter(b.values()))) for b, _ in BAD_TEXTURE_OPTIONS])
+def test_the_api_refuses_texture_options_out_of_range_before_any_work(monkeypatch, what, bad,
+                                                                        message):
+    # The operator's Resolution is 16..16384 and its Radius 0..1024; the API took anything:
+    # texture_size=8 baked an 8 x 8 image, 0 or 16385 failed in the bake after the whole cast.
+    api, core = addon_module("api"), addon_module("core")
+    ob = import_obj("spot.obj")
+    cast = []
+    monkeypatch.setattr(core, "compute", lambda *args, **kwargs: cast.append(args))
+    before = snapshot_all()
+    images = sorted(bpy.data.images.keys())
+    with pytest.raises(ValueError, match=message):
+        api.compute_object(ob, rays=8, **what, **bad)
+    assert not cast  # refused before any work
+    assert snapshot_all() == before and sorted(bpy.data.images.keys()) == images
