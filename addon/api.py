@@ -32,7 +32,9 @@ CoreUnavailable = core.CoreUnavailable
 @dataclass
 class ObjectResult:
     """What one object got. Arrays have one entry per polygon (domain 'FACE') or per vertex
-    (domain 'POINT'), except valid_rays: per triangle (or vertex)."""
+    (domain 'POINT'), except valid_rays: per triangle (or vertex). warnings: what the operator
+    reports, first those about the whole run (objects skipped as not meshes; the same in every
+    result), then this object's own."""
 
     object_name: str
     domain: str
@@ -77,7 +79,9 @@ def compute_objects(objects, *, depsgraph=None, write=True, progress=None, **opt
     opts = process.Options.from_keywords(**options)
     if depsgraph is None:
         depsgraph = context.evaluated_depsgraph_get()
-    tasks, _warnings = process.prepare(depsgraph, objects, opts, for_writing=write)
+    # Warnings about the whole run (what was skipped) go into every result, so that a caller
+    # that reads any result's warnings sees them, as the operator reports them once.
+    tasks, run_warnings = process.prepare(depsgraph, objects, opts, for_writing=write)
     stopped = []
 
     def report(fraction):
@@ -104,7 +108,7 @@ def compute_objects(objects, *, depsgraph=None, write=True, progress=None, **opt
             timings=t.timings,
             attributes=written,
             shared_by=list(t.shared_by),
-            warnings=list(t.warnings),
+            warnings=[*run_warnings, *t.warnings],
             image=t.image_name if write else "",
         )
         for t in tasks

@@ -233,9 +233,11 @@ def _attribute_problem(ob, options):
 
 
 def prepare(depsgraph, objects, options, for_writing=True):
-    """Tasks for the mesh objects among `objects`, plus warnings (skipped objects). Raises
-    UserError, having changed nothing, when the run cannot go ahead. for_writing=False (a
-    dry run of the scripting API) skips the checks of the attributes to be written."""
+    """Tasks for the mesh objects among `objects`, plus the warnings about the whole run
+    (objects skipped as not meshes), to report before computing; a warning about one object
+    (its mesh shared with others) goes into its task's warnings. Raises UserError, having
+    changed nothing, when the run cannot go ahead. for_writing=False (a dry run of the
+    scripting API) skips the checks of the attributes to be written."""
     options.check_values()
     if for_writing:
         options.check()
@@ -297,7 +299,7 @@ def prepare(depsgraph, objects, options, for_writing=True):
         raise UserError("Several objects would bake into one image: put {object} in the image name")
     for task in tasks.values():
         if task.shared_by:
-            notices.append(
+            task.warnings.append(
                 f"{task.object_name} shares its mesh with {', '.join(task.shared_by)}: "
                 f"computed once, from {task.object_name}"
             )

@@ -252,6 +252,26 @@ def test_scripting_api():
     assert [e["name"] for e in api.engines()][0] == shape_diameter.engines()[0]["name"]
 
 
+def test_the_api_says_what_it_skipped_as_the_operator_does():
+    # compute_objects() left out what is not a mesh without a word; the operator reports it.
+    api = addon_module("api")
+    sphere = uv_sphere(segments=16, rings=8)
+    suzanne = import_obj("suzanne.obj")
+    twin = bpy.data.objects.new("twin", suzanne.data)  # a linked duplicate: same mesh
+    camera = bpy.data.objects.new("camera", bpy.data.cameras.new("camera"))
+    for ob in (twin, camera):
+        bpy.context.scene.collection.objects.link(ob)
+    results = api.compute_objects([sphere, camera, suzanne, twin], rays=4)
+    assert [r.object_name for r in results] == ["Sphere", "suzanne"]
+    # About the whole run: in every result, first.
+    assert all(r.warnings[0] == "Skipped what is not a mesh: camera (camera)" for r in results)
+    # About one object: in its own result only.
+    shared = "suzanne shares its mesh with twin: computed once, from suzanne"
+    assert results[1].warnings == [results[0].warnings[0], shared]
+    assert results[0].warnings == [results[0].warnings[0]]
+    assert results[1].shared_by == ["twin"]
+
+
 def test_a_vertex_group_of_the_results_name_is_refused_first():
     # Blender cannot make an attribute of a vertex group's name: this failed only after the
     # computation, with Blender's own error.
