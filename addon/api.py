@@ -32,9 +32,10 @@ CoreUnavailable = core.CoreUnavailable
 @dataclass
 class ObjectResult:
     """What one object got. Arrays have one entry per polygon (domain 'FACE') or per vertex
-    (domain 'POINT'), except valid_rays: per triangle (or vertex). warnings: what the operator
-    reports, first those about the whole run (objects skipped as not meshes; the same in every
-    result), then this object's own."""
+    (domain 'POINT'), except valid_rays: per triangle (or vertex). A vertex in no face has no
+    thickness: values and normalized 0, colors (0, 0, 0, 0), valid_rays 0. warnings: what the
+    operator reports, first those about the whole run (objects skipped as not meshes; the same
+    in every result), then this object's own."""
 
     object_name: str
     domain: str

@@ -33,6 +33,11 @@ class Cancelled(Exception):
 
 SMOOTHING_METHODS = ("none", "kring", "projected", "texture")
 
+# What a vertex in no face gets in every output (values, normalised values; its colour is
+# transparent black): it has no thickness. 0 is what the core gives every point where no ray
+# anywhere found the other side (valid_rays 0 everywhere).
+NOT_MEASURED = 0.0
+
 # The texture's side and blur radius in texels, as the operator's properties bound them
 # (props.py); the API checks the same bounds before any work (the core takes sizes from 1,
 # and would refuse a bad one only in the bake, after the cast).
@@ -356,6 +361,7 @@ def compute(tasks, options, progress=None, cancelled=None):
 
         step(0.0)
         mesh = task.mesh
+        loose = None  # vertex values: the vertices in no face
         # Smoothing, when chosen, is the core's too: compute() casts, then smooths
         # (Result.values; Result.raw keeps the values as cast).
         result = core.compute(mesh.vertices, mesh.triangles, compute_options, step, task.corner_uvs)
@@ -365,6 +371,20 @@ def compute(tasks, options, progress=None, cancelled=None):
         else:
             task.values = np.asarray(result.values, dtype=np.float32)
             task.normalized = np.asarray(result.normalized, dtype=np.float32)
+            # A vertex in no face has no thickness to measure: the core casts no ray from it
+            # and fills it, as any point without a kept ray, with a value from its neighbours
+            # (valid_rays 0), here the median of the mesh, so that normalising and smoothing
+            # the others are unchanged. Written as it is, it read as measured; it is written
+            # as NOT_MEASURED instead, with no colour (below).
+            loose = task.topology.loose_vertices()
+            if loose.any():
+                task.values[loose] = NOT_MEASURED
+                task.normalized[loose] = NOT_MEASURED
+                task.warnings.append(
+                    f"{task.object_name}: {int(loose.sum())} vertices in no face (loose "
+                    "vertices, wire edges) have no thickness: their values are 0 and their "
+                    "colour transparent black"
+                )
         if options.bake_image:
             # The normalised field through the UV map; blurred in texture space when that is
             # the smoothing chosen (the paper's texture-space smoothing, 4.4).
@@ -405,6 +425,8 @@ def compute(tasks, options, progress=None, cancelled=None):
                 "flat or inside out?); every value is 0"
             )
         task.colors = core.colors(task.normalized) if options.color_name else None
+        if loose is not None and task.colors is not None:
+            task.colors[loose] = 0.0  # transparent black: a colour the map never gives
         task.engine = result.engine
         task.timings = dict(result.timings)
         done += share

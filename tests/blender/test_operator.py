@@ -155,6 +155,42 @@ def test_suzanne_vertices():
     assert me.color_attributes.active_color_name == "sdf_color"
 
 
+def test_loose_vertices_are_left_unmeasured():
+    # A vertex of no face (a lone point, a wire edge's ends) casts no ray: the core fills it
+    # with the median of the values (valid_rays 0), which the add-on wrote and coloured as
+    # if measured.
+    api = addon_module("api")
+    ob = uv_sphere(radius=1.0, segments=32, rings=16)
+    me = ob.data
+    n = len(me.vertices)
+    me.vertices.add(3)
+    for i, co in enumerate([(0.1, 0.2, 0.3), (2.0, 0.0, 0.0), (3.0, 0.0, 0.0)]):
+        me.vertices[n + i].co = co
+    me.edges.add(1)
+    me.edges[-1].vertices = (n + 1, n + 2)  # a wire edge
+    me.update()
+    loose = [n, n + 1, n + 2]
+    measured = np.arange(n)
+
+    result = api.compute_object(ob, points="vertices", rays=16)
+    values = attribute_array(me, "sdf")
+    normalized = attribute_array(me, "sdf_normalized")
+    colors = attribute_array(me, "sdf_color")
+    assert (values[loose] == 0).all() and (result.values[loose] == 0).all()
+    assert (normalized[loose] == 0).all() and (result.valid_rays[loose] == 0).all()
+    assert (colors[loose] == 0).all()  # transparent black: no colour of the map
+    assert (colors[measured, 3] == 1).all()
+    assert any("3 vertices in no face" in w for w in result.warnings), result.warnings
+    # The other vertices are as the package gives them: the loose ones change nothing there.
+    v, t, _ = world_triangles(ob)
+    ref = shape_diameter.compute(v, t, points="vertices", rays=16)
+    np.testing.assert_allclose(values[measured], ref.values[measured], rtol=1e-6)
+    np.testing.assert_allclose(normalized[measured], ref.normalized[measured], atol=1e-6)
+    # Per face, loose vertices have no value at all: nothing to say.
+    assert not api.compute_object(ob, attribute_name="per_face", normalized_name="",
+                                  color_name="").warnings
+
+
 def test_undo_restores_the_mesh():
     ob = suzanne_with_ngons()
     name = ob.data.name
