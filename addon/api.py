@@ -17,6 +17,7 @@ callback returns False. The native package itself is `import shape_diameter` (nu
 numpy out).
 """
 
+import warnings
 from dataclasses import dataclass, field
 
 import bpy
@@ -34,8 +35,8 @@ class ObjectResult:
     """What one object got. Arrays have one entry per polygon (domain 'FACE') or per vertex
     (domain 'POINT'), except valid_rays: per triangle (or vertex). A vertex in no face has no
     thickness: values and normalized 0, colors (0, 0, 0, 0), valid_rays 0. warnings: what the
-    operator reports, first those about the whole run (objects skipped as not meshes; the same
-    in every result), then this object's own."""
+    operator reports, first those about the whole run (objects skipped as not meshes, long or
+    large texture work; the same in every result), then this object's own."""
 
     object_name: str
     domain: str
@@ -71,7 +72,9 @@ def compute_objects(objects, *, depsgraph=None, write=True, progress=None, **opt
     shape_diameter.compute() accepts. write=False computes without writing. progress: called
     now and then with the fraction done (0 to 1); returning False stops the run, which raises
     Cancelled having written nothing. The baked image is ObjectResult.image:
-    bpy.data.images[result.image]."""
+    bpy.data.images[result.image]. Warnings about the whole run are also issued
+    (RuntimeWarning) before computing. Texture work estimated to need more than 80% of this
+    machine's memory raises UserError, nothing computed."""
     if progress is not None and not callable(progress):
         raise UserError("progress must be a callable taking the fraction done, or None")
     context = bpy.context
@@ -80,9 +83,12 @@ def compute_objects(objects, *, depsgraph=None, write=True, progress=None, **opt
     opts = process.Options.from_keywords(**options)
     if depsgraph is None:
         depsgraph = context.evaluated_depsgraph_get()
-    # Warnings about the whole run (what was skipped) go into every result, so that a caller
-    # that reads any result's warnings sees them, as the operator reports them once.
+    # Warnings about the whole run (what was skipped, long or large texture work) are issued
+    # before computing, as the operator reports them, and go into every result, so that a
+    # caller that reads any result's warnings sees them.
     tasks, run_warnings = process.prepare(depsgraph, objects, opts, for_writing=write)
+    for warning in run_warnings:
+        warnings.warn(warning, RuntimeWarning, stacklevel=2)
     stopped = []
 
     def report(fraction):

@@ -10,6 +10,7 @@ the scripting API:
              (a failure half-way restores what was written).
 """
 
+import os
 import threading
 from dataclasses import dataclass, field, fields
 
@@ -94,6 +95,10 @@ class Options:
         if self.smoothing == "texture":
             return {"texture_size": self.texture_size, "radius": self.texture_radius or None}
         return {}
+
+    def bake_radius(self):
+        """The bake's blur in texels: texture smoothing's (None: the core's default), else 0."""
+        return self.smoothing_options()["radius"] if self.smoothing == "texture" else 0.0
 
     @classmethod
     def from_keywords(cls, **keywords):
@@ -239,9 +244,10 @@ def _attribute_problem(ob, options):
 
 def prepare(depsgraph, objects, options, for_writing=True):
     """Tasks for the mesh objects among `objects`, plus the warnings about the whole run
-    (objects skipped as not meshes), to report before computing; a warning about one object
-    (its mesh shared with others) goes into its task's warnings. Raises UserError, having
-    changed nothing, when the run cannot go ahead. for_writing=False (a dry run of the
+    (objects skipped as not meshes, long or large texture work), to report before computing;
+    a warning about one object (its mesh shared with others) goes into its task's warnings.
+    Raises UserError, having changed nothing, when the run cannot go ahead (texture work too
+    large for this machine's memory included). for_writing=False (a dry run of the
     scripting API) skips the checks of the attributes to be written."""
     options.check_values()
     if for_writing:
@@ -302,6 +308,9 @@ def prepare(depsgraph, objects, options, for_writing=True):
     images = [t.image_name for t in tasks.values() if t.image_name]
     if len(set(images)) != len(images):
         raise UserError("Several objects would bake into one image: put {object} in the image name")
+    notice = _texture_work_notice(list(tasks.values()), options)
+    if notice:
+        notices.append(notice)
     for task in tasks.values():
         if task.shared_by:
             task.warnings.append(
@@ -309,6 +318,91 @@ def prepare(depsgraph, objects, options, for_writing=True):
                 f"computed once, from {task.object_name}"
             )
     return list(tasks.values()), notices
+
+
+# Texture work (texture smoothing, the bake) grows with the texels, and the blur with the
+# radius too: a 2048^2 bake with texture smoothing at a radius of 1024 texels ran for half a
+# minute on 2 cores without a word. It is estimated before computing, from the core's figures
+# (shape_diameter.smoothing.texture_cost: the blur's reads, the buffers) and the add-on's
+# own, measured on a 2-core AMD EPYC with bpy 4.5 on Spot:
+SECONDS_PER_BLUR_READ = 4e-9  # one CPU thread (texture_cost's measurement)
+SECONDS_PER_TEXEL = 6.4e-8  # one CPU thread: drawing, dilating, reading back (4096^2: 0.54 s)
+SECONDS_PER_BAKED_TEXEL = 1.2e-7  # Blender's side of a bake: its image made, filled, packed
+BAKED_BYTES_PER_TEXEL = 56  # a bake at its peak, Blender's image included: 52.5-56.7 measured
+# (4096^2 and 8192^2; 8192^2 without blur: 10.2 s and 3.4 GB in all). Every baked image is
+# held until all are written. Past WARN_SECONDS or WARN_MEMORY of the machine's memory the
+# run says so before it starts (the interface's Esc still cancels it); past REFUSE_MEMORY it
+# is refused: swapping, or the kernel's out-of-memory killer ending Blender and its unsaved
+# work. Time alone never refuses: an OpenCL GPU blurs far faster than the estimate's CPU.
+WARN_SECONDS = 10.0
+WARN_MEMORY = 0.25
+REFUSE_MEMORY = 0.8
+
+
+def physical_memory():
+    """Bytes of memory of this machine, or None where the system does not say."""
+    try:
+        return os.sysconf("SC_PHYS_PAGES") * os.sysconf("SC_PAGE_SIZE")
+    except (AttributeError, ValueError, OSError):
+        return None
+
+
+def texture_work(tasks, options):
+    """(seconds, bytes, threads): the estimated time of a run's texture work on the CPU
+    threads and its peak memory; (0.0, 0, threads) without texture work."""
+    threads = max(1, int(options.extra.get("threads") or core.cpu_threads()))
+    seconds, peak, baked = 0.0, 0, 0
+    if not options.needs_uvs:
+        return seconds, peak, threads
+    passes = []  # (radius, baked): one texture pass each
+    if options.smoothing == "texture":
+        passes.append((options.smoothing_options()["radius"], False))
+    if options.bake_image:
+        passes.append((options.bake_radius(), True))
+    for task in tasks:
+        for radius, bake in passes:
+            cost = core.texture_cost(options.texture_size, radius, task.corner_uvs)
+            seconds += (cost.blur_reads * SECONDS_PER_BLUR_READ
+                        + cost.texels * SECONDS_PER_TEXEL) / threads
+            peak = max(peak, cost.bytes)
+            if bake:
+                seconds += cost.texels * SECONDS_PER_BAKED_TEXEL
+                baked += cost.texels
+    return seconds, max(peak, baked * BAKED_BYTES_PER_TEXEL), threads
+
+
+def _size(count):
+    return f"{count / 2**30:.1f} GiB" if count >= 2**30 else f"{count / 2**20:.0f} MiB"
+
+
+def _texture_work_notice(tasks, options):
+    """A warning (or None) for texture work estimated to be long or large; raises UserError
+    for work that cannot fit in this machine's memory."""
+    if not options.needs_uvs:
+        return None
+    seconds, peak, threads = texture_work(tasks, options)
+    size = options.texture_size
+    parts = (["texture smoothing"] if options.smoothing == "texture" else []) + (
+        ["the bake"] if options.bake_image else [])
+    what = (f"{' and '.join(parts)} of {len(tasks)} object{'s' if len(tasks) != 1 else ''} at "
+            f"{size} x {size} texels")
+    if options.smoothing == "texture" and options.texture_radius:
+        what += (f" with a blur radius of {options.texture_radius:g} texels (default "
+                 f"{core.default_radius(size):g})")
+    memory = physical_memory()
+    if memory and peak > REFUSE_MEMORY * memory:
+        raise UserError(
+            f"Too large: {what} would need about {_size(peak)} of memory, more than "
+            f"{REFUSE_MEMORY:.0%} of this machine's {_size(memory)}; lower the resolution"
+            f"{' or bake fewer objects at once' if options.bake_image and len(tasks) > 1 else ''}"
+        )
+    if seconds > WARN_SECONDS or (memory and peak > WARN_MEMORY * memory):
+        return (
+            f"Long or large texture work ahead: {what}: about {seconds:.0f} s on {threads} CPU "
+            f"thread{'s' if threads != 1 else ''} and {_size(peak)} of memory (an estimate; a "
+            "GPU blurs faster). A smaller radius or resolution costs less"
+        )
+    return None
 
 
 def _corner_uvs(ob, me, options, flipped):
@@ -388,9 +482,7 @@ def compute(tasks, options, progress=None, cancelled=None):
         if options.bake_image:
             # The normalised field through the UV map; blurred in texture space when that is
             # the smoothing chosen (the paper's texture-space smoothing, 4.4).
-            radius = (
-                options.smoothing_options()["radius"] if options.smoothing == "texture" else 0.0
-            )
+            radius = options.bake_radius()
             per_point = (
                 task.normalized[mesh.triangle_polygons]
                 if options.points == "faces"

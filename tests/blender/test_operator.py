@@ -297,7 +297,8 @@ def test_the_api_says_what_it_skipped_as_the_operator_does():
     camera = bpy.data.objects.new("camera", bpy.data.cameras.new("camera"))
     for ob in (twin, camera):
         bpy.context.scene.collection.objects.link(ob)
-    results = api.compute_objects([sphere, camera, suzanne, twin], rays=4)
+    with pytest.warns(RuntimeWarning, match=r"Skipped what is not a mesh: camera \(camera\)"):
+        results = api.compute_objects([sphere, camera, suzanne, twin], rays=4)
     assert [r.object_name for r in results] == ["Sphere", "suzanne"]
     # About the whole run: in every result, first.
     assert all(r.warnings[0] == "Skipped what is not a mesh: camera (camera)" for r in results)
