@@ -17,6 +17,7 @@ callback returns False. The native package itself is `import shape_diameter` (nu
 numpy out).
 """
 
+import warnings
 from dataclasses import dataclass, field
 
 import bpy
@@ -32,7 +33,10 @@ CoreUnavailable = core.CoreUnavailable
 @dataclass
 class ObjectResult:
     """What one object got. Arrays have one entry per polygon (domain 'FACE') or per vertex
-    (domain 'POINT'), except valid_rays: per triangle (or vertex)."""
+    (domain 'POINT'), except valid_rays: per triangle (or vertex). A vertex in no face has no
+    thickness: values and normalized 0, colors (0, 0, 0, 0), valid_rays 0. warnings: what the
+    operator reports, first those about the whole run (objects skipped as not meshes, long or
+    large texture work; the same in every result), then this object's own."""
 
     object_name: str
     domain: str
@@ -57,16 +61,20 @@ def compute_objects(objects, *, depsgraph=None, write=True, progress=None, **opt
     """Computes every mesh object in `objects` together and writes their attributes (all or
     none). Options, with the operator's names: rays=30, cone_angle=120.0 (degrees),
     sampling='fibonacci', seed=0, points='faces', normalize='linear', engine=None (the
-    preferences' default engine; or 'auto', or a name from engines()), orientation='auto'
-    ('as_is', 'flip'), accel='bvh' or 'octree', smoothing='none', 'kring' (smoothing_rings=0: automatic), 'projected'
-    (smoothing_iterations=1) or 'texture' (texture_size=1024, texture_radius=0: automatic;
-    needs a UV map), attribute_name='sdf', normalized_name='sdf_normalized',
-    color_name='sdf_color' (empty: not written), bake_image=False, uv_map='' (the active one),
-    image_name='{object}_sdf', bake_margin=4, use_modifiers=False, apply_scale=True; and any
-    further keyword that shape_diameter.compute() accepts. write=False computes without
-    writing. progress: called now and then with the fraction done (0 to 1); returning False
-    stops the run, which raises Cancelled having written nothing. The baked image is
-    ObjectResult.image: bpy.data.images[result.image]."""
+    preferences' default engine; or 'auto', 'opencl' (the best OpenCL device), or a name
+    from engines()), orientation='auto' ('as_is', 'flip'), accel='bvh' or 'octree',
+    smoothing='none', 'kring' (smoothing_rings=0: automatic), 'projected'
+    (smoothing_iterations=1) or 'texture' (texture_size=1024, an integer in [16, 16384];
+    texture_radius=0: automatic, or texels in [0, 1024]; needs a UV map), attribute_name='sdf',
+    normalized_name='sdf_normalized', color_name='sdf_color' (empty: not written),
+    bake_image=False, uv_map='' (the active one), image_name='{object}_sdf', bake_margin=4,
+    use_modifiers=False, apply_scale=True; and any further keyword that
+    shape_diameter.compute() accepts. write=False computes without writing. progress: called
+    now and then with the fraction done (0 to 1); returning False stops the run, which raises
+    Cancelled having written nothing. The baked image is ObjectResult.image:
+    bpy.data.images[result.image]. Warnings about the whole run are also issued
+    (RuntimeWarning) before computing. Texture work estimated to need more than 80% of this
+    machine's memory raises UserError, nothing computed."""
     if progress is not None and not callable(progress):
         raise UserError("progress must be a callable taking the fraction done, or None")
     context = bpy.context
@@ -75,7 +83,12 @@ def compute_objects(objects, *, depsgraph=None, write=True, progress=None, **opt
     opts = process.Options.from_keywords(**options)
     if depsgraph is None:
         depsgraph = context.evaluated_depsgraph_get()
-    tasks, _warnings = process.prepare(depsgraph, objects, opts, for_writing=write)
+    # Warnings about the whole run (what was skipped, long or large texture work) are issued
+    # before computing, as the operator reports them, and go into every result, so that a
+    # caller that reads any result's warnings sees them.
+    tasks, run_warnings = process.prepare(depsgraph, objects, opts, for_writing=write)
+    for warning in run_warnings:
+        warnings.warn(warning, RuntimeWarning, stacklevel=2)
     stopped = []
 
     def report(fraction):
@@ -102,7 +115,7 @@ def compute_objects(objects, *, depsgraph=None, write=True, progress=None, **opt
             timings=t.timings,
             attributes=written,
             shared_by=list(t.shared_by),
-            warnings=list(t.warnings),
+            warnings=[*run_warnings, *t.warnings],
             image=t.image_name if write else "",
         )
         for t in tasks

@@ -102,6 +102,24 @@ def uv_faces_outside(uvs):
     return load().smoothing.uv_faces_outside(uvs)
 
 
+def cpu_threads():
+    """The threads the CPU engine runs on here (shape_diameter.engines()' 'cpu' entry)."""
+    cpu = [e for e in engines() if e["name"] == "cpu"]
+    return int(cpu[0].get("threads") or 1) if cpu else 1
+
+
+def texture_cost(size, radius, uvs):
+    """The core's own estimate of texture smoothing (and a bake's drawing and blur) at `size`
+    texels square and `radius` (None: the core's default), known before running it:
+    shape_diameter.smoothing.texture_cost (texels, blur_reads, bytes)."""
+    return load().smoothing.texture_cost(int(size), radius, uvs)
+
+
+def default_radius(size):
+    """Texture smoothing's default blur radius in texels at `size` texels square."""
+    return load().smoothing.default_radius(int(size))
+
+
 def bake(vertices, triangles, values, points, uvs, size, radius, margin, progress=None):
     """The field rasterised through per-corner uvs (m, 3, 2) into a (size, size, 4) float32
     RGBA image in Blender's pixel order (row 0 at v = 0): the value in R, G and B, alpha 1

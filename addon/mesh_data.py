@@ -40,6 +40,10 @@ class Topology:
     corner_vertices: np.ndarray  # int32 per loop (corner): its vertex
     loop_totals: np.ndarray  # int32 per polygon: its corner count
 
+    def loose_vertices(self):
+        """bool per vertex: in no polygon (a lone point, or only in wire edges)."""
+        return np.bincount(self.corner_vertices, minlength=self.vertex_count) == 0
+
     def matches(self, other):
         return (
             self.vertex_count == other.vertex_count

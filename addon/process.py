@@ -10,6 +10,7 @@ the scripting API:
              (a failure half-way restores what was written).
 """
 
+import os
 import threading
 from dataclasses import dataclass, field, fields
 
@@ -32,6 +33,17 @@ class Cancelled(Exception):
 
 
 SMOOTHING_METHODS = ("none", "kring", "projected", "texture")
+
+# What a vertex in no face gets in every output (values, normalised values; its colour is
+# transparent black): it has no thickness. 0 is what the core gives every point where no ray
+# anywhere found the other side (valid_rays 0 everywhere).
+NOT_MEASURED = 0.0
+
+# The texture's side and blur radius in texels, as the operator's properties bound them
+# (props.py); the API checks the same bounds before any work (the core takes sizes from 1,
+# and would refuse a bad one only in the bake, after the cast).
+TEXTURE_SIZE_RANGE = (16, 16384)
+TEXTURE_RADIUS_RANGE = (0.0, 1024.0)
 
 
 @dataclass
@@ -84,6 +96,10 @@ class Options:
             return {"texture_size": self.texture_size, "radius": self.texture_radius or None}
         return {}
 
+    def bake_radius(self):
+        """The bake's blur in texels: texture smoothing's (None: the core's default), else 0."""
+        return self.smoothing_options()["radius"] if self.smoothing == "texture" else 0.0
+
     @classmethod
     def from_keywords(cls, **keywords):
         """Options from keyword arguments (the operator's property names); keywords that are
@@ -121,6 +137,23 @@ class Options:
         if self.color_name:
             out.append((self.color_name, "BYTE_COLOR", "POINT" if on_vertices else "CORNER"))
         return out
+
+    def check_values(self):
+        """The numbers the core sees only late (the bake runs after the cast), checked up
+        front, for dry runs too. Raises UserError naming the option and its range."""
+        lo, hi = TEXTURE_SIZE_RANGE
+        size = self.texture_size
+        integer = isinstance(size, (int, np.integer)) and not isinstance(size, bool)
+        if not integer or not lo <= size <= hi:
+            raise UserError(f"texture_size must be an integer in [{lo}, {hi}], got {size!r}")
+        lo, hi = TEXTURE_RADIUS_RANGE
+        radius = self.texture_radius
+        number = isinstance(radius, (int, float, np.integer, np.floating))
+        if not number or isinstance(radius, bool) or not lo <= radius <= hi:  # NaN fails too
+            raise UserError(
+                f"texture_radius must be a number in [{lo:g}, {hi:g}] texels (0: 2 per 256 "
+                f"texels of the texture), got {radius!r}"
+            )
 
     def check(self):
         if self.points not in ("faces", "vertices"):
@@ -210,9 +243,13 @@ def _attribute_problem(ob, options):
 
 
 def prepare(depsgraph, objects, options, for_writing=True):
-    """Tasks for the mesh objects among `objects`, plus warnings (skipped objects). Raises
-    UserError, having changed nothing, when the run cannot go ahead. for_writing=False (a
-    dry run of the scripting API) skips the checks of the attributes to be written."""
+    """Tasks for the mesh objects among `objects`, plus the warnings about the whole run
+    (objects skipped as not meshes, long or large texture work), to report before computing;
+    a warning about one object (its mesh shared with others) goes into its task's warnings.
+    Raises UserError, having changed nothing, when the run cannot go ahead (texture work too
+    large for this machine's memory included). for_writing=False (a dry run of the
+    scripting API) skips the checks of the attributes to be written."""
+    options.check_values()
     if for_writing:
         options.check()
     objects = list(objects)
@@ -271,13 +308,101 @@ def prepare(depsgraph, objects, options, for_writing=True):
     images = [t.image_name for t in tasks.values() if t.image_name]
     if len(set(images)) != len(images):
         raise UserError("Several objects would bake into one image: put {object} in the image name")
+    notice = _texture_work_notice(list(tasks.values()), options)
+    if notice:
+        notices.append(notice)
     for task in tasks.values():
         if task.shared_by:
-            notices.append(
+            task.warnings.append(
                 f"{task.object_name} shares its mesh with {', '.join(task.shared_by)}: "
                 f"computed once, from {task.object_name}"
             )
     return list(tasks.values()), notices
+
+
+# Texture work (texture smoothing, the bake) grows with the texels, and the blur with the
+# radius too: a 2048^2 bake with texture smoothing at a radius of 1024 texels ran for half a
+# minute on 2 cores without a word. It is estimated before computing, from the core's figures
+# (shape_diameter.smoothing.texture_cost: the blur's reads, the buffers) and the add-on's
+# own, measured on a 2-core AMD EPYC with bpy 4.5 on Spot:
+SECONDS_PER_BLUR_READ = 4e-9  # one CPU thread (texture_cost's measurement)
+SECONDS_PER_TEXEL = 6.4e-8  # one CPU thread: drawing, dilating, reading back (4096^2: 0.54 s)
+SECONDS_PER_BAKED_TEXEL = 1.2e-7  # Blender's side of a bake: its image made, filled, packed
+BAKED_BYTES_PER_TEXEL = 56  # a bake at its peak, Blender's image included: 52.5-56.7 measured
+# (4096^2 and 8192^2; 8192^2 without blur: 10.2 s and 3.4 GB in all). Every baked image is
+# held until all are written. Past WARN_SECONDS or WARN_MEMORY of the machine's memory the
+# run says so before it starts (the interface's Esc still cancels it); past REFUSE_MEMORY it
+# is refused: swapping, or the kernel's out-of-memory killer ending Blender and its unsaved
+# work. Time alone never refuses: an OpenCL GPU blurs far faster than the estimate's CPU.
+WARN_SECONDS = 10.0
+WARN_MEMORY = 0.25
+REFUSE_MEMORY = 0.8
+
+
+def physical_memory():
+    """Bytes of memory of this machine, or None where the system does not say."""
+    try:
+        return os.sysconf("SC_PHYS_PAGES") * os.sysconf("SC_PAGE_SIZE")
+    except (AttributeError, ValueError, OSError):
+        return None
+
+
+def texture_work(tasks, options):
+    """(seconds, bytes, threads): the estimated time of a run's texture work on the CPU
+    threads and its peak memory; (0.0, 0, threads) without texture work."""
+    threads = max(1, int(options.extra.get("threads") or core.cpu_threads()))
+    seconds, peak, baked = 0.0, 0, 0
+    if not options.needs_uvs:
+        return seconds, peak, threads
+    passes = []  # (radius, baked): one texture pass each
+    if options.smoothing == "texture":
+        passes.append((options.smoothing_options()["radius"], False))
+    if options.bake_image:
+        passes.append((options.bake_radius(), True))
+    for task in tasks:
+        for radius, bake in passes:
+            cost = core.texture_cost(options.texture_size, radius, task.corner_uvs)
+            seconds += (cost.blur_reads * SECONDS_PER_BLUR_READ
+                        + cost.texels * SECONDS_PER_TEXEL) / threads
+            peak = max(peak, cost.bytes)
+            if bake:
+                seconds += cost.texels * SECONDS_PER_BAKED_TEXEL
+                baked += cost.texels
+    return seconds, max(peak, baked * BAKED_BYTES_PER_TEXEL), threads
+
+
+def _size(count):
+    return f"{count / 2**30:.1f} GiB" if count >= 2**30 else f"{count / 2**20:.0f} MiB"
+
+
+def _texture_work_notice(tasks, options):
+    """A warning (or None) for texture work estimated to be long or large; raises UserError
+    for work that cannot fit in this machine's memory."""
+    if not options.needs_uvs:
+        return None
+    seconds, peak, threads = texture_work(tasks, options)
+    size = options.texture_size
+    parts = (["texture smoothing"] if options.smoothing == "texture" else []) + (
+        ["the bake"] if options.bake_image else [])
+    what = (f"{' and '.join(parts)} of {len(tasks)} object{'s' if len(tasks) != 1 else ''} at "
+            f"{size} x {size} texels")
+    if options.smoothing == "texture" and options.texture_radius:
+        what += (f" with a blur radius of {options.texture_radius:g} texels (default "
+                 f"{core.default_radius(size):g})")
+    memory = physical_memory()
+    if memory and peak > REFUSE_MEMORY * memory:
+        raise UserError(
+            f"Too large: {what} would need about {_size(peak)} of memory, more than "
+            f"{REFUSE_MEMORY:.0%} of this machine's {_size(memory)}; lower the resolution"
+            f"{' or bake fewer objects at once' if options.bake_image and len(tasks) > 1 else ''}"
+        )
+    if seconds > WARN_SECONDS or (memory and peak > WARN_MEMORY * memory):
+        return (
+            f"Long or large texture work ahead: {what}: about {seconds:.0f} s on {threads} CPU "
+            f"thread{'s' if threads != 1 else ''} and {_size(peak)} of memory (an estimate; a "
+            "GPU blurs faster). A smaller radius or resolution costs less"
+        )
+    return None
 
 
 def _corner_uvs(ob, me, options, flipped):
@@ -330,6 +455,7 @@ def compute(tasks, options, progress=None, cancelled=None):
 
         step(0.0)
         mesh = task.mesh
+        loose = None  # vertex values: the vertices in no face
         # Smoothing, when chosen, is the core's too: compute() casts, then smooths
         # (Result.values; Result.raw keeps the values as cast).
         result = core.compute(mesh.vertices, mesh.triangles, compute_options, step, task.corner_uvs)
@@ -339,12 +465,24 @@ def compute(tasks, options, progress=None, cancelled=None):
         else:
             task.values = np.asarray(result.values, dtype=np.float32)
             task.normalized = np.asarray(result.normalized, dtype=np.float32)
+            # A vertex in no face has no thickness to measure: the core casts no ray from it
+            # and fills it, as any point without a kept ray, with a value from its neighbours
+            # (valid_rays 0), here the median of the mesh, so that normalising and smoothing
+            # the others are unchanged. Written as it is, it read as measured; it is written
+            # as NOT_MEASURED instead, with no colour (below).
+            loose = task.topology.loose_vertices()
+            if loose.any():
+                task.values[loose] = NOT_MEASURED
+                task.normalized[loose] = NOT_MEASURED
+                task.warnings.append(
+                    f"{task.object_name}: {int(loose.sum())} vertices in no face (loose "
+                    "vertices, wire edges) have no thickness: their values are 0 and their "
+                    "colour transparent black"
+                )
         if options.bake_image:
             # The normalised field through the UV map; blurred in texture space when that is
             # the smoothing chosen (the paper's texture-space smoothing, 4.4).
-            radius = (
-                options.smoothing_options()["radius"] if options.smoothing == "texture" else 0.0
-            )
+            radius = options.bake_radius()
             per_point = (
                 task.normalized[mesh.triangle_polygons]
                 if options.points == "faces"
@@ -379,6 +517,8 @@ def compute(tasks, options, progress=None, cancelled=None):
                 "flat or inside out?); every value is 0"
             )
         task.colors = core.colors(task.normalized) if options.color_name else None
+        if loose is not None and task.colors is not None:
+            task.colors[loose] = 0.0  # transparent black: a colour the map never gives
         task.engine = result.engine
         task.timings = dict(result.timings)
         done += share

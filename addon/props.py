@@ -12,27 +12,55 @@ import math
 import bpy
 from bpy.props import BoolProperty, EnumProperty, FloatProperty, IntProperty, StringProperty
 
-from . import core
+from . import core, process
 
 # Blender keeps only pointers to the strings of dynamic enum items: the lists must stay alive
 # (docs.blender.org/api/current/bpy.props.html#bpy.props.EnumProperty, "items" warning).
 _engine_items = {}
 
 
-def engine_items(with_default):
-    """Enum items for the engines shape_diameter.engines() lists here, after 'auto' (and
-    'DEFAULT', the preferences' choice, on the operator and the panel)."""
-    items = []
+def engine_choices(with_default):
+    """[(key, enum item)] for the engines shape_diameter.engines() lists here, after 'auto'
+    (and 'DEFAULT', the preferences' choice, on the operator and the panel); with OpenCL
+    devices, 'opencl' (the best of them, whichever machine this is) and each device, labelled
+    by its name. Item identifiers are what shape_diameter.compute(engine=...) takes, so
+    scripts pass the same strings. `key` is what a saved setting keeps: the identifier, but
+    for a device its name ('opencl:<device name>', '... #2' for a second device of that
+    name), because a device's index changes with the drivers and the devices installed."""
+    choices = []  # (key, (identifier, label, description))
     if with_default:
-        items.append(("DEFAULT", "Default", "The engine chosen in the add-on's preferences"))
-    items.append(("auto", "Automatic", "The best engine available here"))
-    for engine in core.engines():
+        choices.append(("DEFAULT", ("DEFAULT", "Default",
+                                    "The engine chosen in the add-on's preferences")))
+    choices.append(("auto", ("auto", "Automatic",
+                             "The best OpenCL GPU if there is one, else the CPU")))
+    engines = core.engines()
+    has_opencl = any(str(e["name"]).startswith("opencl:") for e in engines)
+    same_name = {}
+    for engine in engines:
         name = str(engine["name"])
-        label = str(engine.get("label") or (name.upper() if len(name) <= 4 else name))
-        description = str(engine.get("description") or engine.get("type") or name)
-        items.append((name, label, description))
-    key = (with_default, tuple(items))
-    return _engine_items.setdefault(key, items)
+        if name.startswith("opencl:"):
+            device = str(engine.get("device") or name)
+            same_name[device] = same_name.get(device, 0) + 1
+            label = device if same_name[device] == 1 else f"{device} #{same_name[device]}"
+            description = f"OpenCL: {engine.get('description') or device}; engine='{name}'"
+            choices.append(("opencl:" + label, (name, label, description)))
+            continue
+        description = str(engine.get("description") or name)
+        if name == "cpu":
+            choices.append(("cpu", ("cpu", "CPU", f"The CPU engine, {description}")))
+        else:  # an engine a later core adds
+            choices.append((name, (name, name, description)))
+        if name == "cpu" and has_opencl:
+            choices.append(("opencl", ("opencl", "Best OpenCL Device", (
+                "The fastest OpenCL device here, a GPU before a CPU device; engine='opencl'"))))
+    items = [item for _, item in choices]
+    items = _engine_items.setdefault((with_default, tuple(items)), items)
+    return [(key, item) for (key, _), item in zip(choices, items)]
+
+
+def engine_items(with_default):
+    """The enum items of engine_choices()."""
+    return [item for _, item in engine_choices(with_default)]
 
 
 def _operator_engine_items(self, context):
@@ -179,16 +207,16 @@ def options():
             description="Size in texels of the texture used by texture smoothing and the bake "
             "(square)",
             default=1024,
-            min=16,
-            max=16384,
+            min=process.TEXTURE_SIZE_RANGE[0],
+            max=process.TEXTURE_SIZE_RANGE[1],
             soft_max=8192,
         ),
         "texture_radius": FloatProperty(
             name="Radius",
             description="Texture smoothing: blur reach in texels (0: 2 per 256 texels, paper)",
             default=0.0,
-            min=0.0,
-            max=1024.0,
+            min=process.TEXTURE_RADIUS_RANGE[0],
+            max=process.TEXTURE_RADIUS_RANGE[1],
         ),
         "bake_image": BoolProperty(
             name="Bake Image",
@@ -247,20 +275,25 @@ def engine_property():
 
 
 def stored_engine_property(store, with_default, description):
-    """An engine enum kept by name in the string property `store`: a dynamic enum saves an
-    index, which would point at another engine on a machine with other devices. An engine
-    that is not available here reads as the first item."""
+    """An engine enum kept by key (engine_choices) in the string property `store`: a dynamic
+    enum saves an index, which would point at another engine on a machine with other
+    devices, and so would a device's 'opencl:<index>'. A device found again under another
+    index reads as that index; an engine that is not available here reads as the first item
+    (Default, or Automatic), never as another device."""
 
     def items(self, context):
         return engine_items(with_default)
 
     def get(self):
-        names = [item[0] for item in engine_items(with_default)]
-        name = getattr(self, store)
-        return names.index(name) if name in names else 0
+        stored = getattr(self, store)
+        choices = engine_choices(with_default)
+        for index, (key, _) in enumerate(choices):
+            if key == stored:
+                return index
+        return 0
 
     def set(self, value):
-        setattr(self, store, engine_items(with_default)[value][0])
+        setattr(self, store, engine_choices(with_default)[value][0])
 
     return EnumProperty(name="Engine", description=description, items=items, get=get, set=set)
 

@@ -288,6 +288,54 @@ def uv_faces_outside(uvs) -> int:
     return int(np.count_nonzero((hi < 0.0).any(axis=1) | (lo > 1.0).any(axis=1)))
 
 
+# Bytes a texel that texture smoothing's CPU path holds at its peak (smoothing_texture.cpp):
+# drawing, a 64-bit owner key and the island (int32) and value (float32) drawn, 16 bytes (the
+# keys are freed after); dilating, a second island and value, 16; blurring, the island and
+# value, the row pass's value and weight sums and the blurred image, 20 (the image, with a
+# one-byte mask, is what return_image keeps). Measured (ru_maxrss, Spot, 1024^2 to 4096^2
+# texels): 15.6-16.0 bytes a texel without a blur, 19.5-20.0 with one.
+TEXTURE_BYTES_PER_TEXEL = 20
+TEXTURE_BYTES_PER_TEXEL_NO_BLUR = 16
+
+
+class TextureCost(NamedTuple):
+    """texture_cost()'s answer."""
+
+    texels: int
+    """width x height: drawing, dilating and reading back are linear in it."""
+    blur_reads: float
+    """Texels the blur reads, its time being proportional: in each of its two passes (rows,
+    then columns) every texel of an island reads the texels within the radius along its row
+    (column), clipped to the image; texels outside the islands read none. Measured on the CPU
+    threads: about 4 ns a read on one thread (2-core AMD EPYC, Spot at 2048^2 texels, radius
+    256 to 1024: 18.3 s for 8.9e9 reads on 2 threads)."""
+    bytes: int
+    """Peak memory of the CPU path's own buffers, beyond the mesh, values and UVs."""
+
+
+def texture_cost(texture_size=1024, radius=None, uvs=None) -> TextureCost:
+    """What texture smoothing (or a bake through it) at texture_size and radius (None: the
+    default, default_radius()) costs on the CPU threads, known before running it: for callers
+    that warn about, or refuse, a job too long or too large. uvs: per-corner (m, 3, 2); the
+    share of the [0, 1] square their triangles cover (at most 1) is taken for the share of
+    texels in islands; without them, every texel (an upper bound). Raises ValueError as
+    smooth() does for a bad size or radius."""
+    width, height = _texture_size(texture_size)
+    if radius is None:
+        radius = default_radius((width, height))
+    taps = math.floor(_real("radius", radius, 0.0, 16384.0))  # as the core cuts it
+    texels = width * height
+    covered = 1.0
+    if uvs is not None:
+        uv = np.asarray(uvs, dtype=np.float64).reshape(-1, 3, 2)
+        a, b = uv[:, 1] - uv[:, 0], uv[:, 2] - uv[:, 0]
+        covered = min(1.0, 0.5 * float(np.abs(a[:, 0] * b[:, 1] - a[:, 1] * b[:, 0]).sum()))
+    if taps < 1:
+        return TextureCost(texels, 0.0, texels * TEXTURE_BYTES_PER_TEXEL_NO_BLUR)
+    window = min(2 * taps + 1, width) + min(2 * taps + 1, height)
+    return TextureCost(texels, texels * covered * window, texels * TEXTURE_BYTES_PER_TEXEL)
+
+
 def mesh_width(v) -> float:
     """The largest side of the vertices' bounding box (0 for no vertex)."""
     return float(np.ptp(v, axis=0).max()) if len(v) else 0.0

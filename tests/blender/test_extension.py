@@ -70,9 +70,11 @@ def test_everything_is_registered():
     # Dynamic enums list no items through RNA outside drawing: ask the add-on's callback.
     props = addon_module("props")
     names = [e["name"] for e in shape_diameter.engines()]
-    assert [item[0] for item in props.engine_items(False)] == ["auto", *names]
-    assert [item[0] for item in props.engine_items(True)] == ["DEFAULT", "auto", *names]
-    assert "cpu" in names
+    assert names[0] == "cpu"
+    best = ["opencl"] if len(names) > 1 else []  # any OpenCL device, when there is one
+    assert [item[0] for item in props.engine_items(False)] == ["auto", "cpu", *best, *names[1:]]
+    assert [item[0] for item in props.engine_items(True)] == [
+        "DEFAULT", "auto", "cpu", *best, *names[1:]]
     operator = bpy.ops.object.shape_diameter.get_rna_type()
     assert {
         "rays",
@@ -237,6 +239,60 @@ def test_default_engine_preference():
         assert operators.resolve_engine(bpy.context, "DEFAULT") == "cpu"
         prefs.default_engine_name = "an-engine-that-is-gone"
         assert prefs.default_engine == "auto"
+    finally:
+        prefs.default_engine = "auto"
+
+
+def fake_engines(*devices):
+    """shape_diameter.engines() as a machine with these OpenCL devices ((name, type) pairs, in
+    the drivers' order) lists them."""
+    found = [{"name": "cpu", "type": "CPU", "threads": 2, "description": "2 threads"}]
+    for index, (device, kind) in enumerate(devices):
+        found.append({
+            "name": f"opencl:{index}", "index": index, "device": device, "type": kind,
+            "platform": "Test", "memory": 8 << 30, "description": f"{device} (Test, 8192 MiB)",
+        })
+    return found
+
+
+def test_the_engine_menu_offers_the_best_opencl_device_and_each_by_name(monkeypatch):
+    # The menu listed devices as 'opencl:0', 'opencl:1' (their indices for labels) and had no
+    # 'opencl', the best device, which shape_diameter.compute() takes.
+    core, props = addon_module("core"), addon_module("props")
+    monkeypatch.setattr(core, "engines", lambda refresh=False: fake_engines(
+        ("GPU A", "GPU"), ("GPU B", "GPU"), ("GPU B", "GPU")))
+    items = props.engine_items(False)
+    assert [item[0] for item in items] == ["auto", "cpu", "opencl", "opencl:0", "opencl:1",
+                                           "opencl:2"]
+    labels = {item[0]: item[1] for item in items}
+    # Two devices of one name (two GPUs of a model) are told apart.
+    assert [labels[f"opencl:{i}"] for i in range(3)] == ["GPU A", "GPU B", "GPU B #2"]
+    assert "engine='opencl:1'" in {item[0]: item[2] for item in items}["opencl:1"]
+    assert [item[0] for item in props.engine_items(True)][:2] == ["DEFAULT", "auto"]
+    monkeypatch.setattr(core, "engines", lambda refresh=False: fake_engines())
+    assert [item[0] for item in props.engine_items(False)] == ["auto", "cpu"]  # no OpenCL
+
+
+def test_a_chosen_device_is_kept_by_name_when_the_devices_change(monkeypatch):
+    # An engine is stored as a name, not the enum's index; a device was stored as
+    # 'opencl:<index>', which named another device once the drivers listed them otherwise.
+    core, operators = addon_module("core"), addon_module("operators")
+    prefs = bpy.context.preferences.addons[ADDON].preferences
+    settings = bpy.context.scene.shape_diameter
+    devices = [("GPU A", "GPU"), ("GPU B", "GPU")]
+    monkeypatch.setattr(core, "engines", lambda refresh=False: fake_engines(*devices))
+    try:
+        prefs.default_engine = "opencl:1"
+        settings.engine = "opencl:1"
+        assert (prefs.default_engine, settings.engine) == ("opencl:1", "opencl:1")
+        devices.reverse()  # a driver update, another GPU: GPU B is listed first now
+        assert (prefs.default_engine, settings.engine) == ("opencl:0", "opencl:0")
+        assert operators.resolve_engine(bpy.context, "DEFAULT") == "opencl:0"
+        del devices[0]  # GPU B is gone: the first item again, not whatever took its place
+        assert (prefs.default_engine, settings.engine) == ("auto", "DEFAULT")
+        prefs.default_engine = "opencl"  # any device, whichever is best here
+        devices[:] = [("GPU C", "GPU")]
+        assert prefs.default_engine == "opencl"
     finally:
         prefs.default_engine = "auto"
 

@@ -97,6 +97,22 @@ def test_object_scale(scale, apply_scale, factor):
         assert abs(np.median(ratio) - 1.0) < 0.005 and np.abs(ratio - 1.0).max() < 0.04
 
 
+def test_the_operator_runs_on_the_best_opencl_device_or_a_chosen_one():
+    # The engine menu refused 'opencl' (the best device), which shape_diameter.compute()
+    # takes. An OpenCL device is needed: CI installs PoCL (scripts/setup.sh), as for
+    # tests/python/test_opencl.py, so none is a failure.
+    operators = addon_module("operators")
+    devices = [e["name"] for e in shape_diameter.engines() if e["name"].startswith("opencl:")]
+    assert devices, "no OpenCL device here: install pocl-opencl-icd"
+    ob = uv_sphere(radius=1.0, segments=32, rings=16)
+    # Fibonacci sampling: every OpenCL device computes the CPU engine's bits (README).
+    expected = reference_face_values(ob, rays=16, engine="cpu")
+    for engine in ("opencl", devices[-1]):
+        assert run(engine=engine, rays=16) == {"FINISHED"}
+        assert ", opencl:" in operators.last_run["text"], operators.last_run["text"]
+        np.testing.assert_allclose(attribute_array(ob.data, "sdf"), expected, rtol=1e-6)
+
+
 def test_suzanne_with_quads_and_ngons():
     ob = suzanne_with_ngons()
     me = ob.data
@@ -137,6 +153,42 @@ def test_suzanne_vertices():
     np.testing.assert_allclose(attribute_array(me, "sdf"), ref.values, rtol=1e-6)
     np.testing.assert_allclose(attribute_array(me, "sdf_normalized"), ref.normalized, atol=1e-6)
     assert me.color_attributes.active_color_name == "sdf_color"
+
+
+def test_loose_vertices_are_left_unmeasured():
+    # A vertex of no face (a lone point, a wire edge's ends) casts no ray: the core fills it
+    # with the median of the values (valid_rays 0), which the add-on wrote and coloured as
+    # if measured.
+    api = addon_module("api")
+    ob = uv_sphere(radius=1.0, segments=32, rings=16)
+    me = ob.data
+    n = len(me.vertices)
+    me.vertices.add(3)
+    for i, co in enumerate([(0.1, 0.2, 0.3), (2.0, 0.0, 0.0), (3.0, 0.0, 0.0)]):
+        me.vertices[n + i].co = co
+    me.edges.add(1)
+    me.edges[-1].vertices = (n + 1, n + 2)  # a wire edge
+    me.update()
+    loose = [n, n + 1, n + 2]
+    measured = np.arange(n)
+
+    result = api.compute_object(ob, points="vertices", rays=16)
+    values = attribute_array(me, "sdf")
+    normalized = attribute_array(me, "sdf_normalized")
+    colors = attribute_array(me, "sdf_color")
+    assert (values[loose] == 0).all() and (result.values[loose] == 0).all()
+    assert (normalized[loose] == 0).all() and (result.valid_rays[loose] == 0).all()
+    assert (colors[loose] == 0).all()  # transparent black: no colour of the map
+    assert (colors[measured, 3] == 1).all()
+    assert any("3 vertices in no face" in w for w in result.warnings), result.warnings
+    # The other vertices are as the package gives them: the loose ones change nothing there.
+    v, t, _ = world_triangles(ob)
+    ref = shape_diameter.compute(v, t, points="vertices", rays=16)
+    np.testing.assert_allclose(values[measured], ref.values[measured], rtol=1e-6)
+    np.testing.assert_allclose(normalized[measured], ref.normalized[measured], atol=1e-6)
+    # Per face, loose vertices have no value at all: nothing to say.
+    assert not api.compute_object(ob, attribute_name="per_face", normalized_name="",
+                                  color_name="").warnings
 
 
 def test_undo_restores_the_mesh():
@@ -234,6 +286,27 @@ def test_scripting_api():
         api.compute_object(bpy.data.objects.new("empty", None))
     assert snapshot(ob.data) == before
     assert [e["name"] for e in api.engines()][0] == shape_diameter.engines()[0]["name"]
+
+
+def test_the_api_says_what_it_skipped_as_the_operator_does():
+    # compute_objects() left out what is not a mesh without a word; the operator reports it.
+    api = addon_module("api")
+    sphere = uv_sphere(segments=16, rings=8)
+    suzanne = import_obj("suzanne.obj")
+    twin = bpy.data.objects.new("twin", suzanne.data)  # a linked duplicate: same mesh
+    camera = bpy.data.objects.new("camera", bpy.data.cameras.new("camera"))
+    for ob in (twin, camera):
+        bpy.context.scene.collection.objects.link(ob)
+    with pytest.warns(RuntimeWarning, match=r"Skipped what is not a mesh: camera \(camera\)"):
+        results = api.compute_objects([sphere, camera, suzanne, twin], rays=4)
+    assert [r.object_name for r in results] == ["Sphere", "suzanne"]
+    # About the whole run: in every result, first.
+    assert all(r.warnings[0] == "Skipped what is not a mesh: camera (camera)" for r in results)
+    # About one object: in its own result only.
+    shared = "suzanne shares its mesh with twin: computed once, from suzanne"
+    assert results[1].warnings == [results[0].warnings[0], shared]
+    assert results[0].warnings == [results[0].warnings[0]]
+    assert results[1].shared_by == ["twin"]
 
 
 def test_a_vertex_group_of_the_results_name_is_refused_first():

@@ -6,7 +6,14 @@ import bpy
 import numpy as np
 import pytest
 import shape_diameter
-from helpers import addon_module, attribute_array, import_obj, run, world_triangles
+from helpers import (
+    addon_module,
+    attribute_array,
+    import_obj,
+    run,
+    snapshot_all,
+    world_triangles,
+)
 
 
 def corner_uvs(ob, name=None):
@@ -150,3 +157,91 @@ def test_a_bake_of_uvs_outside_the_square_warns_and_takes_the_object_name():
     assert result.image == "spot"
     assert any("(bake)" in w and "outside the [0, 1] square" in w for w in result.warnings)
 
+
+BAD_TEXTURE_OPTIONS = [
+    ({"texture_size": 8}, r"texture_size must be an integer in \[16, 16384\], got 8"),
+    ({"texture_size": 0}, r"texture_size must be an integer in \[16, 16384\], got 0"),
+    ({"texture_size": 16385}, r"texture_size must be an integer in \[16, 16384\], got 16385"),
+    ({"texture_size": 1024.0}, r"texture_size must be an integer in \[16, 16384\], got 1024.0"),
+    ({"texture_size": "1024"}, r"texture_size must be an integer in \[16, 16384\], got '1024'"),
+    ({"texture_size": True}, r"texture_size must be an integer in \[16, 16384\], got True"),
+    ({"texture_radius": -1.0}, r"texture_radius must be a number in \[0, 1024\].*got -1.0"),
+    ({"texture_radius": float("nan")}, r"texture_radius must be a number in \[0, 1024\]"),
+]
+
+
+@pytest.mark.parametrize("what", [{"bake_image": True}, {"smoothing": "texture"},
+                                  {"bake_image": True, "write": False}],
+                         ids=["bake", "texture-smoothing", "dry-run"])
+@pytest.mark.parametrize("bad, message", BAD_TEXTURE_OPTIONS,
+                         ids=[repr(next(iter(b.values()))) for b, _ in BAD_TEXTURE_OPTIONS])
+def test_the_api_refuses_texture_options_out_of_range_before_any_work(monkeypatch, what, bad,
+                                                                        message):
+    # The operator's Resolution is 16..16384 and its Radius 0..1024; the API took anything:
+    # texture_size=8 baked an 8 x 8 image, 0 or 16385 failed in the bake after the whole cast.
+    api, core = addon_module("api"), addon_module("core")
+    ob = import_obj("spot.obj")
+    cast = []
+    monkeypatch.setattr(core, "compute", lambda *args, **kwargs: cast.append(args))
+    before = snapshot_all()
+    images = sorted(bpy.data.images.keys())
+    with pytest.raises(ValueError, match=message):
+        api.compute_object(ob, rays=8, **what, **bad)
+    assert not cast  # refused before any work
+    assert snapshot_all() == before and sorted(bpy.data.images.keys()) == images
+
+
+def stop_before_casting(monkeypatch):
+    """The core's compute() replaced by one that stops the run: what came before it was
+    up front."""
+    core = addon_module("core")
+
+    def stop(*args, **kwargs):
+        raise RuntimeError("the cast was reached")
+
+    monkeypatch.setattr(core, "compute", stop)
+
+
+def test_long_texture_work_is_announced_before_it_starts(monkeypatch):
+    # A 2048^2 bake with texture smoothing at a radius of 1024 texels (two blurs over the whole
+    # image) ran for half a minute (32.6 s on 2 cores) without a word.
+    api = addon_module("api")
+    ob = import_obj("spot.obj")
+    stop_before_casting(monkeypatch)
+    options = {"smoothing": "texture", "texture_size": 2048, "texture_radius": 1024.0,
+               "bake_image": True, "threads": 1}  # one thread: the same estimate anywhere
+    with pytest.warns(RuntimeWarning) as seen, pytest.raises(RuntimeError, match="cast was"):
+        api.compute_object(ob, **options)
+    (warning,) = [str(w.message) for w in seen]
+    assert warning.startswith("Long or large texture work ahead: texture smoothing and the "
+                              "bake of 1 object at 2048 x 2048 texels with a blur radius of "
+                              "1024 texels (default 16): about ")
+    # Two blurs reading 2 x 2048 texels around each of Spot's about 2.1M island texels, at
+    # 4 ns a read on one thread: about 70 s (32.6 s measured on 2 threads).
+    seconds = float(warning.split("about ")[1].split(" s on 1 CPU thread ")[0])
+    assert 55 < seconds < 90, warning
+    # The default radius, and a smaller texture: nothing to say (warnings are errors here).
+    with pytest.raises(RuntimeError, match="cast was"):
+        api.compute_object(ob, **{**options, "texture_radius": 0.0, "texture_size": 1024})
+
+
+def test_texture_work_that_cannot_fit_in_memory_is_refused(monkeypatch):
+    api, process = addon_module("api"), addon_module("process")
+    good = import_obj("spot.obj")
+    assert run(rays=4) == {"FINISHED"}
+    monkeypatch.setattr(process, "physical_memory", lambda: 2 << 30)  # a 2 GiB machine
+    stop_before_casting(monkeypatch)
+    before = snapshot_all()
+    images = sorted(bpy.data.images.keys())
+    # A 8192^2 bake holds about 56 bytes a texel (3.4 GB measured): 3.5 GiB estimated.
+    message = (r"Too large: the bake of 1 object at 8192 x 8192 texels would need about 3.5 GiB "
+               r"of memory, more than 80% of this machine's 2.0 GiB; lower the resolution$")
+    with pytest.raises(api.UserError, match=message):
+        api.compute_object(good, bake_image=True, texture_size=8192)
+    with pytest.raises(RuntimeError, match=message):  # the operator reports it
+        run(bake_image=True, texture_size=8192)
+    assert snapshot_all() == before and sorted(bpy.data.images.keys()) == images
+    # Large, not too large: a warning (a quarter of the memory and more), then the work.
+    with pytest.warns(RuntimeWarning, match=r"and 896 MiB of memory"), \
+            pytest.raises(RuntimeError, match="cast was"):
+        api.compute_object(good, bake_image=True, texture_size=4096)

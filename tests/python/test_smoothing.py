@@ -447,6 +447,56 @@ def test_default_radius_follows_the_paper():
 # ---- Reading UVs ----
 
 
+def test_texture_cost_follows_the_core(spot):
+    # The blur reads 2 r + 1 texels a pass around each texel of an island, clipped to the
+    # image; the buffers are 20 bytes a texel with a blur, 16 without (smoothing_texture.cpp).
+    from shape_diameter.smoothing import texture_cost
+
+    _, _, uvs, _, _ = spot
+    cost = texture_cost(2048, 16.0)
+    assert (cost.texels, cost.blur_reads, cost.bytes) == (2048**2, 2048**2 * 66, 20 * 2048**2)
+    assert texture_cost(2048, 1024.0).blur_reads == 2048**2 * (2048 + 2048)  # the whole side
+    assert texture_cost((512, 256), 200.0).blur_reads == 512 * 256 * (401 + 256)
+    assert texture_cost(1024) == texture_cost(1024, default_radius(1024))
+    assert texture_cost(256, 0.9) == (256**2, 0.0, 16 * 256**2)  # under one texel: no blur
+    # Spot's islands cover about half of its UV square: about half the reads.
+    share = texture_cost(2048, 16.0, uvs=uvs).blur_reads / cost.blur_reads
+    assert 0.45 < share < 0.55, share
+    with pytest.raises(ValueError, match="texture_size"):
+        texture_cost(0)
+    with pytest.raises(ValueError, match="radius"):
+        texture_cost(256, -1.0)
+
+
+def test_texture_cost_bytes_are_what_the_core_holds(spot, tmp_path):
+    # Measured, not only derived: a fresh process's peak resident memory grows by about
+    # texture_cost().bytes while smoothing (a blur, then none), the image returned included.
+    from shape_diameter.smoothing import texture_cost
+
+    v, t, uvs, faces, _ = spot
+    np.savez(tmp_path / "spot.npz", v=v, t=t, uvs=uvs, values=faces)
+    # The peak from /proc (VmHWM): getrusage's ru_maxrss keeps the parent's across exec.
+    script = (
+        "import re, sys, numpy as np, shape_diameter\n"
+        "peak = lambda: int(re.search(r'VmHWM:\\s+(\\d+)', open('/proc/self/status').read())[1])\n"
+        "d = np.load(sys.argv[1]); size, radius = int(sys.argv[2]), float(sys.argv[3])\n"
+        "v, t, values, uvs = d['v'], d['t'], d['values'], d['uvs']\n"
+        "before = peak()\n"
+        "shape_diameter.smooth(v, t, values, 'texture', uvs=uvs, texture_size=size,\n"
+        "    radius=radius, return_image=True, engine='cpu')\n"
+        "print((peak() - before) * 1024)\n"
+    )
+    import subprocess
+    import sys
+
+    for size, radius in ((2048, 16.0), (2048, 0.0)):
+        out = subprocess.run([sys.executable, "-c", script, str(tmp_path / "spot.npz"),
+                              str(size), str(radius)], capture_output=True, text=True, check=True)
+        grown = int(out.stdout.split()[-1])
+        expected = texture_cost(size, radius, uvs=uvs).bytes
+        assert 0.85 * expected < grown < 1.15 * expected, (size, radius, grown, expected)
+
+
 def test_load_mesh_with_uvs():
     mesh_io = pytest.importorskip("shape_diameter.mesh_io")
     _, t, uvs = mesh_io.load_mesh_with_uvs(DATA / "spot.obj")
