@@ -120,12 +120,14 @@ def default_radius(size):
     return load().smoothing.default_radius(int(size))
 
 
-def bake(vertices, triangles, values, points, uvs, size, radius, margin, progress=None):
+def bake(vertices, triangles, values, points, uvs, size, radius, margin, progress=None,
+         engine="auto", threads=0):
     """The field rasterised through per-corner uvs (m, 3, 2) into a (size, size, 4) float32
     RGBA image in Blender's pixel order (row 0 at v = 0): the value in R, G and B, alpha 1
     where a face (or the margin around an island) covers the texel, else 0. `radius` is the
     texture-space blur in texels (0: none, None: the core's default). Rasterising and
-    blurring are the core's (shape_diameter.smooth(..., 'texture', return_image=True))."""
+    blurring are the core's (shape_diameter.smooth(..., 'texture', return_image=True)), on
+    `engine` (compute()'s names) with `threads` CPU threads (0: every core)."""
     out = load().smooth(
         vertices,
         triangles,
@@ -134,6 +136,8 @@ def bake(vertices, triangles, values, points, uvs, size, radius, margin, progres
         uvs=uvs,
         points=points,
         progress=progress,
+        engine=engine,
+        threads=threads,
         texture_size=int(size),
         radius=radius,
         margin=int(margin),

@@ -498,6 +498,10 @@ def compute(tasks, options, progress=None, cancelled=None):
                 radius,
                 options.bake_margin,
                 step,
+                # The engine and threads the user chose for the cast (it ran on 'auto'
+                # whatever was chosen).
+                engine=options.engine,
+                threads=int(options.extra.get("threads") or 0),
             )
             # Faces whose UVs lie wholly outside [0, 1] are left out of the image (the image
             # came out empty for a UDIM layout, without a word). Counted here rather than by

@@ -142,6 +142,24 @@ def test_bake_through_a_chosen_uv_map_and_the_api():
     assert covered[:28, :28].any() and not covered[36:, :].any() and not covered[:, 36:].any()
 
 
+@pytest.mark.parametrize("engine", ["cpu", "opencl"])
+def test_the_bake_runs_on_the_chosen_engine_and_threads(monkeypatch, engine):
+    # The bake's rasterising and blur ran on engine 'auto' and every core whatever the user
+    # chose for the run.
+    api = addon_module("api")
+    ob = import_obj("spot.obj")
+    seen = []
+    smooth = shape_diameter.smooth
+
+    def recording_smooth(*args, **kwargs):
+        seen.append((kwargs.get("engine"), kwargs.get("threads")))
+        return smooth(*args, **kwargs)
+
+    monkeypatch.setattr(shape_diameter, "smooth", recording_smooth)
+    api.compute_object(ob, rays=8, bake_image=True, texture_size=32, engine=engine, threads=1)
+    assert seen == [(engine, 1)]
+
+
 def test_a_bake_of_uvs_outside_the_square_warns_and_takes_the_object_name():
     # UVs moved one tile up and right (a UDIM layout): the bake leaves those faces out, which
     # the run's warnings say (it went to stderr only); "{object}" alone names the image after
