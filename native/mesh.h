@@ -17,14 +17,15 @@ namespace sdf {
 struct Mesh {
   UninitializedVector<glm::vec3> vertices;    // positions minus `center`
   UninitializedVector<glm::uvec3> triangles;  // counter-clockwise seen from outside
-  glm::dvec3 center{0.0};             // bounding-box centre of the input, in input units
-  double max_extent = 0.0;            // largest bounding-box side, in input units
+  glm::dvec3 center{0.0};             // bounding-box centre of the used vertices, input units
+  double max_extent = 0.0;            // largest side of that box, in input units
 };
 
 // Copies a mesh from row-major arrays: vertices (n, 3) and triangles (m, 3), 0-based.
 // Throws std::invalid_argument naming the problem for an empty mesh, an index out of range, a
-// coordinate that is not finite, or a bounding box wider than 1e30 on an axis. Vertices no
-// triangle uses are allowed (they take no part). Checks and copies on `threads` (0 = every
+// coordinate that is not finite, a bounding box wider than 1e30 on an axis, or a vertex more
+// than 1e30 from its centre. The box (center, max_extent) is of the vertices the triangles
+// use: vertices no triangle uses are allowed and take no part. Checks and copies on `threads` (0 = every
 // core); the result, and which problem an error names (the first), do not depend on it.
 Mesh make_mesh(const double* vertices, std::size_t vertex_count, const std::int64_t* triangles,
                std::size_t triangle_count, unsigned threads = 0);

@@ -22,6 +22,7 @@
 #include "normalize.h"
 #include "parallel.h"
 #include "python_cast_points.h"
+#include "python_progress.h"
 #include "python_timings.h"
 #include "sdf.h"
 #include "unit_scale.h"
@@ -117,16 +118,7 @@ py::dict compute(const Doubles& vertices, const Int64s& triangles, int rays, dou
   options.orientation = parse_orientation(orientation);
   options.bvh_quality = parse_bvh_quality(bvh_quality);
 
-  sdf::ProgressFn report;
-  if (!progress.is_none()) {
-    // Runs on the thread that called compute, which holds no GIL while native code runs. An
-    // exception the callback raises travels out through the engine and back to Python.
-    report = [&progress](double fraction) {
-      py::gil_scoped_acquire gil;
-      progress(fraction);
-      return true;
-    };
-  }
+  const sdf::ProgressFn report = sdf::python_progress(progress);
   // Also on the calling thread, taking the GIL for its Python code; it gets the cast's points
   // (sdf::CastPoints) for the length of the call.
   sdf::BesideCast beside;

@@ -11,6 +11,7 @@
 #include "mesh_weld.h"
 #include "parallel.h"
 #include "python_cast_points.h"
+#include "python_progress.h"
 #include "python_timings.h"
 #include "smoothing_kring.h"
 #include "smoothing_projected.h"
@@ -71,17 +72,6 @@ py::array_t<float> filled_array(py::ssize_t n, const Fill& fill) {
   return array;
 }
 
-// A callback run on the calling thread (which holds no GIL while native code runs); an
-// exception it raises travels out through the native code and back to Python.
-sdf::ProgressFn progress_from(const py::object& progress) {
-  if (progress.is_none()) return nullptr;
-  return [&progress](double fraction) {
-    py::gil_scoped_acquire gil;
-    progress(fraction);
-    return true;
-  };
-}
-
 // The OpenCL device an engine string names ("opencl", "opencl:N", "opencl:<name>"; the first
 // of "opencl:all"), or null for "cpu". Throws std::invalid_argument naming the devices there
 // are when nothing matches.
@@ -122,7 +112,7 @@ py::dict smooth_kring(const Doubles& vertices, const Int64s& triangles, const Fl
   options.corner_angle = corner_angle;
   options.weld_tolerance = weld_tolerance;
   options.threads = threads;
-  const sdf::ProgressFn report = progress_from(progress);
+  const sdf::ProgressFn report = sdf::python_progress(progress);
   const py::array_t<float> out = filled_array(values.shape(0), [&](float* into) {
     sdf::smooth_kring_into(mesh, kind, v, options, into, report, 0.0, 1.0, &stages);
   });
@@ -160,7 +150,7 @@ py::array_t<float> smooth_projected(const Doubles& vertices, const Int64s& trian
                                                           node_size_ratio, branch_on, threads);
   const auto* device = device_for(engine);
   (void)device;  // unused without OpenCL
-  const sdf::ProgressFn report = progress_from(progress);
+  const sdf::ProgressFn report = sdf::python_progress(progress);
   sdf::StageTimings stages;
   py::array_t<float> out = filled_array(values.shape(0), [&](float* into) {
 #ifdef SDF_HAVE_OPENCL
@@ -211,7 +201,7 @@ py::array_t<float> smooth_projected_prepared(const sdf::cl::PreparedProjected& p
                                                           node_size_ratio, branch_on, threads);
   const auto* device = device_for(engine);
   if (!device) throw std::invalid_argument("smooth_projected_prepared needs an OpenCL engine");
-  const sdf::ProgressFn report = progress_from(progress);
+  const sdf::ProgressFn report = sdf::python_progress(progress);
   sdf::StageTimings stages;
   py::array_t<float> out = filled_array(values.shape(0), [&](float* into) {
     sdf::cl::smooth_projected_opencl(*device, prepared, v, options, into, report, &stages);
@@ -271,7 +261,7 @@ py::dict smooth_texture(const Doubles& vertices, const Int64s& triangles, const 
                                                       range_sigma, margin, weld_tolerance, threads);
   const auto* device = device_for(engine);
   (void)device;  // unused without OpenCL
-  const sdf::ProgressFn report = progress_from(progress);
+  const sdf::ProgressFn report = sdf::python_progress(progress);
   return texture_result(values.shape(0), return_image, [&](float* into) {
 #ifdef SDF_HAVE_OPENCL
     if (device)
@@ -337,7 +327,7 @@ py::dict smooth_texture_prepared(const sdf::PreparedTexture& prepared, const Flo
                       prepared.islands.weld_tolerance, threads);
   const auto* device = device_for(engine);
   (void)device;  // unused without OpenCL
-  const sdf::ProgressFn report = progress_from(progress);
+  const sdf::ProgressFn report = sdf::python_progress(progress);
   return texture_result(values.shape(0), return_image, [&](float* into) {
 #ifdef SDF_HAVE_OPENCL
     if (device)

@@ -45,6 +45,14 @@ bool makes_trees(const Device& device);
 DeviceTree build_device_tree(const Device& device, DeviceState& s, const std::string& options,
                              const Mesh& mesh, const std::function<void()>& uploaded = nullptr);
 
+// Makes `tree` (made by build_device_tree for a mesh) the tree of `mesh`, the same mesh with
+// some faces reversed: a face's box, and so the faces' order and the nodes, do not depend on
+// its winding, so only the faces are uploaded again and the triangles' records remade.
+// Throws Error when an OpenCL call fails; uploaded as for build_device_tree.
+void rewind_device_tree(const Device& device, DeviceState& s, const std::string& options,
+                        DeviceTree& tree, const Mesh& mesh,
+                        const std::function<void()>& uploaded = nullptr);
+
 // The faces' sort as the device makes it: every face, those with area first in Morton order
 // of their box centres (ties in face order), then the others in face order; the codes of the
 // first `with_area`; the margin the tree's boxes grow by.

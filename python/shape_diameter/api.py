@@ -284,7 +284,7 @@ def compute(
     # the UVs and islands uploaded); on a device, projected smoothing's point frames uploaded
     # from the cast's own points (oriented as the cast saw the mesh).
     prepared, prepare_failure = [], []
-    far_from_unit_size = smoothing == "projected" and unit_scale_exponent(v) != 0
+    far_from_unit_size = smoothing == "projected" and unit_scale_exponent(v, t) != 0
 
     def run(engine_name):
         prepared.clear()

@@ -336,15 +336,18 @@ def texture_cost(texture_size=1024, radius=None, uvs=None) -> TextureCost:
     return TextureCost(texels, texels * covered * window, texels * TEXTURE_BYTES_PER_TEXEL)
 
 
-def mesh_width(v) -> float:
-    """The largest side of the vertices' bounding box (0 for no vertex)."""
-    return float(np.ptp(v, axis=0).max()) if len(v) else 0.0
+def mesh_width(v, t) -> float:
+    """The largest side of the bounding box of the vertices the triangles t use (0 for
+    none): the core's measure (make_mesh), which a vertex no triangle uses takes no part in."""
+    used = np.zeros(len(v), dtype=bool)
+    used[np.asarray(t).ravel()] = True
+    return float(np.ptp(v[used], axis=0).max()) if used.any() else 0.0
 
 
-def unit_scale_exponent(v) -> int:
+def unit_scale_exponent(v, t) -> int:
     """The power of two that brings a mesh far from unit size to a width in [1, 2); 0 for
     other meshes: compute()'s own rule (unit_scale.h)."""
-    return _core.unit_scale_exponent(mesh_width(v))
+    return _core.unit_scale_exponent(mesh_width(v, t))
 
 
 def run_checked(v, t, values, points, method, o, threads, progress, engine="cpu",
@@ -373,7 +376,7 @@ def run_checked(v, t, values, points, method, o, threads, progress, engine="cpu"
         # It moves points along the mesh in 32-bit floats: far from unit size (7% off at 1e10
         # units) it runs on the mesh and values scaled by a power of two, as compute()'s cast
         # does, and scales back (exact).
-        width = mesh_width(v)
+        width = mesh_width(v, t)
         exponent = _core.unit_scale_exponent(width)
         if width > 1e30:  # the core's limit, which the scaled mesh would no longer meet
             raise ValueError(

@@ -5,6 +5,8 @@ open meshes giving finite values; the progress callback; the GIL released while 
 
 from __future__ import annotations
 
+import os
+import signal
 import threading
 import time
 
@@ -637,6 +639,41 @@ def test_unused_vertices_change_nothing(sphere, sphere_result):
     assert (per_vertex.raw[unused] > 0).all()
 
 
+@pytest.mark.parametrize("widths_away", [10.0, 1e4, 1e20])
+@pytest.mark.parametrize("smoothing", ["none", "projected"])
+def test_an_unused_vertex_far_away_changes_nothing(sphere, widths_away, smoothing):
+    # A stray vertex far outside the mesh (one at a georeferenced mesh's origin): it took part
+    # in the bounding box, and so in the near-hit threshold and the unit scaling: 10 widths
+    # away changed values by up to 28%, 1e4 widths away left faces without a ray.
+    V, F = sphere
+    stray = V.min(axis=0) - widths_away * np.ptp(V, axis=0).max()
+    alone = shape_diameter.compute(V, F, smoothing=smoothing)
+    with_stray = shape_diameter.compute(np.vstack([V, stray]), F, smoothing=smoothing)
+    assert np.array_equal(with_stray.values, alone.values)
+    assert np.array_equal(with_stray.normalized, alone.normalized)
+    per_vertex = shape_diameter.compute(np.vstack([V, stray]), F, points="vertices")
+    by_itself = shape_diameter.compute(V, F, points="vertices")
+    assert np.array_equal(per_vertex.raw[:-1], by_itself.raw)
+    assert per_vertex.valid_rays[-1] == 0
+
+
+def test_smoothing_alone_ignores_an_unused_vertex_far_away(sphere):
+    V, F = sphere
+    values = shape_diameter.compute(V, F).raw
+    stray = np.vstack([V, V.min(axis=0) - 1e12])  # the mesh alone is unit size: not scaled
+    np.testing.assert_array_equal(
+        shape_diameter.smooth(stray, F, values, "projected"),
+        shape_diameter.smooth(V, F, values, "projected"),
+    )
+
+
+def test_a_vertex_beyond_the_float_range_is_refused_by_name(sphere):
+    V, F = sphere
+    with pytest.raises(ValueError, match=rf"vertex {len(V)}, used by no triangle, lies more "
+                                         r"than 1e30 units from the mesh"):
+        shape_diameter.compute(np.vstack([V, [1e31, 0.0, 0.0]]), F)
+
+
 def test_single_triangle_warns_and_gives_zeros():
     V = np.array([[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]])
     F = np.array([[0, 1, 2]])
@@ -706,6 +743,47 @@ def test_progress_exception_propagates_and_leaves_no_trace(medium_sphere, except
     # The next computation is unaffected.
     after = shape_diameter.compute(V, F, rays=60)
     assert np.isfinite(after.raw).all() and (after.valid_rays > 0).all()
+
+
+class _Signalled(Exception):
+    pass
+
+
+@pytest.mark.parametrize("call", ["compute", "smooth"])
+def test_a_signal_stops_native_work_without_a_progress_callback(call):
+    # Ctrl-C during compute() with no progress callback waited for the whole computation
+    # (22 s at 128 rays on a large mesh in a new-user trial): Python's signal handlers run
+    # only between bytecodes. The core now runs them whenever it would report progress.
+    # SIGUSR1 with a handler that raises stands in for SIGINT's KeyboardInterrupt.
+    V, F = shapes.icosphere(1.0, 6)  # 81920 faces
+
+    def work():
+        if call == "compute":
+            return shape_diameter.compute(V, F, rays=128, engine="cpu", threads=1)
+        values = np.linspace(0.0, 1.0, len(F)).astype(np.float32)
+        return shape_diameter.smooth(V, F, values, "kring", k=12, threads=1)
+
+    clock = time.perf_counter()
+    work()
+    whole = time.perf_counter() - clock
+
+    def on_signal(signum, frame):
+        raise _Signalled()
+
+    previous = signal.signal(signal.SIGUSR1, on_signal)
+    timer = threading.Timer(0.1 * whole, os.kill, (os.getpid(), signal.SIGUSR1))
+    try:
+        timer.start()
+        clock = time.perf_counter()
+        with pytest.raises(_Signalled):
+            work()
+        stopped_after = time.perf_counter() - clock
+    finally:
+        timer.cancel()
+        signal.signal(signal.SIGUSR1, previous)
+    assert stopped_after < 0.6 * whole, (stopped_after, whole)
+    after = shape_diameter.compute(V, F, rays=8)  # the next computation is unaffected
+    assert (after.valid_rays > 0).all()
 
 
 # --------------------------------------------------------------------------- GIL
