@@ -238,7 +238,8 @@ void cast_on_opencl(const Options& options, const Plan& plan, const cl::CastInpu
   out.timings.emplace_back(
       "setup", std::max(0.0, total - t.upload - t.wait - t.build - t.cast - t.download));
   out.timings.emplace_back("upload", t.upload);
-  if (plan.tree_on_device) out.timings.emplace_back("build (device)", t.build);
+  if (plan.tree_on_device)
+    out.timings.emplace_back(t.rewound ? "rewind (device)" : "build (device)", t.build);
   out.timings.emplace_back("cast", t.cast);
   out.timings.emplace_back("download", t.download);
   out.device_bytes = t.device_bytes;
@@ -256,9 +257,10 @@ struct ReverseFacesFirst {};
 // Casts `mesh` as it is wound while deciding its 'auto' orientation beside the cast (only
 // reading the mesh). Nothing to reverse: the cast stands (it is the cast of the oriented
 // mesh). Faces to reverse: the devices stop at their next launch (launches are kept short
-// while the orientation runs), the faces are reversed, and the mesh is cast again (its tree
-// made again too: 3-6 ms at 1.2M faces). Either way the values are those of casting the
-// oriented mesh.
+// while the orientation runs), the faces are reversed, and the mesh is cast again on the
+// devices' trees of the first cast, rewound (a face's box does not depend on its winding:
+// only the faces go up again and the triangles' records are remade). Either way the values
+// are those of casting the oriented mesh.
 void cast_speculatively(const Options& options, const Plan& plan, cl::CastInput input,
                         Mesh& mesh, const Cone& cone, Output& out, const ProgressFn& progress,
                         const std::function<void()>& beside_cast) {
@@ -279,6 +281,8 @@ void cast_speculatively(const Options& options, const Plan& plan, cl::CastInput 
     out.timings.emplace_back("orientation (beside cast)", orientation_seconds);
     for (const auto& [name, seconds] : orientation_steps) out.timings.emplace_back(name, seconds);
   };
+  cl::KeptTrees trees;  // freed on the way out, whichever way that is
+  input.trees = &trees;
   Stopwatch first;
   try {
     cast_on_opencl(options, plan, input, mesh, cone, out, progress, orient_beside);
@@ -293,6 +297,7 @@ void cast_speculatively(const Options& options, const Plan& plan, cl::CastInput 
   apply_orientation(mesh, out.orientation, options.threads);
   out.timings.emplace_back("orientation: reverse faces", first.lap());
   input.short_launches = nullptr;
+  input.rewind_trees = true;
   cast_on_opencl(options, plan, input, mesh, cone, out, progress, beside_cast);
 }
 #endif

@@ -95,6 +95,27 @@ void sort_faces_on_device(const Device& device, DeviceState& s, cl_program progr
       sdf_ordered_float(found[6]));  // a length >= 0: its bits as they are
 }
 
+// The triangles' records of the faces with area, in the cast order (SdfTriangle units, as
+// the host writes them), then the order read back for the results: waits for the device.
+void make_records(const Device& device, DeviceState& s, cl_program program, DeviceTree& tree,
+                  std::size_t faces) {
+  const std::size_t n = tree.with_area;
+  if (!tree.triangles)
+    tree.triangles = std::make_unique<Buffer>(s, n * sizeof(kern::SdfTriangle), nullptr);
+  Kernel records(program, "sdf_lbvh_triangles");
+  records.arg(0, tree.vertices->get());
+  records.arg(1, tree.faces->get());
+  records.arg(2, tree.order->get());
+  records.arg(3, static_cast<cl_uint>(n));
+  records.arg(4, tree.triangles->get());
+  launch_items(device, s, records, n);
+  if (tree.host_order.size() != faces) {
+    tree.host_order.resize(faces);
+    read_buffer(s, tree.order->get(), tree.host_order.data(), faces * 4);
+  }
+  check(api()->clFinish(s.queue), "clFinish (device tree)");
+}
+
 }  // namespace
 
 bool makes_trees(const Device& device) { return device.max_group >= kSortGroup; }
@@ -194,19 +215,20 @@ DeviceTree build_device_tree(const Device& device, DeviceState& s, const std::st
     // The tree is waited for, so that its scratch is freed before the records take memory.
     check(api()->clFinish(s.queue), "clFinish (device tree)");
   }
-  tree.triangles = std::make_unique<Buffer>(s, n * sizeof(kern::SdfTriangle), nullptr);
-  Kernel records(program, "sdf_lbvh_triangles");
-  records.arg(0, vertices.get());
-  records.arg(1, triangles.get());
-  records.arg(2, tree.order->get());
-  records.arg(3, static_cast<cl_uint>(n));
-  records.arg(4, tree.triangles->get());
-  launch_items(device, s, records, n);
-  tree.host_order.resize(faces);
-  read_buffer(s, tree.order->get(), tree.host_order.data(), faces * 4);
-  check(api()->clFinish(s.queue), "clFinish (device tree)");
+  make_records(device, s, program, tree, faces);
   tree.build_seconds = clock.lap();
   return tree;
+}
+
+void rewind_device_tree(const Device& device, DeviceState& s, const std::string& options,
+                        DeviceTree& tree, const Mesh& mesh, const std::function<void()>& uploaded) {
+  Stopwatch clock;
+  write_buffer(s, tree.faces->get(), mesh.triangles.data(), bytes_of(mesh.triangles));
+  check(api()->clFinish(s.queue), "clFinish (upload)");
+  tree.upload_seconds = clock.lap();
+  if (uploaded) uploaded();
+  make_records(device, s, program_for(device, s, options), tree, mesh.triangles.size());
+  tree.build_seconds = clock.lap();
 }
 
 TreeKeys device_tree_keys(int index, const Mesh& mesh) {

@@ -50,6 +50,28 @@ struct DeviceResult {
 
 }  // namespace
 
+struct KeptTrees::Slots {
+  std::mutex mutex;
+  std::map<const Device*, DeviceTree> trees;
+
+  void put(const Device* device, DeviceTree&& tree) {
+    std::lock_guard<std::mutex> lock(mutex);
+    trees.insert_or_assign(device, std::move(tree));
+  }
+  // The device's kept tree, moved out; false when there is none.
+  bool take(const Device* device, DeviceTree& into) {
+    std::lock_guard<std::mutex> lock(mutex);
+    auto found = trees.find(device);
+    if (found == trees.end()) return false;
+    into = std::move(found->second);
+    trees.erase(found);
+    return true;
+  }
+};
+
+KeptTrees::KeptTrees() : slots_(std::make_unique<Slots>()) {}
+KeptTrees::~KeptTrees() = default;
+
 // Which cast kernel a device runs for accel='bvh'. GPUs: the binary BVH, one work item per
 // ray (13-15% faster than one per point on an H100; the 4-wide BVH was 8-10% slower there).
 // CPU devices (PoCL): the CPU engine's 8-wide BVH, one work item per point, with float8 box
@@ -175,14 +197,21 @@ void run_device(const Device& device, SharedScene& shared_scene, const CastInput
   Buffer local_rays(s, table.size() * sizeof(float), table.data());
 
   if (input.mesh) {
-    // Order and tree made here, from the mesh alone (the kernel makes the faces' points).
-    tree = build_device_tree(device, s, options, *input.mesh, [&] {
+    // Order and tree made here, from the mesh alone (the kernel makes the faces' points), or
+    // a kept tree of the mesh as an earlier cast had it wound, rewound.
+    auto uploaded = [&] {
       {
         std::lock_guard<std::mutex> lock(done_mutex);
         ++work.meshes_uploaded;
       }
       done_changed.notify_all();
-    });
+    };
+    if (input.trees && input.rewind_trees && input.trees->slots().take(&device, tree)) {
+      rewind_device_tree(device, s, options, tree, *input.mesh, uploaded);
+      result.timings.rewound = true;
+    } else {
+      tree = build_device_tree(device, s, options, *input.mesh, uploaded);
+    }
     program = program_for(device, s, options);  // built by now: a lookup
     result.timings.upload += tree.upload_seconds;
     result.timings.build = tree.build_seconds;
@@ -198,6 +227,7 @@ void run_device(const Device& device, SharedScene& shared_scene, const CastInput
       // differently: then this run fails (engine 'auto' then runs on the CPU).
       std::lock_guard<std::mutex> lock(work.order_mutex);
       if (work.device_order.empty()) {
+        // (Kept, the tree then reads its order back again if rewound: device_tree.cpp.)
         work.device_order = std::move(tree.host_order);
       } else if (!std::equal(work.device_order.begin(), work.device_order.end(),
                              tree.host_order.begin())) {
@@ -384,6 +414,7 @@ void run_device(const Device& device, SharedScene& shared_scene, const CastInput
     const double factor = std::clamp(target / std::max(took, 1e-4), 0.5, 8.0);
     chunk = std::clamp<std::size_t>(static_cast<std::size_t>(chunk * factor), 256, 1u << 22);
   }
+  if (input.trees && tree.nodes) input.trees->slots().put(&device, std::move(tree));
 }
 
 }  // namespace
@@ -485,6 +516,7 @@ CastTimings cast_opencl(const std::vector<const Device*>& devices, const CastInp
     timings.upload = std::max(timings.upload, r.timings.upload);
     timings.wait = std::max(timings.wait, r.timings.wait);
     timings.build = std::max(timings.build, r.timings.build);
+    timings.rewound = timings.rewound || r.timings.rewound;
     timings.cast = std::max(timings.cast, r.timings.cast);
     timings.download = std::max(timings.download, r.timings.download);
     timings.device_bytes = std::max(timings.device_bytes, r.timings.device_bytes);

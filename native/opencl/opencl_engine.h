@@ -6,6 +6,7 @@
 #include <atomic>
 #include <cstdint>
 #include <functional>
+#include <memory>
 #include <string>
 #include <utility>
 #include <vector>
@@ -51,7 +52,23 @@ struct CastTimings {
   double upload = 0.0, cast = 0.0, download = 0.0;
   double wait = 0.0;  // for the scene, once the points were uploaded
   double build = 0.0;  // of a tree made on the device (the faces' sort and the tree)
+  bool rewound = false;  // that tree was a kept one, rewound (CastInput::rewind_trees)
   std::uint64_t device_bytes = 0;  // buffers on the device (the largest of several devices)
+};
+
+// Trees the devices made in one cast, kept for a second cast of the same mesh (CastInput::
+// trees); freed with it.
+class KeptTrees {
+ public:
+  KeptTrees();
+  ~KeptTrees();
+  KeptTrees(const KeptTrees&) = delete;
+  KeptTrees& operator=(const KeptTrees&) = delete;
+  struct Slots;  // opencl_engine.cpp
+  Slots& slots() { return *slots_; }
+
+ private:
+  std::unique_ptr<Slots> slots_;
 };
 
 // What the devices cast: points sampled on the host (`points`, cast in the spatial `order`
@@ -67,6 +84,13 @@ struct CastInput {
   // While it points at true, launches of about 5 ms instead of 100, so that a verdict that
   // the cast is moot (sdf.cpp: the orientation reverses faces) stops the devices soon.
   const std::atomic<bool>* short_launches = nullptr;
+  // With `mesh`: where each device leaves its tree when the cast ends (null: freed), and
+  // whether a tree found there is of this mesh as an earlier cast had it wound: the same
+  // vertices, each face the same corners, some reversed. A face's box does not depend on
+  // its winding, so such a tree is rewound (the faces uploaded again, the triangles'
+  // records remade: device_tree.h) instead of made.
+  KeptTrees* trees = nullptr;
+  bool rewind_trees = false;
 };
 
 // Casts every point on `devices` (several: points are shared out dynamically; results are
