@@ -3,7 +3,6 @@
 
 #include <algorithm>
 #include <atomic>
-#include <tuple>
 
 #include "parallel.h"
 #include "uninitialized_vector.h"
@@ -128,9 +127,12 @@ void match_uses(const EdgeUse* edge, const EdgeUse* edge_end, Link&& link) {
 }
 
 // Level two: one bucket's uses ordered by lower vertex (a stable counting sort), then each
-// lower vertex's by higher vertex and face.
+// lower vertex's by higher vertex and face; visit(list, list_end) is called on each lower
+// vertex's uses once sorted, while they are in cache (no edge spans two lower vertices).
+template <class Visit>
 void sort_bucket(EdgeUse* first, EdgeUse* last, std::size_t vertices,
-                 std::vector<std::uint32_t>& counts, std::vector<EdgeUse>& scratch) {
+                 std::vector<std::uint32_t>& counts, std::vector<EdgeUse>& scratch,
+                 Visit&& visit) {
   counts.assign(vertices + 1, 0);
   for (EdgeUse* u = first; u != last; ++u) ++counts[u->low() + 1];
   for (std::size_t v = 0; v < vertices; ++v) counts[v + 1] += counts[v];
@@ -140,9 +142,11 @@ void sort_bucket(EdgeUse* first, EdgeUse* last, std::size_t vertices,
   for (EdgeUse* list = first; list != last;) {
     EdgeUse* list_end = list;
     while (list_end != last && list_end->low() == list->low()) ++list_end;
+    // One 64-bit compare: these lists are short (a vertex's edges), sorted by insertion.
     std::sort(list, list_end, [](const EdgeUse& a, const EdgeUse& b) {
-      return std::tie(a.high, a.face) < std::tie(b.high, b.face);
+      return (std::uint64_t{a.high} << 32 | a.face) < (std::uint64_t{b.high} << 32 | b.face);
     });
+    visit(static_cast<const EdgeUse*>(list), static_cast<const EdgeUse*>(list_end));
     list = list_end;
   }
 }
@@ -179,12 +183,14 @@ EdgeUses::EdgeUses(const Mesh& mesh, unsigned threads)
       EdgeUse* last = buckets_->uses.data() + buckets_->offsets[b + 1];
       const std::size_t vertices =
           std::min(nv, (b + 1) << buckets_->shift) - (b << buckets_->shift);
-      sort_bucket(first, last, vertices, counts, scratch);
-      for_each_edge(first, last, [&](const EdgeUse* edge, const EdgeUse* edge_end) {
-        match_uses(edge, edge_end, [&](const EdgeUse& use, const EdgeUse& other) {
-          mine |= use.forward() == other.forward();
-        });
-      });
+      sort_bucket(first, last, vertices, counts, scratch,
+                  [&](const EdgeUse* list, const EdgeUse* list_end) {
+                    for_each_edge(list, list_end, [&](const EdgeUse* edge, const EdgeUse* end) {
+                      match_uses(edge, end, [&](const EdgeUse& use, const EdgeUse& other) {
+                        mine |= use.forward() == other.forward();
+                      });
+                    });
+                  });
     }
     if (mine) any_same.store(true, std::memory_order_relaxed);
   });
