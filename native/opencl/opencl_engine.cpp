@@ -58,6 +58,10 @@ struct KeptTrees::Slots {
     std::lock_guard<std::mutex> lock(mutex);
     trees.insert_or_assign(device, std::move(tree));
   }
+  void clear() {
+    std::lock_guard<std::mutex> lock(mutex);
+    trees.clear();
+  }
   // The device's kept tree, moved out; false when there is none.
   bool take(const Device* device, DeviceTree& into) {
     std::lock_guard<std::mutex> lock(mutex);
@@ -508,6 +512,9 @@ CastTimings cast_opencl(const std::vector<const Device*>& devices, const CastInp
     }
   }
   for (std::thread& t : threads) t.join();
+  // Trees are kept for a cast again only when the caller stopped this one (sdf.cpp: the
+  // orientation reverses faces); otherwise freed here, within the cast's time, as before.
+  if (input.trees && !caller_failure) input.trees->slots().clear();
   if (caller_failure) std::rethrow_exception(caller_failure);
   if (cancelled) throw Cancelled();
   CastTimings timings;

@@ -84,7 +84,8 @@ struct CastInput {
   // While it points at true, launches of about 5 ms instead of 100, so that a verdict that
   // the cast is moot (sdf.cpp: the orientation reverses faces) stops the devices soon.
   const std::atomic<bool>* short_launches = nullptr;
-  // With `mesh`: where each device leaves its tree when the cast ends (null: freed), and
+  // With `mesh`: where each device leaves its tree when beside_cast stops the cast by
+  // throwing (null, or a cast that ends otherwise: freed before cast_opencl returns), and
   // whether a tree found there is of this mesh as an earlier cast had it wound: the same
   // vertices, each face the same corners, some reversed. A face's box does not depend on
   // its winding, so such a tree is rewound (the faces uploaded again, the triangles'
