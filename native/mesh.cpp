@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "parallel.h"
+#include "unit_scale.h"
 #include "uninitialized_vector.h"
 
 namespace sdf {
@@ -118,15 +119,18 @@ Mesh make_mesh(const double* vertices, std::size_t vertex_count, const std::int6
                                 "leave room for; scale it down");
   }
   // An unused vertex is still stored (points='vertices' gives it a value): it must fit the
-  // floats too.
+  // floats too, also once compute() has scaled a mesh far from unit size (unit_scale.h: a
+  // tiny mesh's stray vertex would overflow; found by fuzzing).
+  const double reach = std::min(1e30, std::ldexp(1e30, -unit_scale_exponent(mesh.max_extent)));
   const std::size_t too_far = first_bad(vertex_count, threads, [&](std::size_t i) {
     const glm::dvec3 d = glm::abs(point(i) - mesh.center);
-    return !(std::max(d.x, std::max(d.y, d.z)) <= 1e30);
+    return !(std::max(d.x, std::max(d.y, d.z)) <= reach);
   });
   if (too_far != kNoItem)
     throw std::invalid_argument("vertex " + std::to_string(too_far) +
-                                ", used by no triangle, lies more than 1e30 units from the "
-                                "mesh, farther than 32-bit floats leave room for; remove it");
+                                ", used by no triangle, lies too far from the mesh for 32-bit "
+                                "floats (more than 1e30 units, or 1e30 times the mesh's "
+                                "width); remove it");
   mesh.vertices.resize(vertex_count);
   parallel_for(vertex_count, kGrain, threads, [&](std::size_t begin, std::size_t end) {
     for (std::size_t i = begin; i < end; ++i) mesh.vertices[i] = glm::vec3(point(i) - mesh.center);

@@ -71,16 +71,20 @@ SamplePoints sample_points(const Mesh& mesh, PointKind kind, unsigned threads) {
 
 std::vector<std::uint32_t> spatial_order(const SamplePoints& points, unsigned threads) {
   const std::size_t n = points.size();
-  // Bounding box: per-chunk boxes, then merged (min and max are exact in any order).
+  // Bounding box of the points that cast (a vertex no face uses casts nothing, and one far
+  // away would crowd the others into a few cells): per-chunk boxes, then merged (min and max
+  // are exact in any order).
+  auto casts = [&](std::size_t i) { return points.axes[i] != glm::vec3(0.0f); };
   const std::size_t chunks = (n + kGrain - 1) / kGrain;
   std::vector<glm::vec3> chunk_lo(chunks, glm::vec3(INFINITY)),
       chunk_hi(chunks, glm::vec3(-INFINITY));
   parallel_for(n, kGrain, threads, [&](std::size_t begin, std::size_t end) {
     glm::vec3 lo(INFINITY), hi(-INFINITY);
-    for (std::size_t i = begin; i < end; ++i) {
-      lo = glm::min(lo, points.origins[i]);
-      hi = glm::max(hi, points.origins[i]);
-    }
+    for (std::size_t i = begin; i < end; ++i)
+      if (casts(i)) {
+        lo = glm::min(lo, points.origins[i]);
+        hi = glm::max(hi, points.origins[i]);
+      }
     chunk_lo[begin / kGrain] = lo;
     chunk_hi[begin / kGrain] = hi;
   });
@@ -89,12 +93,15 @@ std::vector<std::uint32_t> spatial_order(const SamplePoints& points, unsigned th
     lo = glm::min(lo, chunk_lo[c]);
     hi = glm::max(hi, chunk_hi[c]);
   }
+  if (!(lo.x <= hi.x)) lo = hi = glm::vec3(0.0f);  // no point casts: any order will do
   const glm::vec3 scale = 1023.0f / glm::max(hi - lo, glm::vec3(1e-30f));
   // (code << 32) | index, sorted stably on the code: the order of std::sort on (code, index).
   UninitializedVector<std::uint64_t> keyed(n);
   parallel_for(n, kGrain, threads, [&](std::size_t begin, std::size_t end) {
     for (std::size_t i = begin; i < end; ++i) {
-      const glm::uvec3 c = glm::uvec3((points.origins[i] - lo) * scale);
+      // Clamped: points that cast nothing may lie outside the box.
+      const glm::uvec3 c =
+          glm::uvec3(glm::clamp((points.origins[i] - lo) * scale, 0.0f, 1023.0f));
       const std::uint64_t code = morton_30(c);
       keyed[i] = (code << 32) | i;
     }

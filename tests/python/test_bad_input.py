@@ -667,11 +667,20 @@ def test_smoothing_alone_ignores_an_unused_vertex_far_away(sphere):
     )
 
 
-def test_a_vertex_beyond_the_float_range_is_refused_by_name(sphere):
+@pytest.mark.parametrize("scale, stray", [(1.0, 1e31), (1e-25, 1e8)])
+@pytest.mark.parametrize("points", ["faces", "vertices"])
+def test_a_vertex_beyond_the_float_range_is_refused_by_name(sphere, scale, stray, points):
+    # Beyond 1e30 units, or beyond 1e30 widths of a mesh far below unit size, which compute()
+    # scales up (a stray vertex of a 1e-25-wide mesh overflowed floats: found by fuzzing).
     V, F = sphere
-    with pytest.raises(ValueError, match=rf"vertex {len(V)}, used by no triangle, lies more "
-                                         r"than 1e30 units from the mesh"):
-        shape_diameter.compute(np.vstack([V, [1e31, 0.0, 0.0]]), F)
+    with pytest.raises(ValueError, match=rf"vertex {len(V)}, used by no triangle, lies too "
+                                         r"far from the mesh for 32-bit floats"):
+        shape_diameter.compute(np.vstack([V * scale, [stray, 0.0, 0.0]]), F, points=points)
+    # A little nearer, it takes no part.
+    near = shape_diameter.compute(np.vstack([V * scale, [stray / 1e3, 0.0, 0.0]]), F,
+                                  points=points)
+    alone = shape_diameter.compute(V * scale, F, points=points)
+    assert np.array_equal(near.raw[: len(alone.raw)], alone.raw)
 
 
 def test_single_triangle_warns_and_gives_zeros():
