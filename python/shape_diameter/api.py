@@ -410,6 +410,12 @@ def reduce_lengths(lengths, angles, sampling="fibonacci", rays=None, cone_angle=
     _check_cone_angle(cone_angle)
     lengths = np.asarray(lengths, dtype=np.float32).reshape(-1)
     angles = np.asarray(angles, dtype=np.float32).reshape(-1)
+    # What the engine keeps: a hit's length is a distance past the start, an angle lies in
+    # the cone (a NaN or negative length gave NaN or a meaningless mean without a word).
+    if not (np.isfinite(lengths).all() and (lengths >= 0).all()):
+        raise ValueError("lengths must be finite and >= 0 (kept rays' distances to their hits)")
+    if not (np.isfinite(angles).all() and (angles >= 0).all()):
+        raise ValueError("angles must be finite and >= 0 (radians from the cone's axis)")
     return float(
         _core.reduce_lengths(lengths, angles, sampling, int(rays or 0), float(cone_angle))
     )

@@ -25,7 +25,8 @@ def normalize_values(values, method: str = "linear", threads: int = 0) -> np.nda
     if v.dtype not in (np.float32, np.float64):
         v = v.astype(np.float64)
     check_finite_float32(v)
-    return _core.normalize(np.ascontiguousarray(v), method, threads)
+    # reshape: a 0-d input (one number) came back with shape (1,)
+    return _core.normalize(np.ascontiguousarray(v), method, threads).reshape(v.shape)
 
 
 def check_threads(threads) -> int:

@@ -385,6 +385,15 @@ def test_stage_functions_refuse_bad_input():
     with pytest.raises(ValueError, match=r"cone_angle must be a number in"):
         shape_diameter.reduce_lengths([1.0], [0.1], cone_angle=0.0)
     assert np.isnan(shape_diameter.reduce_lengths([], []))
+    # A NaN length gave NaN, a negative one a meaningless mean (a new-user trial).
+    for lengths in ([1.0, np.nan], [-1.0, 2.0], [1.0, np.inf]):
+        with pytest.raises(ValueError, match=r"lengths must be finite and >= 0"):
+            shape_diameter.reduce_lengths(lengths, [0.1, 0.2])
+    with pytest.raises(ValueError, match=r"angles must be finite and >= 0"):
+        shape_diameter.reduce_lengths([1.0, 2.0], [0.1, -0.2])
+    # One number normalises to one number (it came back with shape (1,)).
+    assert shape_diameter.normalize(3.0).shape == ()
+    assert shape_diameter.normalize(np.ones((2, 3))).shape == (2, 3)
     V, F = shapes.icosphere(1.0, 0)
     with pytest.raises(ValueError, match=r"points must be one of .* got 'edges'"):
         shape_diameter.sample_points(V, F, "edges")
