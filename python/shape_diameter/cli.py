@@ -342,7 +342,12 @@ def _run(args) -> int:
     for warning in caught:  # one line each, like the errors
         print(f"{PROG}: warning: {_one_line(warning.message)}", file=sys.stderr)
 
-    mesh_io.save_colored(output, vertices, triangles, colormap(result.normalized), args.points)
+    with warnings.catch_warnings(record=True) as caught:  # GLB and STL: float32 coordinates
+        warnings.simplefilter("always")
+        mesh_io.save_colored(output, vertices, triangles, colormap(result.normalized),
+                             args.points)
+    for warning in caught:
+        print(f"{PROG}: warning: {_one_line(warning.message)}", file=sys.stderr)
     if args.values:
         with open(args.values, "wb") as stream:  # np.save(path) would append ".npy"
             np.save(stream, np.asarray(result.values, dtype=np.float32))

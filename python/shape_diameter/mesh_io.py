@@ -25,6 +25,7 @@ from __future__ import annotations
 
 import io
 import os
+import warnings
 
 import numpy as np
 import trimesh
@@ -284,10 +285,13 @@ def save_colored(path, vertices, triangles, colors, per: str = "faces") -> None:
     """Write the mesh coloured per face or per vertex; the format follows the suffix.
 
     colors: (m,4) uint8 RGBA for per="faces", (n,4) for per="vertices".
-    PLY is written binary and keeps either kind; OFF keeps either (written here);
-    OBJ and GLB store only vertex colours, so per-face colours give every
-    triangle its own three vertices (exact flat colours, 3m vertices); STL keeps
-    no colour. Raises ValueError for an unknown suffix or mismatched arrays.
+    PLY is written binary with 64-bit float coordinates and keeps either kind of colour; OFF
+    keeps either (written here, coordinates as %.17g); OBJ and GLB store only vertex colours,
+    so per-face colours give every triangle its own three vertices (exact flat colours, 3m
+    vertices); STL keeps no colour. PLY, OFF and OBJ give the float64 coordinates back
+    exactly; GLB and STL hold 32-bit floats only, and a RuntimeWarning says so when that moves
+    a vertex by more than PRECISION_WARNING of the mesh's size (a mesh far from the origin:
+    UTM coordinates, say). Raises ValueError for an unknown suffix or mismatched arrays.
     """
     path = os.fspath(path)
     suffix = os.path.splitext(path)[1].lower()
@@ -307,17 +311,94 @@ def save_colored(path, vertices, triangles, colors, per: str = "faces") -> None:
             f"got {colors.dtype} {colors.shape}"
         )
 
-    if suffix == ".off":
-        _write_off(path, vertices, triangles, colors, per)
-        return
+    if suffix in (".glb", ".stl"):
+        _warn_if_float32_moves(path, vertices)
     if per == "faces" and suffix in (".obj", ".glb"):
         vertices = vertices[triangles].reshape(-1, 3)
         triangles = np.arange(len(vertices), dtype=np.int64).reshape(-1, 3)
         colors = np.repeat(colors, 3, axis=0)
         per = "vertices"
-    key = "face_colors" if per == "faces" else "vertex_colors"
-    mesh = trimesh.Trimesh(vertices, triangles, process=False, **{key: colors})
-    mesh.export(path, file_type=suffix[1:])
+    if suffix == ".ply":
+        _write_ply(path, vertices, triangles, colors, per)
+    elif suffix == ".off":
+        _write_off(path, vertices, triangles, colors, per)
+    elif suffix == ".obj":
+        _write_obj(path, vertices, triangles, colors)
+    else:
+        key = "face_colors" if per == "faces" else "vertex_colors"
+        mesh = trimesh.Trimesh(vertices, triangles, process=False, **{key: colors})
+        mesh.export(path, file_type=suffix[1:])
+
+
+# Past this share of the mesh's size, rounding the coordinates to 32-bit floats (GLB, STL)
+# is worth a warning: float32 keeps about 6e-8 of a coordinate's magnitude, so a mesh near
+# the origin never reaches it, and a 10 m building at UTM northings (5.4e6) moves by 0.25 m.
+PRECISION_WARNING = 1e-6
+
+
+def _warn_if_float32_moves(path: str, vertices: np.ndarray) -> None:
+    if len(vertices) == 0:
+        return
+    with np.errstate(over="ignore", invalid="ignore"):
+        moved = float(np.max(np.abs(vertices.astype(np.float32) - vertices)))
+    size = float(np.max(np.ptp(vertices, axis=0)))
+    if not moved <= PRECISION_WARNING * size:  # also inf: beyond float32's range
+        share = f"{moved / size:.2g} of the mesh's size" if size > 0 else "the mesh is a point"
+        warnings.warn(
+            f"{path}: {format_name(os.path.splitext(path)[1].lower())} holds 32-bit float "
+            f"coordinates: vertices move by up to {moved:.3g} units ({share}); write .ply, "
+            ".off or .obj to keep them exactly",
+            RuntimeWarning,
+            stacklevel=3,
+        )
+
+
+def _write_ply(path, vertices, triangles, colors, per) -> None:
+    """Binary little-endian PLY, coordinates as double: float32 (trimesh's choice) moves a
+    vertex of a mesh far from the origin by a visible amount, and collapses a small one."""
+    channels = ("red", "green", "blue", "alpha")
+    rgba = [(name, "u1") for name in channels]
+    vertex_fields = [("x", "<f8"), ("y", "<f8"), ("z", "<f8")] + (rgba if per == "vertices" else [])
+    face_fields = [("count", "u1"), ("indices", "<i4", (3,))] + (rgba if per == "faces" else [])
+    if len(vertices) > np.iinfo(np.int32).max:
+        raise ValueError(f"{path}: too many vertices for PLY's 32-bit indices")
+    vertex_rows = np.empty(len(vertices), dtype=vertex_fields)
+    for axis, name in enumerate("xyz"):
+        vertex_rows[name] = vertices[:, axis]
+    face_rows = np.empty(len(triangles), dtype=face_fields)
+    face_rows["count"] = 3
+    face_rows["indices"] = triangles
+    coloured_rows = vertex_rows if per == "vertices" else face_rows
+    for channel, name in enumerate(channels):
+        coloured_rows[name] = colors[:, channel]
+
+    colour_lines = "".join(f"property uchar {name}\n" for name in channels)
+    header = (
+        "ply\nformat binary_little_endian 1.0\ncomment shape-diameter\n"
+        f"element vertex {len(vertices)}\n"
+        "property double x\nproperty double y\nproperty double z\n"
+        f"{colour_lines if per == 'vertices' else ''}"
+        f"element face {len(triangles)}\nproperty list uchar int vertex_indices\n"
+        f"{colour_lines if per == 'faces' else ''}end_header\n"
+    )
+    with open(path, "wb") as out:
+        out.write(header.encode("ascii"))
+        out.write(vertex_rows.tobytes())
+        out.write(face_rows.tobytes())
+
+
+def _write_obj(path, vertices, triangles, colors) -> None:
+    """OBJ with vertex colours ("v x y z r g b", colours in [0, 1] as trimesh writes and reads
+    them; OBJ has no alpha). Coordinates in Python's shortest form that reads back as the
+    same double: a fixed number of decimals loses small meshes (8 decimals: 2.5e-4 relative
+    at 1e-5 units)."""
+    rgb = (colors[:, :3] / 255.0).tolist()
+    with open(path, "w", encoding="ascii", newline="\n") as out:
+        out.writelines(
+            f"v {x!r} {y!r} {z!r} {r:.8f} {g:.8f} {b:.8f}\n"
+            for (x, y, z), (r, g, b) in zip(vertices.tolist(), rgb)
+        )
+        np.savetxt(out, triangles + 1, fmt="f %d %d %d")
 
 
 def _write_off(path, vertices, triangles, colors, per) -> None:

@@ -122,6 +122,26 @@ def test_default_output_is_next_to_the_input(tmp_path, capsys):
     assert out.count("\n") == 1 and "cow.sdf.ply" in out
 
 
+def test_a_mesh_at_utm_coordinates_keeps_its_geometry(tmp_path, capsys):
+    # A 10 m sphere at UTM coordinates: the default PLY output once held float32 coordinates
+    # (0.25 m off); now the same doubles come back. GLB can only warn, in one line.
+    sphere = trimesh.creation.icosphere(subdivisions=2, radius=5.0)
+    vertices = np.asarray(sphere.vertices) + (500000.123, 5400000.456, 100.789)
+    source = tmp_path / "site.off"
+    trimesh.Trimesh(vertices, sphere.faces, process=False).export(source, digits=17)
+    vertices, triangles = load_mesh(source)
+    assert cli.main([str(source), "--rays", "4"]) == 0
+    written_vertices, written_triangles = load_mesh(tmp_path / "site.sdf.ply")
+    np.testing.assert_array_equal(written_vertices, vertices)
+    np.testing.assert_array_equal(written_triangles, triangles)
+    assert capsys.readouterr().err == ""
+
+    assert cli.main([str(source), "--rays", "4", "-o", str(tmp_path / "site.glb")]) == 0
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and err.startswith("shape-diameter: warning: ")
+    assert "GLB holds 32-bit float coordinates" in err and ".ply, .off or .obj" in err
+
+
 # --- --json -------------------------------------------------------------------
 
 

@@ -312,6 +312,65 @@ def test_save_colored_writes_mesh_and_colours(tmp_path, per, suffix):
         np.testing.assert_array_equal(visual.vertex_colors, np.repeat(colours, 3, axis=0))
 
 
+# Meshes far from the origin or tiny: a 10 m sphere at UTM coordinates (float32 moves its
+# vertices by up to 0.25 m), a unit sphere at 1e8 (float32 collapses it), a sphere 1e-5 wide
+# (8 fixed decimals, trimesh's OBJ, kept 2.5e-4 of its size).
+FAR_AND_SMALL = {
+    "utm": (5.0, (500000.123, 5400000.456, 100.789)),
+    "1e8": (1.0, (1e8, -3e7, 0.0)),
+    "tiny": (1e-5, (0.0, 0.0, 0.0)),
+}
+
+
+def _sphere(radius, offset):
+    sphere = trimesh.creation.icosphere(subdivisions=2, radius=radius)
+    return np.asarray(sphere.vertices) + offset, np.asarray(sphere.faces, dtype=np.int64)
+
+
+@pytest.mark.parametrize("per", ["faces", "vertices"])
+@pytest.mark.parametrize("suffix", [".ply", ".obj", ".off"])
+@pytest.mark.parametrize("case", sorted(FAR_AND_SMALL))
+def test_ply_obj_and_off_give_the_coordinates_back_exactly(tmp_path, case, suffix, per):
+    vertices, triangles = _sphere(*FAR_AND_SMALL[case])
+    count = len(triangles) if per == "faces" else len(vertices)
+    path = tmp_path / f"out{suffix}"
+    save_colored(path, vertices, triangles, _colours(count, 4), per=per)
+    loaded_vertices, loaded_triangles = load_mesh(path)
+    # OBJ with colours per face gives each triangle its own corners: compare corners.
+    np.testing.assert_array_equal(loaded_vertices[loaded_triangles], vertices[triangles])
+    if suffix == ".ply":
+        assert b"property double x" in path.read_bytes()[:300]
+
+
+@pytest.mark.parametrize("suffix", [".glb", ".stl"])
+@pytest.mark.parametrize("case", ["utm", "1e8"])
+def test_glb_and_stl_warn_when_32_bit_floats_move_the_vertices(tmp_path, case, suffix):
+    vertices, triangles = _sphere(*FAR_AND_SMALL[case])
+    path = tmp_path / f"out{suffix}"
+    with pytest.warns(RuntimeWarning) as caught:
+        save_colored(path, vertices, triangles, _colours(len(triangles), 5))
+    assert len(caught) == 1
+    message = str(caught[0].message)
+    assert message.startswith(f"{path}: {suffix[1:].upper()} holds 32-bit float coordinates")
+    assert "write .ply, .off or .obj to keep them exactly" in message
+    # What the file holds is the float32 rounding of the mesh, as the warning says.
+    loaded_vertices, loaded_triangles = load_mesh(path)
+    expected = vertices.astype(np.float32).astype(np.float64)[triangles]
+    np.testing.assert_array_equal(loaded_vertices[loaded_triangles], expected)
+
+
+@pytest.mark.parametrize("suffix", [".glb", ".stl"])
+def test_glb_and_stl_are_quiet_where_32_bit_floats_suffice(tmp_path, suffix):
+    # A tiny mesh at the origin keeps float32's relative precision: no warning (warnings
+    # are errors in this suite), and every vertex within 1e-7 of the size.
+    vertices, triangles = _sphere(*FAR_AND_SMALL["tiny"])
+    path = tmp_path / f"out{suffix}"
+    save_colored(path, vertices, triangles, _colours(len(triangles), 6))
+    loaded_vertices, loaded_triangles = load_mesh(path)
+    np.testing.assert_allclose(loaded_vertices[loaded_triangles], vertices[triangles],
+                               rtol=0, atol=1e-7 * 2e-5)  # fmt: skip
+
+
 def test_ply_output_is_binary(tmp_path):
     vertices, triangles = load_mesh(DATA / "suzanne.obj")
     path = tmp_path / "out.ply"
