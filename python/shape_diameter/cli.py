@@ -28,6 +28,7 @@ import numpy as np
 from . import __version__
 from .api import MAX_RAYS, compute
 from .colormap import colormap
+from .output_files import written_whole
 from .smoothing import DEVICE_ERRORS
 
 PROG = "shape-diameter"
@@ -349,8 +350,8 @@ def _run(args) -> int:
     for warning in caught:
         print(f"{PROG}: warning: {_one_line(warning.message)}", file=sys.stderr)
     if args.values:
-        with open(args.values, "wb") as stream:  # np.save(path) would append ".npy"
-            np.save(stream, np.asarray(result.values, dtype=np.float32))
+        with written_whole(args.values) as temporary, open(temporary, "wb") as stream:
+            np.save(stream, np.asarray(result.values, dtype=np.float32))  # (a path gains .npy)
     finished = time.perf_counter()
 
     # The CLI's own stages, apart from compute()'s: reading and writing files.

@@ -31,9 +31,11 @@ import numpy as np
 import trimesh
 
 from .mesh_file_checks import check_complete, format_name
+from .output_files import written_whole
 
-# Formats ``save_colored`` writes. OFF goes through our own writer because
-# trimesh's OFF exporter drops colours; STL has no colour at all.
+# Formats ``save_colored`` writes. PLY, OBJ and OFF go through our own writers: trimesh's
+# PLY holds float32 coordinates, its OBJ 8 fixed decimals, and its OFF drops colours. STL has
+# no colour at all.
 WRITE_SUFFIXES = (".ply", ".obj", ".off", ".glb", ".stl")
 
 
@@ -292,6 +294,8 @@ def save_colored(path, vertices, triangles, colors, per: str = "faces") -> None:
     exactly; GLB and STL hold 32-bit floats only, and a RuntimeWarning says so when that moves
     a vertex by more than PRECISION_WARNING of the mesh's size (a mesh far from the origin:
     UTM coordinates, say). Raises ValueError for an unknown suffix or mismatched arrays.
+    The file is written whole or not at all: a failed write raises an OSError naming it and
+    leaves an existing file as it was.
     """
     path = os.fspath(path)
     suffix = os.path.splitext(path)[1].lower()
@@ -318,16 +322,18 @@ def save_colored(path, vertices, triangles, colors, per: str = "faces") -> None:
         triangles = np.arange(len(vertices), dtype=np.int64).reshape(-1, 3)
         colors = np.repeat(colors, 3, axis=0)
         per = "vertices"
-    if suffix == ".ply":
-        _write_ply(path, vertices, triangles, colors, per)
-    elif suffix == ".off":
-        _write_off(path, vertices, triangles, colors, per)
-    elif suffix == ".obj":
-        _write_obj(path, vertices, triangles, colors)
-    else:
-        key = "face_colors" if per == "faces" else "vertex_colors"
-        mesh = trimesh.Trimesh(vertices, triangles, process=False, **{key: colors})
-        mesh.export(path, file_type=suffix[1:])
+    # Written whole or not at all: a failed write leaves an existing file as it was.
+    with written_whole(path) as temporary:
+        if suffix == ".ply":
+            _write_ply(temporary, vertices, triangles, colors, per)
+        elif suffix == ".off":
+            _write_off(temporary, vertices, triangles, colors, per)
+        elif suffix == ".obj":
+            _write_obj(temporary, vertices, triangles, colors)
+        else:
+            key = "face_colors" if per == "faces" else "vertex_colors"
+            mesh = trimesh.Trimesh(vertices, triangles, process=False, **{key: colors})
+            mesh.export(temporary, file_type=suffix[1:])
 
 
 # Past this share of the mesh's size, rounding the coordinates to 32-bit floats (GLB, STL)

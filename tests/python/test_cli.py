@@ -316,6 +316,59 @@ def test_outputs_never_overwrite_the_input_or_each_other(tmp_path, capsys, monke
     assert not (tmp_path / "out.ply").exists()
 
 
+def _limit_file_size():
+    import resource
+
+    resource.setrlimit(resource.RLIMIT_FSIZE, (100_000, resource.RLIM_INFINITY))
+
+
+@pytest.mark.parametrize("suffix", [".ply", ".obj", ".off", ".glb", ".stl"])
+def test_a_failed_write_leaves_the_existing_output_as_it_was(tmp_path, suffix):
+    # `ulimit -f 100` once left 100 KB of the output in place of a good, older one.
+    output = tmp_path / f"big{suffix}"
+    output.write_bytes(b"the output of an earlier run\n")
+    done = subprocess.run(
+        [sys.executable, "-m", "shape_diameter.cli", str(DATA / "horse.ply"), "-o", str(output),
+         "--rays", "2", "--engine", "cpu"],
+        check=False, capture_output=True, text=True, timeout=120, preexec_fn=_limit_file_size,
+    )  # fmt: skip
+    assert done.returncode == 1
+    _assert_one_line_error(done.stderr, done.stdout)
+    assert f"{output}: cannot write (File too large)" in done.stderr
+    assert "the existing file is left as it was" in done.stderr
+    assert output.read_bytes() == b"the output of an earlier run\n"
+    assert sorted(p.name for p in tmp_path.iterdir()) == [output.name]  # no temporary left
+
+
+def test_a_failed_values_write_leaves_no_part_of_it(tmp_path, capsys, monkeypatch):
+    values = tmp_path / "values.npy"
+    real_save = np.save
+
+    def save_half_then_fail(stream, array):
+        real_save(stream, array[: len(array) // 2])
+        raise OSError(28, "No space left on device")
+
+    monkeypatch.setattr(np, "save", save_half_then_fail)
+    argv = [str(DATA / "suzanne.obj"), "-o", str(tmp_path / "out.ply"), "--values", str(values)]
+    assert cli.main([*argv, "--rays", "2"]) == 1
+    captured = capsys.readouterr()
+    _assert_one_line_error(captured.err)
+    assert f"{values}: cannot write (No space left on device); nothing written" in captured.err
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["out.ply"]
+
+
+def test_outputs_replace_files_whole_and_keep_links_and_permissions(tmp_path):
+    # The new file takes the old one's permissions; a link stays a link to the new content.
+    real, link = tmp_path / "real.ply", tmp_path / "link.ply"
+    real.write_bytes(b"old")
+    real.chmod(0o640)
+    link.symlink_to(real)
+    assert cli.main([str(DATA / "suzanne.obj"), "-o", str(link), "--rays", "2"]) == 0
+    assert link.is_symlink() and real.read_bytes().startswith(b"ply\n")
+    assert real.stat().st_mode & 0o777 == 0o640
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["link.ply", "real.ply"]
+
+
 def test_an_opencl_failure_is_one_line_and_status_1(tmp_path, capsys, monkeypatch):
     # A RuntimeError the command did not catch: it once printed a traceback.
     from shape_diameter import _core
