@@ -318,7 +318,8 @@ def _run(args) -> int:
             uvs = None
     loaded = time.perf_counter()
 
-    with _progress_bar() as progress, warnings.catch_warnings(record=True) as caught:
+    with _progress_bar() as progress, warnings.catch_warnings(record=True) as caught, \
+            _naming(args.input):
         warnings.simplefilter("always")
         result = compute(
             vertices,
@@ -365,6 +366,15 @@ def _run(args) -> int:
             f"{report['total_seconds']:.2f} s on {result.engine} -> {output}"
         )
     return 0
+
+
+@contextlib.contextmanager
+def _naming(path: str):
+    """compute()'s ValueErrors (a mesh wider than 1e30, ...) name the file they are about."""
+    try:
+        yield
+    except ValueError as exc:
+        raise ValueError(f"{path}: {exc}") from exc
 
 
 def _smoothing_options(args) -> dict:

@@ -5,38 +5,90 @@ are no STL with an error about text encodings."""
 
 import os
 
-# The first bytes of the formats read, to say what a misnamed file seems to be.
-_MAGIC = {b"ply": "PLY", b"glTF": "GLB", b"OFF": "OFF", b"COFF": "OFF", b"solid": "STL"}
-_ARTICLE = {"OFF": "an", "STL": "an"}
+# The suffixes read, and the format each names.
+READ_SUFFIXES = (".obj", ".ply", ".off", ".stl", ".gltf", ".glb")
+_ARTICLE = {"OFF": "an", "STL": "an", "OBJ": "an"}
+# The first words of an OBJ file's records (after comments), to tell OBJ text from others.
+_OBJ_RECORDS = {b"v", b"vt", b"vn", b"vp", b"f", b"o", b"g", b"s", b"l", b"mtllib", b"usemtl"}
 
 
 def format_name(suffix: str) -> str:
     return {".gltf": "glTF", ".glb": "GLB"}.get(suffix, suffix[1:].upper() or "mesh")
 
 
-def _not_valid(suffix: str, why: str, data: bytes) -> ValueError:
+def looks_like(head: bytes, size: int):
+    """The format a file's first bytes (and its size, for binary STL) suggest: 'OBJ', 'PLY',
+    'OFF', 'STL', 'GLB', 'glTF', or None."""
+    if head.startswith(b"ply") and head[3:4] in (b"\n", b"\r"):
+        return "PLY"
+    if head.startswith(b"glTF"):
+        return "GLB"
+    if len(head) >= 84 and size == 84 + 50 * int.from_bytes(head[80:84], "little"):
+        return "STL"  # binary: its 80-byte header says anything, its size is what counts
+    if b"\x00" in head:
+        return None  # no text
+    head = head.removeprefix(b"\xef\xbb\xbf")  # a UTF-8 byte order mark
+    words = [line.split(maxsplit=1)[0] for line in head.splitlines()
+             if line.strip() and not line.lstrip().startswith(b"#")]  # fmt: skip
+    first = words[0] if words else b""
+    if first.endswith(b"OFF") and first.isalpha() and first.isupper():
+        return "OFF"  # OFF, COFF, NOFF, STOFF, ...
+    if first == b"solid":
+        return "STL"
+    if first.startswith(b"{"):
+        return "glTF"
+    if first in _OBJ_RECORDS:
+        return "OBJ"
+    return None
+
+
+def _not_valid(suffix: str, why: str, data: bytes, size=None) -> ValueError:
     """The error for a file that is not what its suffix says, naming what it looks like."""
-    for magic, name in _MAGIC.items():
-        if data.startswith(magic) and name != format_name(suffix):
-            why = f"it looks like {_ARTICLE.get(name, 'a')} {name} file"
+    seems = looks_like(data[:4096], len(data) if size is None else size)
+    if seems is not None and seems != format_name(suffix):
+        why = f"it looks like {_ARTICLE.get(seems, 'a')} {seems} file"
     return ValueError(f"not a valid {format_name(suffix)} file ({why})")
 
 
-def check_complete(path: str, suffix: str) -> None:
-    """The counts a header declares against what the file holds (ValueError if short).
+def check_suffix(path: str) -> str:
+    """The suffix of a file to read, lower case; ValueError for one that names no format read
+    (saying which are, and what the file looks like)."""
+    suffix = os.path.splitext(path)[1].lower()
+    if suffix in READ_SUFFIXES:
+        return suffix
+    supported = ", ".join(READ_SUFFIXES)
+    try:
+        with open(path, "rb") as stream:
+            seems = looks_like(stream.read(4096), os.fstat(stream.fileno()).st_size)
+    except OSError:
+        seems = None
+    hint = f"it looks like {_ARTICLE.get(seems, 'a')} {seems} file; " if seems else ""
+    if not suffix:
+        raise ValueError(f"no file extension to tell the mesh format by ({hint}supported: "
+                         f"{supported})")
+    raise ValueError(f"cannot read '{suffix}' files ({hint}supported: {supported})")
 
-    trimesh reads a truncated ASCII OFF or PLY as a smaller mesh without a word, and fails on
-    bytes that are no STL with an error about text encodings. A cut inside the last number
-    stays unseen: the file then holds a different, complete-looking number.
+
+def check_complete(path: str, suffix: str) -> None:
+    """That the file is of the format its suffix names (ValueError saying what it seems to
+    be otherwise), and the counts a header declares against what the file holds (ValueError
+    if short).
+
+    trimesh reads a truncated ASCII OFF or PLY as a smaller mesh without a word, fails on
+    bytes that are no STL with an error about text encodings, and finds "no triangles" in a
+    binary PLY named .obj. A cut inside the last number stays unseen: the file then holds a
+    different, complete-looking number.
     """
-    if suffix not in (".off", ".ply", ".stl"):
-        return
     with open(path, "rb") as stream:
+        size = os.fstat(stream.fileno()).st_size
         head = stream.read(84)
         if suffix == ".stl" and len(head) == 84:
             count = int.from_bytes(head[80:84], "little")
-            if os.fstat(stream.fileno()).st_size == 84 + 50 * count:
+            if size == 84 + 50 * count:
                 return  # a whole binary STL: not worth reading twice
+        if suffix not in (".off", ".ply", ".stl"):
+            _check_kind(suffix, head + stream.read(4096 - len(head)), size)
+            return
         data = head + stream.read()
     if suffix == ".off":
         _check_off(data)
@@ -44,6 +96,20 @@ def check_complete(path: str, suffix: str) -> None:
         _check_ply(data)
     else:
         _check_stl(data)
+
+
+def _check_kind(suffix: str, head: bytes, size: int) -> None:
+    """OBJ, glTF and GLB: only whether the file is of that kind (trimesh checks the rest)."""
+    seems = looks_like(head, size)
+    if suffix == ".obj":
+        if seems not in (None, "OBJ"):
+            raise _not_valid(suffix, "", head, size)
+        if b"\x00" in head:
+            raise _not_valid(suffix, "it is not text", head, size)
+    elif suffix == ".glb" and seems != "GLB":
+        raise _not_valid(suffix, "no 'glTF' header", head, size)
+    elif suffix == ".gltf" and seems != "glTF":
+        raise _not_valid(suffix, "not JSON text", head, size)
 
 
 def _check_off(data: bytes) -> None:
@@ -86,9 +152,11 @@ def _check_off(data: bytes) -> None:
 
 def _check_ply(data: bytes) -> None:
     """ASCII PLY only: binary PLY is checked against its expected length by trimesh."""
+    if looks_like(data[:4096], len(data)) != "PLY":
+        raise _not_valid(".ply", "no 'ply' header", data)
     end = data.find(b"end_header")
-    if not data.startswith(b"ply") or end < 0:
-        return  # trimesh says it is no PLY
+    if end < 0:
+        raise ValueError("not a valid PLY file (no end_header)")
     # Each element: name, count, and its properties (True for a list).
     elements, is_ascii = [], False
     for line in data[:end].decode("ascii", errors="replace").splitlines():
@@ -142,9 +210,12 @@ def _check_stl(data: bytes) -> None:
             return
     try:
         data.decode("utf-8")
-        return  # ASCII STL: trimesh finds no triangles in broken text
     except UnicodeDecodeError:
         pass
+    else:
+        if looks_like(data[:4096], len(data)) == "STL":
+            return  # ASCII STL: trimesh finds no triangles in broken text
+        raise _not_valid(".stl", "text that does not start with 'solid'", data)
     if len(data) < 84:
         raise _not_valid(".stl", "too short for a binary STL, and not ASCII STL text", data)
     raise _not_valid(

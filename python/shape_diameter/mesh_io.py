@@ -30,7 +30,7 @@ import warnings
 import numpy as np
 import trimesh
 
-from .mesh_file_checks import check_complete, format_name
+from .mesh_file_checks import check_complete, check_suffix, format_name
 from .output_files import written_whole
 
 # Formats ``save_colored`` writes. PLY, OBJ and OFF go through our own writers: trimesh's
@@ -50,8 +50,8 @@ def load_mesh(path) -> tuple[np.ndarray, np.ndarray]:
         raise ValueError(f"{path}: no such file")
     if not os.path.isfile(path):
         raise ValueError(f"{path}: not a file")
-    suffix = os.path.splitext(path)[1].lower()
     try:
+        suffix = check_suffix(path)
         check_complete(path, suffix)
     except ValueError as exc:
         raise ValueError(f"{path}: {exc}") from None

@@ -285,6 +285,18 @@ def test_a_file_not_of_its_format_says_so(tmp_path, capsys):
     assert "not a valid STL file (it looks like a PLY file)" in captured.err
 
 
+def test_a_mesh_too_wide_names_its_file(tmp_path, capsys):
+    # compute()'s refusal of a mesh wider than 1e30 once did not say which file it was.
+    source = tmp_path / "huge.obj"
+    source.write_text("v 0 0 0\nv 2e30 0 0\nv 0 2e30 0\nv 0 0 2e30\n"
+                      "f 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\n")  # fmt: skip
+    assert cli.main([str(source), "-o", str(tmp_path / "out.ply")]) == 2
+    captured = capsys.readouterr()
+    _assert_one_line_error(captured.err, captured.out)
+    assert captured.err.startswith(f"shape-diameter: error: {source}: the mesh spans 2e+30")
+    assert not (tmp_path / "out.ply").exists()
+
+
 def _no_compute(*args, **kwargs):
     raise AssertionError("compute() ran: the paths should have been refused first")
 

@@ -2,6 +2,7 @@
 """Mesh files through trimesh: the file's numbering is kept, bad files are refused clearly."""
 
 import re
+import shutil
 from pathlib import Path
 
 import numpy as np
@@ -228,7 +229,25 @@ NOT_THAT_FORMAT = {
     "ply.stl": (lambda tmp, spot: (DATA / "horse.ply").read_bytes(),
                 r"not a valid STL file \(it looks like a PLY file\)"),
     "obj.off": (lambda tmp, spot: (DATA / "spot.obj").read_bytes(),
-                r"not a valid OFF file \(no OFF header\)"),
+                r"not a valid OFF file \(it looks like an OBJ file\)"),
+    "text.off": (lambda tmp, spot: b"hello\n1 2 3\n", r"not a valid OFF file \(no OFF header\)"),
+    # These once said "no triangles found", or repeated trimesh's exception.
+    "ply.obj": (lambda tmp, spot: (DATA / "horse.ply").read_bytes(),
+                r"not a valid OBJ file \(it looks like a PLY file\)"),
+    "off.stl": (lambda tmp, spot: (DATA / "bunny00.off").read_bytes(),
+                r"not a valid STL file \(it looks like an OFF file\)"),
+    "text.stl": (lambda tmp, spot: b"hello\n", r"not a valid STL file \(text that does not "
+                 r"start with 'solid'\)"),
+    "random.obj": (lambda tmp, spot: np.random.default_rng(1).bytes(5000) + b"\x00",
+                   r"not a valid OBJ file \(it is not text\)"),
+    "obj.ply": (lambda tmp, spot: (DATA / "spot.obj").read_bytes(),
+                r"not a valid PLY file \(it looks like an OBJ file\)"),
+    "stl.glb": (lambda tmp, spot: _whole_binary_stl(tmp, spot),
+                r"not a valid GLB file \(it looks like an STL file\)"),
+    "glb.gltf": (lambda tmp, spot: trimesh.Trimesh(*spot).export(file_type="glb"),
+                 r"not a valid glTF file \(it looks like a GLB file\)"),
+    "off.glb": (lambda tmp, spot: (DATA / "bunny00.off").read_bytes(),
+                r"not a valid GLB file \(it looks like an OFF file\)"),
 }  # fmt: skip
 
 
@@ -239,6 +258,30 @@ def test_a_file_not_of_its_format_says_so(tmp_path, spot, name):
     path.write_bytes(content(tmp_path, spot))
     with pytest.raises(ValueError, match=f"{re.escape(str(path))}: {message}"):
         load_mesh(path)
+
+
+@pytest.mark.parametrize("name", ["horse", "horse.xyz", "horse.ply.bak"])
+def test_a_name_without_a_mesh_suffix_says_which_are_read(tmp_path, name):
+    # A file without an extension once gave trimesh's "file_type '/tmp/.../noext' not
+    # supported".
+    path = tmp_path / name
+    shutil.copy(DATA / "horse.ply", path)
+    start = "no file extension to tell the mesh format by" if name == "horse" else (
+        f"cannot read '{path.suffix}' files")
+    supported = ".obj, .ply, .off, .stl, .gltf, .glb"
+    with pytest.raises(ValueError) as raised:
+        load_mesh(path)
+    assert str(raised.value) == (f"{path}: {start} (it looks like a PLY file; supported: "
+                                 f"{supported})")
+
+
+def test_other_formats_are_not_mistaken_for_obj(tmp_path):
+    # OBJ is told by its records, so ordinary OBJ files (comments first, objects, groups,
+    # a byte order mark) are still read.
+    path = tmp_path / "odd.obj"
+    path.write_bytes(b"\xef\xbb\xbf# made by hand\nmtllib x.mtl\no a\nv 0 0 0\nv 1 0 0\n"
+                     b"v 0 1 0\ng part\nf 1 2 3\n")
+    np.testing.assert_array_equal(load_mesh(path)[1], [[0, 1, 2]])
 
 
 def test_point_cloud_is_refused_as_such(tmp_path):
