@@ -24,7 +24,7 @@ RAYS = 12  # enough rays to be a real run, few enough to keep the file fast
 JSON_KEYS = {
     "input", "faces", "vertices", "points", "point_count", "rays", "cone", "sampling",
     "seed", "normalize", "smooth", "engine", "flipped_faces", "seconds", "Mrays_per_s",
-    "io_seconds", "total_seconds", "outputs",
+    "io_seconds", "total_seconds", "outputs", "status", "error", "exit_status", "warnings",
 }  # fmt: skip
 
 
@@ -154,6 +154,8 @@ def test_json_is_one_object_with_the_documented_keys(tmp_path):
     assert done.stdout.endswith("\n") and done.stdout.count("\n") == 1
     report = json.loads(done.stdout)
     assert set(report) == JSON_KEYS
+    assert (report["status"], report["error"], report["exit_status"]) == ("ok", None, 0)
+    assert report["warnings"] == []
     assert (report["faces"], report["vertices"]) == (5856, 2930)
     assert (report["points"], report["point_count"], report["rays"]) == ("faces", 5856, RAYS)
     assert (report["cone"], report["sampling"], report["seed"]) == (120.0, "fibonacci", 0)
@@ -224,7 +226,15 @@ PROCESS_FAILURES = {
 def test_failures_print_one_line_and_exit_2(tmp_path, case):
     done = _run_process(*PROCESS_FAILURES[case](tmp_path), "--json", cwd=tmp_path)
     assert done.returncode == 2
-    _assert_one_line_error(done.stderr, done.stdout)
+    if case in ("negative rays", "unknown points"):  # refused before any input is read
+        _assert_one_line_error(done.stderr, done.stdout)
+    else:  # a bad input: its --json object says so too
+        _assert_one_line_error(done.stderr)
+        report = json.loads(done.stdout)
+        assert done.stdout.count("\n") == 1
+        assert (report["status"], report["exit_status"]) == ("error", 2)
+        assert done.stderr == f"shape-diameter: error: {report['error']}\n"
+        assert report["error"].startswith(f"{report['input']}: ")
     assert not list(tmp_path.glob("*.sdf.ply"))
 
 

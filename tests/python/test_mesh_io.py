@@ -236,8 +236,8 @@ NOT_THAT_FORMAT = {
                 r"not a valid OBJ file \(it looks like a PLY file\)"),
     "off.stl": (lambda tmp, spot: (DATA / "bunny00.off").read_bytes(),
                 r"not a valid STL file \(it looks like an OFF file\)"),
-    "text.stl": (lambda tmp, spot: b"hello\n", r"not a valid STL file \(text that does not "
-                 r"start with 'solid'\)"),
+    "text.stl": (lambda tmp, spot: b"hello\n",
+                 r"not a valid STL file \(text that does not start with 'solid'\)"),
     "random.obj": (lambda tmp, spot: np.random.default_rng(1).bytes(5000) + b"\x00",
                    r"not a valid OBJ file \(it is not text\)"),
     "obj.ply": (lambda tmp, spot: (DATA / "spot.obj").read_bytes(),
