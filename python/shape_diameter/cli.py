@@ -5,11 +5,16 @@ Needs the ``cli`` extra (trimesh to read and write meshes, tqdm for the progress
 bar); both are imported only when the command runs, so ``import shape_diameter``
 never needs them.
 
-``--json`` prints one object on stdout: input, faces, vertices (of the mesh as
-read), points ("faces" or "vertices"), point_count, rays, cone, sampling, seed,
-normalize, smooth, engine, seconds (compute()'s stages: Result.timings), Mrays_per_s
-(point_count * rays / seconds["cast"] / 1e6), io_seconds (load, write),
-total_seconds (the whole command) and outputs (mesh, values: paths or null).
+``--json`` prints one object per input on a line of stdout, when that input is done:
+status ("ok" or "error"), error, exit_status, warnings, input, faces, vertices (of the mesh as
+read), points ("faces" or "vertices"), point_count, rays, cone, sampling, seed, normalize,
+smooth, engine, seconds (compute()'s stages: Result.timings), Mrays_per_s (point_count * rays
+/ seconds["cast"] / 1e6), io_seconds (load, write), total_seconds (the whole input) and
+outputs (mesh, values: paths or null); an input that failed has status, error, exit_status,
+warnings, input and outputs only.
+
+The console script enters through ``_shape_diameter_entry`` and console_main(), which take
+Ctrl-C over (see console_main); main() called from Python leaves signals alone.
 """
 
 from __future__ import annotations
@@ -20,6 +25,7 @@ import fnmatch
 import json
 import logging
 import os
+import signal
 import sys
 import time
 import warnings
@@ -285,18 +291,101 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
-def main(argv=None) -> int:
-    """Run the command; returns the exit status (the console script exits with it)."""
+def main(argv=None, *, interrupts=None) -> int:
+    """Run the command; returns the exit status (130 after Ctrl-C: KeyboardInterrupt).
+
+    `interrupts`: the console script's _Interrupts (console_main), which take SIGINT over;
+    without them (a call from Python) the process's signal handling is left alone.
+    """
     try:
         args = build_parser().parse_args(argv)
     except SystemExit as done:  # --help, --version, or an option error already printed
         return done.code if isinstance(done.code, int) else 0
     try:
-        return _run(args)
+        return _run(args, interrupts or _Interrupts([]))
     except CommandError as exc:
         return _fail(exc, exc.status)
     except KeyboardInterrupt:
         return _fail("interrupted", EXIT_INTERRUPTED)
+    finally:
+        if interrupts is not None:
+            interrupts.disarm()
+
+
+def console_main(pending=None) -> int:
+    """The command as a program (the console script, ``python -m shape_diameter``): main()
+    on sys.argv, and after Ctrl-C, once outputs are cleaned up and the one-line message is
+    out, death by SIGINT, so that a shell running it in a loop stops (its status reads 130).
+    An exit status of 130 would not do: bash goes on with a loop whose command exited so.
+
+    `pending`: the list the entry point's SIGINT handler has been appending to while the
+    modules were imported (see _shape_diameter_entry); None where it could not take SIGINT.
+    """
+    interrupts = _Interrupts([] if pending is None else pending)
+    if not interrupts.take_over():
+        return main(interrupts=None)
+    status = main(interrupts=interrupts)
+    if not interrupts.pending:
+        return status
+    if status != EXIT_INTERRUPTED:  # it came after the last check: still, the loop stops
+        _fail("interrupted", EXIT_INTERRUPTED)
+    return _die_by_sigint()
+
+
+class _Interrupts:
+    """SIGINT for the console script. Every SIGINT is recorded; while armed (the command's
+    own work, not imports: trimesh's imports catch BaseException, and a KeyboardInterrupt
+    raised in them was swallowed and the run went on) it also raises KeyboardInterrupt, and
+    check() raises it for one that was recorded, held or swallowed since."""
+
+    def __init__(self, pending):
+        self.pending = pending
+        self.armed = False
+
+    def _handle(self, signum, frame):
+        self.pending.append(signum)
+        if self.armed:
+            raise KeyboardInterrupt
+
+    def take_over(self) -> bool:
+        """Install the handler (held, not armed); False where signals cannot be taken."""
+        try:
+            signal.signal(signal.SIGINT, self._handle)
+        except (ValueError, OSError):  # not the main thread
+            return False
+        return True
+
+    def arm(self) -> None:
+        self.armed = True
+        self.check()
+
+    def disarm(self) -> None:
+        self.armed = False
+
+    def check(self) -> None:
+        """Raise KeyboardInterrupt if SIGINT came (a check point of the command's own)."""
+        if self.pending:
+            raise KeyboardInterrupt
+
+    def checked(self, progress):
+        """The progress callback, checking first: native code sees Ctrl-C only through it."""
+
+        def callback(fraction):
+            self.check()
+            progress(fraction)
+
+        return callback
+
+
+def _die_by_sigint() -> int:
+    with contextlib.suppress(OSError, ValueError):  # e.g. a closed pipe
+        sys.stdout.flush()
+    with contextlib.suppress(OSError, ValueError):
+        sys.stderr.flush()
+    if os.name == "posix":
+        signal.signal(signal.SIGINT, signal.SIG_DFL)
+        os.kill(os.getpid(), signal.SIGINT)
+    return EXIT_INTERRUPTED  # where the signal did not end the process
 
 
 def _fail(message, status: int) -> int:
@@ -330,7 +419,7 @@ class _Job:
         self.source, self.output, self.values, self.problem = source, output, values, problem
 
 
-def _run(args) -> int:
+def _run(args, interrupts) -> int:
     try:
         from . import mesh_io
     except ImportError as exc:
@@ -338,8 +427,12 @@ def _run(args) -> int:
             f"the command line needs trimesh: pip install 'shape_diameter[cli]' ({exc})",
             EXIT_ENVIRONMENT,
         ) from exc
+    if not args.quiet and sys.stderr.isatty():
+        with contextlib.suppress(ImportError):  # the progress bar's, imported while held
+            import tqdm  # noqa: F401
     # trimesh logs what it skips in odd files; this command reports errors itself.
     logging.getLogger("trimesh").setLevel(logging.CRITICAL + 1)
+    interrupts.arm()  # a Ctrl-C held during the imports stops the run here
 
     smoothing_options = _smoothing_options(args)
     jobs = _plan(args, mesh_io.WRITE_SUFFIXES)
@@ -350,8 +443,11 @@ def _run(args) -> int:
         try:
             if job.problem is not None:
                 raise CommandError(job.problem)
-            report = _compute_one(args, job, mesh_io, smoothing_options, several, warned)
+            interrupts.check()
+            report = _compute_one(args, job, mesh_io, smoothing_options, several, warned,
+                                  interrupts)  # fmt: skip
         except Exception as exc:  # noqa: BLE001 - each kind is mapped, the rest re-raised
+            interrupts.check()  # a KeyboardInterrupt that a library turned into an error
             status, message = _failure(exc)
             message = _naming_a_file(job, message)
             _fail(message, status)
@@ -457,7 +553,7 @@ def _check_no_collisions(jobs) -> None:
             )
 
 
-def _compute_one(args, job, mesh_io, smoothing_options, several: bool, warned: list) -> dict:
+def _compute_one(args, job, mesh_io, smoothing_options, several, warned, interrupts) -> dict:
     """Read, compute and write one input; returns its --json object. Warnings are printed
     (one line each, naming the file) and appended to `warned`."""
     started = time.perf_counter()
@@ -476,9 +572,11 @@ def _compute_one(args, job, mesh_io, smoothing_options, several: bool, warned: l
             vertices, triangles = mesh_io.load_mesh(job.source)
             uvs = None
     loaded = time.perf_counter()
+    interrupts.check()  # (trimesh catches BaseException in places)
 
     bar = None if args.quiet else (os.path.basename(job.source) if several else PROG)
     with _progress_bar(bar) as progress, _warnings_to(job, warned):
+        progress = interrupts.checked(progress)
         result = compute(
             vertices,
             triangles,
@@ -499,6 +597,7 @@ def _compute_one(args, job, mesh_io, smoothing_options, several: bool, warned: l
             smoothing_options=smoothing_options,
         )
     computed = time.perf_counter()
+    interrupts.check()
 
     with _warnings_to(job, warned):  # GLB and STL: float32 coordinates
         mesh_io.save_colored(job.output, vertices, triangles, colormap(result.normalized),
@@ -506,6 +605,7 @@ def _compute_one(args, job, mesh_io, smoothing_options, several: bool, warned: l
     if job.values:
         with written_whole(job.values) as temporary, open(temporary, "wb") as stream:
             np.save(stream, np.asarray(result.values, dtype=np.float32))  # (a path gains .npy)
+            interrupts.check()  # (before the temporary file takes the output's place)
     finished = time.perf_counter()
 
     # The CLI's own stages, apart from compute()'s: reading and writing files.
@@ -663,4 +763,4 @@ def _progress_bar(label=PROG):
 
 
 if __name__ == "__main__":
-    sys.exit(main())
+    sys.exit(console_main())

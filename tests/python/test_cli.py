@@ -585,5 +585,5 @@ def test_ctrl_c_stops_a_long_run_when_stderr_is_not_a_terminal(tmp_path):
     start = time.perf_counter()
     run.send_signal(signal.SIGINT)
     _, err = run.communicate(timeout=60)
-    assert run.returncode == 130 and "interrupted" in err
+    assert run.returncode == -signal.SIGINT and "interrupted" in err  # (test_cli_interrupt.py)
     assert time.perf_counter() - start < 5.0
