@@ -266,7 +266,10 @@ def build_parser() -> argparse.ArgumentParser:
         "--values",
         metavar="FILE.npy",
         help="also save the SDF (float32, mesh units; smoothed with --smooth) as a .npy "
-        "array: one value per face or vertex, in the order they were read from INPUT",
+        "array: with --points faces one value per triangle, in INPUT's face order, a polygon "
+        "of k corners giving k-2 consecutive rows (shape_diameter.load_mesh(INPUT, "
+        "source_faces=True) gives each row's face); with --points vertices one per vertex, in "
+        "INPUT's order (STL: positions merged, by first use)",
     )
     parser.add_argument(
         "--save-values",

@@ -5,6 +5,8 @@ are no STL with an error about text encodings."""
 
 import os
 
+import numpy as np
+
 # The suffixes read, and the format each names.
 READ_SUFFIXES = (".obj", ".ply", ".off", ".stl", ".gltf", ".glb")
 _ARTICLE = {"OFF": "an", "STL": "an", "OBJ": "an"}
@@ -151,23 +153,32 @@ def _check_off(data: bytes) -> None:
 
 
 def _check_ply(data: bytes) -> None:
-    """ASCII PLY only: binary PLY is checked against its expected length by trimesh."""
+    """ASCII PLY: the counts against the rows. Binary PLY: that lists (a face's corners) all
+    have one length, the only kind trimesh reads (its length is checked by trimesh)."""
     if looks_like(data[:4096], len(data)) != "PLY":
         raise _not_valid(".ply", "no 'ply' header", data)
     end = data.find(b"end_header")
     if end < 0:
         raise ValueError("not a valid PLY file (no end_header)")
-    # Each element: name, count, and its properties (True for a list).
-    elements, is_ascii = [], False
+    # Each element: name, count, and its properties (True for a list); and the properties'
+    # types, for binary files: (count type, item type) of a list, (None, type) otherwise.
+    elements, types, format_name = [], [], ""
     for line in data[:end].decode("ascii", errors="replace").splitlines():
         fields = line.split()
         if len(fields) >= 2 and fields[0] == "format":
-            is_ascii = fields[1] == "ascii"
+            format_name = fields[1]
         elif len(fields) >= 3 and fields[0] == "element" and fields[2].isdecimal():
             elements.append((fields[1], int(fields[2]), []))
+            types.append([])
         elif len(fields) >= 2 and fields[0] == "property" and elements:
             elements[-1][2].append(fields[1] == "list")
-    if not is_ascii:
+            types[-1].append((fields[2], fields[3] if len(fields) > 3 else "")
+                             if fields[1] == "list" else (None, fields[1]))  # fmt: skip
+    if format_name in ("binary_little_endian", "binary_big_endian"):
+        start = data.index(b"\n", end) + 1
+        _check_ply_lists(data, start, elements, types, format_name == "binary_big_endian")
+        return
+    if format_name != "ascii":
         return
     rows = [row for row in data[end:].splitlines()[1:] if row.strip()]
     seen = 0
@@ -184,6 +195,57 @@ def _check_ply(data: bytes) -> None:
         raise ValueError(
             f"truncated PLY file: its last {last[-1][0]} has fewer values than declared"
         )
+
+
+# Bytes of PLY's scalar types, by both their names.
+_PLY_SIZES = {"char": 1, "uchar": 1, "int8": 1, "uint8": 1, "short": 2, "ushort": 2,
+              "int16": 2, "uint16": 2, "int": 4, "uint": 4, "int32": 4, "uint32": 4,
+              "float": 4, "float32": 4, "double": 8, "float64": 8}  # fmt: skip
+
+
+def _check_ply_lists(data: bytes, start: int, elements, types, big_endian: bool) -> None:
+    """Refuse a binary PLY whose lists of one property differ in length (a mesh of triangles
+    and quads, as Blender writes n-gons): trimesh reads every row as long as the first, which
+    fails on the file's length, or, where the lengths happen to add up, reads wrong faces.
+    Each element's rows are laid side by side as the first row's lengths would have them, and
+    every list's length is compared with the first's; elements after one that is not
+    uniform are not checked (trimesh's length check remains)."""
+    offset = start
+    for (name, count, _), properties in zip(elements, types):
+        if any(t not in _PLY_SIZES for pair in properties for t in pair if t is not None):
+            return  # an unknown type: trimesh's to judge
+        stride, lists, at = 0, [], offset
+        for count_type, item_type in properties:
+            if count_type is None:
+                stride += _PLY_SIZES[item_type]
+                continue
+            size = _PLY_SIZES[count_type]
+            if count == 0 or at + stride + size > len(data):
+                return
+            length = int.from_bytes(data[at + stride : at + stride + size],
+                                    "big" if big_endian else "little")  # fmt: skip
+            lists.append((stride, size, length))
+            stride += size + length * _PLY_SIZES[item_type]
+        if lists and count > 0:
+            rows = data[offset : offset + count * stride]
+            if len(rows) < count * stride:
+                return  # short, or mixed: trimesh's length check says so
+            table = np.frombuffer(rows, dtype=np.uint8).reshape(count, stride)
+            for column, size, length in lists:
+                lengths = table[:, column : column + size]
+                first = np.frombuffer(data[offset + column : offset + column + size],
+                                      dtype=np.uint8)  # fmt: skip
+                if not (lengths == first).all():
+                    raise _mixed_lists(name)
+        offset += count * stride
+
+
+def _mixed_lists(name: str) -> ValueError:
+    plural = {"face": "faces"}.get(name, f"'{name}' elements")
+    return ValueError(
+        f"binary PLY whose {plural} have different numbers of corners: trimesh cannot read "
+        "that; save it as ASCII PLY, OBJ or OFF"
+    )
 
 
 def _ply_row_complete(fields, properties) -> bool:

@@ -5,15 +5,18 @@ This module imports trimesh, an optional dependency (the ``cli`` extra), so the
 package's ``__init__`` must never import it.
 
 Reading keeps the file's own numbering wherever the format has one, because the
-values written with ``--values`` are indexed by it:
+values written with ``--values`` are indexed by it: polygons are fanned in place (a face
+of k corners gives k - 2 consecutive triangles (0, j, j + 1), in the file's face order), and
+load_mesh(source_faces=True) says which face each triangle comes from.
 
-* OBJ: vertices in file order (none split or merged), faces in file order with
-  each polygon fanned in place. trimesh on its own splits vertices at UV and
-  normal seams and moves the second half of every quad to the end, so the file is
-  first reduced to its ``v`` and ``f`` records (see ``_plain_obj``).
-* PLY, OFF: vertices and triangles as stored. Polygons are triangulated by
-  trimesh, which groups the pieces by polygon size rather than keeping them in
-  place.
+* OBJ: vertices in file order (none split or merged), faces in file order. trimesh on its own
+  splits vertices at UV and normal seams and moves the second half of every quad to the end,
+  so the file is first reduced to its ``v`` and ``f`` records (see ``_plain_obj``).
+* PLY: vertices as stored, faces fanned here from the elements trimesh read (its own
+  triangles come grouped by polygon size). trimesh reads binary PLY lists of one length only
+  (a binary file mixing triangles and quads is refused).
+* OFF: read here (trimesh groups the pieces by polygon size, and fails on polygons of more
+  than four corners).
 * STL: a triangle soup by design, so corners at the same position are merged
   (in order of first use) to give the mesh back its connectivity; triangle order
   is kept.
@@ -39,12 +42,55 @@ from .output_files import written_whole
 WRITE_SUFFIXES = (".ply", ".obj", ".off", ".glb", ".stl")
 
 
-def load_mesh(path) -> tuple[np.ndarray, np.ndarray]:
+def load_mesh(path, *, source_faces: bool = False):
     """Read a mesh file as (vertices float64 (n,3), triangles int64 (m,3)).
+
+    Triangles come in the file's face order, each polygon of k corners fanned in place into
+    k - 2 consecutive triangles (corners 0, j, j + 1); with source_faces=True a third array
+    comes back: int64 (m,), the 0-based index of the file's face each triangle comes from
+    (OBJ: its ``f`` records, counted in order; PLY and OFF: its face elements; STL, glTF and
+    GLB: the triangle's own index, their faces being triangles).
 
     Raises ValueError naming the file for a missing, unreadable or empty file,
     and for one that holds no triangles (a point cloud, a set of lines).
     """
+    vertices, triangles, source, _ = _read(path)
+    return (vertices, triangles, source) if source_faces else (vertices, triangles)
+
+
+def load_mesh_with_uvs(path) -> tuple[np.ndarray, np.ndarray, "np.ndarray | None"]:
+    """load_mesh, plus the texture coordinates of every face corner.
+
+    Returns (vertices, triangles, uvs): uvs float32 (m, 3, 2), corner k of triangle i at
+    uvs[i, k], with v = 0 at the bottom of the image (OBJ and Blender's convention; glTF's
+    top-down v is flipped by trimesh), or None when the file has no UVs for every face. Read
+    from OBJ ``vt`` (through the ``f v/vt`` references, polygons fanned as load_mesh fans
+    them), glTF/GLB ``TEXCOORD_0`` (of primitives that have a material: trimesh reads UVs only
+    with one) and PLY texture coordinates (texture_u/texture_v, u/v, s/t or a per-face
+    texcoord list). OFF and STL have none.
+    """
+    vertices, triangles, _, ply_uvs = _read(path, want_uvs=True)
+    path = os.fspath(path)
+    suffix = os.path.splitext(path)[1].lower()
+    uvs = None
+    if suffix == ".obj":
+        uvs = _obj_corner_uvs(path)
+    elif suffix == ".ply":
+        uvs = ply_uvs
+    elif suffix in (".gltf", ".glb"):
+        try:
+            # Materials are loaded this time: trimesh keeps glTF UVs only with them.
+            scene = trimesh.load(path, process=False, force="scene")
+        except Exception:  # e.g. a texture image that cannot be decoded: read without
+            scene = trimesh.load(path, process=False, force="scene", skip_materials=True)
+        uvs = _scene_corner_uvs(scene)
+    if uvs is not None and (uvs.shape != (len(triangles), 3, 2) or not np.isfinite(uvs).all()):
+        uvs = None
+    return vertices, triangles, uvs
+
+
+def _read(path, want_uvs: bool = False):
+    """(vertices, triangles, source faces, PLY corner UVs or None) of a mesh file."""
     path = os.fspath(path)
     if not os.path.exists(path):
         raise ValueError(f"{path}: no such file")
@@ -57,10 +103,16 @@ def load_mesh(path) -> tuple[np.ndarray, np.ndarray]:
         raise ValueError(f"{path}: {exc}") from None
     except OSError as exc:  # e.g. no permission to read it
         raise ValueError(f"{path}: cannot read mesh ({exc.strerror or exc})") from exc
+    uvs, other_kinds = None, set()
     try:
-        if suffix == ".obj":
+        if suffix == ".off":
+            # Read here: trimesh groups an OFF's triangles by polygon size, and fails on
+            # polygons of more than four corners.
+            vertices, triangles, source = _read_off(path)
+        elif suffix == ".obj":
+            text, source = _plain_obj(path)
             scene = trimesh.load(
-                io.BytesIO(_plain_obj(path)),
+                io.BytesIO(text),
                 file_type="obj",
                 process=False,
                 force="scene",
@@ -79,12 +131,26 @@ def load_mesh(path) -> tuple[np.ndarray, np.ndarray]:
         ) from exc
     except Exception as exc:  # a parser fed a broken file fails in many ways
         reason = str(exc) or type(exc).__name__
+        if reason == "PLY is unexpected length!":  # trimesh's words; they do not say why
+            reason = ("its size is not what its header declares: it is truncated, or mixes "
+                      "faces of different corner counts, which trimesh cannot read in binary "
+                      "PLY")
         raise ValueError(f"{path}: cannot read mesh ({reason})") from exc
 
-    try:
-        vertices, triangles, other_kinds = _flatten(scene)
-    except ValueError as exc:
-        raise ValueError(f"{path}: cannot read mesh ({exc})") from exc
+    if suffix != ".off":
+        try:
+            in_place = _ply_in_place(scene, want_uvs) if suffix == ".ply" else None
+            if in_place is not None:
+                vertices, triangles, source, uvs = in_place
+            else:
+                vertices, triangles, other_kinds = _flatten(scene)
+                if suffix != ".obj":  # (a PLY only where trimesh kept no elements: never seen)
+                    source = np.arange(len(triangles), dtype=np.int64)
+                elif len(source) != len(triangles):
+                    raise ValueError(f"{len(source) - len(triangles)} of its faces were lost "
+                                     "in reading")
+        except ValueError as exc:
+            raise ValueError(f"{path}: cannot read mesh ({exc})") from exc
     if len(triangles) == 0:
         found = f" (it holds {', '.join(sorted(other_kinds))})" if other_kinds else ""
         raise ValueError(f"{path}: no triangles found{found}")
@@ -94,36 +160,133 @@ def load_mesh(path) -> tuple[np.ndarray, np.ndarray]:
         raise ValueError(f"{path}: vertex coordinates are not all finite")
     if triangles.min() < 0 or triangles.max() >= len(vertices):
         raise ValueError(f"{path}: a face refers to a vertex that does not exist")
-    return vertices, triangles
+    return vertices, triangles, source, uvs
 
 
-def load_mesh_with_uvs(path) -> tuple[np.ndarray, np.ndarray, "np.ndarray | None"]:
-    """load_mesh, plus the texture coordinates of every face corner.
+def _fan(polygons):
+    """Polygons (a 2D array, one row each, or a sequence of index arrays) fanned in place:
+    (triangles int64 (t, 3), source int64 (t,)), polygon i of k corners giving triangles
+    (0, j, j + 1) for j = 1 .. k - 2 at consecutive rows; fewer than 3 corners give none.
+    Also returns the corner positions, (t, 3) indices into the polygons' corners laid end to
+    end, for anything stored per corner (PLY's per-face UVs)."""
+    if isinstance(polygons, np.ndarray) and polygons.ndim == 2:
+        sizes = np.full(len(polygons), polygons.shape[1], dtype=np.int64)
+        flat = polygons.reshape(-1)
+    else:
+        sizes = np.fromiter((len(p) for p in polygons), dtype=np.int64, count=len(polygons))
+        flat = (np.concatenate([np.asarray(p).reshape(-1) for p in polygons])
+                if len(polygons) else np.zeros(0))  # fmt: skip
+    starts = np.cumsum(sizes) - sizes
+    counts = np.maximum(sizes - 2, 0)
+    source = np.repeat(np.arange(len(sizes), dtype=np.int64), counts)
+    step = np.arange(len(source), dtype=np.int64) - np.repeat(np.cumsum(counts) - counts, counts)
+    first = starts[source]
+    corners = np.stack([first, first + step + 1, first + step + 2], axis=1)
+    return flat.astype(np.int64)[corners], source, corners
 
-    Returns (vertices, triangles, uvs): uvs float32 (m, 3, 2), corner k of triangle i at
-    uvs[i, k], with v = 0 at the bottom of the image (OBJ and Blender's convention; glTF's
-    top-down v is flipped by trimesh), or None when the file has no UVs for every face. Read
-    from OBJ ``vt`` (through the ``f v/vt`` references, polygons fanned as load_mesh fans
-    them), glTF/GLB ``TEXCOORD_0`` (of primitives that have a material: trimesh reads UVs only
-    with one) and PLY texture coordinates (texture_u/texture_v, u/v, s/t or a per-face
-    texcoord list). OFF and STL have none.
-    """
-    vertices, triangles = load_mesh(path)
-    path = os.fspath(path)
-    suffix = os.path.splitext(path)[1].lower()
-    uvs = None
-    if suffix == ".obj":
-        uvs = _obj_corner_uvs(path)
-    elif suffix in (".ply", ".gltf", ".glb"):
+
+def _read_off(path: str):
+    """An OFF file (check_complete has seen its header and counts): vertices as stored, each
+    face fanned in place. Values after a vertex's first three (colours, normals, texture
+    coordinates: COFF, NOFF, STOFF) and after a face's corners (colours) are skipped."""
+    with open(path, "rb") as stream:
+        text = stream.read().decode("utf-8")
+    lines = text.splitlines()
+    if "#" in text:
+        lines = [line.split("#", 1)[0] for line in lines]
+    lines = [line for line in lines if line and not line.isspace()]
+    header = lines[0].split()
+    counts = header[1:] if len(header) > 1 else lines[1].split()
+    body = lines[1:] if len(header) > 1 else lines[2:]
+    vertex_count, face_count = int(counts[0]), int(counts[1])
+    try:
+        vertices = np.array([line.split()[:3] for line in body[:vertex_count]],
+                            dtype=np.float64).reshape(vertex_count, 3)  # fmt: skip
+    except ValueError:
+        raise ValueError("malformed OFF vertex: not three numbers") from None
+    polygons = []
+    for line in body[vertex_count : vertex_count + face_count]:
+        fields = line.split()
         try:
-            # Materials are loaded this time: trimesh keeps glTF UVs only with them.
-            scene = trimesh.load(path, process=False, force="scene")
-        except Exception:  # e.g. a texture image that cannot be decoded: read without
-            scene = trimesh.load(path, process=False, force="scene", skip_materials=True)
-        uvs = _scene_corner_uvs(scene)
-    if uvs is not None and (uvs.shape != (len(triangles), 3, 2) or not np.isfinite(uvs).all()):
-        uvs = None
-    return vertices, triangles, uvs
+            size = int(fields[0])
+            polygons.append(np.array(fields[1 : 1 + size], dtype=np.int64))
+        except ValueError:
+            raise ValueError(f"malformed OFF face {line.strip()[:60]!r}") from None
+        if len(polygons[-1]) != size:
+            raise ValueError(f"malformed OFF face {line.strip()[:60]!r}")
+    triangles, source, _ = _fan(polygons)
+    return vertices, triangles, source
+
+
+# Names PLY writers give per-vertex texture coordinates, as trimesh reads them.
+_PLY_UV_NAMES = (("texture_u", "texture_v"), ("u", "v"), ("s", "t"))
+
+
+def _ply_in_place(scene, want_uvs: bool):
+    """A PLY's vertices as stored and its faces fanned in place, from the elements trimesh
+    read (its own triangles put the pieces of polygons in groups by size), with corner UVs
+    when asked: (vertices, triangles, source, uvs or None), or None where its elements are
+    not there to read (trimesh's mesh is used then)."""
+    geometries = [g for g in scene.geometry.values() if isinstance(g, trimesh.Trimesh)]
+    if len(geometries) != 1 or "_ply_raw" not in geometries[0].metadata:
+        return None
+    raw = geometries[0].metadata["_ply_raw"]
+    try:
+        vertex_data = raw["vertex"]["data"]
+        vertices = np.column_stack([np.asarray(vertex_data[axis], dtype=np.float64)
+                                    for axis in "xyz"])  # fmt: skip
+        face_data = raw["face"]["data"]
+    except (KeyError, TypeError, ValueError, IndexError):
+        return None
+    polygons, texcoords = None, None
+    if isinstance(face_data, dict):
+        for name in ("vertex_indices", "vertex_index"):
+            if name in face_data:
+                polygons = face_data[name]
+                break
+        texcoords = face_data.get("texcoord")
+    elif isinstance(face_data, np.ndarray) and face_data.dtype.names:
+        names = face_data.dtype.names
+        name = names[0] if len(names) == 1 else next(
+            (n for n in ("vertex_indices", "vertex_index") if n in names), None)
+        if name is not None:
+            polygons = face_data[name]["f1"]
+        if "texcoord" in names:
+            texcoords = face_data["texcoord"]["f1"]
+    elif isinstance(face_data, np.ndarray) and face_data.ndim == 2:
+        polygons = face_data
+    if polygons is None:
+        return None
+    if isinstance(polygons, np.ndarray) and polygons.dtype != object:
+        polygons = polygons.reshape(len(polygons), -1)
+    triangles, source, corners = _fan(polygons)
+    uvs = None
+    if want_uvs:
+        uvs = _ply_corner_uvs(vertex_data, triangles, texcoords, corners)
+    return vertices, triangles, source, uvs
+
+
+def _ply_corner_uvs(vertex_data, triangles, texcoords, corners):
+    """Corner UVs of a PLY's fanned triangles: from a per-face texcoord list (u, v per corner)
+    or from per-vertex coordinates; None if it has neither."""
+    if texcoords is not None:
+        try:
+            if isinstance(texcoords, np.ndarray) and texcoords.dtype != object:
+                flat = np.asarray(texcoords, dtype=np.float64).reshape(-1, 2)
+            else:
+                flat = np.concatenate([np.asarray(t, dtype=np.float64).reshape(-1, 2)
+                                       for t in texcoords])  # fmt: skip
+            return flat[corners].astype(np.float32)
+        except (ValueError, IndexError):
+            return None
+    for u, v in _PLY_UV_NAMES:
+        try:
+            per_vertex = np.column_stack([np.asarray(vertex_data[u], dtype=np.float64),
+                                          np.asarray(vertex_data[v], dtype=np.float64)])
+        except (KeyError, ValueError, IndexError):
+            continue
+        return per_vertex[triangles].astype(np.float32)
+    return None
 
 
 def _obj_corner_uvs(path: str):
@@ -181,8 +344,9 @@ def _scene_corner_uvs(scene: trimesh.Scene):
     return np.ascontiguousarray(np.concatenate(parts))
 
 
-def _plain_obj(path: str) -> bytes:
-    """The OBJ file reduced to ``v`` lines and triangular ``f`` lines, in order.
+def _plain_obj(path: str):
+    """The OBJ file reduced to ``v`` lines and triangular ``f`` lines, in order, and for each
+    triangle the index of the ``f`` record it comes from (int64).
 
     Dropping the texture and normal references keeps trimesh from splitting
     vertices at seams; fanning polygons here keeps each polygon's triangles at
@@ -194,8 +358,8 @@ def _plain_obj(path: str) -> bytes:
         # Numbers are ASCII; a stray byte can only sit in a name or comment.
         text = stream.read().decode("utf-8", errors="replace")
     text = text.replace("\\\r\n", " ").replace("\\\n", " ")  # continuation lines
-    out = []
-    vertex_count = 0
+    out, source = [], []
+    vertex_count = face_count = 0
     for line in text.splitlines():
         fields = line.split()
         if not fields:
@@ -223,7 +387,9 @@ def _plain_obj(path: str) -> bytes:
             # Fewer than three corners is not a face; trimesh skips these too.
             for k in range(1, len(refs) - 1):
                 out.append(f"f {refs[0]} {refs[k]} {refs[k + 1]}")
-    return ("\n".join(out) + "\n").encode("ascii")
+                source.append(face_count)
+            face_count += 1
+    return ("\n".join(out) + "\n").encode("ascii"), np.array(source, dtype=np.int64)
 
 
 # How non-mesh geometry is named in the "no triangles" message.

@@ -15,6 +15,7 @@ import pytest
 trimesh = pytest.importorskip("trimesh")
 
 import shape_diameter
+from polygon_files import fanned, prism, write_polygons
 from shape_diameter import cli
 from shape_diameter.colormap import colormap
 from shape_diameter.mesh_io import load_mesh
@@ -140,6 +141,25 @@ def test_a_mesh_at_utm_coordinates_keeps_its_geometry(tmp_path, capsys):
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and err.startswith("shape-diameter: warning: ")
     assert "GLB holds 32-bit float coordinates" in err and ".ply, .off or .obj" in err
+
+
+def test_values_rows_follow_the_files_faces_in_every_format(tmp_path):
+    # One polygon mesh as OBJ, OFF and PLY: the same rows, in the file's face order, each
+    # polygon's triangles together (PLY and OFF rows were grouped by polygon size).
+    vertices, polygons = prism()
+    rows = {}
+    for suffix in (".obj", ".off", ".ply"):
+        source, values = tmp_path / f"prism{suffix}", tmp_path / f"{suffix[1:]}.npy"
+        write_polygons(source, vertices, polygons)
+        argv = [str(source), "-o", str(tmp_path / f"out{suffix}"), "--values", str(values)]
+        assert cli.main([*argv, "--rays", str(RAYS), "-q"]) == 0
+        rows[suffix] = np.load(values)
+    triangles, _ = fanned(polygons)
+    expected = shape_diameter.compute(vertices, triangles, rays=RAYS).raw
+    for values in rows.values():
+        np.testing.assert_array_equal(values, expected)
+    _, _, source_faces = shape_diameter.load_mesh(tmp_path / "prism.ply", source_faces=True)
+    assert source_faces.tolist() == [0, 0, 1, 1, 1, 2, 2, 3, 4, 5, 5, 5, 6, 6, 7, 7]
 
 
 # --- --json -------------------------------------------------------------------

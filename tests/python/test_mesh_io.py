@@ -10,6 +10,7 @@ import pytest
 
 trimesh = pytest.importorskip("trimesh")
 
+from polygon_files import cube_of_quads, fanned, prism, write_polygons
 from shape_diameter.mesh_io import WRITE_SUFFIXES, load_mesh, save_colored
 
 DATA = Path(__file__).resolve().parents[1] / "data"
@@ -78,6 +79,62 @@ def test_off_keeps_the_files_order():
     expected_vertices, expected_triangles = _read_off_by_hand(DATA / "ChineseDragon-10kv.off")
     np.testing.assert_array_equal(vertices, expected_vertices)
     np.testing.assert_array_equal(triangles, expected_triangles)
+
+
+@pytest.mark.parametrize("suffix", [".obj", ".off", ".ply"])
+def test_polygons_are_fanned_in_place_with_their_source_faces(tmp_path, suffix):
+    # PLY and OFF polygons came back grouped by size (triangles, then first halves of quads,
+    # then second halves, ...), so --values rows did not follow the file; an OFF pentagon
+    # failed in trimesh.
+    vertices, polygons = prism()
+    path = tmp_path / f"prism{suffix}"
+    write_polygons(path, vertices, polygons)
+    loaded_vertices, triangles, source = load_mesh(path, source_faces=True)
+    expected_triangles, expected_source = fanned(polygons)
+    np.testing.assert_array_equal(loaded_vertices, vertices)
+    np.testing.assert_array_equal(triangles, expected_triangles)
+    np.testing.assert_array_equal(source, expected_source)
+    assert source.dtype == np.int64
+
+
+def test_binary_ply_quads_are_fanned_in_place(tmp_path):
+    # A binary PLY of quads only (trimesh reads binary lists of one length only).
+    vertices, quads = cube_of_quads()
+    header = ("ply\nformat binary_little_endian 1.0\nelement vertex 8\nproperty double x\n"
+              "property double y\nproperty double z\nelement face 6\n"
+              "property list uchar int vertex_indices\nend_header\n")
+    faces = np.zeros(6, dtype=[("n", "u1"), ("i", "<i4", (4,))])
+    faces["n"], faces["i"] = 4, quads
+    path = tmp_path / "cube.ply"
+    path.write_bytes(header.encode() + vertices.astype("<f8").tobytes() + faces.tobytes())
+    _, triangles, source = load_mesh(path, source_faces=True)
+    expected_triangles, expected_source = fanned(quads)
+    np.testing.assert_array_equal(triangles, expected_triangles)
+    np.testing.assert_array_equal(source, expected_source)
+
+
+@pytest.mark.parametrize(("suffix", "shape", "uvs"), [(".obj", prism, "vt"),
+                                                      (".ply", prism, "vertex"),
+                                                      (".ply", cube_of_quads, "corner")])
+def test_corner_uvs_follow_the_fanned_triangles(tmp_path, suffix, shape, uvs):
+    # (trimesh reads PLY texcoord lists only where every face has as many corners)
+    from shape_diameter.mesh_io import load_mesh_with_uvs
+
+    vertices, polygons = shape()
+    path = tmp_path / f"mesh{suffix}"
+    write_polygons(path, vertices, polygons, uvs=uvs)
+    _, triangles, loaded_uvs = load_mesh_with_uvs(path)
+    np.testing.assert_array_equal(triangles, fanned(polygons)[0])
+    expected = (vertices[triangles][:, :, :2] + (2.0, 3.0)).astype(np.float32)
+    np.testing.assert_array_equal(loaded_uvs, expected)
+
+
+def test_stl_and_glb_triangles_are_their_own_source(tmp_path, spot):
+    for suffix in (".stl", ".glb"):
+        path = tmp_path / f"spot{suffix}"
+        trimesh.Trimesh(*spot, process=False).export(path)
+        _, triangles, source = load_mesh(path, source_faces=True)
+        np.testing.assert_array_equal(source, np.arange(len(triangles)))
 
 
 def test_obj_relative_indices_polygons_and_continuations(tmp_path):
@@ -179,6 +236,27 @@ def test_bad_files_raise_a_value_error_naming_the_file(tmp_path, name):
 def test_truncated_binary_ply_is_refused(tmp_path, spot):
     path = _truncated_ply(tmp_path, spot)
     with pytest.raises(ValueError, match=re.escape(str(path))):
+        load_mesh(path)
+
+
+@pytest.mark.parametrize("polygons", ["prism", "quads after a pentagon"])
+def test_a_binary_ply_of_mixed_polygons_says_why_it_cannot_be_read(tmp_path, polygons):
+    # Where the lengths add up as if every face had the first one's corners (the prism: 136
+    # bytes either way), trimesh read wrong faces; otherwise it said "PLY is unexpected
+    # length!", as for a truncated file.
+    vertices, faces = prism()
+    if polygons == "quads after a pentagon":  # shorter than three pentagons: trimesh sees it
+        faces = [faces[1], faces[0], faces[2]]
+    header = ("ply\nformat binary_little_endian 1.0\nelement vertex 10\nproperty double x\n"
+              f"property double y\nproperty double z\nelement face {len(faces)}\n"
+              "property list uchar int vertex_indices\nend_header\n")
+    rows = b"".join(bytes([len(f)]) + np.array(f, dtype="<i4").tobytes() for f in faces)
+    path = tmp_path / "prism.ply"
+    path.write_bytes(header.encode() + vertices.astype("<f8").tobytes() + rows)
+    message = ("binary PLY whose faces have different numbers of corners: trimesh cannot read "
+               "that" if polygons == "prism" else "it is truncated, or mixes faces of "
+               "different corner counts, which trimesh cannot read in binary PLY")
+    with pytest.raises(ValueError, match=re.escape(f"{path}: ") + ".*" + re.escape(message)):
         load_mesh(path)
 
 
