@@ -469,12 +469,15 @@ def _plan(args, write_suffixes) -> list:
     sources, problems = [], {}
     for source in args.input:
         if os.path.isdir(source):
-            found = _meshes_in(source)
+            try:
+                found = _meshes_in(source)
+            except OSError as exc:  # e.g. no permission to list it
+                found, problems[source] = [], f"{source}: cannot list the folder ({exc.strerror})"
             sources += found
             if not found:
-                problems[source] = (f"{source}: no mesh files in the folder (looked for "
-                                    f"{', '.join(READ_SUFFIXES)}; skipped *.sdf.*, the "
-                                    f"outputs of this command)")  # fmt: skip
+                problems.setdefault(source, f"{source}: no mesh files in the folder (looked for "
+                                            f"{', '.join(READ_SUFFIXES)}; skipped *.sdf.*, the "
+                                            "outputs of this command)")  # fmt: skip
                 sources.append(source)
         else:
             sources.append(source)

@@ -185,6 +185,26 @@ def test_a_folder_without_meshes_is_a_failure_of_its_own(tmp_path, capsys):
     assert (tmp_path / "suzanne.sdf.ply").is_file()
 
 
+def test_a_folder_that_cannot_be_listed_is_a_failure_of_its_own(tmp_path, capsys, monkeypatch):
+    # (Permissions do not stop root, who runs the tests: the listing is made to fail.)
+    locked = tmp_path / "locked"
+    locked.mkdir()
+    (good,) = _copy(tmp_path, "suzanne.obj")
+    real_scandir = cli.os.scandir
+
+    def scandir(path):
+        if Path(path) == locked:
+            raise PermissionError(13, "Permission denied")
+        return real_scandir(path)
+
+    monkeypatch.setattr(cli.os, "scandir", scandir)
+    assert cli.main([str(locked), str(good), "--rays", RAYS, "-q"]) == 2
+    captured = capsys.readouterr()
+    assert captured.err == (f"shape-diameter: error: {locked}: cannot list the folder "
+                            "(Permission denied)\n")  # fmt: skip
+    assert (tmp_path / "suzanne.sdf.ply").is_file()
+
+
 def test_a_batch_in_one_process_costs_one_startup(tmp_path):
     # Three files in one process, against three processes: the start-up (Python, numpy,
     # trimesh: about 0.9 s here) is paid once.
