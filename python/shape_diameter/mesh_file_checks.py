@@ -172,7 +172,9 @@ def _check_ply(data: bytes) -> None:
             types.append([])
         elif len(fields) >= 2 and fields[0] == "property" and elements:
             elements[-1][2].append(fields[1] == "list")
-            types[-1].append((fields[2], fields[3] if len(fields) > 3 else "")
+            # (a list short of its types gets "": an unknown type, trimesh's to judge)
+            types[-1].append((fields[2] if len(fields) > 2 else "",
+                              fields[3] if len(fields) > 3 else "")
                              if fields[1] == "list" else (None, fields[1]))  # fmt: skip
     if format_name in ("binary_little_endian", "binary_big_endian"):
         start = data.index(b"\n", end) + 1
