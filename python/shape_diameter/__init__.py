@@ -5,10 +5,12 @@
 >>> result = shape_diameter.compute(vertices, triangles)      # (n,3) floats, (m,3) ints
 >>> result.raw          # float32 per face: local diameter in mesh units
 >>> result.normalized   # float32 in [0, 1]
+>>> vertices, triangles = shape_diameter.load_mesh("cow.obj")  # needs the cli extra
 """
 
 from ._version import __version__
 from .api import Result, compute, cone_rays, engines, reduce_lengths, sample_points
+from .load import load_mesh
 from .normalization import normalize_values as normalize
 from .smoothing import smooth
 
@@ -17,6 +19,7 @@ __all__ = [
     "compute",
     "cone_rays",
     "engines",
+    "load_mesh",
     "normalize",
     "reduce_lengths",
     "sample_points",

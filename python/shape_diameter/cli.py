@@ -5,20 +5,27 @@ Needs the ``cli`` extra (trimesh to read and write meshes, tqdm for the progress
 bar); both are imported only when the command runs, so ``import shape_diameter``
 never needs them.
 
-``--json`` prints one object on stdout: input, faces, vertices (of the mesh as
-read), points ("faces" or "vertices"), point_count, rays, cone, sampling, seed,
-normalize, smooth, engine, seconds (compute()'s stages: Result.timings), Mrays_per_s
-(point_count * rays / seconds["cast"] / 1e6), io_seconds (load, write),
-total_seconds (the whole command) and outputs (mesh, values: paths or null).
+``--json`` prints one object per input on a line of stdout, when that input is done:
+status ("ok" or "error"), error, exit_status, warnings, input, faces, vertices (of the mesh as
+read), points ("faces" or "vertices"), point_count, rays, cone, sampling, seed, normalize,
+smooth, engine, seconds (compute()'s stages: Result.timings), Mrays_per_s (point_count * rays
+/ seconds["cast"] / 1e6), io_seconds (load, write), total_seconds (the whole input) and
+outputs (mesh, values: paths or null); an input that failed has status, error, exit_status,
+warnings, input and outputs only.
+
+The console script enters through ``_shape_diameter_entry`` and console_main(), which take
+Ctrl-C over (see console_main); main() called from Python leaves signals alone.
 """
 
 from __future__ import annotations
 
 import argparse
 import contextlib
+import fnmatch
 import json
 import logging
 import os
+import signal
 import sys
 import time
 import warnings
@@ -28,6 +35,8 @@ import numpy as np
 from . import __version__
 from .api import MAX_RAYS, compute
 from .colormap import colormap
+from .mesh_file_checks import READ_SUFFIXES
+from .output_files import written_whole
 from .smoothing import DEVICE_ERRORS
 
 PROG = "shape-diameter"
@@ -37,6 +46,7 @@ DEFAULT_SUFFIX = ".sdf.ply"
 # dependency, an OpenCL device that fails or is too small, memory, a failed write).
 EXIT_USAGE = 2
 EXIT_ENVIRONMENT = 1
+EXIT_INTERRUPTED = 130  # 128 + SIGINT, as shells report a run killed by Ctrl-C
 
 
 class CommandError(Exception):
@@ -109,24 +119,40 @@ def default_output(input_path: str) -> str:
     return os.path.splitext(input_path)[0] + DEFAULT_SUFFIX
 
 
+def default_values(output_path: str) -> str:
+    """--save-values: OUTPUT with its suffix replaced by .npy (cow.sdf.ply -> cow.sdf.npy)."""
+    return os.path.splitext(output_path)[0] + ".npy"
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = _Parser(
         prog=PROG,
         description="Compute the Shape Diameter Function (SDF) of a triangle mesh and write "
         "the mesh coloured by it (viridis: thin parts dark purple, thick parts yellow).",
         epilog="Reads OBJ, PLY, OFF, STL, glTF and GLB (polygons are triangulated; the "
-        "meshes of a glTF scene are joined). Writes PLY, OBJ, OFF, GLB or STL, chosen by "
-        "the output suffix; STL keeps no colour; an existing OUTPUT is overwritten. Exit "
-        "status: 0 done, 2 bad option, input or output path, 1 missing dependency, OpenCL "
-        "device failure (e.g. too little device memory), out of memory or failed write.",
+        "meshes of a glTF scene are joined). Several INPUTs are computed one after the other "
+        "in one process; a file that fails is reported in one line and the others go on. "
+        "Writes PLY, OBJ, OFF, GLB or STL, chosen by the output suffix; STL keeps no colour; "
+        "an existing OUTPUT is overwritten. Exit status: 0 done, 2 bad option, input or "
+        "output path, 1 missing dependency, OpenCL device failure (e.g. too little device "
+        "memory), out of memory or failed write; with several inputs, the status of the "
+        "first that failed; on Ctrl-C the command is killed by SIGINT (status 130 in the "
+        "shell).",
     )
-    parser.add_argument("input", metavar="INPUT", help="mesh file to read")
+    parser.add_argument(
+        "input",
+        metavar="INPUT",
+        nargs="+",
+        help="mesh file to read; several are computed in turn, each written next to itself; "
+        "a folder stands for its mesh files (not those of its subfolders), skipping *.sdf.* "
+        "files (this command's outputs)",
+    )
     parser.add_argument(
         "-o",
         "--output",
         metavar="OUTPUT",
-        help=f"coloured mesh to write (default: INPUT with its suffix replaced by "
-        f"'{DEFAULT_SUFFIX}', next to INPUT; e.g. cow.obj -> cow{DEFAULT_SUFFIX})",
+        help=f"coloured mesh to write, for a single INPUT (default: INPUT with its suffix "
+        f"replaced by '{DEFAULT_SUFFIX}', next to INPUT; e.g. cow.obj -> cow{DEFAULT_SUFFIX})",
     )
     parser.add_argument(
         "--rays",
@@ -240,49 +266,163 @@ def build_parser() -> argparse.ArgumentParser:
         "--values",
         metavar="FILE.npy",
         help="also save the SDF (float32, mesh units; smoothed with --smooth) as a .npy "
-        "array: one value per face or vertex, in the order they were read from INPUT",
+        "array: with --points faces one value per triangle, in INPUT's face order, a polygon "
+        "of k corners giving k-2 consecutive rows (shape_diameter.load_mesh(INPUT, "
+        "source_faces=True) gives each row's face); with --points vertices one per vertex, in "
+        "INPUT's order (STL: positions merged, by first use)",
+    )
+    parser.add_argument(
+        "--save-values",
+        action="store_true",
+        help="save each input's values as --values does, next to its output with .npy in "
+        "place of the output's suffix (cow.obj -> cow.sdf.npy); for several inputs",
     )
     parser.add_argument(
         "--json",
         action="store_true",
-        help="print one JSON object with sizes, options, engine, timings and outputs",
+        help="print one JSON object per input, one a line, when it is done: status ('ok' "
+        "or 'error'), error, warnings, sizes, options, engine, timings and outputs",
+    )
+    parser.add_argument(
+        "-q",
+        "--quiet",
+        action="store_true",
+        help="no progress bar and no line per input done; warnings and errors still go to "
+        "stderr, --json to stdout",
     )
     parser.add_argument("--version", action="version", version=f"%(prog)s {__version__}")
     return parser
 
 
-def main(argv=None) -> int:
-    """Run the command; returns the exit status (the console script exits with it)."""
+def main(argv=None, *, interrupts=None) -> int:
+    """Run the command; returns the exit status (130 after Ctrl-C: KeyboardInterrupt).
+
+    `interrupts`: the console script's _Interrupts (console_main), which take SIGINT over;
+    without them (a call from Python) the process's signal handling is left alone.
+    """
     try:
         args = build_parser().parse_args(argv)
     except SystemExit as done:  # --help, --version, or an option error already printed
         return done.code if isinstance(done.code, int) else 0
     try:
-        return _run(args)
+        return _run(args, interrupts or _Interrupts([]))
     except CommandError as exc:
         return _fail(exc, exc.status)
-    except ValueError as exc:
-        # load_mesh, compute and save_colored report bad input this way.
-        return _fail(exc, EXIT_USAGE)
-    except OSError as exc:  # e.g. the output could not be written
-        return _fail(exc, EXIT_ENVIRONMENT)
-    except DEVICE_ERRORS as exc:
-        # The device, not the mesh. Its first line: a kernel's build log follows it; the
-        # advice is worded for the Python API.
-        line = (str(exc) or "OpenCL failed").splitlines()[0]
-        return _fail(line.replace("engine='cpu'", "--engine cpu"), EXIT_ENVIRONMENT)
-    except MemoryError:
-        return _fail("out of memory", EXIT_ENVIRONMENT)
     except KeyboardInterrupt:
-        return _fail("interrupted", 130)
+        return _fail("interrupted", EXIT_INTERRUPTED)
+    finally:
+        if interrupts is not None:
+            interrupts.disarm()
+
+
+def console_main(pending=None) -> int:
+    """The command as a program (the console script, ``python -m shape_diameter``): main()
+    on sys.argv, and after Ctrl-C, once outputs are cleaned up and the one-line message is
+    out, death by SIGINT, so that a shell running it in a loop stops (its status reads 130).
+    An exit status of 130 would not do: bash goes on with a loop whose command exited so.
+
+    `pending`: the list the entry point's SIGINT handler has been appending to while the
+    modules were imported (see _shape_diameter_entry); None where it could not take SIGINT.
+    """
+    interrupts = _Interrupts([] if pending is None else pending)
+    if not interrupts.take_over():
+        return main(interrupts=None)
+    status = main(interrupts=interrupts)
+    if not interrupts.pending:
+        return status
+    if status != EXIT_INTERRUPTED:  # it came after the last check: still, the loop stops
+        _fail("interrupted", EXIT_INTERRUPTED)
+    return _die_by_sigint()
+
+
+class _Interrupts:
+    """SIGINT for the console script. Every SIGINT is recorded; while armed (the command's
+    own work, not imports: trimesh's imports catch BaseException, and a KeyboardInterrupt
+    raised in them was swallowed and the run went on) it also raises KeyboardInterrupt, and
+    check() raises it for one that was recorded, held or swallowed since."""
+
+    def __init__(self, pending):
+        self.pending = pending
+        self.armed = False
+
+    def _handle(self, signum, frame):
+        self.pending.append(signum)
+        if self.armed:
+            raise KeyboardInterrupt
+
+    def take_over(self) -> bool:
+        """Install the handler (held, not armed); False where signals cannot be taken."""
+        try:
+            signal.signal(signal.SIGINT, self._handle)
+        except (ValueError, OSError):  # not the main thread
+            return False
+        return True
+
+    def arm(self) -> None:
+        self.armed = True
+        self.check()
+
+    def disarm(self) -> None:
+        self.armed = False
+
+    def check(self) -> None:
+        """Raise KeyboardInterrupt if SIGINT came (a check point of the command's own)."""
+        if self.pending:
+            raise KeyboardInterrupt
+
+    def checked(self, progress):
+        """The progress callback, checking first: native code sees Ctrl-C only through it."""
+
+        def callback(fraction):
+            self.check()
+            progress(fraction)
+
+        return callback
+
+
+def _die_by_sigint() -> int:
+    with contextlib.suppress(OSError, ValueError):  # e.g. a closed pipe
+        sys.stdout.flush()
+    with contextlib.suppress(OSError, ValueError):
+        sys.stderr.flush()
+    if os.name == "posix":
+        signal.signal(signal.SIGINT, signal.SIG_DFL)
+        os.kill(os.getpid(), signal.SIGINT)
+    return EXIT_INTERRUPTED  # where the signal did not end the process
 
 
 def _fail(message, status: int) -> int:
-    print(f"{PROG}: error: {_one_line(message)}", file=sys.stderr)
+    print(f"{PROG}: error: {_one_line(message)}", file=sys.stderr, flush=True)
     return status
 
 
-def _run(args) -> int:
+def _failure(exc: BaseException):
+    """An exception of one input's run as (exit status, one-line message)."""
+    if isinstance(exc, CommandError):
+        return exc.status, str(exc)
+    if isinstance(exc, ValueError):  # load_mesh, compute and save_colored: bad input
+        return EXIT_USAGE, str(exc)
+    if isinstance(exc, OSError):  # e.g. the output could not be written
+        return EXIT_ENVIRONMENT, str(exc)
+    if isinstance(exc, DEVICE_ERRORS):
+        # The device, not the mesh. Its first line: a kernel's build log follows it; the
+        # advice is worded for the Python API.
+        line = (str(exc) or "OpenCL failed").splitlines()[0]
+        return EXIT_ENVIRONMENT, line.replace("engine='cpu'", "--engine cpu")
+    if isinstance(exc, MemoryError):
+        return EXIT_ENVIRONMENT, "out of memory"
+    raise exc
+
+
+class _Job:
+    """One input file and the outputs it writes; `problem` when it cannot even start (a
+    folder without meshes)."""
+
+    def __init__(self, source: str, output=None, values=None, problem=None):
+        self.source, self.output, self.values, self.problem = source, output, values, problem
+
+
+def _run(args, interrupts) -> int:
     try:
         from . import mesh_io
     except ImportError as exc:
@@ -290,35 +430,159 @@ def _run(args) -> int:
             f"the command line needs trimesh: pip install 'shape_diameter[cli]' ({exc})",
             EXIT_ENVIRONMENT,
         ) from exc
+    if not args.quiet and sys.stderr.isatty():
+        with contextlib.suppress(ImportError):  # the progress bar's, imported while held
+            import tqdm  # noqa: F401
     # trimesh logs what it skips in odd files; this command reports errors itself.
     logging.getLogger("trimesh").setLevel(logging.CRITICAL + 1)
+    interrupts.arm()  # a Ctrl-C held during the imports stops the run here
 
     smoothing_options = _smoothing_options(args)
-    output = args.output or default_output(args.input)
-    _check_writable_path(output, mesh_io.WRITE_SUFFIXES)
-    if args.values:
-        _check_writable_path(args.values, None)
-    _check_distinct(args.input, output, args.values)
+    jobs = _plan(args, mesh_io.WRITE_SUFFIXES)
+    several = len(jobs) > 1 or any(os.path.isdir(source) for source in args.input)
+    first_failure = 0
+    for job in jobs:
+        warned = []
+        try:
+            if job.problem is not None:
+                raise CommandError(job.problem)
+            interrupts.check()
+            report = _compute_one(args, job, mesh_io, smoothing_options, several, warned,
+                                  interrupts)  # fmt: skip
+        except Exception as exc:  # noqa: BLE001 - each kind is mapped, the rest re-raised
+            interrupts.check()  # a KeyboardInterrupt that a library turned into an error
+            status, message = _failure(exc)
+            message = _naming_a_file(job, message)
+            _fail(message, status)
+            first_failure = first_failure or status
+            report = {"input": job.source, "status": "error", "error": _one_line(message),
+                      "exit_status": status, "warnings": warned,
+                      "outputs": {"mesh": None, "values": None}}  # fmt: skip
+        if args.json:
+            print(json.dumps(report), flush=True)
+    return first_failure
 
+
+def _plan(args, write_suffixes) -> list:
+    """The inputs (folders expanded) and their outputs, checked before any work: paths that
+    cannot be written, an output that is an input, two inputs writing one file."""
+    sources, problems = [], {}
+    for source in args.input:
+        if os.path.isdir(source):
+            try:
+                found = _meshes_in(source)
+            except OSError as exc:  # e.g. no permission to list it
+                found, problems[source] = [], f"{source}: cannot list the folder ({exc.strerror})"
+            sources += found
+            if not found:
+                problems.setdefault(source, f"{source}: no mesh files in the folder (looked for "
+                                            f"{', '.join(READ_SUFFIXES)}; skipped *.sdf.*, the "
+                                            "outputs of this command)")  # fmt: skip
+                sources.append(source)
+        else:
+            sources.append(source)
+    several = len(sources) > 1 or len(problems) > 0 or any(map(os.path.isdir, args.input))
+    if several and args.output:
+        raise CommandError(
+            f"-o/--output names one file, but there are {len(sources)} inputs: leave it out "
+            f"to write each next to its input (INPUT{DEFAULT_SUFFIX})"
+        )
+    if several and args.values:
+        raise CommandError(
+            f"--values names one file, but there are {len(sources)} inputs: use --save-values "
+            "to write each input's values next to its output (INPUT.sdf.npy)"
+        )
+    jobs = []
+    for source in sources:
+        if source in problems:
+            jobs.append(_Job(source, problem=problems[source]))
+            continue
+        output = args.output or default_output(source)
+        values = args.values or (default_values(output) if args.save_values else None)
+        if args.output or os.path.exists(source):  # (a missing input fails on its own)
+            _check_writable_path(output, write_suffixes)
+        if args.values or (values and os.path.exists(source)):
+            _check_writable_path(values, None)
+        _check_distinct(source, output, values)
+        jobs.append(_Job(source, output, values))
+    _check_no_collisions([job for job in jobs if job.problem is None])
+    return jobs
+
+
+def _meshes_in(folder: str) -> list:
+    """The mesh files of a folder (not of its subfolders), by name; hidden files, the outputs
+    of this command (*.sdf.*) and its temporary files are skipped."""
+    found = []
+    for entry in sorted(os.scandir(folder), key=lambda e: e.name):
+        name = entry.name
+        if (name.startswith(".") or fnmatch.fnmatch(name, "*.sdf.*")
+                or os.path.splitext(name)[1].lower() not in READ_SUFFIXES
+                or not entry.is_file()):  # fmt: skip
+            continue
+        found.append(os.path.join(folder, name))
+    return found
+
+
+def _check_no_collisions(jobs) -> None:
+    """Refuse, before any work, two inputs writing one file, and an input that another
+    input's run would overwrite (a.obj and a.ply both make a.sdf.ply)."""
+    written, writer = {}, {}  # real path of an output -> the input writing it, its job
+    for job in jobs:
+        for path in (job.output, job.values):
+            if path is None:
+                continue
+            key = os.path.realpath(path)
+            if key in written and writer[key] is not job:
+                if _same_file(written[key], job.source):
+                    raise CommandError(f"{job.source}: is given twice")
+                raise CommandError(
+                    f"{written[key]} and {job.source} would both write {path}: give them "
+                    "separate runs, or rename one"
+                )
+            written[key], writer[key] = job.source, job
+    identities = {}  # each input: its real path and, where it exists, (device, inode)
+    for job in jobs:
+        identities[os.path.realpath(job.source)] = job.source
+        with contextlib.suppress(OSError):
+            status = os.stat(job.source)
+            identities[(status.st_dev, status.st_ino)] = job.source
+    for key, source in written.items():
+        other = identities.get(key)
+        if other is None:
+            with contextlib.suppress(OSError):
+                status = os.stat(key)
+                other = identities.get((status.st_dev, status.st_ino))
+        if other is not None and other != source:
+            raise CommandError(
+                f"{other} is an input, and {source}'s output: it would be overwritten; "
+                "leave it out of the inputs (a folder input skips *.sdf.* files)"
+            )
+
+
+def _compute_one(args, job, mesh_io, smoothing_options, several, warned, interrupts) -> dict:
+    """Read, compute and write one input; returns its --json object. Warnings are printed
+    (one line each, naming the file) and appended to `warned`."""
     started = time.perf_counter()
     with warnings.catch_warnings():
         # A parser warns before it fails on a broken file; the error line says it all.
         warnings.simplefilter("ignore")
         if args.smooth == "texture":
-            vertices, triangles, uvs = mesh_io.load_mesh_with_uvs(args.input)
+            vertices, triangles, uvs = mesh_io.load_mesh_with_uvs(job.source)
             if uvs is None:
                 raise CommandError(
-                    f"{args.input}: no UVs for every face (--smooth texture needs OBJ vt, "
+                    f"{job.source}: no UVs for every face (--smooth texture needs OBJ vt, "
                     "glTF TEXCOORD_0 of a primitive with a material (trimesh reads no UVs "
                     "without one), or PLY texture coordinates)"
                 )
         else:
-            vertices, triangles = mesh_io.load_mesh(args.input)
+            vertices, triangles = mesh_io.load_mesh(job.source)
             uvs = None
     loaded = time.perf_counter()
+    interrupts.check()  # (trimesh catches BaseException in places)
 
-    with _progress_bar() as progress, warnings.catch_warnings(record=True) as caught:
-        warnings.simplefilter("always")
+    bar = None if args.quiet else (os.path.basename(job.source) if several else PROG)
+    with _progress_bar(bar) as progress, _warnings_to(job, warned):
+        progress = interrupts.checked(progress)
         result = compute(
             vertices,
             triangles,
@@ -339,26 +603,51 @@ def _run(args) -> int:
             smoothing_options=smoothing_options,
         )
     computed = time.perf_counter()
-    for warning in caught:  # one line each, like the errors
-        print(f"{PROG}: warning: {_one_line(warning.message)}", file=sys.stderr)
+    interrupts.check()
 
-    mesh_io.save_colored(output, vertices, triangles, colormap(result.normalized), args.points)
-    if args.values:
-        with open(args.values, "wb") as stream:  # np.save(path) would append ".npy"
-            np.save(stream, np.asarray(result.values, dtype=np.float32))
+    with _warnings_to(job, warned):  # GLB and STL: float32 coordinates
+        mesh_io.save_colored(job.output, vertices, triangles, colormap(result.normalized),
+                             args.points)
+    if job.values:
+        with written_whole(job.values) as temporary, open(temporary, "wb") as stream:
+            np.save(stream, np.asarray(result.values, dtype=np.float32))  # (a path gains .npy)
+            interrupts.check()  # (before the temporary file takes the output's place)
     finished = time.perf_counter()
 
     # The CLI's own stages, apart from compute()'s: reading and writing files.
     io_seconds = {"load": loaded - started, "write": finished - computed}
-    report = _report(args, vertices, triangles, result, output, io_seconds, finished - started)
-    if args.json:
-        print(json.dumps(report))
-    else:
+    report = _report(args, job, vertices, triangles, result, io_seconds, finished - started)
+    report["warnings"] = list(warned)
+    if not args.quiet and not args.json:
         print(
-            f"{args.input}: {report['point_count']} {args.points}, {args.rays} rays, "
-            f"{report['total_seconds']:.2f} s on {result.engine} -> {output}"
+            f"{job.source}: {report['point_count']} {args.points}, {args.rays} rays, "
+            f"{report['total_seconds']:.2f} s on {result.engine} -> {job.output}",
+            flush=True,
         )
-    return 0
+    return report
+
+
+def _naming_a_file(job, message: str) -> str:
+    """A message about an input's run, starting with the file it is about: as it is where it
+    names one of the run's files already, else after the input's name."""
+    names = tuple(f"{path}:" for path in (job.source, job.output, job.values) if path)
+    return message if message.startswith(names) else f"{job.source}: {message}"
+
+
+@contextlib.contextmanager
+def _warnings_to(job, warned: list):
+    """Warnings raised inside, printed as one line each on stderr (naming a file) and kept in
+    `warned` for --json."""
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        try:
+            yield
+        finally:
+            for warning in caught:
+                message = _one_line(warning.message)
+                warned.append(message)
+                print(f"{PROG}: warning: {_naming_a_file(job, message)}", file=sys.stderr,
+                      flush=True)  # fmt: skip
 
 
 def _smoothing_options(args) -> dict:
@@ -406,13 +695,17 @@ def _same_file(a: str, b: str) -> bool:
         return False
 
 
-def _report(args, vertices, triangles, result, output, io_seconds, total_seconds) -> dict:
-    """The --json object (documented in the README's command line section)."""
+def _report(args, job, vertices, triangles, result, io_seconds, total_seconds) -> dict:
+    """An input's --json object (documented in the README's command line section); the
+    caller adds its warnings."""
     point_count = len(result.raw)
     timings = {stage: float(seconds) for stage, seconds in result.timings.items()}
     cast = timings.get("cast", timings.get("total", 0.0))
     return {
-        "input": args.input,
+        "input": job.source,
+        "status": "ok",
+        "error": None,
+        "exit_status": 0,
         "faces": len(triangles),
         "vertices": len(vertices),
         "points": args.points,
@@ -431,13 +724,14 @@ def _report(args, vertices, triangles, result, output, io_seconds, total_seconds
         "Mrays_per_s": point_count * int(result.rays) / cast / 1e6 if cast > 0 else None,
         "io_seconds": io_seconds,
         "total_seconds": total_seconds,
-        "outputs": {"mesh": output, "values": args.values},
+        "outputs": {"mesh": job.output, "values": job.values},
     }
 
 
 @contextlib.contextmanager
-def _progress_bar():
-    """A progress callback for compute(): a tqdm bar on stderr, or a silent one.
+def _progress_bar(label=PROG):
+    """A progress callback for compute(): a tqdm bar on stderr labelled `label`, or a silent
+    one (always with label None: --quiet).
 
     The bar only on a terminal (a bar in a log file is noise) and only after
     half a second, so quick runs print nothing. stdout is never touched. Always
@@ -449,7 +743,7 @@ def _progress_bar():
     def silent(fraction: float) -> None:
         pass
 
-    if not sys.stderr.isatty():
+    if label is None or not sys.stderr.isatty():
         yield silent
         return
     try:
@@ -463,7 +757,7 @@ def _progress_bar():
         file=sys.stderr,
         leave=False,
         bar_format="{l_bar}{bar}| {elapsed}<{remaining}",
-        desc=PROG,
+        desc=label,
     ) as bar:
 
         def update(fraction: float) -> None:
@@ -475,4 +769,4 @@ def _progress_bar():
 
 
 if __name__ == "__main__":
-    sys.exit(main())
+    sys.exit(console_main())

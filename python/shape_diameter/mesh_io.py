@@ -5,15 +5,18 @@ This module imports trimesh, an optional dependency (the ``cli`` extra), so the
 package's ``__init__`` must never import it.
 
 Reading keeps the file's own numbering wherever the format has one, because the
-values written with ``--values`` are indexed by it:
+values written with ``--values`` are indexed by it: polygons are fanned in place (a face
+of k corners gives k - 2 consecutive triangles (0, j, j + 1), in the file's face order), and
+load_mesh(source_faces=True) says which face each triangle comes from.
 
-* OBJ: vertices in file order (none split or merged), faces in file order with
-  each polygon fanned in place. trimesh on its own splits vertices at UV and
-  normal seams and moves the second half of every quad to the end, so the file is
-  first reduced to its ``v`` and ``f`` records (see ``_plain_obj``).
-* PLY, OFF: vertices and triangles as stored. Polygons are triangulated by
-  trimesh, which groups the pieces by polygon size rather than keeping them in
-  place.
+* OBJ: vertices in file order (none split or merged), faces in file order. trimesh on its own
+  splits vertices at UV and normal seams and moves the second half of every quad to the end,
+  so the file is first reduced to its ``v`` and ``f`` records (see ``_plain_obj``).
+* PLY: vertices as stored, faces fanned here from the elements trimesh read (its own
+  triangles come grouped by polygon size). trimesh reads binary PLY lists of one length only
+  (a binary file mixing triangles and quads is refused).
+* OFF: read here (trimesh groups the pieces by polygon size, and fails on polygons of more
+  than four corners).
 * STL: a triangle soup by design, so corners at the same position are merged
   (in order of first use) to give the mesh back its connectivity; triangle order
   is kept.
@@ -25,39 +28,91 @@ from __future__ import annotations
 
 import io
 import os
+import warnings
 
 import numpy as np
 import trimesh
 
-from .mesh_file_checks import check_complete, format_name
+from .mesh_file_checks import check_complete, check_suffix, format_name
+from .output_files import written_whole
 
-# Formats ``save_colored`` writes. OFF goes through our own writer because
-# trimesh's OFF exporter drops colours; STL has no colour at all.
+# Formats ``save_colored`` writes. PLY, OBJ and OFF go through our own writers: trimesh's
+# PLY holds float32 coordinates, its OBJ 8 fixed decimals, and its OFF drops colours. STL has
+# no colour at all.
 WRITE_SUFFIXES = (".ply", ".obj", ".off", ".glb", ".stl")
 
 
-def load_mesh(path) -> tuple[np.ndarray, np.ndarray]:
+def load_mesh(path, *, source_faces: bool = False):
     """Read a mesh file as (vertices float64 (n,3), triangles int64 (m,3)).
+
+    Triangles come in the file's face order, each polygon of k corners fanned in place into
+    k - 2 consecutive triangles (corners 0, j, j + 1); with source_faces=True a third array
+    comes back: int64 (m,), the 0-based index of the file's face each triangle comes from
+    (OBJ: its ``f`` records, counted in order; PLY and OFF: its face elements; STL, glTF and
+    GLB: the triangle's own index, their faces being triangles).
 
     Raises ValueError naming the file for a missing, unreadable or empty file,
     and for one that holds no triangles (a point cloud, a set of lines).
     """
+    vertices, triangles, source, _ = _read(path)
+    return (vertices, triangles, source) if source_faces else (vertices, triangles)
+
+
+def load_mesh_with_uvs(path) -> tuple[np.ndarray, np.ndarray, "np.ndarray | None"]:
+    """load_mesh, plus the texture coordinates of every face corner.
+
+    Returns (vertices, triangles, uvs): uvs float32 (m, 3, 2), corner k of triangle i at
+    uvs[i, k], with v = 0 at the bottom of the image (OBJ and Blender's convention; glTF's
+    top-down v is flipped by trimesh), or None when the file has no UVs for every face. Read
+    from OBJ ``vt`` (through the ``f v/vt`` references, polygons fanned as load_mesh fans
+    them), glTF/GLB ``TEXCOORD_0`` (of primitives that have a material: trimesh reads UVs only
+    with one) and PLY texture coordinates (texture_u/texture_v, u/v, s/t or a per-face
+    texcoord list). OFF and STL have none.
+    """
+    vertices, triangles, _, ply_uvs = _read(path, want_uvs=True)
+    path = os.fspath(path)
+    suffix = os.path.splitext(path)[1].lower()
+    uvs = None
+    if suffix == ".obj":
+        uvs = _obj_corner_uvs(path)
+    elif suffix == ".ply":
+        uvs = ply_uvs
+    elif suffix in (".gltf", ".glb"):
+        try:
+            # Materials are loaded this time: trimesh keeps glTF UVs only with them.
+            scene = trimesh.load(path, process=False, force="scene")
+        except Exception:  # e.g. a texture image that cannot be decoded: read without
+            scene = trimesh.load(path, process=False, force="scene", skip_materials=True)
+        uvs = _scene_corner_uvs(scene)
+    if uvs is not None and (uvs.shape != (len(triangles), 3, 2) or not np.isfinite(uvs).all()):
+        uvs = None
+    return vertices, triangles, uvs
+
+
+def _read(path, want_uvs: bool = False):
+    """(vertices, triangles, source faces, PLY corner UVs or None) of a mesh file."""
     path = os.fspath(path)
     if not os.path.exists(path):
         raise ValueError(f"{path}: no such file")
     if not os.path.isfile(path):
         raise ValueError(f"{path}: not a file")
-    suffix = os.path.splitext(path)[1].lower()
     try:
+        suffix = check_suffix(path)
         check_complete(path, suffix)
     except ValueError as exc:
         raise ValueError(f"{path}: {exc}") from None
     except OSError as exc:  # e.g. no permission to read it
         raise ValueError(f"{path}: cannot read mesh ({exc.strerror or exc})") from exc
+    uvs, other_kinds = None, set()
     try:
-        if suffix == ".obj":
+        if suffix == ".off":
+            # Read here: trimesh groups an OFF's triangles by polygon size, and fails on
+            # polygons of more than four corners.
+            vertices, triangles, source = _read_off(path)
+        elif suffix == ".obj":
+            text, source = _plain_obj(path)
             scene = trimesh.load(
-                io.BytesIO(_plain_obj(path)),
+                io.BytesIO(text),
                 file_type="obj",
                 process=False,
                 force="scene",
@@ -76,12 +131,26 @@ def load_mesh(path) -> tuple[np.ndarray, np.ndarray]:
         ) from exc
     except Exception as exc:  # a parser fed a broken file fails in many ways
         reason = str(exc) or type(exc).__name__
+        if reason == "PLY is unexpected length!":  # trimesh's words; they do not say why
+            reason = ("its size is not what its header declares: it is truncated, or mixes "
+                      "faces of different corner counts, which trimesh cannot read in binary "
+                      "PLY")
         raise ValueError(f"{path}: cannot read mesh ({reason})") from exc
 
-    try:
-        vertices, triangles, other_kinds = _flatten(scene)
-    except ValueError as exc:
-        raise ValueError(f"{path}: cannot read mesh ({exc})") from exc
+    if suffix != ".off":
+        try:
+            in_place = _ply_in_place(scene, want_uvs) if suffix == ".ply" else None
+            if in_place is not None:
+                vertices, triangles, source, uvs = in_place
+            else:
+                vertices, triangles, other_kinds = _flatten(scene)
+                if suffix != ".obj":  # (a PLY only where trimesh kept no elements: never seen)
+                    source = np.arange(len(triangles), dtype=np.int64)
+                elif len(source) != len(triangles):
+                    raise ValueError(f"{len(source) - len(triangles)} of its faces were lost "
+                                     "in reading")
+        except ValueError as exc:
+            raise ValueError(f"{path}: cannot read mesh ({exc})") from exc
     if len(triangles) == 0:
         found = f" (it holds {', '.join(sorted(other_kinds))})" if other_kinds else ""
         raise ValueError(f"{path}: no triangles found{found}")
@@ -91,36 +160,133 @@ def load_mesh(path) -> tuple[np.ndarray, np.ndarray]:
         raise ValueError(f"{path}: vertex coordinates are not all finite")
     if triangles.min() < 0 or triangles.max() >= len(vertices):
         raise ValueError(f"{path}: a face refers to a vertex that does not exist")
-    return vertices, triangles
+    return vertices, triangles, source, uvs
 
 
-def load_mesh_with_uvs(path) -> tuple[np.ndarray, np.ndarray, "np.ndarray | None"]:
-    """load_mesh, plus the texture coordinates of every face corner.
+def _fan(polygons):
+    """Polygons (a 2D array, one row each, or a sequence of index arrays) fanned in place:
+    (triangles int64 (t, 3), source int64 (t,)), polygon i of k corners giving triangles
+    (0, j, j + 1) for j = 1 .. k - 2 at consecutive rows; fewer than 3 corners give none.
+    Also returns the corner positions, (t, 3) indices into the polygons' corners laid end to
+    end, for anything stored per corner (PLY's per-face UVs)."""
+    if isinstance(polygons, np.ndarray) and polygons.ndim == 2:
+        sizes = np.full(len(polygons), polygons.shape[1], dtype=np.int64)
+        flat = polygons.reshape(-1)
+    else:
+        sizes = np.fromiter((len(p) for p in polygons), dtype=np.int64, count=len(polygons))
+        flat = (np.concatenate([np.asarray(p).reshape(-1) for p in polygons])
+                if len(polygons) else np.zeros(0))  # fmt: skip
+    starts = np.cumsum(sizes) - sizes
+    counts = np.maximum(sizes - 2, 0)
+    source = np.repeat(np.arange(len(sizes), dtype=np.int64), counts)
+    step = np.arange(len(source), dtype=np.int64) - np.repeat(np.cumsum(counts) - counts, counts)
+    first = starts[source]
+    corners = np.stack([first, first + step + 1, first + step + 2], axis=1)
+    return flat.astype(np.int64)[corners], source, corners
 
-    Returns (vertices, triangles, uvs): uvs float32 (m, 3, 2), corner k of triangle i at
-    uvs[i, k], with v = 0 at the bottom of the image (OBJ and Blender's convention; glTF's
-    top-down v is flipped by trimesh), or None when the file has no UVs for every face. Read
-    from OBJ ``vt`` (through the ``f v/vt`` references, polygons fanned as load_mesh fans
-    them), glTF/GLB ``TEXCOORD_0`` (of primitives that have a material: trimesh reads UVs only
-    with one) and PLY texture coordinates (texture_u/texture_v, u/v, s/t or a per-face
-    texcoord list). OFF and STL have none.
-    """
-    vertices, triangles = load_mesh(path)
-    path = os.fspath(path)
-    suffix = os.path.splitext(path)[1].lower()
-    uvs = None
-    if suffix == ".obj":
-        uvs = _obj_corner_uvs(path)
-    elif suffix in (".ply", ".gltf", ".glb"):
+
+def _read_off(path: str):
+    """An OFF file (check_complete has seen its header and counts): vertices as stored, each
+    face fanned in place. Values after a vertex's first three (colours, normals, texture
+    coordinates: COFF, NOFF, STOFF) and after a face's corners (colours) are skipped."""
+    with open(path, "rb") as stream:
+        text = stream.read().decode("utf-8")
+    lines = text.splitlines()
+    if "#" in text:
+        lines = [line.split("#", 1)[0] for line in lines]
+    lines = [line for line in lines if line and not line.isspace()]
+    header = lines[0].split()
+    counts = header[1:] if len(header) > 1 else lines[1].split()
+    body = lines[1:] if len(header) > 1 else lines[2:]
+    vertex_count, face_count = int(counts[0]), int(counts[1])
+    try:
+        vertices = np.array([line.split()[:3] for line in body[:vertex_count]],
+                            dtype=np.float64).reshape(vertex_count, 3)  # fmt: skip
+    except ValueError:
+        raise ValueError("malformed OFF vertex: not three numbers") from None
+    polygons = []
+    for line in body[vertex_count : vertex_count + face_count]:
+        fields = line.split()
         try:
-            # Materials are loaded this time: trimesh keeps glTF UVs only with them.
-            scene = trimesh.load(path, process=False, force="scene")
-        except Exception:  # e.g. a texture image that cannot be decoded: read without
-            scene = trimesh.load(path, process=False, force="scene", skip_materials=True)
-        uvs = _scene_corner_uvs(scene)
-    if uvs is not None and (uvs.shape != (len(triangles), 3, 2) or not np.isfinite(uvs).all()):
-        uvs = None
-    return vertices, triangles, uvs
+            size = int(fields[0])
+            polygons.append(np.array(fields[1 : 1 + size], dtype=np.int64))
+        except ValueError:
+            raise ValueError(f"malformed OFF face {line.strip()[:60]!r}") from None
+        if len(polygons[-1]) != size:
+            raise ValueError(f"malformed OFF face {line.strip()[:60]!r}")
+    triangles, source, _ = _fan(polygons)
+    return vertices, triangles, source
+
+
+# Names PLY writers give per-vertex texture coordinates, as trimesh reads them.
+_PLY_UV_NAMES = (("texture_u", "texture_v"), ("u", "v"), ("s", "t"))
+
+
+def _ply_in_place(scene, want_uvs: bool):
+    """A PLY's vertices as stored and its faces fanned in place, from the elements trimesh
+    read (its own triangles put the pieces of polygons in groups by size), with corner UVs
+    when asked: (vertices, triangles, source, uvs or None), or None where its elements are
+    not there to read (trimesh's mesh is used then)."""
+    geometries = [g for g in scene.geometry.values() if isinstance(g, trimesh.Trimesh)]
+    if len(geometries) != 1 or "_ply_raw" not in geometries[0].metadata:
+        return None
+    raw = geometries[0].metadata["_ply_raw"]
+    try:
+        vertex_data = raw["vertex"]["data"]
+        vertices = np.column_stack([np.asarray(vertex_data[axis], dtype=np.float64)
+                                    for axis in "xyz"])  # fmt: skip
+        face_data = raw["face"]["data"]
+    except (KeyError, TypeError, ValueError, IndexError):
+        return None
+    polygons, texcoords = None, None
+    if isinstance(face_data, dict):
+        for name in ("vertex_indices", "vertex_index"):
+            if name in face_data:
+                polygons = face_data[name]
+                break
+        texcoords = face_data.get("texcoord")
+    elif isinstance(face_data, np.ndarray) and face_data.dtype.names:
+        names = face_data.dtype.names
+        name = names[0] if len(names) == 1 else next(
+            (n for n in ("vertex_indices", "vertex_index") if n in names), None)
+        if name is not None:
+            polygons = face_data[name]["f1"]
+        if "texcoord" in names:
+            texcoords = face_data["texcoord"]["f1"]
+    elif isinstance(face_data, np.ndarray) and face_data.ndim == 2:
+        polygons = face_data
+    if polygons is None:
+        return None
+    if isinstance(polygons, np.ndarray) and polygons.dtype != object:
+        polygons = polygons.reshape(len(polygons), -1)
+    triangles, source, corners = _fan(polygons)
+    uvs = None
+    if want_uvs:
+        uvs = _ply_corner_uvs(vertex_data, triangles, texcoords, corners)
+    return vertices, triangles, source, uvs
+
+
+def _ply_corner_uvs(vertex_data, triangles, texcoords, corners):
+    """Corner UVs of a PLY's fanned triangles: from a per-face texcoord list (u, v per corner)
+    or from per-vertex coordinates; None if it has neither."""
+    if texcoords is not None:
+        try:
+            if isinstance(texcoords, np.ndarray) and texcoords.dtype != object:
+                flat = np.asarray(texcoords, dtype=np.float64).reshape(-1, 2)
+            else:
+                flat = np.concatenate([np.asarray(t, dtype=np.float64).reshape(-1, 2)
+                                       for t in texcoords])  # fmt: skip
+            return flat[corners].astype(np.float32)
+        except (ValueError, IndexError):
+            return None
+    for u, v in _PLY_UV_NAMES:
+        try:
+            per_vertex = np.column_stack([np.asarray(vertex_data[u], dtype=np.float64),
+                                          np.asarray(vertex_data[v], dtype=np.float64)])
+        except (KeyError, ValueError, IndexError):
+            continue
+        return per_vertex[triangles].astype(np.float32)
+    return None
 
 
 def _obj_corner_uvs(path: str):
@@ -178,8 +344,9 @@ def _scene_corner_uvs(scene: trimesh.Scene):
     return np.ascontiguousarray(np.concatenate(parts))
 
 
-def _plain_obj(path: str) -> bytes:
-    """The OBJ file reduced to ``v`` lines and triangular ``f`` lines, in order.
+def _plain_obj(path: str):
+    """The OBJ file reduced to ``v`` lines and triangular ``f`` lines, in order, and for each
+    triangle the index of the ``f`` record it comes from (int64).
 
     Dropping the texture and normal references keeps trimesh from splitting
     vertices at seams; fanning polygons here keeps each polygon's triangles at
@@ -191,8 +358,8 @@ def _plain_obj(path: str) -> bytes:
         # Numbers are ASCII; a stray byte can only sit in a name or comment.
         text = stream.read().decode("utf-8", errors="replace")
     text = text.replace("\\\r\n", " ").replace("\\\n", " ")  # continuation lines
-    out = []
-    vertex_count = 0
+    out, source = [], []
+    vertex_count = face_count = 0
     for line in text.splitlines():
         fields = line.split()
         if not fields:
@@ -220,7 +387,9 @@ def _plain_obj(path: str) -> bytes:
             # Fewer than three corners is not a face; trimesh skips these too.
             for k in range(1, len(refs) - 1):
                 out.append(f"f {refs[0]} {refs[k]} {refs[k + 1]}")
-    return ("\n".join(out) + "\n").encode("ascii")
+                source.append(face_count)
+            face_count += 1
+    return ("\n".join(out) + "\n").encode("ascii"), np.array(source, dtype=np.int64)
 
 
 # How non-mesh geometry is named in the "no triangles" message.
@@ -284,10 +453,15 @@ def save_colored(path, vertices, triangles, colors, per: str = "faces") -> None:
     """Write the mesh coloured per face or per vertex; the format follows the suffix.
 
     colors: (m,4) uint8 RGBA for per="faces", (n,4) for per="vertices".
-    PLY is written binary and keeps either kind; OFF keeps either (written here);
-    OBJ and GLB store only vertex colours, so per-face colours give every
-    triangle its own three vertices (exact flat colours, 3m vertices); STL keeps
-    no colour. Raises ValueError for an unknown suffix or mismatched arrays.
+    PLY is written binary with 64-bit float coordinates and keeps either kind of colour; OFF
+    keeps either (written here, coordinates as %.17g); OBJ and GLB store only vertex colours,
+    so per-face colours give every triangle its own three vertices (exact flat colours, 3m
+    vertices); STL keeps no colour. PLY, OFF and OBJ give the float64 coordinates back
+    exactly; GLB and STL hold 32-bit floats only, and a RuntimeWarning says so when that moves
+    a vertex by more than PRECISION_WARNING of the mesh's size (a mesh far from the origin:
+    UTM coordinates, say). Raises ValueError for an unknown suffix or mismatched arrays.
+    The file is written whole or not at all: a failed write raises an OSError naming it and
+    leaves an existing file as it was.
     """
     path = os.fspath(path)
     suffix = os.path.splitext(path)[1].lower()
@@ -307,17 +481,96 @@ def save_colored(path, vertices, triangles, colors, per: str = "faces") -> None:
             f"got {colors.dtype} {colors.shape}"
         )
 
-    if suffix == ".off":
-        _write_off(path, vertices, triangles, colors, per)
-        return
+    if suffix in (".glb", ".stl"):
+        _warn_if_float32_moves(path, vertices)
     if per == "faces" and suffix in (".obj", ".glb"):
         vertices = vertices[triangles].reshape(-1, 3)
         triangles = np.arange(len(vertices), dtype=np.int64).reshape(-1, 3)
         colors = np.repeat(colors, 3, axis=0)
         per = "vertices"
-    key = "face_colors" if per == "faces" else "vertex_colors"
-    mesh = trimesh.Trimesh(vertices, triangles, process=False, **{key: colors})
-    mesh.export(path, file_type=suffix[1:])
+    # Written whole or not at all: a failed write leaves an existing file as it was.
+    with written_whole(path) as temporary:
+        if suffix == ".ply":
+            _write_ply(temporary, vertices, triangles, colors, per)
+        elif suffix == ".off":
+            _write_off(temporary, vertices, triangles, colors, per)
+        elif suffix == ".obj":
+            _write_obj(temporary, vertices, triangles, colors)
+        else:
+            key = "face_colors" if per == "faces" else "vertex_colors"
+            mesh = trimesh.Trimesh(vertices, triangles, process=False, **{key: colors})
+            mesh.export(temporary, file_type=suffix[1:])
+
+
+# Past this share of the mesh's size, rounding the coordinates to 32-bit floats (GLB, STL)
+# is worth a warning: float32 keeps about 6e-8 of a coordinate's magnitude, so a mesh near
+# the origin never reaches it, and a 10 m building at UTM northings (5.4e6) moves by 0.25 m.
+PRECISION_WARNING = 1e-6
+
+
+def _warn_if_float32_moves(path: str, vertices: np.ndarray) -> None:
+    if len(vertices) == 0:
+        return
+    with np.errstate(over="ignore", invalid="ignore"):
+        moved = float(np.max(np.abs(vertices.astype(np.float32) - vertices)))
+    size = float(np.max(np.ptp(vertices, axis=0)))
+    if not moved <= PRECISION_WARNING * size:  # also inf: beyond float32's range
+        share = f"{moved / size:.2g} of the mesh's size" if size > 0 else "the mesh is a point"
+        warnings.warn(
+            f"{path}: {format_name(os.path.splitext(path)[1].lower())} holds 32-bit float "
+            f"coordinates: vertices move by up to {moved:.3g} units ({share}); write .ply, "
+            ".off or .obj to keep them exactly",
+            RuntimeWarning,
+            stacklevel=3,
+        )
+
+
+def _write_ply(path, vertices, triangles, colors, per) -> None:
+    """Binary little-endian PLY, coordinates as double: float32 (trimesh's choice) moves a
+    vertex of a mesh far from the origin by a visible amount, and collapses a small one."""
+    channels = ("red", "green", "blue", "alpha")
+    rgba = [(name, "u1") for name in channels]
+    vertex_fields = [("x", "<f8"), ("y", "<f8"), ("z", "<f8")] + (rgba if per == "vertices" else [])
+    face_fields = [("count", "u1"), ("indices", "<i4", (3,))] + (rgba if per == "faces" else [])
+    if len(vertices) > np.iinfo(np.int32).max:
+        raise ValueError(f"{path}: too many vertices for PLY's 32-bit indices")
+    vertex_rows = np.empty(len(vertices), dtype=vertex_fields)
+    for axis, name in enumerate("xyz"):
+        vertex_rows[name] = vertices[:, axis]
+    face_rows = np.empty(len(triangles), dtype=face_fields)
+    face_rows["count"] = 3
+    face_rows["indices"] = triangles
+    coloured_rows = vertex_rows if per == "vertices" else face_rows
+    for channel, name in enumerate(channels):
+        coloured_rows[name] = colors[:, channel]
+
+    colour_lines = "".join(f"property uchar {name}\n" for name in channels)
+    header = (
+        "ply\nformat binary_little_endian 1.0\ncomment shape-diameter\n"
+        f"element vertex {len(vertices)}\n"
+        "property double x\nproperty double y\nproperty double z\n"
+        f"{colour_lines if per == 'vertices' else ''}"
+        f"element face {len(triangles)}\nproperty list uchar int vertex_indices\n"
+        f"{colour_lines if per == 'faces' else ''}end_header\n"
+    )
+    with open(path, "wb") as out:
+        out.write(header.encode("ascii"))
+        out.write(vertex_rows.tobytes())
+        out.write(face_rows.tobytes())
+
+
+def _write_obj(path, vertices, triangles, colors) -> None:
+    """OBJ with vertex colours ("v x y z r g b", colours in [0, 1] as trimesh writes and reads
+    them; OBJ has no alpha). Coordinates in Python's shortest form that reads back as the
+    same double: a fixed number of decimals loses small meshes (8 decimals: 2.5e-4 relative
+    at 1e-5 units)."""
+    rgb = (colors[:, :3] / 255.0).tolist()
+    with open(path, "w", encoding="ascii", newline="\n") as out:
+        out.writelines(
+            f"v {x!r} {y!r} {z!r} {r:.8f} {g:.8f} {b:.8f}\n"
+            for (x, y, z), (r, g, b) in zip(vertices.tolist(), rgb)
+        )
+        np.savetxt(out, triangles + 1, fmt="f %d %d %d")
 
 
 def _write_off(path, vertices, triangles, colors, per) -> None:

@@ -15,6 +15,7 @@ import pytest
 trimesh = pytest.importorskip("trimesh")
 
 import shape_diameter
+from polygon_files import fanned, prism, write_polygons
 from shape_diameter import cli
 from shape_diameter.colormap import colormap
 from shape_diameter.mesh_io import load_mesh
@@ -24,7 +25,7 @@ RAYS = 12  # enough rays to be a real run, few enough to keep the file fast
 JSON_KEYS = {
     "input", "faces", "vertices", "points", "point_count", "rays", "cone", "sampling",
     "seed", "normalize", "smooth", "engine", "flipped_faces", "seconds", "Mrays_per_s",
-    "io_seconds", "total_seconds", "outputs",
+    "io_seconds", "total_seconds", "outputs", "status", "error", "exit_status", "warnings",
 }  # fmt: skip
 
 
@@ -122,6 +123,45 @@ def test_default_output_is_next_to_the_input(tmp_path, capsys):
     assert out.count("\n") == 1 and "cow.sdf.ply" in out
 
 
+def test_a_mesh_at_utm_coordinates_keeps_its_geometry(tmp_path, capsys):
+    # A 10 m sphere at UTM coordinates: the default PLY output once held float32 coordinates
+    # (0.25 m off); now the same doubles come back. GLB can only warn, in one line.
+    sphere = trimesh.creation.icosphere(subdivisions=2, radius=5.0)
+    vertices = np.asarray(sphere.vertices) + (500000.123, 5400000.456, 100.789)
+    source = tmp_path / "site.off"
+    trimesh.Trimesh(vertices, sphere.faces, process=False).export(source, digits=17)
+    vertices, triangles = load_mesh(source)
+    assert cli.main([str(source), "--rays", "4"]) == 0
+    written_vertices, written_triangles = load_mesh(tmp_path / "site.sdf.ply")
+    np.testing.assert_array_equal(written_vertices, vertices)
+    np.testing.assert_array_equal(written_triangles, triangles)
+    assert capsys.readouterr().err == ""
+
+    assert cli.main([str(source), "--rays", "4", "-o", str(tmp_path / "site.glb")]) == 0
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and err.startswith("shape-diameter: warning: ")
+    assert "GLB holds 32-bit float coordinates" in err and ".ply, .off or .obj" in err
+
+
+def test_values_rows_follow_the_files_faces_in_every_format(tmp_path):
+    # One polygon mesh as OBJ, OFF and PLY: the same rows, in the file's face order, each
+    # polygon's triangles together (PLY and OFF rows were grouped by polygon size).
+    vertices, polygons = prism()
+    rows = {}
+    for suffix in (".obj", ".off", ".ply"):
+        source, values = tmp_path / f"prism{suffix}", tmp_path / f"{suffix[1:]}.npy"
+        write_polygons(source, vertices, polygons)
+        argv = [str(source), "-o", str(tmp_path / f"out{suffix}"), "--values", str(values)]
+        assert cli.main([*argv, "--rays", str(RAYS), "-q"]) == 0
+        rows[suffix] = np.load(values)
+    triangles, _ = fanned(polygons)
+    expected = shape_diameter.compute(vertices, triangles, rays=RAYS).raw
+    for values in rows.values():
+        np.testing.assert_array_equal(values, expected)
+    _, _, source_faces = shape_diameter.load_mesh(tmp_path / "prism.ply", source_faces=True)
+    assert source_faces.tolist() == [0, 0, 1, 1, 1, 2, 2, 3, 4, 5, 5, 5, 6, 6, 7, 7]
+
+
 # --- --json -------------------------------------------------------------------
 
 
@@ -134,6 +174,8 @@ def test_json_is_one_object_with_the_documented_keys(tmp_path):
     assert done.stdout.endswith("\n") and done.stdout.count("\n") == 1
     report = json.loads(done.stdout)
     assert set(report) == JSON_KEYS
+    assert (report["status"], report["error"], report["exit_status"]) == ("ok", None, 0)
+    assert report["warnings"] == []
     assert (report["faces"], report["vertices"]) == (5856, 2930)
     assert (report["points"], report["point_count"], report["rays"]) == ("faces", 5856, RAYS)
     assert (report["cone"], report["sampling"], report["seed"]) == (120.0, "fibonacci", 0)
@@ -204,7 +246,15 @@ PROCESS_FAILURES = {
 def test_failures_print_one_line_and_exit_2(tmp_path, case):
     done = _run_process(*PROCESS_FAILURES[case](tmp_path), "--json", cwd=tmp_path)
     assert done.returncode == 2
-    _assert_one_line_error(done.stderr, done.stdout)
+    if case in ("negative rays", "unknown points"):  # refused before any input is read
+        _assert_one_line_error(done.stderr, done.stdout)
+    else:  # a bad input: its --json object says so too
+        _assert_one_line_error(done.stderr)
+        report = json.loads(done.stdout)
+        assert done.stdout.count("\n") == 1
+        assert (report["status"], report["exit_status"]) == ("error", 2)
+        assert done.stderr == f"shape-diameter: error: {report['error']}\n"
+        assert report["error"].startswith(f"{report['input']}: ")
     assert not list(tmp_path.glob("*.sdf.ply"))
 
 
@@ -265,6 +315,18 @@ def test_a_file_not_of_its_format_says_so(tmp_path, capsys):
     assert "not a valid STL file (it looks like a PLY file)" in captured.err
 
 
+def test_a_mesh_too_wide_names_its_file(tmp_path, capsys):
+    # compute()'s refusal of a mesh wider than 1e30 once did not say which file it was.
+    source = tmp_path / "huge.obj"
+    source.write_text("v 0 0 0\nv 2e30 0 0\nv 0 2e30 0\nv 0 0 2e30\n"
+                      "f 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\n")  # fmt: skip
+    assert cli.main([str(source), "-o", str(tmp_path / "out.ply")]) == 2
+    captured = capsys.readouterr()
+    _assert_one_line_error(captured.err, captured.out)
+    assert captured.err.startswith(f"shape-diameter: error: {source}: the mesh spans 2e+30")
+    assert not (tmp_path / "out.ply").exists()
+
+
 def _no_compute(*args, **kwargs):
     raise AssertionError("compute() ran: the paths should have been refused first")
 
@@ -294,6 +356,59 @@ def test_outputs_never_overwrite_the_input_or_each_other(tmp_path, capsys, monke
     )
     assert source.read_bytes() == (DATA / "spot.obj").read_bytes()
     assert not (tmp_path / "out.ply").exists()
+
+
+def _limit_file_size():
+    import resource
+
+    resource.setrlimit(resource.RLIMIT_FSIZE, (100_000, resource.RLIM_INFINITY))
+
+
+@pytest.mark.parametrize("suffix", [".ply", ".obj", ".off", ".glb", ".stl"])
+def test_a_failed_write_leaves_the_existing_output_as_it_was(tmp_path, suffix):
+    # `ulimit -f 100` once left 100 KB of the output in place of a good, older one.
+    output = tmp_path / f"big{suffix}"
+    output.write_bytes(b"the output of an earlier run\n")
+    done = subprocess.run(
+        [sys.executable, "-m", "shape_diameter.cli", str(DATA / "horse.ply"), "-o", str(output),
+         "--rays", "2", "--engine", "cpu"],
+        check=False, capture_output=True, text=True, timeout=120, preexec_fn=_limit_file_size,
+    )  # fmt: skip
+    assert done.returncode == 1
+    _assert_one_line_error(done.stderr, done.stdout)
+    assert f"{output}: cannot write (File too large)" in done.stderr
+    assert "the existing file is left as it was" in done.stderr
+    assert output.read_bytes() == b"the output of an earlier run\n"
+    assert sorted(p.name for p in tmp_path.iterdir()) == [output.name]  # no temporary left
+
+
+def test_a_failed_values_write_leaves_no_part_of_it(tmp_path, capsys, monkeypatch):
+    values = tmp_path / "values.npy"
+    real_save = np.save
+
+    def save_half_then_fail(stream, array):
+        real_save(stream, array[: len(array) // 2])
+        raise OSError(28, "No space left on device")
+
+    monkeypatch.setattr(np, "save", save_half_then_fail)
+    argv = [str(DATA / "suzanne.obj"), "-o", str(tmp_path / "out.ply"), "--values", str(values)]
+    assert cli.main([*argv, "--rays", "2"]) == 1
+    captured = capsys.readouterr()
+    _assert_one_line_error(captured.err)
+    assert f"{values}: cannot write (No space left on device); nothing written" in captured.err
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["out.ply"]
+
+
+def test_outputs_replace_files_whole_and_keep_links_and_permissions(tmp_path):
+    # The new file takes the old one's permissions; a link stays a link to the new content.
+    real, link = tmp_path / "real.ply", tmp_path / "link.ply"
+    real.write_bytes(b"old")
+    real.chmod(0o640)
+    link.symlink_to(real)
+    assert cli.main([str(DATA / "suzanne.obj"), "-o", str(link), "--rays", "2"]) == 0
+    assert link.is_symlink() and real.read_bytes().startswith(b"ply\n")
+    assert real.stat().st_mode & 0o777 == 0o640
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["link.ply", "real.ply"]
 
 
 def test_an_opencl_failure_is_one_line_and_status_1(tmp_path, capsys, monkeypatch):
@@ -490,5 +605,5 @@ def test_ctrl_c_stops_a_long_run_when_stderr_is_not_a_terminal(tmp_path):
     start = time.perf_counter()
     run.send_signal(signal.SIGINT)
     _, err = run.communicate(timeout=60)
-    assert run.returncode == 130 and "interrupted" in err
+    assert run.returncode == -signal.SIGINT and "interrupted" in err  # (test_cli_interrupt.py)
     assert time.perf_counter() - start < 5.0

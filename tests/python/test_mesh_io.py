@@ -2,6 +2,7 @@
 """Mesh files through trimesh: the file's numbering is kept, bad files are refused clearly."""
 
 import re
+import shutil
 from pathlib import Path
 
 import numpy as np
@@ -9,6 +10,7 @@ import pytest
 
 trimesh = pytest.importorskip("trimesh")
 
+from polygon_files import cube_of_quads, fanned, prism, write_polygons
 from shape_diameter.mesh_io import WRITE_SUFFIXES, load_mesh, save_colored
 
 DATA = Path(__file__).resolve().parents[1] / "data"
@@ -77,6 +79,62 @@ def test_off_keeps_the_files_order():
     expected_vertices, expected_triangles = _read_off_by_hand(DATA / "ChineseDragon-10kv.off")
     np.testing.assert_array_equal(vertices, expected_vertices)
     np.testing.assert_array_equal(triangles, expected_triangles)
+
+
+@pytest.mark.parametrize("suffix", [".obj", ".off", ".ply"])
+def test_polygons_are_fanned_in_place_with_their_source_faces(tmp_path, suffix):
+    # PLY and OFF polygons came back grouped by size (triangles, then first halves of quads,
+    # then second halves, ...), so --values rows did not follow the file; an OFF pentagon
+    # failed in trimesh.
+    vertices, polygons = prism()
+    path = tmp_path / f"prism{suffix}"
+    write_polygons(path, vertices, polygons)
+    loaded_vertices, triangles, source = load_mesh(path, source_faces=True)
+    expected_triangles, expected_source = fanned(polygons)
+    np.testing.assert_array_equal(loaded_vertices, vertices)
+    np.testing.assert_array_equal(triangles, expected_triangles)
+    np.testing.assert_array_equal(source, expected_source)
+    assert source.dtype == np.int64
+
+
+def test_binary_ply_quads_are_fanned_in_place(tmp_path):
+    # A binary PLY of quads only (trimesh reads binary lists of one length only).
+    vertices, quads = cube_of_quads()
+    header = ("ply\nformat binary_little_endian 1.0\nelement vertex 8\nproperty double x\n"
+              "property double y\nproperty double z\nelement face 6\n"
+              "property list uchar int vertex_indices\nend_header\n")
+    faces = np.zeros(6, dtype=[("n", "u1"), ("i", "<i4", (4,))])
+    faces["n"], faces["i"] = 4, quads
+    path = tmp_path / "cube.ply"
+    path.write_bytes(header.encode() + vertices.astype("<f8").tobytes() + faces.tobytes())
+    _, triangles, source = load_mesh(path, source_faces=True)
+    expected_triangles, expected_source = fanned(quads)
+    np.testing.assert_array_equal(triangles, expected_triangles)
+    np.testing.assert_array_equal(source, expected_source)
+
+
+@pytest.mark.parametrize(("suffix", "shape", "uvs"), [(".obj", prism, "vt"),
+                                                      (".ply", prism, "vertex"),
+                                                      (".ply", cube_of_quads, "corner")])
+def test_corner_uvs_follow_the_fanned_triangles(tmp_path, suffix, shape, uvs):
+    # (trimesh reads PLY texcoord lists only where every face has as many corners)
+    from shape_diameter.mesh_io import load_mesh_with_uvs
+
+    vertices, polygons = shape()
+    path = tmp_path / f"mesh{suffix}"
+    write_polygons(path, vertices, polygons, uvs=uvs)
+    _, triangles, loaded_uvs = load_mesh_with_uvs(path)
+    np.testing.assert_array_equal(triangles, fanned(polygons)[0])
+    expected = (vertices[triangles][:, :, :2] + (2.0, 3.0)).astype(np.float32)
+    np.testing.assert_array_equal(loaded_uvs, expected)
+
+
+def test_stl_and_glb_triangles_are_their_own_source(tmp_path, spot):
+    for suffix in (".stl", ".glb"):
+        path = tmp_path / f"spot{suffix}"
+        trimesh.Trimesh(*spot, process=False).export(path)
+        _, triangles, source = load_mesh(path, source_faces=True)
+        np.testing.assert_array_equal(source, np.arange(len(triangles)))
 
 
 def test_obj_relative_indices_polygons_and_continuations(tmp_path):
@@ -181,6 +239,27 @@ def test_truncated_binary_ply_is_refused(tmp_path, spot):
         load_mesh(path)
 
 
+@pytest.mark.parametrize("polygons", ["prism", "quads after a pentagon"])
+def test_a_binary_ply_of_mixed_polygons_says_why_it_cannot_be_read(tmp_path, polygons):
+    # Where the lengths add up as if every face had the first one's corners (the prism: 136
+    # bytes either way), trimesh read wrong faces; otherwise it said "PLY is unexpected
+    # length!", as for a truncated file.
+    vertices, faces = prism()
+    if polygons == "quads after a pentagon":  # shorter than three pentagons: trimesh sees it
+        faces = [faces[1], faces[0], faces[2]]
+    header = ("ply\nformat binary_little_endian 1.0\nelement vertex 10\nproperty double x\n"
+              f"property double y\nproperty double z\nelement face {len(faces)}\n"
+              "property list uchar int vertex_indices\nend_header\n")
+    rows = b"".join(bytes([len(f)]) + np.array(f, dtype="<i4").tobytes() for f in faces)
+    path = tmp_path / "prism.ply"
+    path.write_bytes(header.encode() + vertices.astype("<f8").tobytes() + rows)
+    message = ("binary PLY whose faces have different numbers of corners: trimesh cannot read "
+               "that" if polygons == "prism" else "it is truncated, or mixes faces of "
+               "different corner counts, which trimesh cannot read in binary PLY")
+    with pytest.raises(ValueError, match=re.escape(f"{path}: ") + ".*" + re.escape(message)):
+        load_mesh(path)
+
+
 def _ascii_copy(tmp_path, spot, suffix):
     """spot as an ASCII OFF or PLY file (trimesh writes both)."""
     path = tmp_path / f"whole{suffix}"
@@ -228,7 +307,25 @@ NOT_THAT_FORMAT = {
     "ply.stl": (lambda tmp, spot: (DATA / "horse.ply").read_bytes(),
                 r"not a valid STL file \(it looks like a PLY file\)"),
     "obj.off": (lambda tmp, spot: (DATA / "spot.obj").read_bytes(),
-                r"not a valid OFF file \(no OFF header\)"),
+                r"not a valid OFF file \(it looks like an OBJ file\)"),
+    "text.off": (lambda tmp, spot: b"hello\n1 2 3\n", r"not a valid OFF file \(no OFF header\)"),
+    # These once said "no triangles found", or repeated trimesh's exception.
+    "ply.obj": (lambda tmp, spot: (DATA / "horse.ply").read_bytes(),
+                r"not a valid OBJ file \(it looks like a PLY file\)"),
+    "off.stl": (lambda tmp, spot: (DATA / "bunny00.off").read_bytes(),
+                r"not a valid STL file \(it looks like an OFF file\)"),
+    "text.stl": (lambda tmp, spot: b"hello\n",
+                 r"not a valid STL file \(text that does not start with 'solid'\)"),
+    "random.obj": (lambda tmp, spot: np.random.default_rng(1).bytes(5000) + b"\x00",
+                   r"not a valid OBJ file \(it is not text\)"),
+    "obj.ply": (lambda tmp, spot: (DATA / "spot.obj").read_bytes(),
+                r"not a valid PLY file \(it looks like an OBJ file\)"),
+    "stl.glb": (lambda tmp, spot: _whole_binary_stl(tmp, spot),
+                r"not a valid GLB file \(it looks like an STL file\)"),
+    "glb.gltf": (lambda tmp, spot: trimesh.Trimesh(*spot).export(file_type="glb"),
+                 r"not a valid glTF file \(it looks like a GLB file\)"),
+    "off.glb": (lambda tmp, spot: (DATA / "bunny00.off").read_bytes(),
+                r"not a valid GLB file \(it looks like an OFF file\)"),
 }  # fmt: skip
 
 
@@ -239,6 +336,30 @@ def test_a_file_not_of_its_format_says_so(tmp_path, spot, name):
     path.write_bytes(content(tmp_path, spot))
     with pytest.raises(ValueError, match=f"{re.escape(str(path))}: {message}"):
         load_mesh(path)
+
+
+@pytest.mark.parametrize("name", ["horse", "horse.xyz", "horse.ply.bak"])
+def test_a_name_without_a_mesh_suffix_says_which_are_read(tmp_path, name):
+    # A file without an extension once gave trimesh's "file_type '/tmp/.../noext' not
+    # supported".
+    path = tmp_path / name
+    shutil.copy(DATA / "horse.ply", path)
+    start = "no file extension to tell the mesh format by" if name == "horse" else (
+        f"cannot read '{path.suffix}' files")
+    supported = ".obj, .ply, .off, .stl, .gltf, .glb"
+    with pytest.raises(ValueError) as raised:
+        load_mesh(path)
+    assert str(raised.value) == (f"{path}: {start} (it looks like a PLY file; supported: "
+                                 f"{supported})")
+
+
+def test_other_formats_are_not_mistaken_for_obj(tmp_path):
+    # OBJ is told by its records, so ordinary OBJ files (comments first, objects, groups,
+    # a byte order mark) are still read.
+    path = tmp_path / "odd.obj"
+    path.write_bytes(b"\xef\xbb\xbf# made by hand\nmtllib x.mtl\no a\nv 0 0 0\nv 1 0 0\n"
+                     b"v 0 1 0\ng part\nf 1 2 3\n")
+    np.testing.assert_array_equal(load_mesh(path)[1], [[0, 1, 2]])
 
 
 def test_point_cloud_is_refused_as_such(tmp_path):
@@ -310,6 +431,65 @@ def test_save_colored_writes_mesh_and_colours(tmp_path, per, suffix):
         assert visual.kind == "vertex"
         assert len(loaded_vertices) == 3 * len(triangles)
         np.testing.assert_array_equal(visual.vertex_colors, np.repeat(colours, 3, axis=0))
+
+
+# Meshes far from the origin or tiny: a 10 m sphere at UTM coordinates (float32 moves its
+# vertices by up to 0.25 m), a unit sphere at 1e8 (float32 collapses it), a sphere 1e-5 wide
+# (8 fixed decimals, trimesh's OBJ, kept 2.5e-4 of its size).
+FAR_AND_SMALL = {
+    "utm": (5.0, (500000.123, 5400000.456, 100.789)),
+    "1e8": (1.0, (1e8, -3e7, 0.0)),
+    "tiny": (1e-5, (0.0, 0.0, 0.0)),
+}
+
+
+def _sphere(radius, offset):
+    sphere = trimesh.creation.icosphere(subdivisions=2, radius=radius)
+    return np.asarray(sphere.vertices) + offset, np.asarray(sphere.faces, dtype=np.int64)
+
+
+@pytest.mark.parametrize("per", ["faces", "vertices"])
+@pytest.mark.parametrize("suffix", [".ply", ".obj", ".off"])
+@pytest.mark.parametrize("case", sorted(FAR_AND_SMALL))
+def test_ply_obj_and_off_give_the_coordinates_back_exactly(tmp_path, case, suffix, per):
+    vertices, triangles = _sphere(*FAR_AND_SMALL[case])
+    count = len(triangles) if per == "faces" else len(vertices)
+    path = tmp_path / f"out{suffix}"
+    save_colored(path, vertices, triangles, _colours(count, 4), per=per)
+    loaded_vertices, loaded_triangles = load_mesh(path)
+    # OBJ with colours per face gives each triangle its own corners: compare corners.
+    np.testing.assert_array_equal(loaded_vertices[loaded_triangles], vertices[triangles])
+    if suffix == ".ply":
+        assert b"property double x" in path.read_bytes()[:300]
+
+
+@pytest.mark.parametrize("suffix", [".glb", ".stl"])
+@pytest.mark.parametrize("case", ["utm", "1e8"])
+def test_glb_and_stl_warn_when_32_bit_floats_move_the_vertices(tmp_path, case, suffix):
+    vertices, triangles = _sphere(*FAR_AND_SMALL[case])
+    path = tmp_path / f"out{suffix}"
+    with pytest.warns(RuntimeWarning) as caught:
+        save_colored(path, vertices, triangles, _colours(len(triangles), 5))
+    assert len(caught) == 1
+    message = str(caught[0].message)
+    assert message.startswith(f"{path}: {suffix[1:].upper()} holds 32-bit float coordinates")
+    assert "write .ply, .off or .obj to keep them exactly" in message
+    # What the file holds is the float32 rounding of the mesh, as the warning says.
+    loaded_vertices, loaded_triangles = load_mesh(path)
+    expected = vertices.astype(np.float32).astype(np.float64)[triangles]
+    np.testing.assert_array_equal(loaded_vertices[loaded_triangles], expected)
+
+
+@pytest.mark.parametrize("suffix", [".glb", ".stl"])
+def test_glb_and_stl_are_quiet_where_32_bit_floats_suffice(tmp_path, suffix):
+    # A tiny mesh at the origin keeps float32's relative precision: no warning (warnings
+    # are errors in this suite), and every vertex within 1e-7 of the size.
+    vertices, triangles = _sphere(*FAR_AND_SMALL["tiny"])
+    path = tmp_path / f"out{suffix}"
+    save_colored(path, vertices, triangles, _colours(len(triangles), 6))
+    loaded_vertices, loaded_triangles = load_mesh(path)
+    np.testing.assert_allclose(loaded_vertices[loaded_triangles], vertices[triangles],
+                               rtol=0, atol=1e-7 * 2e-5)  # fmt: skip
 
 
 def test_ply_output_is_binary(tmp_path):

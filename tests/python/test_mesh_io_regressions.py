@@ -95,3 +95,17 @@ def test_gltf_positions_of_three_components_are_read(tmp_path):
     vertices, triangles = load_mesh(path)
     np.testing.assert_array_equal(vertices, np.arange(9.0).reshape(3, 3))
     np.testing.assert_array_equal(triangles, [[0, 1, 2]])
+
+
+# --- PLY: a list property without its types ----------------------------------------------
+
+
+@pytest.mark.parametrize("encoding", ["ascii", "binary_little_endian"])
+def test_ply_list_property_without_types_is_refused(tmp_path, encoding):
+    # The binary PLY list check read the types of "property list" by position: IndexError.
+    path = tmp_path / "short.ply"
+    path.write_bytes(f"ply\nformat {encoding} 1.0\nelement vertex 3\nproperty float x\n"
+                     "property float y\nproperty float z\nelement face 1\nproperty list\n"
+                     "end_header\n".encode() + bytes(40))  # fmt: skip
+    with pytest.raises(ValueError, match=r"short\.ply: "):
+        load_mesh(path)
