@@ -50,26 +50,52 @@ struct DeviceResult {
 
 }  // namespace
 
+// Each device's tree, with the device state it was made on: another computation may find the
+// device broken between the two casts and give it a fresh state (state_of), whose context the
+// tree's buffers are not of.
 struct KeptTrees::Slots {
+  struct Kept {
+    DeviceState* state = nullptr;
+    DeviceTree tree;
+  };
   std::mutex mutex;
-  std::map<const Device*, DeviceTree> trees;
+  std::map<const Device*, Kept> trees;
 
-  void put(const Device* device, DeviceTree&& tree) {
+  ~Slots() { clear(); }
+  void put(const Device* device, DeviceState* state, DeviceTree&& tree) {
     std::lock_guard<std::mutex> lock(mutex);
-    trees.insert_or_assign(device, std::move(tree));
+    Kept& kept = trees[device];
+    drop(kept);
+    kept.state = state;
+    kept.tree = std::move(tree);
   }
   void clear() {
     std::lock_guard<std::mutex> lock(mutex);
+    for (auto& [device, kept] : trees) drop(kept);
     trees.clear();
   }
-  // The device's kept tree, moved out; false when there is none.
-  bool take(const Device* device, DeviceTree& into) {
+  // The device's kept tree, moved out, when it was made on `state` and that state still
+  // works; false otherwise.
+  bool take(const Device* device, DeviceState& state, DeviceTree& into) {
     std::lock_guard<std::mutex> lock(mutex);
     auto found = trees.find(device);
     if (found == trees.end()) return false;
-    into = std::move(found->second);
+    const bool usable = found->second.state == &state && !state.broken;
+    if (usable) into = std::move(found->second.tree);
+    drop(found->second);
     trees.erase(found);
-    return true;
+    return usable;
+  }
+
+ private:
+  // Frees a tree's buffers, unless its device failed since (its driver objects may be dead:
+  // they are left alone, as the state is).
+  static void drop(Kept& kept) {
+    DeviceTree& t = kept.tree;
+    if (kept.state && kept.state->broken)
+      for (std::unique_ptr<Buffer>* b : {&t.vertices, &t.faces, &t.order, &t.nodes, &t.triangles})
+        (void)b->release();
+    t = DeviceTree{};
   }
 };
 
@@ -210,7 +236,7 @@ void run_device(const Device& device, SharedScene& shared_scene, const CastInput
       }
       done_changed.notify_all();
     };
-    if (input.trees && input.rewind_trees && input.trees->slots().take(&device, tree)) {
+    if (input.trees && input.rewind_trees && input.trees->slots().take(&device, s, tree)) {
       rewind_device_tree(device, s, options, tree, *input.mesh, uploaded);
       result.timings.rewound = true;
     } else {
@@ -418,7 +444,7 @@ void run_device(const Device& device, SharedScene& shared_scene, const CastInput
     const double factor = std::clamp(target / std::max(took, 1e-4), 0.5, 8.0);
     chunk = std::clamp<std::size_t>(static_cast<std::size_t>(chunk * factor), 256, 1u << 22);
   }
-  if (input.trees && tree.nodes) input.trees->slots().put(&device, std::move(tree));
+  if (input.trees && tree.nodes) input.trees->slots().put(&device, &s, std::move(tree));
 }
 
 }  // namespace
