@@ -30,8 +30,8 @@ constexpr std::size_t kWeldGrain = 1 << 14;
 // The cell grid of a weld: cells at least twice the tolerance wide, so the ball of radius
 // `tolerance` around a point meets at most 2 cells per axis; up to 64 times wider while that
 // keeps about one vertex per cell on a surface (side extent / sqrt(count)): then most balls
-// lie in one cell and a query looks up one cell, not 8. Coordinates too large for the grid
-// fall back to exact merging (a tolerance below float resolution merges only equal positions
+// lie in one cell and a query looks up one cell, not 8. A position too large for the grid
+// falls back to exact merging (a tolerance below float resolution merges only equal positions
 // anyway), where a cell is one exact position.
 struct WeldGrid {
   bool exact = true;
@@ -61,19 +61,29 @@ struct WeldGrid {
     const glm::vec3 size = hi - lo;
     const double extent = std::max(size.x, std::max(size.y, size.z));
     cell = std::max(cell, std::min(64.0 * tolerance, extent / std::sqrt(double(count))));
-    const double largest = std::max(glm::length(lo), glm::length(hi));
-    exact = !(largest / cell < 1e15) || !std::isfinite(cell);
+    exact = !std::isfinite(cell);
+  }
+  // A position too far out for the grid's 64-bit cell indices. Each such position is its own
+  // cell, keyed by its bits (merging only equal positions there), where the whole weld went
+  // exact: a vertex no triangle uses may lie 1e30 mesh widths away (make_mesh), and one of
+  // them turned k-ring's and texture smoothing's seams into walls (found by review).
+  bool beyond(glm::vec3 p) const {
+    return !(std::max(std::fabs(p.x), std::max(std::fabs(p.y), std::fabs(p.z))) / cell < 1e15);
   }
   CellKey home(glm::vec3 p) const {
     if (exact) return {float_bits(p.x), float_bits(p.y), float_bits(p.z)};
+    // Bits offset past every grid index (below 1e15 < 2^50): no grid cell shares the key.
+    if (beyond(p))
+      return {float_bits(p.x) + (std::int64_t{1} << 62), float_bits(p.y), float_bits(p.z)};
     return {static_cast<std::int64_t>(std::floor(p.x / cell)),
             static_cast<std::int64_t>(std::floor(p.y / cell)),
             static_cast<std::int64_t>(std::floor(p.z / cell))};
   }
-  // Calls visit(key) for every cell the ball around p meets (only the home cell when exact).
+  // Calls visit(key) for every cell the ball around p meets (only the home cell when exact
+  // or beyond the grid).
   template <class Visit>
   void for_each_cell(glm::vec3 p, Visit&& visit) const {
-    if (exact) {
+    if (exact || beyond(p)) {
       visit(home(p));
       return;
     }

@@ -226,6 +226,15 @@ def test_kring_split_seams_smooth_like_the_welded_mesh(spot):
         smooth(split_v, split_t, noisy, "kring", k=3, weld_tolerance=None),
         smooth(v, t, noisy, "kring", k=3),
     )
+    # Seam copies a hair apart (within the weld tolerance, not equal): a vertex no triangle
+    # uses, far away, changes nothing. It made the whole weld exact (the grid's box took it
+    # in), and the seams walls again.
+    apart_v = split_v + 1e-9 * np.random.default_rng(7).standard_normal(split_v.shape)
+    welded = smooth(apart_v, split_t, noisy, "kring", k=3)
+    assert not np.array_equal(welded, smooth(apart_v, split_t, noisy, "kring", k=3,
+                                             weld_tolerance=None))
+    stray_v = np.vstack([apart_v, [1e20, 0.0, 0.0]])
+    np.testing.assert_array_equal(smooth(stray_v, split_t, noisy, "kring", k=3), welded)
 
 
 def test_kring_more_rings_smooth_more(spot):
