@@ -39,7 +39,70 @@ std::size_t first_bad(std::size_t count, unsigned threads, Bad&& bad) {
   return kNoItem;
 }
 
+// The box of the vertices the triangles use, with their marks; throws std::invalid_argument
+// naming the first index out of range. The indices are checked and the vertices they use
+// marked in one pass. A vertex no triangle uses takes no part in the box: one far away (a
+// stray point at a georeferenced mesh's origin) would otherwise set the near-hit threshold
+// and the unit scaling, and so every value (found by a new-user trial: one unused vertex 10
+// mesh widths away changed values by up to 28%, 1e5 widths away zeroed them). The marks are
+// atomic bytes: many threads mark a shared vertex, each mark written only while unset (H100
+// host, 16 threads, 1.21M faces: make_mesh 2.0 ms without the marks, 5.0-5.5 with every
+// corner's mark written, 4.1-4.6 so; boxing the corners' positions instead, read at random,
+// 4.3-4.9, and 2.6x slower on one thread).
+struct UsedBox {
+  std::vector<std::atomic<std::uint8_t>> used;  // per vertex
+  glm::dvec3 lo{std::numeric_limits<double>::infinity()};
+  glm::dvec3 hi{-std::numeric_limits<double>::infinity()};
+
+  UsedBox(const double* vertices, std::size_t vertex_count, const std::int64_t* triangles,
+          std::size_t triangle_count, unsigned threads)
+      : used(vertex_count) {  // zeroed
+    const std::size_t bad_index = first_bad(3 * triangle_count, threads, [&](std::size_t i) {
+      if (triangles[i] < 0 || static_cast<std::uint64_t>(triangles[i]) >= vertex_count)
+        return true;
+      auto& mark = used[static_cast<std::size_t>(triangles[i])];
+      if (!mark.load(std::memory_order_relaxed)) mark.store(1, std::memory_order_relaxed);
+      return false;
+    });
+    if (bad_index != kNoItem)
+      throw std::invalid_argument("triangle " + std::to_string(bad_index / 3) +
+                                  " uses vertex index " + std::to_string(triangles[bad_index]) +
+                                  ", outside [0, " + std::to_string(vertex_count) + ")");
+    // Per-chunk boxes merged (min and max of finite values are exact in any order).
+    auto point = [&](std::size_t i) {
+      return glm::dvec3(vertices[3 * i], vertices[3 * i + 1], vertices[3 * i + 2]);
+    };
+    const std::size_t chunks = (vertex_count + kGrain - 1) / kGrain;
+    std::vector<glm::dvec3> chunk_lo(chunks, lo), chunk_hi(chunks, hi);
+    parallel_for(vertex_count, kGrain, threads, [&](std::size_t begin, std::size_t end) {
+      glm::dvec3 l = lo, h = hi;
+      for (std::size_t i = begin; i < end; ++i)
+        if (used[i].load(std::memory_order_relaxed)) {
+          l = glm::min(l, point(i));
+          h = glm::max(h, point(i));
+        }
+      chunk_lo[begin / kGrain] = l;
+      chunk_hi[begin / kGrain] = h;
+    });
+    for (std::size_t c = 0; c < chunks; ++c) {
+      lo = glm::min(lo, chunk_lo[c]);
+      hi = glm::max(hi, chunk_hi[c]);
+    }
+  }
+  // The box's largest side; 0 for no triangle.
+  double width() const {
+    if (!(lo.x <= hi.x)) return 0.0;
+    const glm::dvec3 size = hi - lo;
+    return std::max(size.x, std::max(size.y, size.z));
+  }
+};
+
 }  // namespace
+
+double used_width(const double* vertices, std::size_t vertex_count,
+                  const std::int64_t* triangles, std::size_t triangle_count, unsigned threads) {
+  return UsedBox(vertices, vertex_count, triangles, triangle_count, threads).width();
+}
 
 Mesh make_mesh(const double* vertices, std::size_t vertex_count, const std::int64_t* triangles,
                std::size_t triangle_count, unsigned threads) {
@@ -63,51 +126,10 @@ Mesh make_mesh(const double* vertices, std::size_t vertex_count, const std::int6
   if (not_finite != kNoItem)
     throw std::invalid_argument("vertex " + std::to_string(not_finite) +
                                 " has a coordinate that is not finite");
-  // The indices checked and the vertices they use marked in one pass. The box below is of the
-  // vertices the triangles use: a vertex no triangle uses takes no part, and one far away (a
-  // stray point at a georeferenced mesh's origin) would otherwise set the near-hit threshold
-  // and the unit scaling, and so every value (found by a new-user trial: one unused vertex 10
-  // mesh widths away changed values by up to 28%, 1e5 widths away zeroed them). The marks
-  // are atomic bytes: many threads mark a shared vertex, each mark written only while unset
-  // (H100 host, 16 threads, 1.21M faces: make_mesh 2.0 ms without the marks, 5.0-5.5 with
-  // every corner's mark written, 4.1-4.6 so; boxing the corners' positions instead, read at
-  // random, 4.3-4.9, and 2.6x slower on one thread).
-  std::vector<std::atomic<std::uint8_t>> used(vertex_count);  // zeroed
-  const std::size_t bad_index = first_bad(3 * triangle_count, threads, [&](std::size_t i) {
-    if (triangles[i] < 0 || static_cast<std::uint64_t>(triangles[i]) >= vertex_count) return true;
-    auto& mark = used[static_cast<std::size_t>(triangles[i])];
-    if (!mark.load(std::memory_order_relaxed)) mark.store(1, std::memory_order_relaxed);
-    return false;
-  });
-  if (bad_index != kNoItem)
-    throw std::invalid_argument("triangle " + std::to_string(bad_index / 3) +
-                                " uses vertex index " + std::to_string(triangles[bad_index]) +
-                                ", outside [0, " + std::to_string(vertex_count) + ")");
-  // Per-chunk boxes merged (min and max of finite values are exact in any order).
-  const std::size_t chunks = (vertex_count + kGrain - 1) / kGrain;
-  std::vector<glm::dvec3> chunk_lo(chunks), chunk_hi(chunks);
-  parallel_for(vertex_count, kGrain, threads, [&](std::size_t begin, std::size_t end) {
-    glm::dvec3 lo(std::numeric_limits<double>::infinity());
-    glm::dvec3 hi(-std::numeric_limits<double>::infinity());
-    for (std::size_t i = begin; i < end; ++i)
-      if (used[i].load(std::memory_order_relaxed)) {
-        lo = glm::min(lo, point(i));
-        hi = glm::max(hi, point(i));
-      }
-    chunk_lo[begin / kGrain] = lo;
-    chunk_hi[begin / kGrain] = hi;
-  });
-  glm::dvec3 lo(std::numeric_limits<double>::infinity());
-  glm::dvec3 hi(-std::numeric_limits<double>::infinity());
-  for (std::size_t c = 0; c < chunks; ++c) {
-    lo = glm::min(lo, chunk_lo[c]);
-    hi = glm::max(hi, chunk_hi[c]);
-  }
-
+  const UsedBox box(vertices, vertex_count, triangles, triangle_count, threads);
   Mesh mesh;
-  mesh.center = 0.5 * (lo + hi);
-  const glm::dvec3 size = hi - lo;
-  mesh.max_extent = std::max(size.x, std::max(size.y, size.z));
+  mesh.center = 0.5 * (box.lo + box.hi);
+  mesh.max_extent = box.width();
   // The engines compute in 32-bit floats on coordinates centred on the box: past ~1e30 the
   // sums and differences of a centroid or an edge leave the float range (found by fuzzing).
   if (!(mesh.max_extent <= 1e30))
@@ -123,7 +145,7 @@ Mesh make_mesh(const double* vertices, std::size_t vertex_count, const std::int6
   // tiny mesh's stray vertex would overflow; found by fuzzing).
   const double reach = std::min(1e30, std::ldexp(1e30, -unit_scale_exponent(mesh.max_extent)));
   const std::size_t too_far = first_bad(vertex_count, threads, [&](std::size_t i) {
-    if (used[i].load(std::memory_order_relaxed)) return false;  // within the box
+    if (box.used[i].load(std::memory_order_relaxed)) return false;  // within the box
     const glm::dvec3 d = glm::abs(point(i) - mesh.center);
     return !(std::max(d.x, std::max(d.y, d.z)) <= reach);
   });

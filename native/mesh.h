@@ -30,6 +30,13 @@ struct Mesh {
 Mesh make_mesh(const double* vertices, std::size_t vertex_count, const std::int64_t* triangles,
                std::size_t triangle_count, unsigned threads = 0);
 
+// The largest side of the box make_mesh takes (the vertices the triangles use; 0 for no
+// triangle), for what runs on the caller's arrays outside compute() (projected smoothing's
+// unit scaling). Throws std::invalid_argument for an index out of range.
+double used_width(const double* vertices, std::size_t vertex_count,
+                  const std::int64_t* triangles, std::size_t triangle_count,
+                  unsigned threads = 0);
+
 // Asks for a face's three corners ahead of use. The corners of consecutive faces lie anywhere
 // in the vertex array (subdivided and remeshed models scatter them), and per-face loops whose
 // arithmetic has divisions and square roots leave the core too little room to overlap those

@@ -400,6 +400,19 @@ PYBIND11_MODULE(_core, m) {
   m.def("hardware_threads", [] { return sdf::resolve_threads(0); });
   // compute()'s rule for meshes far from unit size, for the smoothing that runs outside it.
   m.def("unit_scale_exponent", &sdf::unit_scale_exponent, py::arg("max_extent"));
+  m.def(
+      "used_width",
+      [](const Doubles& vertices, const Int64s& triangles) {
+        require_rows_of_3(vertices, "vertices");
+        require_rows_of_3(triangles, "triangles");
+        const double* v = vertices.data();
+        const std::int64_t* t = triangles.data();
+        const auto nv = static_cast<std::size_t>(vertices.shape(0));
+        const auto nt = static_cast<std::size_t>(triangles.shape(0));
+        py::gil_scoped_release release;
+        return sdf::used_width(v, nv, t, nt);
+      },
+      py::arg("vertices"), py::arg("triangles"));
   m.attr("MAX_RAYS") = sdf::kMaxRays;
   bind_smoothing(m);
 }
