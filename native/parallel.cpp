@@ -169,19 +169,17 @@ void parallel_for(std::size_t n, std::size_t grain, unsigned threads,
 
   bool cancelled = false;
   if (progress) {
-    // Report at most every 50 ms (and after the first chunk and the last): a Python callback is not
-    // free (it takes the GIL, and runs Python's signal handlers), and people read bars
+    // Report at most every 50 ms (and after the first chunk and the last): a Python callback
+    // is not free (it takes the GIL, and runs Python's signal handlers), and people read bars
     // slowly. Workers wake this thread at every chunk: 4,700 reports for a 1.2M-point cast.
     using Clock = std::chrono::steady_clock;
     constexpr auto kEvery = std::chrono::milliseconds(50);
-    Clock::time_point last{};
-    bool reported = false;
+    Clock::time_point last = Clock::now() - kEvery;  // the first wake reports
     std::unique_lock<std::mutex> lock(mutex);
     while (chunks_done.load() < chunks && !stop.load()) {
       changed.wait_for(lock, kEvery);
       // (The end is always reported: callers' bars reach their top.)
-      if (reported && Clock::now() - last < kEvery && chunks_done.load() < chunks) continue;
-      reported = true;
+      if (Clock::now() - last < kEvery && chunks_done.load() < chunks) continue;
       last = Clock::now();
       lock.unlock();
       const double fraction = static_cast<double>(chunks_done.load()) / chunks;
