@@ -244,13 +244,8 @@ bool EdgeUses::join_patches(ConcurrentParityUnionFind& sets, unsigned threads) c
         sets.prefetch_word(edge[1].face);
         batch[held++] = {edge[0].face, edge[1].face, edge[0].forward() == edge[1].forward()};
         if (held == kJoinBatch) join_held();
-      } else if (s > 2) {  // links here are one-sided: a run of s - 1 uses of one face
-        for (const EdgeUse* run = edge; run != edge_end;) {
-          const EdgeUse* run_end = run;
-          while (run_end != edge_end && run_end->face == run->face) ++run_end;
-          mine &= run_end - run != s - 1;
-          run = run_end;
-        }
+      } else if (s > 2) {  // any link here is one-sided (a run of s - 1 uses of one face)
+        match_uses(edge, edge_end, [&](const EdgeUse&, const EdgeUse&) { mine = false; });
       }
     });
     join_held();
