@@ -33,7 +33,7 @@ import warnings
 import numpy as np
 import trimesh
 
-from .mesh_file_checks import check_complete, check_suffix, format_name
+from .mesh_file_checks import check_complete, check_suffix, format_name, off_sections
 from .output_files import written_whole
 
 # Formats ``save_colored`` writes. PLY, OBJ and OFF go through our own writers: trimesh's
@@ -190,14 +190,7 @@ def _read_off(path: str):
     face fanned in place. Values after a vertex's first three (colours, normals, texture
     coordinates: COFF, NOFF, STOFF) and after a face's corners (colours) are skipped."""
     with open(path, "rb") as stream:
-        text = stream.read().decode("utf-8")
-    lines = text.splitlines()
-    if "#" in text:
-        lines = [line.split("#", 1)[0] for line in lines]
-    lines = [line for line in lines if line and not line.isspace()]
-    header = lines[0].split()
-    counts = header[1:] if len(header) > 1 else lines[1].split()
-    body = lines[1:] if len(header) > 1 else lines[2:]
+        _, counts, body = off_sections(stream.read().decode("utf-8"))
     vertex_count, face_count = int(counts[0]), int(counts[1])
     try:
         vertices = np.array([line.split()[:3] for line in body[:vertex_count]],
