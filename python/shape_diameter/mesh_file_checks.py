@@ -264,9 +264,12 @@ def _ply_row_complete(fields, properties) -> bool:
             return False
         if is_list:
             try:
-                at += int(float(fields[at]))
+                count = int(float(fields[at]))
             except (ValueError, OverflowError):
                 return True  # not a count: trimesh's error to give
+            if count < 0:
+                return True  # the same (a negative count sent the index backwards: fuzzer)
+            at += count
         at += 1
     return at <= len(fields)
 

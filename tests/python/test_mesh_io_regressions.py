@@ -109,3 +109,18 @@ def test_ply_list_property_without_types_is_refused(tmp_path, encoding):
                      "end_header\n".encode() + bytes(40))  # fmt: skip
     with pytest.raises(ValueError, match=r"short\.ply: "):
         load_mesh(path)
+
+
+# --- PLY: a negative list count in the last ASCII row --------------------------------------
+
+
+def test_ply_negative_list_count_in_the_last_row_is_refused(tmp_path):
+    # The completeness check of the last row stepped back by the count and indexed outside
+    # the row: IndexError (found by the fuzzer in CI).
+    path = tmp_path / "negative.ply"
+    path.write_text("ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\n"
+                    "property float y\nproperty float z\nelement face 1\n"
+                    "property list uchar int vertex_indices\nproperty list uchar int tags\n"
+                    "end_header\n0 0 0\n1 0 0\n0 1 0\n-9 0 1 2 1 5\n")  # fmt: skip
+    with pytest.raises(ValueError, match=r"negative\.ply: "):
+        load_mesh(path)
