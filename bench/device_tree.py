@@ -5,8 +5,11 @@ calls of each by wall time, for each orientation (and for a mesh whose faces 'au
 reverse); checks that both give the same values.
 
     python bench/device_tree.py [ENGINE [MESH,MESH]] [--rays R] [--repeat N] [--rounds N]
+        [--vary NAME=A,B]
 
-Prints one row a setting: wall time of each tree, their ratio, and the stages of each."""
+Prints one row a setting: wall time of each tree, their ratio, and the stages of each.
+--vary compares two values of another environment variable instead, on the device's tree
+(e.g. SDF_OPENCL_WIDE=0,1: the binary tree against the 8-wide one)."""
 
 import argparse
 import os
@@ -27,10 +30,11 @@ SETTINGS = (("auto", "auto", False), ("as_is", "as_is", False),
             ("auto, 1/3 reversed", "auto", True))
 
 
-def timed(v, f, tree, args, orientation):
+def timed(v, f, setting, args, orientation):
     import shape_diameter as sd
 
-    os.environ["SDF_OPENCL_TREE"] = tree
+    os.environ["SDF_OPENCL_TREE"] = "device"
+    os.environ[args.name] = setting
     t0 = time.perf_counter()
     r = sd.compute(v, f, rays=args.rays, engine=args.engine, orientation=orientation)
     return (time.perf_counter() - t0) * 1e3, r
@@ -45,10 +49,14 @@ def main():
     parser.add_argument("--rounds", type=int, default=2)
     parser.add_argument("--all-stages", action="store_true",
                         help="after each row, every stage and step of the device tree's run")
+    parser.add_argument("--vary", default="SDF_OPENCL_TREE=host,device",
+                        help="the environment variable and its two values to compare")
     args = parser.parse_args()
+    args.name, values = args.vary.split("=", 1)
+    first, second = values.split(",")
     wanted = args.meshes.split(",")
-    print("| mesh | faces | orientation | host tree ms | device tree ms | host/device | "
-          "host stages | device stages |")
+    print(f"| mesh | faces | orientation | {first} ms | {second} ms | {first}/{second} | "
+          f"{first} stages | {second} stages |")
     print("|---|---:|---|---:|---:|---:|---|---|")
     for name, v, f in benchmark_meshes():
         if name not in wanted:
@@ -59,14 +67,14 @@ def main():
                 faces[::3] = faces[::3, ::-1]
             best = {}
             for _ in range(args.rounds):
-                for tree in ("host", "device"):
+                for tree in (first, second):
                     for _ in range(args.repeat):
                         wall, r = timed(v, faces, tree, args, orientation)
                         if tree not in best or wall < best[tree][0]:
                             best[tree] = (wall, r)
-            host, device = best["host"], best["device"]
+            host, device = best[first], best[second]
             if not np.array_equal(host[1].raw, device[1].raw):
-                raise SystemExit(f"{name}: the device tree's values differ from the host tree's")
+                raise SystemExit(f"{name}: {args.name}={second} gives other values than {first}")
 
             def stages(r):
                 return " ".join(f"{k} {r.timings[k] * 1e3:.1f}" for k in STAGES if k in r.timings)
@@ -76,9 +84,10 @@ def main():
                   flush=True)
             if args.all_stages:
                 print("    " + " ".join(f"{k} {x * 1e3:.1f}" for k, x in device[1].timings.items())
-                      + f" | device memory {device[1].device_memory / len(f):.0f} B/face (host tree "
+                      + f" | device memory {device[1].device_memory / len(f):.0f} B/face ({first}: "
                       f"{host[1].device_memory / len(f):.0f})")
     os.environ.pop("SDF_OPENCL_TREE", None)
+    os.environ.pop(args.name, None)
 
 
 if __name__ == "__main__":
