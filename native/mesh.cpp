@@ -44,45 +44,69 @@ std::size_t first_bad(std::size_t count, unsigned threads, Bad&& bad) {
 // marked in one pass. A vertex no triangle uses takes no part in the box: one far away (a
 // stray point at a georeferenced mesh's origin) would otherwise set the near-hit threshold
 // and the unit scaling, and so every value (found by a new-user trial: one unused vertex 10
-// mesh widths away changed values by up to 28%, 1e5 widths away zeroed them). The marks are
-// atomic bytes: many threads mark a shared vertex, each mark written only while unset (H100
-// host, 16 threads, 1.21M faces: make_mesh 2.0 ms without the marks, 5.0-5.5 with every
-// corner's mark written, 4.1-4.6 so; boxing the corners' positions instead, read at random,
-// 4.3-4.9, and 2.6x slower on one thread).
+// mesh widths away changed values by up to 28%, 1e5 widths away zeroed them).
+// Each block of corners marks its own bit set, merged after: marks shared by all threads
+// (atomic bytes) cost 3.3-4.6 ms on 1.21M faces on a 16-core host, most of it cache lines
+// passed between cores (a subdivided mesh's faces use its first vertices everywhere).
 struct UsedBox {
-  std::vector<std::atomic<std::uint8_t>> used;  // per vertex
+  std::vector<std::uint64_t> used;  // bit v % 64 of word v / 64: vertex v is used
   glm::dvec3 lo{std::numeric_limits<double>::infinity()};
   glm::dvec3 hi{-std::numeric_limits<double>::infinity()};
 
+  bool is_used(std::size_t v) const { return (used[v / 64] >> (v % 64)) & 1u; }
+
+  // copy_to, when set, receives the indices as 32 bits (make_mesh's triangles), in the same
+  // pass that reads them.
   UsedBox(const double* vertices, std::size_t vertex_count, const std::int64_t* triangles,
-          std::size_t triangle_count, unsigned threads)
-      : used(vertex_count) {  // zeroed
-    const std::size_t bad_index = first_bad(3 * triangle_count, threads, [&](std::size_t i) {
-      if (triangles[i] < 0 || static_cast<std::uint64_t>(triangles[i]) >= vertex_count)
-        return true;
-      auto& mark = used[static_cast<std::size_t>(triangles[i])];
-      if (!mark.load(std::memory_order_relaxed)) mark.store(1, std::memory_order_relaxed);
-      return false;
+          std::size_t triangle_count, unsigned threads, std::uint32_t* copy_to = nullptr) {
+    const std::size_t corners = 3 * triangle_count, words = (vertex_count + 63) / 64;
+    // At most 16 blocks: their sets take 16 x vertex_count / 8 bytes.
+    const std::size_t blocks = std::max<std::size_t>(
+        1, std::min<std::size_t>({resolve_threads(threads), 16, corners / kGrain}));
+    std::vector<std::uint64_t> marks(blocks * words, 0);
+    std::vector<std::size_t> first_bad_of(blocks, kNoItem);
+    parallel_for(blocks, 1, threads, [&](std::size_t b0, std::size_t b1) {
+      for (std::size_t b = b0; b < b1; ++b) {
+        std::uint64_t* mine = marks.data() + b * words;
+        for (std::size_t i = corners * b / blocks; i < corners * (b + 1) / blocks; ++i) {
+          const std::int64_t v = triangles[i];
+          if (v < 0 || static_cast<std::uint64_t>(v) >= vertex_count) {
+            first_bad_of[b] = i;
+            break;
+          }
+          mine[static_cast<std::size_t>(v) / 64] |= std::uint64_t{1} << (v % 64);
+          if (copy_to) copy_to[i] = static_cast<std::uint32_t>(v);
+        }
+      }
     });
+    const std::size_t bad_index = *std::min_element(first_bad_of.begin(), first_bad_of.end());
     if (bad_index != kNoItem)
       throw std::invalid_argument("triangle " + std::to_string(bad_index / 3) +
                                   " uses vertex index " + std::to_string(triangles[bad_index]) +
                                   ", outside [0, " + std::to_string(vertex_count) + ")");
-    // Per-chunk boxes merged (min and max of finite values are exact in any order).
+    // The marks merged, and per-chunk boxes merged (min and max of finite values are exact in
+    // any order); chunks of whole words.
+    used.resize(words);
     auto point = [&](std::size_t i) {
       return glm::dvec3(vertices[3 * i], vertices[3 * i + 1], vertices[3 * i + 2]);
     };
-    const std::size_t chunks = (vertex_count + kGrain - 1) / kGrain;
+    constexpr std::size_t kWordGrain = kGrain / 64;
+    const std::size_t chunks = (words + kWordGrain - 1) / kWordGrain;
     std::vector<glm::dvec3> chunk_lo(chunks, lo), chunk_hi(chunks, hi);
-    parallel_for(vertex_count, kGrain, threads, [&](std::size_t begin, std::size_t end) {
+    parallel_for(words, kWordGrain, threads, [&](std::size_t begin, std::size_t end) {
       glm::dvec3 l = lo, h = hi;
-      for (std::size_t i = begin; i < end; ++i)
-        if (used[i].load(std::memory_order_relaxed)) {
+      for (std::size_t w = begin; w < end; ++w) {
+        std::uint64_t bits = 0;
+        for (std::size_t b = 0; b < blocks; ++b) bits |= marks[b * words + w];
+        used[w] = bits;
+        for (; bits != 0; bits &= bits - 1) {
+          const std::size_t i = 64 * w + static_cast<std::size_t>(__builtin_ctzll(bits));
           l = glm::min(l, point(i));
           h = glm::max(h, point(i));
         }
-      chunk_lo[begin / kGrain] = l;
-      chunk_hi[begin / kGrain] = h;
+      }
+      chunk_lo[begin / kWordGrain] = l;
+      chunk_hi[begin / kWordGrain] = h;
     });
     for (std::size_t c = 0; c < chunks; ++c) {
       lo = glm::min(lo, chunk_lo[c]);
@@ -98,6 +122,57 @@ struct UsedBox {
 };
 
 }  // namespace
+
+MeshValues mesh_values(const double* vertices, std::size_t vertex_count,
+                       const std::int64_t* triangles, std::size_t triangle_count,
+                       unsigned threads) {
+  struct Part {
+    std::size_t not_finite = 0, first = kNoItem;
+    std::int64_t lo = std::numeric_limits<std::int64_t>::max();
+    std::int64_t hi = std::numeric_limits<std::int64_t>::min();
+  };
+  // Chunks of vertices and of corners alike, each chunk its own part, merged in order.
+  const std::size_t corners = 3 * triangle_count, items = std::max(vertex_count, corners);
+  std::vector<Part> parts((items + kGrain - 1) / kGrain);
+  parallel_for(items, kGrain, threads, [&](std::size_t begin, std::size_t end) {
+    // Locals, not the part's fields, in the loops: they then vectorise (a store through the
+    // part could alias the indices).
+    std::size_t bad = 0;
+    const std::size_t v_end = std::min(end, vertex_count);
+    for (std::size_t i = begin; i < v_end; ++i) {
+      const double* p = vertices + 3 * i;
+      bad += !(std::isfinite(p[0]) && std::isfinite(p[1]) && std::isfinite(p[2]));
+    }
+    Part& part = parts[begin / kGrain];
+    part.not_finite = bad;
+    for (std::size_t i = begin; bad > 0 && i < v_end; ++i) {
+      const double* p = vertices + 3 * i;
+      if (!(std::isfinite(p[0]) && std::isfinite(p[1]) && std::isfinite(p[2]))) {
+        part.first = i;
+        break;
+      }
+    }
+    std::int64_t lo = part.lo, hi = part.hi;
+    for (std::size_t i = begin; i < std::min(end, corners); ++i) {
+      lo = std::min(lo, triangles[i]);
+      hi = std::max(hi, triangles[i]);
+    }
+    part.lo = lo;
+    part.hi = hi;
+  });
+  MeshValues out;
+  out.first_not_finite = kNoItem;
+  std::int64_t lo = std::numeric_limits<std::int64_t>::max(), hi = std::numeric_limits<std::int64_t>::min();
+  for (const Part& part : parts) {
+    out.not_finite += part.not_finite;
+    out.first_not_finite = std::min(out.first_not_finite, part.first);
+    lo = std::min(lo, part.lo);
+    hi = std::max(hi, part.hi);
+  }
+  if (out.not_finite == 0) out.first_not_finite = 0;
+  if (corners > 0) out.min_index = lo, out.max_index = hi;
+  return out;
+}
 
 double used_width(const double* vertices, std::size_t vertex_count,
                   const std::int64_t* triangles, std::size_t triangle_count, unsigned threads) {
@@ -126,8 +201,10 @@ Mesh make_mesh(const double* vertices, std::size_t vertex_count, const std::int6
   if (not_finite != kNoItem)
     throw std::invalid_argument("vertex " + std::to_string(not_finite) +
                                 " has a coordinate that is not finite");
-  const UsedBox box(vertices, vertex_count, triangles, triangle_count, threads);
   Mesh mesh;
+  mesh.triangles.resize(triangle_count);
+  const UsedBox box(vertices, vertex_count, triangles, triangle_count, threads,
+                    &mesh.triangles[0][0]);
   mesh.center = 0.5 * (box.lo + box.hi);
   mesh.max_extent = box.width();
   // The engines compute in 32-bit floats on coordinates centred on the box: past ~1e30 the
@@ -145,7 +222,7 @@ Mesh make_mesh(const double* vertices, std::size_t vertex_count, const std::int6
   // tiny mesh's stray vertex would overflow; found by fuzzing).
   const double reach = std::min(1e30, std::ldexp(1e30, -unit_scale_exponent(mesh.max_extent)));
   const std::size_t too_far = first_bad(vertex_count, threads, [&](std::size_t i) {
-    if (box.used[i].load(std::memory_order_relaxed)) return false;  // within the box
+    if (box.is_used(i)) return false;  // within the box
     const glm::dvec3 d = glm::abs(point(i) - mesh.center);
     return !(std::max(d.x, std::max(d.y, d.z)) <= reach);
   });
@@ -157,12 +234,6 @@ Mesh make_mesh(const double* vertices, std::size_t vertex_count, const std::int6
   mesh.vertices.resize(vertex_count);
   parallel_for(vertex_count, kGrain, threads, [&](std::size_t begin, std::size_t end) {
     for (std::size_t i = begin; i < end; ++i) mesh.vertices[i] = glm::vec3(point(i) - mesh.center);
-  });
-  mesh.triangles.resize(triangle_count);
-  parallel_for(triangle_count, kGrain, threads, [&](std::size_t begin, std::size_t end) {
-    for (std::size_t f = begin; f < end; ++f)
-      for (int k = 0; k < 3; ++k)
-        mesh.triangles[f][k] = static_cast<std::uint32_t>(triangles[3 * f + k]);
   });
   return mesh;
 }

@@ -37,6 +37,17 @@ double used_width(const double* vertices, std::size_t vertex_count,
                   const std::int64_t* triangles, std::size_t triangle_count,
                   unsigned threads = 0);
 
+// What the caller's checks report about a mesh's values, in one parallel pass (numpy's passes
+// cost 6 ms on 1.2M faces on a 16-core host, most of the time outside compute()'s stages).
+struct MeshValues {
+  std::size_t not_finite = 0;  // vertices with a NaN or infinite coordinate
+  std::size_t first_not_finite = 0;  // the first of them (when not_finite > 0)
+  std::int64_t min_index = 0, max_index = 0;  // over every corner (0 for no triangle)
+};
+MeshValues mesh_values(const double* vertices, std::size_t vertex_count,
+                       const std::int64_t* triangles, std::size_t triangle_count,
+                       unsigned threads = 0);
+
 // Asks for a face's three corners ahead of use. The corners of consecutive faces lie anywhere
 // in the vertex array (subdivided and remeshed models scatter them), and per-face loops whose
 // arithmetic has divisions and square roots leave the core too little room to overlap those

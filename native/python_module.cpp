@@ -413,6 +413,24 @@ PYBIND11_MODULE(_core, m) {
         return sdf::used_width(v, nv, t, nt);
       },
       py::arg("vertices"), py::arg("triangles"));
+  m.def(
+      "mesh_values",
+      [](const Doubles& vertices, const Int64s& triangles) {
+        require_rows_of_3(vertices, "vertices");
+        require_rows_of_3(triangles, "triangles");
+        const double* v = vertices.data();
+        const std::int64_t* t = triangles.data();
+        const auto nv = static_cast<std::size_t>(vertices.shape(0));
+        const auto nt = static_cast<std::size_t>(triangles.shape(0));
+        sdf::MeshValues values;
+        {
+          py::gil_scoped_release release;
+          values = sdf::mesh_values(v, nv, t, nt);
+        }
+        return py::make_tuple(values.not_finite, values.first_not_finite, values.min_index,
+                              values.max_index);
+      },
+      py::arg("vertices"), py::arg("triangles"));
   m.attr("MAX_RAYS") = sdf::kMaxRays;
   bind_smoothing(m);
 }

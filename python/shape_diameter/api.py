@@ -11,7 +11,7 @@ from typing import Callable, Optional
 import numpy as np
 
 from . import _core
-from .normalization import NORMALIZATIONS, normalize_values
+from .normalization import NORMALIZATIONS
 from .smoothing import (
     check_smoothing,
     prepare_projected_for,
@@ -117,22 +117,27 @@ def _check_mesh(vertices, triangles):
     if t.shape[0] == 0:
         raise ValueError("the mesh is empty: no triangles")
     v = np.ascontiguousarray(v, dtype=np.float64)
-    # One flat pass first (30x faster than per row on a million vertices); rows only to name
-    # the culprits.
-    if not np.isfinite(v).all():
-        bad = ~np.isfinite(v).all(axis=1)
+    # Unsigned 64-bit indices may not fit int64: checked as they are. Otherwise one parallel
+    # native pass (numpy's took 6 ms on 1.2M faces on a 16-core host).
+    wide_unsigned = t.dtype.kind == "u" and t.dtype.itemsize == 8
+    if wide_unsigned:
+        lo, hi = int(np.min(t)), int(np.max(t))
+    t = np.ascontiguousarray(t, dtype=np.int64)
+    not_finite, first_not_finite, min_index, max_index = _core.mesh_values(v, t)
+    if not wide_unsigned:
+        lo, hi = min_index, max_index
+    if not_finite:
         raise ValueError(
-            f"vertices must be finite: {int(bad.sum())} have NaN or infinite coordinates "
-            f"(first: vertex {int(np.argmax(bad))})"
+            f"vertices must be finite: {not_finite} have NaN or infinite coordinates "
+            f"(first: vertex {first_not_finite})"
         )
-    lo, hi = int(np.min(t)), int(np.max(t))
     if lo < 0:
         raise ValueError(f"triangles contain a negative vertex index ({lo})")
     if hi >= v.shape[0]:
         raise ValueError(
             f"triangles contain vertex index {hi}, but there are only {v.shape[0]} vertices"
         )
-    return v, np.ascontiguousarray(t, dtype=np.int64)
+    return v, t
 
 
 def _check_integer(name, value, lo, hi):
@@ -361,7 +366,9 @@ def compute(
         timings["smooth"] = time.perf_counter() - clock
         timings.update({f"smooth: {k}": x for k, x in stages.items()})
     clock = time.perf_counter()
-    normalized = normalize_values(values, normalize, threads)
+    # The core's own values (finite, >= 0, float32): normalize_values' checks would only cost
+    # time (1 ms a million values).
+    normalized = _core.normalize(values, normalize, int(threads))
     timings["normalize"] = time.perf_counter() - clock
     timings["total"] = time.perf_counter() - start
     return Result(
