@@ -840,3 +840,20 @@ def test_gil_is_released_while_computing():
     assert longest_pause < 0.5 * cast, (
         f"the other thread stalled {longest_pause:.3f} s during a {cast:.3f} s cast"
     )
+
+
+def test_mesh_checks_span_the_native_chunks():
+    # The checks run natively in chunks of 32768 items merged in order: the count sums every
+    # chunk, the first bad vertex is the first overall, the index range spans every chunk.
+    rng = np.random.default_rng(7)
+    V = rng.random((100_000, 3))
+    V[[90_000, 40_000, 70_000], [1, 2, 0]] = [np.inf, np.nan, -np.inf]
+    F = rng.integers(5, 99_000, size=(60_000, 3))
+    F[45_000, 1], F[11_000, 2] = 2, 99_999
+    from shape_diameter import _core
+
+    assert _core.mesh_values(V, F) == (3, 40_000, 2, 99_999)
+    F[20_000, 0] = -7
+    assert _core.mesh_values(V, F)[2] == -7
+    with pytest.raises(ValueError, match=r"3 have NaN or infinite coordinates \(first: vertex 40000\)"):
+        shape_diameter.compute(V, F)
