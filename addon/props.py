@@ -22,8 +22,8 @@ _engine_items = {}
 def engine_choices(with_default):
     """[(key, enum item)] for the engines shape_diameter.engines() lists here, after 'auto'
     (and 'DEFAULT', the preferences' choice, on the operator and the panel); with OpenCL
-    devices, 'opencl' (the best of them, whichever machine this is) and each device, labelled
-    by its name. Item identifiers are what shape_diameter.compute(engine=...) takes, so
+    devices, 'opencl' (the best of them, whichever machine this is), 'opencl:all' where that
+    shares the work between two devices or more, and each device, labelled by its name. Item identifiers are what shape_diameter.compute(engine=...) takes, so
     scripts pass the same strings. `key` is what a saved setting keeps: the identifier, but
     for a device its name ('opencl:<device name>', '... #2' for a second device of that
     name), because a device's index changes with the drivers and the devices installed."""
@@ -34,7 +34,11 @@ def engine_choices(with_default):
     choices.append(("auto", ("auto", "Automatic",
                              "The best OpenCL GPU if there is one, else the CPU")))
     engines = core.engines()
-    has_opencl = any(str(e["name"]).startswith("opencl:") for e in engines)
+    devices = [e for e in engines if str(e["name"]).startswith("opencl:")]
+    has_opencl = bool(devices)
+    # 'opencl:all' takes every GPU, or every OpenCL device where there is no GPU.
+    gpus = sum(1 for e in devices if e.get("type") == "GPU")
+    sharing = gpus or len(devices)
     same_name = {}
     for engine in engines:
         name = str(engine["name"])
@@ -53,6 +57,11 @@ def engine_choices(with_default):
         if name == "cpu" and has_opencl:
             choices.append(("opencl", ("opencl", "Best OpenCL Device", (
                 "The fastest OpenCL device here, a GPU before a CPU device; engine='opencl'"))))
+            if sharing >= 2:  # 'opencl:all' would use more than one device
+                label = "All GPUs" if gpus else "All OpenCL Devices"
+                choices.append(("opencl:all", ("opencl:all", label, (
+                    f"{label} at once, sharing the points (the same values as one device); "
+                    "engine='opencl:all'"))))
     items = [item for _, item in choices]
     items = _engine_items.setdefault((with_default, tuple(items)), items)
     return [(key, item) for (key, _), item in zip(choices, items)]

@@ -262,8 +262,8 @@ def test_the_engine_menu_offers_the_best_opencl_device_and_each_by_name(monkeypa
     monkeypatch.setattr(core, "engines", lambda refresh=False: fake_engines(
         ("GPU A", "GPU"), ("GPU B", "GPU"), ("GPU B", "GPU")))
     items = props.engine_items(False)
-    assert [item[0] for item in items] == ["auto", "cpu", "opencl", "opencl:0", "opencl:1",
-                                           "opencl:2"]
+    assert [item[0] for item in items] == ["auto", "cpu", "opencl", "opencl:all", "opencl:0",
+                                           "opencl:1", "opencl:2"]
     labels = {item[0]: item[1] for item in items}
     # Two devices of one name (two GPUs of a model) are told apart.
     assert [labels[f"opencl:{i}"] for i in range(3)] == ["GPU A", "GPU B", "GPU B #2"]
@@ -271,6 +271,21 @@ def test_the_engine_menu_offers_the_best_opencl_device_and_each_by_name(monkeypa
     assert [item[0] for item in props.engine_items(True)][:2] == ["DEFAULT", "auto"]
     monkeypatch.setattr(core, "engines", lambda refresh=False: fake_engines())
     assert [item[0] for item in props.engine_items(False)] == ["auto", "cpu"]  # no OpenCL
+
+
+def test_the_engine_menu_offers_every_device_at_once_where_that_is_two_or_more(monkeypatch):
+    # compute(engine='opencl:all') shares the points between every GPU (every OpenCL device
+    # where there is none); the menu offered no way to ask for it.
+    core, props = addon_module("core"), addon_module("props")
+
+    def menu(*devices):
+        monkeypatch.setattr(core, "engines", lambda refresh=False: fake_engines(*devices))
+        return {item[0]: item[1] for item in props.engine_items(False)}
+
+    assert menu(("GPU A", "GPU"), ("GPU B", "GPU"))["opencl:all"] == "All GPUs"
+    assert "opencl:all" not in menu(("GPU A", "GPU"), ("PoCL", "CPU"))  # one GPU: the same
+    assert "opencl:all" not in menu(("PoCL", "CPU"),)
+    assert menu(("PoCL", "CPU"), ("Intel CPU", "CPU"))["opencl:all"] == "All OpenCL Devices"
 
 
 def test_a_chosen_device_is_kept_by_name_when_the_devices_change(monkeypatch):
