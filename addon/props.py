@@ -23,10 +23,12 @@ def engine_choices(with_default):
     """[(key, enum item)] for the engines shape_diameter.engines() lists here, after 'auto'
     (and 'DEFAULT', the preferences' choice, on the operator and the panel); with OpenCL
     devices, 'opencl' (the best of them, whichever machine this is), 'opencl:all' where that
-    shares the work between two devices or more, and each device, labelled by its name. Item identifiers are what shape_diameter.compute(engine=...) takes, so
-    scripts pass the same strings. `key` is what a saved setting keeps: the identifier, but
-    for a device its name ('opencl:<device name>', '... #2' for a second device of that
-    name), because a device's index changes with the drivers and the devices installed."""
+    shares the work between two devices or more, and each device, labelled by its name. Item
+    identifiers are what shape_diameter.compute(engine=...) takes, so scripts pass the same
+    strings. `key` is what a saved setting keeps: the identifier, but for a device its name
+    ('opencl:<device name>', '... #2' for a second device of that name), because a device's
+    index changes with the drivers and the devices installed, and 'OPENCL_ALL' for
+    'opencl:all'."""
     choices = []  # (key, (identifier, label, description))
     if with_default:
         choices.append(("DEFAULT", ("DEFAULT", "Default",
@@ -59,7 +61,8 @@ def engine_choices(with_default):
                 "The fastest OpenCL device here, a GPU before a CPU device; engine='opencl'"))))
             if sharing >= 2:  # 'opencl:all' would use more than one device
                 label = "All GPUs" if gpus else "All OpenCL Devices"
-                choices.append(("opencl:all", ("opencl:all", label, (
+                # Its key is no "opencl:<label>": a device named "all" keeps its own.
+                choices.append(("OPENCL_ALL", ("opencl:all", label, (
                     f"{label} at once, sharing the points (the same values as one device); "
                     "engine='opencl:all'"))))
     items = [item for _, item in choices]

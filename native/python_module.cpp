@@ -415,7 +415,7 @@ PYBIND11_MODULE(_core, m) {
       py::arg("vertices"), py::arg("triangles"));
   m.def(
       "mesh_values",
-      [](const Doubles& vertices, const Int64s& triangles) {
+      [](const Doubles& vertices, const Int64s& triangles, unsigned threads) {
         require_rows_of_3(vertices, "vertices");
         require_rows_of_3(triangles, "triangles");
         const double* v = vertices.data();
@@ -425,12 +425,12 @@ PYBIND11_MODULE(_core, m) {
         sdf::MeshValues values;
         {
           py::gil_scoped_release release;
-          values = sdf::mesh_values(v, nv, t, nt);
+          values = sdf::mesh_values(v, nv, t, nt, threads);
         }
         return py::make_tuple(values.not_finite, values.first_not_finite, values.min_index,
                               values.max_index);
       },
-      py::arg("vertices"), py::arg("triangles"));
+      py::arg("vertices"), py::arg("triangles"), py::arg("threads") = 0);
   m.attr("MAX_RAYS") = sdf::kMaxRays;
   bind_smoothing(m);
 }

@@ -101,7 +101,9 @@ def _resolve_engine(engine: str) -> str:
     return "cpu"
 
 
-def _check_mesh(vertices, triangles):
+def _check_mesh(vertices, triangles, threads=0):
+    """The mesh as contiguous float64 and int64 arrays; ValueError naming what is wrong. The
+    value checks run on `threads` (an already checked count, 0 = every core)."""
     v = np.asarray(vertices)
     t = np.asarray(triangles)
     if v.ndim != 2 or v.shape[1] != 3:
@@ -123,7 +125,7 @@ def _check_mesh(vertices, triangles):
     if wide_unsigned:
         lo, hi = int(np.min(t)), int(np.max(t))
     t = np.ascontiguousarray(t, dtype=np.int64)
-    not_finite, first_not_finite, min_index, max_index = _core.mesh_values(v, t)
+    not_finite, first_not_finite, min_index, max_index = _core.mesh_values(v, t, threads)
     if not wide_unsigned:
         lo, hi = min_index, max_index
     if not_finite:
@@ -264,9 +266,9 @@ def compute(
     input; the GIL is released while native code runs.
     """
     start = time.perf_counter()
-    v, t = _check_mesh(vertices, triangles)
+    _check_integer("threads", threads, 0, 4096)  # first: the mesh's checks run on them
+    v, t = _check_mesh(vertices, triangles, int(threads))
     _check_options(rays, cone_angle, sampling, points, normalize, engine, progress, seed)
-    _check_integer("threads", threads, 0, 4096)
     _check_choice("accel", accel, ACCELERATIONS)
     _check_choice("orientation", orientation, ORIENTATIONS)
     _check_choice("bvh_quality", bvh_quality, BVH_QUALITIES)

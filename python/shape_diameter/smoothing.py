@@ -166,11 +166,11 @@ def smooth(
     return_image=True). Raises ValueError for bad input or options; the GIL is released while
     native code runs.
     """
-    v, t = _check_mesh(vertices, triangles)
+    threads = check_threads(threads)  # first: the mesh's checks run on them
+    v, t = _check_mesh(vertices, triangles, threads)
     values, points = _check_values(values, points, len(v), len(t))
     resolved = check_smoothing(method, options, uvs=uvs, face_count=len(t), vertex_count=len(v),
                                triangles=t)  # fmt: skip
-    threads = check_threads(threads)
     if progress is not None and not callable(progress):
         raise ValueError("progress must be a callable taking a fraction in [0, 1], or None")
     _check_engine(engine)
@@ -438,11 +438,11 @@ def run_checked(v, t, values, points, method, o, threads, progress, engine="cpu"
 # ---- Checks ----
 
 
-def _check_mesh(vertices, triangles):
+def _check_mesh(vertices, triangles, threads):
     # The same rules and messages as compute() (imported late: api imports this module).
     from .api import _check_mesh as check
 
-    return check(vertices, triangles)
+    return check(vertices, triangles, threads)
 
 
 def _check_values(values, points, n, m):

@@ -286,6 +286,11 @@ def test_the_engine_menu_offers_every_device_at_once_where_that_is_two_or_more(m
     assert "opencl:all" not in menu(("GPU A", "GPU"), ("PoCL", "CPU"))  # one GPU: the same
     assert "opencl:all" not in menu(("PoCL", "CPU"),)
     assert menu(("PoCL", "CPU"), ("Intel CPU", "CPU"))["opencl:all"] == "All OpenCL Devices"
+    # A device named "all" keeps a key of its own: a saved choice of it reads back as it.
+    menu(("all", "GPU"), ("GPU B", "GPU"))
+    keys = [key for key, _ in props.engine_choices(False)]
+    assert len(set(keys)) == len(keys)
+    assert dict(props.engine_choices(False))["opencl:all"][0] == "opencl:0"
 
 
 def test_a_chosen_device_is_kept_by_name_when_the_devices_change(monkeypatch):
