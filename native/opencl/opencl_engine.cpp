@@ -17,6 +17,7 @@
 #include "../../kernels/sdf_bvh4_traverse.h"
 #include "device_state.h"
 #include "device_tree.h"
+#include "launch_sizes.h"
 #include "program_cache.h"
 
 namespace sdf::cl {
@@ -38,6 +39,8 @@ struct WorkQueue {
   std::size_t meshes_uploaded = 0;  // devices whose mesh is up (CastInput::mesh), under done_mutex
   std::size_t total = 0;
   std::size_t devices = 1;  // casting together
+  // Per device (its place in the list), points a second in its last launch; 0 before one.
+  std::unique_ptr<std::atomic<double>[]> rates;
   // A device-made order (CastInput::mesh), from the first device to make it (all make the
   // same), for putting the results in face order.
   std::mutex order_mutex;
@@ -178,7 +181,8 @@ class SharedScene {
   std::exception_ptr failure_;
 };
 
-void run_device(const Device& device, SharedScene& shared_scene, const CastInput& input,
+void run_device(const Device& device, std::size_t slot, SharedScene& shared_scene,
+                const CastInput& input,
                 const Cone& cone, float min_closeness,
                 unsigned host_threads,
                 UninitializedVector<float>& raw_ordered,
@@ -389,8 +393,10 @@ void run_device(const Device& device, SharedScene& shared_scene, const CastInput
   // item per point (2048 resident per unit on NVIDIA's), `rays` times more with the per-ray
   // kernel, and still short (about 12 ms for 270k points on an H100); starting at 4096 points
   // left the GPU mostly idle, 11% of the cast time at 832k faces (H100).
-  std::size_t chunk = device.gpu ? std::max<std::size_t>(4096, device.compute_units * 2048u) : 4096;
-  const std::size_t first_chunk = chunk;
+  std::size_t chunk = first_launch_points(
+      device.gpu ? std::max<std::size_t>(4096, device.compute_units * 2048u) : 4096, work.total,
+      work.devices);
+  const std::size_t floor = chunk / 4;
   // Work-group size. GPUs: 64, two warps or one wavefront (left to the driver, NVIDIA's picks a
   // divisor of the global size, down to 1 for a prime count). CPUs (PoCL): 1, because PoCL
   // runs a work group as a loop it tries to vectorise, and divergent traversal loops defeat
@@ -440,21 +446,18 @@ void run_device(const Device& device, SharedScene& shared_scene, const CastInput
       work.done += count;
     }
     done_changed.notify_all();
-    // Scale the next launch toward the target time, by at most 8x at once.
+    // The next launch toward the target time, shared out between devices (launch_sizes.h).
     const double target =
         input.short_launches && input.short_launches->load() ? kShortSeconds : kTargetSeconds;
-    const double factor = std::clamp(target / std::max(took, 1e-4), 0.5, 8.0);
-    chunk = std::clamp<std::size_t>(static_cast<std::size_t>(chunk * factor), 256, 1u << 22);
-    // Several devices: at most a share of what is left, so that they finish together (guided
-    // scheduling). Growing toward the target alone, the device done first with its first
-    // launch took all the rest: 2 x H200, 1.21M faces, as_is or after reversing faces, the
-    // cast took 30 ms where an even split takes 20.
-    // Not below a quarter of the first launch: smaller launches add a wait each (2 x H200:
-    // a floor of 256 points cost 2 ms at 832k faces where launches were already short).
-    if (work.devices > 1) {
-      const std::size_t left = work.total - std::min(work.total, work.next.load());
-      chunk = std::min(chunk, std::max(first_chunk / 4, left / (2 * work.devices)));
+    work.rates[slot] = count / std::max(took, 1e-6);
+    double share = 1.0 / work.devices;
+    if (work.devices <= 64) {
+      double rates[64];
+      for (std::size_t d = 0; d < work.devices; ++d) rates[d] = work.rates[d].load();
+      share = launch_share(rates, work.devices, slot);
     }
+    const std::size_t left = work.total - std::min(work.total, work.next.load());
+    chunk = next_launch_points(chunk, took, target, floor, left, share);
   }
   if (input.trees && tree.nodes) input.trees->slots().put(&device, &s, std::move(tree));
 }
@@ -483,6 +486,8 @@ CastTimings cast_opencl(const std::vector<const Device*>& devices, const CastInp
   WorkQueue work;
   work.total = n;
   work.devices = devices.size();
+  work.rates = std::make_unique<std::atomic<double>[]>(devices.size());
+  for (std::size_t i = 0; i < devices.size(); ++i) work.rates[i] = 0.0;
   std::mutex done_mutex;
   std::condition_variable done_changed;
   std::vector<DeviceResult> results(devices.size());
@@ -490,7 +495,7 @@ CastTimings cast_opencl(const std::vector<const Device*>& devices, const CastInp
   for (std::size_t i = 0; i < devices.size(); ++i) {
     threads.emplace_back([&, i] {
       try {
-        run_device(*devices[i], shared_scene, input, cone, min_closeness, host_threads,
+        run_device(*devices[i], i, shared_scene, input, cone, min_closeness, host_threads,
                    raw_ordered, valid_ordered, work, done_mutex, done_changed, results[i]);
       } catch (const Error&) {
         // An OpenCL call failed: the device may be lost, so the next run starts afresh.
