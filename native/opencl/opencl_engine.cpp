@@ -457,7 +457,7 @@ void run_device(const Device& device, std::size_t slot, SharedScene& shared_scen
       share = launch_share(rates, work.devices, slot);
     }
     const std::size_t left = work.total - std::min(work.total, work.next.load());
-    chunk = next_launch_points(chunk, took, target, floor, left, share);
+    chunk = next_launch_points(chunk, took, target, floor, left, work.devices, share);
   }
   if (input.trees && tree.nodes) input.trees->slots().put(&device, &s, std::move(tree));
 }

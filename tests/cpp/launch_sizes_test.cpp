@@ -37,7 +37,8 @@ Cast cast_points(const std::vector<double>& speeds, bool shared = true) {
     if (took[d] > 0.0) {
       rates[d] = size[d] / took[d];
       const double share = shared ? sdf::cl::launch_share(rates.data(), n, d) : 1.0;
-      size[d] = sdf::cl::next_launch_points(size[d], took[d], 0.1, floor, kPoints - next, share);
+      size[d] = sdf::cl::next_launch_points(size[d], took[d], 0.1, floor, kPoints - next,
+                                            devices, share);
     }
     const std::size_t take = std::min(size[d], kPoints - next);
     next += take;
@@ -69,9 +70,12 @@ TEST(LaunchSizes, EqualDevicesFinishTogether) {
   EXPECT_GT(alone.spread(), 0.005);
 }
 
+// Devices of one speed share it evenly; devices of several need the shares weighted by speed
+// (split evenly, one device 8x slower of two ended the cast at 63 ms where 40 was due) and a
+// first launch small enough (a quarter of an even share: one 16x slower of two, 76 ms for 36).
 TEST(LaunchSizes, UnequalDevicesFinishTogether) {
   for (std::size_t devices : {2, 3, 4}) {
-    for (double slower : {2.0, 4.0}) {
+    for (double slower : {2.0, 4.0, 8.0, 16.0}) {
       std::vector<double> speeds(devices, kH200);
       speeds[0] = kH200 / slower;
       const Cast run = cast_points(speeds);
@@ -85,14 +89,18 @@ TEST(LaunchSizes, OneDeviceGrowsTowardTheTarget) {
   using sdf::cl::next_launch_points;
   EXPECT_EQ(sdf::cl::first_launch_points(kFill, kPoints, 1), kFill);
   // 10 ms for a launch of a 100 ms target: 8x at most at once; halved at most; 256 to 2^22.
-  EXPECT_EQ(next_launch_points(kFill, 0.01, 0.1, 0, 0, 1.0), 8 * kFill);
-  EXPECT_EQ(next_launch_points(1000, 0.05, 0.1, 0, 0, 1.0), 2000u);
-  EXPECT_EQ(next_launch_points(1000, 1.0, 0.1, 0, 0, 1.0), 500u);
-  EXPECT_EQ(next_launch_points(300, 1.0, 0.1, 0, 0, 1.0), 256u);
-  EXPECT_EQ(next_launch_points(1u << 22, 0.001, 0.1, 0, 0, 1.0), 1u << 22);
+  EXPECT_EQ(next_launch_points(kFill, 0.01, 0.1, 0, 0, 1, 1.0), 8 * kFill);
+  EXPECT_EQ(next_launch_points(1000, 0.05, 0.1, 0, 0, 1, 1.0), 2000u);
+  EXPECT_EQ(next_launch_points(1000, 1.0, 0.1, 0, 0, 1, 1.0), 500u);
+  EXPECT_EQ(next_launch_points(300, 1.0, 0.1, 0, 0, 1, 1.0), 256u);
+  EXPECT_EQ(next_launch_points(1u << 22, 0.001, 0.1, 0, 0, 1, 1.0), 1u << 22);
   // Shared: half the device's share of what is left, not below the floor.
-  EXPECT_EQ(next_launch_points(kFill, 0.01, 0.1, 1000, 8 * kFill, 0.5), 2 * kFill);
-  EXPECT_EQ(next_launch_points(kFill, 0.01, 0.1, 1000, 0, 0.5), 1000u);
+  EXPECT_EQ(next_launch_points(kFill, 0.01, 0.1, 1000, 8 * kFill, 2, 0.5), 2 * kFill);
+  EXPECT_EQ(next_launch_points(kFill, 0.01, 0.1, 1000, 0, 2, 0.5), 1000u);
+  EXPECT_EQ(sdf::cl::first_launch_points(kFill, kPoints, 2), kPoints / 32);
+  EXPECT_EQ(sdf::cl::first_launch_points(kFill, 1000, 2), 4096u);
+  // A share that rounds to 1 beside a vastly slower device still caps the launch.
+  EXPECT_EQ(next_launch_points(kFill, 0.01, 0.1, 1000, 8 * kFill, 2, 1.0), 4 * kFill);
   const double rates[3] = {1.0, 3.0, 0.0};  // the third has not reported: taken as the asker
   EXPECT_DOUBLE_EQ(sdf::cl::launch_share(rates, 3, 1), 3.0 / 7.0);
   EXPECT_DOUBLE_EQ(sdf::cl::launch_share(rates, 3, 2), 1.0 / 3.0);
