@@ -210,10 +210,11 @@ def check_smoothing(
     known = OPTIONS[method]
     unknown = sorted(set(options) - set(known))
     if unknown:
-        allowed = ", ".join(known) if known else "none"
+        # ("allowed: none" read as if 'none' were an option's name, found by a trial)
+        allowed = f"allowed: {', '.join(known)}" if known else "it takes no options"
         raise ValueError(
             f"unknown option{'s' if len(unknown) > 1 else ''} for smoothing {method!r}: "
-            f"{', '.join(unknown)} (allowed: {allowed})"
+            f"{', '.join(unknown)} ({allowed})"
         )
     o = dict(known)
     o.update(options)
@@ -522,7 +523,9 @@ def _real(name, value, lo, hi):
     if isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating)):
         raise ValueError(f"{name} must be a number in [{lo}, {hi}], got {value!r}")
     if not (lo <= float(value) <= hi) or math.isnan(float(value)) or math.isinf(float(value)):
-        raise ValueError(f"{name} must be a finite number in [{lo}, {hi}], got {value!r}")
+        # (no "finite number in [0.0, inf]", which contradicts itself: found by a trial)
+        bound = f"in [{lo}, {hi}]" if math.isfinite(hi) else f">= {lo}"
+        raise ValueError(f"{name} must be a finite number {bound}, got {value!r}")
     return float(value)
 
 

@@ -556,7 +556,7 @@ def test_errors_name_the_problem(spot):
         (dict(method="texture", uvs=uvs, bilateral="yes"), "bilateral must be True or False"),
         (dict(method="texture", uvs=uvs[:10]), r"uvs must have shape \(5856, 3, 2\)"),
         (dict(method="texture", uvs=np.full_like(uvs, np.nan)), "uvs must be finite"),
-        (dict(method="none", k=1), "unknown option for smoothing 'none': k"),
+        (dict(method="none", k=1), r"unknown option for smoothing 'none': k \(it takes no options\)"),
         (dict(method="kring", points="edges"), "points must be 'faces' or 'vertices'"),
         (dict(method="kring", threads=-1), "threads"),
         (dict(method="kring", threads=2**40), r"threads must be an integer in \[0, 4096\]"),
