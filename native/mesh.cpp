@@ -39,6 +39,11 @@ std::size_t first_bad(std::size_t count, unsigned threads, Bad&& bad) {
   return kNoItem;
 }
 
+// Whether the vertex at p (x, y, z) has finite coordinates.
+bool finite_vertex(const double* p) {
+  return std::isfinite(p[0]) && std::isfinite(p[1]) && std::isfinite(p[2]);
+}
+
 // The box of the vertices the triangles use, with their marks; throws std::invalid_argument
 // naming the first index out of range. The indices are checked and the vertices they use
 // marked in one pass. A vertex no triangle uses takes no part in the box: one far away (a
@@ -139,19 +144,14 @@ MeshValues mesh_values(const double* vertices, std::size_t vertex_count,
     // part could alias the indices).
     std::size_t bad = 0;
     const std::size_t v_end = std::min(end, vertex_count);
-    for (std::size_t i = begin; i < v_end; ++i) {
-      const double* p = vertices + 3 * i;
-      bad += !(std::isfinite(p[0]) && std::isfinite(p[1]) && std::isfinite(p[2]));
-    }
+    for (std::size_t i = begin; i < v_end; ++i) bad += !finite_vertex(vertices + 3 * i);
     Part& part = parts[begin / kGrain];
     part.not_finite = bad;
-    for (std::size_t i = begin; bad > 0 && i < v_end; ++i) {
-      const double* p = vertices + 3 * i;
-      if (!(std::isfinite(p[0]) && std::isfinite(p[1]) && std::isfinite(p[2]))) {
+    for (std::size_t i = begin; bad > 0 && i < v_end; ++i)
+      if (!finite_vertex(vertices + 3 * i)) {
         part.first = i;
         break;
       }
-    }
     std::int64_t lo = part.lo, hi = part.hi;
     for (std::size_t i = begin; i < std::min(end, corners); ++i) {
       lo = std::min(lo, triangles[i]);
@@ -194,10 +194,8 @@ Mesh make_mesh(const double* vertices, std::size_t vertex_count, const std::int6
   auto point = [&](std::size_t i) {
     return glm::dvec3(vertices[3 * i], vertices[3 * i + 1], vertices[3 * i + 2]);
   };
-  const std::size_t not_finite = first_bad(vertex_count, threads, [&](std::size_t i) {
-    const glm::dvec3 p = point(i);
-    return !std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z);
-  });
+  const std::size_t not_finite = first_bad(
+      vertex_count, threads, [&](std::size_t i) { return !finite_vertex(vertices + 3 * i); });
   if (not_finite != kNoItem)
     throw std::invalid_argument("vertex " + std::to_string(not_finite) +
                                 " has a coordinate that is not finite");

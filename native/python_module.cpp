@@ -62,11 +62,24 @@ void require_rows_of_3(const py::array& a, const char* what) {
     throw std::invalid_argument(std::string(what) + " must have shape (n, 3)");
 }
 
-sdf::Mesh to_mesh(const Doubles& vertices, const Int64s& triangles, unsigned threads = 0) {
+// The caller's mesh arrays as the core's functions take them, their shapes checked.
+struct MeshArrays {
+  const double* vertices;
+  std::size_t vertex_count;
+  const std::int64_t* triangles;
+  std::size_t triangle_count;
+};
+
+MeshArrays mesh_arrays(const Doubles& vertices, const Int64s& triangles) {
   require_rows_of_3(vertices, "vertices");
   require_rows_of_3(triangles, "triangles");
-  return sdf::make_mesh(vertices.data(), static_cast<std::size_t>(vertices.shape(0)),
-                        triangles.data(), static_cast<std::size_t>(triangles.shape(0)), threads);
+  return {vertices.data(), static_cast<std::size_t>(vertices.shape(0)), triangles.data(),
+          static_cast<std::size_t>(triangles.shape(0))};
+}
+
+sdf::Mesh to_mesh(const Doubles& vertices, const Int64s& triangles, unsigned threads = 0) {
+  const MeshArrays a = mesh_arrays(vertices, triangles);
+  return sdf::make_mesh(a.vertices, a.vertex_count, a.triangles, a.triangle_count, threads);
 }
 
 const char* fill_name(sdf::FillResult r) {
@@ -403,29 +416,20 @@ PYBIND11_MODULE(_core, m) {
   m.def(
       "used_width",
       [](const Doubles& vertices, const Int64s& triangles) {
-        require_rows_of_3(vertices, "vertices");
-        require_rows_of_3(triangles, "triangles");
-        const double* v = vertices.data();
-        const std::int64_t* t = triangles.data();
-        const auto nv = static_cast<std::size_t>(vertices.shape(0));
-        const auto nt = static_cast<std::size_t>(triangles.shape(0));
+        const MeshArrays a = mesh_arrays(vertices, triangles);
         py::gil_scoped_release release;
-        return sdf::used_width(v, nv, t, nt);
+        return sdf::used_width(a.vertices, a.vertex_count, a.triangles, a.triangle_count);
       },
       py::arg("vertices"), py::arg("triangles"));
   m.def(
       "mesh_values",
       [](const Doubles& vertices, const Int64s& triangles, unsigned threads) {
-        require_rows_of_3(vertices, "vertices");
-        require_rows_of_3(triangles, "triangles");
-        const double* v = vertices.data();
-        const std::int64_t* t = triangles.data();
-        const auto nv = static_cast<std::size_t>(vertices.shape(0));
-        const auto nt = static_cast<std::size_t>(triangles.shape(0));
+        const MeshArrays a = mesh_arrays(vertices, triangles);
         sdf::MeshValues values;
         {
           py::gil_scoped_release release;
-          values = sdf::mesh_values(v, nv, t, nt, threads);
+          values = sdf::mesh_values(a.vertices, a.vertex_count, a.triangles, a.triangle_count,
+                                    threads);
         }
         return py::make_tuple(values.not_finite, values.first_not_finite, values.min_index,
                               values.max_index);
