@@ -111,12 +111,20 @@ sdf::Accel parse_accel(const std::string& name) {
   throw std::invalid_argument("accel must be 'bvh' or 'octree', got '" + name + "'");
 }
 
+// A vector as a new numpy array of its element type.
+template <typename T>
+py::array_t<T> to_array(const std::vector<T>& items) {
+  py::array_t<T> out(static_cast<py::ssize_t>(items.size()));
+  std::copy(items.begin(), items.end(), out.mutable_data());
+  return out;
+}
+
 py::dict compute(const Doubles& vertices, const Int64s& triangles, int rays, double cone_angle,
                  const std::string& sampling, std::uint32_t seed, const std::string& points,
                  unsigned threads, const py::object& progress, const std::string& engine,
                  const std::string& accel, int octree_max_depth, int octree_leaf_size,
                  const std::string& orientation, const std::string& bvh_quality,
-                 const py::object& beside_cast) {
+                 const py::object& beside_cast, bool find_twins) {
   sdf::Options options;
   options.rays = rays;
   options.cone_angle = cone_angle;
@@ -130,6 +138,7 @@ py::dict compute(const Doubles& vertices, const Int64s& triangles, int rays, dou
   options.octree.leaf_size = octree_leaf_size;
   options.orientation = parse_orientation(orientation);
   options.bvh_quality = parse_bvh_quality(bvh_quality);
+  options.find_twins = find_twins;
 
   const sdf::ProgressFn report = sdf::python_progress(progress);
   // Also on the calling thread, taking the GIL for its Python code; it gets the cast's points
@@ -170,6 +179,14 @@ py::dict compute(const Doubles& vertices, const Int64s& triangles, int rays, dou
     std::copy(out.orientation.reversed.begin(), out.orientation.reversed.end(),
               reversed.mutable_data());
     result["reversed"] = reversed;
+  }
+  // Faces with a reversed twin (the computation stopped on finding them): (dropped, twin,
+  // corner) as mesh_twins.h describes them; None when there are none.
+  if (out.twins.empty()) {
+    result["twins"] = py::none();
+  } else {
+    result["twins"] = py::make_tuple(to_array(out.twins.dropped), to_array(out.twins.twin),
+                                     to_array(out.twins.corner));
   }
   return result;
 }
@@ -359,7 +376,7 @@ PYBIND11_MODULE(_core, m) {
         py::arg("threads"), py::arg("progress"), py::arg("engine") = "cpu",
         py::arg("accel") = "bvh", py::arg("octree_max_depth") = 10,
         py::arg("octree_leaf_size") = 8, py::arg("orientation") = "auto", py::arg("bvh_quality") = "auto",
-        py::arg("beside_cast") = py::none());
+        py::arg("beside_cast") = py::none(), py::arg("find_twins") = true);
   m.def("opencl_devices", &opencl_devices);
   m.def("octree_stats", &octree_stats, py::arg("vertices"), py::arg("triangles"),
         py::arg("max_depth") = 10, py::arg("leaf_size") = 8);

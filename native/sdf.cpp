@@ -253,47 +253,69 @@ void cast_on_opencl(const Options& options, const Plan& plan, const cl::CastInpu
 // Thrown from beside the cast when the orientation reverses faces: the cast read the mesh as
 // it was wound.
 struct ReverseFacesFirst {};
+// Thrown from beside the cast when faces have reversed twins: the caller casts without them.
+struct TwinsFound {};
 
-// Casts `mesh` as it is wound while deciding its 'auto' orientation beside the cast (only
-// reading the mesh). Nothing to reverse: the cast stands (it is the cast of the oriented
-// mesh). Faces to reverse: the devices stop at their next launch (launches are kept short
-// while the orientation runs), the faces are reversed, and the mesh is cast again on the
-// devices' trees of the first cast, rewound (a face's box does not depend on its winding:
-// only the faces go up again and the triangles' records are remade). Either way the values
-// are those of casting the oriented mesh.
+// Casts `mesh` as it is wound while deciding beside the cast (only reading the mesh) its
+// 'auto' orientation, and whether faces have reversed twins. Twins: the devices stop at their
+// next launch (launches are kept short while deciding) and out.twins says which. Nothing to
+// reverse: the cast stands (it is the cast of the oriented mesh). Faces to reverse: the
+// devices stop, the faces are reversed, and the mesh is cast again on the devices' trees of
+// the first cast, rewound (a face's box does not depend on its winding: only the faces go up
+// again and the triangles' records are remade). Either way the values are those of casting
+// the oriented mesh. `flipped`: orientation 'flip' reversed every face before this cast.
 void cast_speculatively(const Options& options, const Plan& plan, cl::CastInput input,
                         Mesh& mesh, const Cone& cone, Output& out, const ProgressFn& progress,
-                        const std::function<void()>& beside_cast) {
+                        const std::function<void()>& beside_cast, bool flipped) {
   StageTimings orientation_steps;
-  double orientation_seconds = 0.0;
+  double orientation_seconds = 0.0, twins_seconds = 0.0;
+  const bool orienting = options.orientation == Orientation::Auto;
   std::atomic<bool> deciding{true};
   input.short_launches = &deciding;
-  auto orient_beside = [&] {
+  auto decide_beside = [&] {
     Stopwatch clock;
-    out.orientation = decide_orientation(mesh, Orientation::Auto, options.threads,
-                                         &orientation_steps);
-    orientation_seconds = clock.lap();
-    if (out.orientation.flipped_faces > 0) throw ReverseFacesFirst{};
+    if (orienting) {
+      out.orientation = decide_orientation(mesh, Orientation::Auto, options.threads,
+                                           &orientation_steps);
+      orientation_seconds = clock.lap();
+    }
+    if (options.find_twins) {
+      out.twins = reversed_twins(mesh, options.threads);
+      twins_seconds = clock.lap();
+      // A face's corner 0 stays where it was when every face is flipped; corners 1 and 2 swap.
+      if (flipped)
+        for (std::uint8_t& corner : out.twins.corner) corner = static_cast<std::uint8_t>((3 - corner) % 3);
+      if (!out.twins.empty()) throw TwinsFound{};
+    }
+    if (out.orientation.flipped_faces > 0 && orienting) throw ReverseFacesFirst{};
     deciding = false;
     if (beside_cast) beside_cast();
   };
-  auto record_orientation = [&] {
-    out.timings.emplace_back("orientation (beside cast)", orientation_seconds);
-    for (const auto& [name, seconds] : orientation_steps) out.timings.emplace_back(name, seconds);
+  auto record_decisions = [&] {
+    if (orienting) {
+      out.timings.emplace_back("orientation (beside cast)", orientation_seconds);
+      for (const auto& [name, seconds] : orientation_steps)
+        out.timings.emplace_back(name, seconds);
+    }
+    if (options.find_twins) out.timings.emplace_back("twins (beside cast)", twins_seconds);
   };
   cl::KeptTrees trees;  // freed on the way out, whichever way that is
   input.trees = &trees;
   Stopwatch first;
   try {
-    cast_on_opencl(options, plan, input, mesh, cone, out, progress, orient_beside);
-    record_orientation();
+    cast_on_opencl(options, plan, input, mesh, cone, out, progress, decide_beside);
+    record_decisions();
     return;
   } catch (const ReverseFacesFirst&) {
+  } catch (const TwinsFound&) {
+    out.timings.emplace_back("cast (discarded)", first.lap());
+    record_decisions();
+    return;
   }
   // What the first cast took until it stopped (its stages are not recorded), then the faces
   // reversed and the stages of the cast that counts.
   out.timings.emplace_back("cast (discarded)", first.lap());
-  record_orientation();
+  record_decisions();
   apply_orientation(mesh, out.orientation, options.threads);
   out.timings.emplace_back("orientation: reverse faces", first.lap());
   input.short_launches = nullptr;
@@ -330,6 +352,13 @@ Output compute(Mesh mesh, const Options& options, const ProgressFn& progress,
   // on the development machine's PoCL).
   const Plan plan = make_plan(options, mesh.triangles.size());
   if (!cpu) out.timings.emplace_back("devices", clock.lap());
+  // With a tree made on the device, twins are looked for beside the cast (cast_speculatively);
+  // otherwise first, on the mesh as the caller wound it.
+  if (options.find_twins && !plan.tree_on_device) {
+    out.twins = reversed_twins(mesh, options.threads);
+    out.timings.emplace_back("twins", clock.lap());
+    if (!out.twins.empty()) return out;
+  }
   StageTimings steps;  // of 'prepare'
   StageClock step(&steps);
   report(progress, 0.0);
@@ -343,10 +372,12 @@ Output compute(Mesh mesh, const Options& options, const ProgressFn& progress,
   // `mesh` is the computation's own copy, wound outward; the caller's mesh is never changed.
   // With a tree made on the device, 'auto' orientation is decided while the devices cast the
   // mesh as it is wound (the common case: nothing to reverse); should faces need reversing,
-  // the cast stops and runs again on the oriented mesh (cast_speculatively).
-  const bool speculate = plan.tree_on_device && options.orientation == Orientation::Auto;
+  // the cast stops and runs again on the oriented mesh (cast_speculatively). Twins are looked
+  // for there too.
+  const bool speculate =
+      plan.tree_on_device && (options.orientation == Orientation::Auto || options.find_twins);
   StageTimings orientation_steps;
-  if (!speculate) {
+  if (!(speculate && options.orientation == Orientation::Auto)) {
     out.orientation = orient(mesh, options.orientation, options.threads, &orientation_steps);
     step.lap("prepare: orientation");
     for (const auto& [name, seconds] : orientation_steps)
@@ -403,7 +434,13 @@ Output compute(Mesh mesh, const Options& options, const ProgressFn& progress,
     }
     input.size = count;
     if (speculate) {
-      cast_speculatively(options, plan, input, mesh, cone, out, progress, timed_beside_cast);
+      cast_speculatively(options, plan, input, mesh, cone, out, progress, timed_beside_cast,
+                         options.orientation == Orientation::Flip);
+      if (!out.twins.empty()) {  // the cast stopped: no values
+        out.raw.clear();
+        out.valid_rays.clear();
+        return out;
+      }
     } else {
       cast_on_opencl(options, plan, input, mesh, cone, out, progress, timed_beside_cast);
     }

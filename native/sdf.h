@@ -10,6 +10,7 @@
 
 #include "fill.h"
 #include "mesh.h"
+#include "mesh_twins.h"
 #include "octree.h"
 #include "orientation.h"
 #include "parallel.h"
@@ -43,6 +44,9 @@ struct Options {
   OctreeConfig octree;
   Orientation orientation = Orientation::Auto;
   BvhQuality bvh_quality = BvhQuality::Auto;
+  // Look for faces with a reversed twin (mesh_twins.h) and, where there are any, stop there
+  // and return them (Output::twins): the caller casts the mesh without them.
+  bool find_twins = true;
 };
 
 struct Output {
@@ -53,6 +57,9 @@ struct Output {
   std::string engine;                      // what ran, e.g. "cpu (2 threads, bvh)"
   std::uint64_t device_bytes = 0;          // OpenCL buffers on the device (0 on the CPU)
   OrientationReport orientation;           // faces the computation reversed
+  // Faces with a reversed twin, in the caller's winding (Options::find_twins). When there are
+  // any, the computation stopped on finding them: raw and valid_rays are empty.
+  ReversedTwins twins;
 };
 
 // Host work that needs no result of the computation, run once on the calling thread: while

@@ -70,7 +70,13 @@ class Result:
     """bool per face: which ones it reversed (None when none was). The winding it cast and
     smoothed on is `triangles` with those faces' corners swapped, e.g.
     `t = triangles.copy(); t[r.reversed_faces] = t[r.reversed_faces][:, [0, 2, 1]]`:
-    smooth(vertices, t, r.raw, ...) then gives compute()'s smoothing."""
+    smooth(vertices, t, r.raw, ...) then gives compute()'s smoothing (where twin_faces is 0)."""
+    twin_faces: int = 0
+    """Faces left out of the cast because an earlier face of the array lies at the same three
+    positions wound the other way (a double-sided mesh: cast with both, a ray meets two
+    coincident walls and keeps either); each takes that face's values, and a vertex only
+    such faces use takes the value of the vertex at its position. Orientation and smoothing
+    ran on the mesh without them (they are never in reversed_faces)."""
 
 
 def engines() -> list:
@@ -281,111 +287,221 @@ def compute(
     clock = time.perf_counter()
     chosen = _resolve_engine(engine)
     choosing = time.perf_counter() - clock  # 'auto' lists the devices (drivers load once)
-    # With smoothing, casting reports [0, 0.9] of the progress and smoothing the rest.
-    cast_progress = progress
-    if progress is not None and smoothing != "none":
-        cast_progress = lambda fraction: progress(0.9 * fraction)  # noqa: E731
 
-    # Smoothing's work that needs no SDF, done while a device casts, when the host would only
-    # wait (for the CPU engine, after its cast): texture smoothing's UV islands (on a device,
-    # the UVs and islands uploaded); on a device, projected smoothing's point frames uploaded
-    # from the cast's own points (oriented as the cast saw the mesh).
-    prepared, prepare_failure = [], []
-    far_from_unit_size = smoothing == "projected" and unit_scale_exponent(v, t) != 0
+    def attempt(t, smoothing_resolved, find_twins, progress):
+        """The cast (and smoothing) of the mesh with triangles `t`: a Result, or, where
+        find_twins found faces with a reversed twin, the core's (dropped, twin, corner)."""
+        # With smoothing, casting reports [0, 0.9] of the progress and smoothing the rest.
+        cast_progress = progress
+        if progress is not None and smoothing != "none":
+            cast_progress = lambda fraction: progress(0.9 * fraction)  # noqa: E731
 
-    def run(engine_name):
-        prepared.clear()
-        prepare_failure.clear()
+        # Smoothing's work that needs no SDF, done while a device casts, when the host would
+        # only wait (for the CPU engine, after its cast): texture smoothing's UV islands (on a
+        # device, the UVs and islands uploaded); on a device, projected smoothing's point
+        # frames uploaded from the cast's own points (oriented as the cast saw the mesh).
+        prepared, prepare_failure = [], []
+        far_from_unit_size = smoothing == "projected" and unit_scale_exponent(v, t) != 0
 
-        def prepare(cast_points):
-            try:
-                if smoothing == "texture":
-                    prepared.append(prepare_texture_for(v, t, points, smoothing_resolved,
-                                                        int(threads), engine_name))
-                else:
-                    prepared.append(prepare_projected_for(cast_points, int(threads),
-                                                          engine_name))
-            except Exception as error:  # raised after the cast: not a device failure
-                prepare_failure.append(error)
+        def run(engine_name):
+            prepared.clear()
+            prepare_failure.clear()
 
-        beside = None
-        if smoothing == "texture" or (smoothing == "projected" and engine_name != "cpu"
-                                      and not far_from_unit_size):
-            beside = prepare  # (projected far from unit size runs scaled: smoothing.py)
-        return _core.compute(
-            v, t, int(rays), float(cone_angle), sampling, int(seed), points, int(threads),
-            cast_progress, engine_name, accel, int(octree_depth), int(octree_leaf_size),
-            orientation, bvh_quality, beside,
-        )
+            def prepare(cast_points):
+                try:
+                    if smoothing == "texture":
+                        prepared.append(prepare_texture_for(v, t, points, smoothing_resolved,
+                                                            int(threads), engine_name))
+                    else:
+                        prepared.append(prepare_projected_for(cast_points, int(threads),
+                                                              engine_name))
+                except Exception as error:  # raised after the cast: not a device failure
+                    prepare_failure.append(error)
 
-    out, failure = run_with_fallback(run, chosen, engine)
-    fallback = _fallback_line(chosen, failure)
-    if prepare_failure:
-        raise prepare_failure[0]
-    if out["fill"] == "no-value-anywhere":
-        warnings.warn(
-            "no ray of any point found the other side of the mesh (is it open, flat or inside "
-            "out?); every value is 0 and valid_rays is 0 everywhere",
-            RuntimeWarning,
-            stacklevel=2,
-        )
-    timings = dict(out["timings"])
-    if engine == "auto":
-        timings["devices"] = timings.get("devices", 0.0) + choosing
-    if prepared and prepared[0] is not None:  # what 'beside cast' spent its time on
-        timings.update({f"beside cast: {k}": x for k, x in prepared[0].timings.items()})
-    raw = out["raw"]
-    values = raw.copy()
-    if smoothing != "none":
-        clock = time.perf_counter()
-        smooth_engine = "cpu" if fallback else chosen
-        stages = {}  # of the smoothing, as 'smooth: <stage>'
-
-        def run_smoothing(engine_name):
-            stages.clear()  # a failed device's partial stages
-            ready = prepared[0] if prepared else None
-            if smoothing == "projected" and engine_name == "cpu":
-                ready = None  # the frames on a device that failed: the CPU works from the mesh
-            # Projected smoothing moves points along their inward axes, and the k-ring's
-            # corner weights compare face normals: both on the mesh as the cast oriented it
-            # (prepared frames come from the cast's points, oriented already). Texture
-            # smoothing does not depend on the winding, and its UVs follow the caller's corners.
-            smooth_t = t
-            if (smoothing in ("projected", "kring") and ready is None
-                    and out["reversed"] is not None):
-                smooth_t = t.copy()
-                smooth_t[out["reversed"]] = smooth_t[out["reversed"]][:, [0, 2, 1]]
-            # compute()'s own checked mesh, options and SDF (raw: finite, >= 0): no second
-            # round of checks.
-            return run_checked(
-                v, smooth_t, raw, points, smoothing, smoothing_resolved, int(threads),
-                None if progress is None else lambda f: progress(0.9 + 0.1 * f),
-                engine_name, ready, stages, stacklevel=5,
+            beside = None
+            if smoothing == "texture" or (smoothing == "projected" and engine_name != "cpu"
+                                          and not far_from_unit_size):
+                beside = prepare  # (projected far from unit size runs scaled: smoothing.py)
+            return _core.compute(
+                v, t, int(rays), float(cone_angle), sampling, int(seed), points, int(threads),
+                cast_progress, engine_name, accel, int(octree_depth), int(octree_leaf_size),
+                orientation, bvh_quality, beside, find_twins,
             )
 
-        values, failure = run_with_fallback(run_smoothing, smooth_engine, engine)
-        fallback = _fallback_line(f"smoothing on {smooth_engine}", failure) or fallback
-        timings["smooth"] = time.perf_counter() - clock
-        timings.update({f"smooth: {k}": x for k, x in stages.items()})
+        out, failure = run_with_fallback(run, chosen, engine)
+        if out["twins"] is not None:
+            return out["twins"]
+        fallback = _fallback_line(chosen, failure)
+        if prepare_failure:
+            raise prepare_failure[0]
+        if out["fill"] == "no-value-anywhere":
+            warnings.warn(
+                "no ray of any point found the other side of the mesh (is it open, flat or "
+                "inside out?); every value is 0 and valid_rays is 0 everywhere",
+                RuntimeWarning,
+                stacklevel=3,
+            )
+        else:
+            _warn_if_few_rays_kept(out["valid_rays"], int(rays), orientation)
+        timings = dict(out["timings"])
+        if engine == "auto":
+            timings["devices"] = timings.get("devices", 0.0) + choosing
+        if prepared and prepared[0] is not None:  # what 'beside cast' spent its time on
+            timings.update({f"beside cast: {k}": x for k, x in prepared[0].timings.items()})
+        raw = out["raw"]
+        values = raw.copy()
+        if smoothing != "none":
+            clock = time.perf_counter()
+            smooth_engine = "cpu" if fallback else chosen
+            stages = {}  # of the smoothing, as 'smooth: <stage>'
+
+            def run_smoothing(engine_name):
+                stages.clear()  # a failed device's partial stages
+                ready = prepared[0] if prepared else None
+                if smoothing == "projected" and engine_name == "cpu":
+                    ready = None  # the frames on a device that failed: the CPU works from the mesh
+                # Projected smoothing moves points along their inward axes, and the k-ring's
+                # corner weights compare face normals: both on the mesh as the cast oriented it
+                # (prepared frames come from the cast's points, oriented already). Texture
+                # smoothing does not depend on the winding, and its UVs follow the caller's
+                # corners.
+                smooth_t = t
+                if (smoothing in ("projected", "kring") and ready is None
+                        and out["reversed"] is not None):
+                    smooth_t = t.copy()
+                    smooth_t[out["reversed"]] = smooth_t[out["reversed"]][:, [0, 2, 1]]
+                # compute()'s own checked mesh, options and SDF (raw: finite, >= 0): no second
+                # round of checks.
+                return run_checked(
+                    v, smooth_t, raw, points, smoothing, smoothing_resolved, int(threads),
+                    None if progress is None else lambda f: progress(0.9 + 0.1 * f),
+                    engine_name, ready, stages, stacklevel=6,
+                )
+
+            values, failure = run_with_fallback(run_smoothing, smooth_engine, engine)
+            fallback = _fallback_line(f"smoothing on {smooth_engine}", failure) or fallback
+            timings["smooth"] = time.perf_counter() - clock
+            timings.update({f"smooth: {k}": x for k, x in stages.items()})
+        return Result(
+            raw=raw,
+            values=values,
+            normalized=values,  # normalised by compute(), once the twins have their values
+            valid_rays=out["valid_rays"],
+            timings=timings,
+            engine=out["engine"] + (f" [fell back: {fallback}]" if fallback else ""),
+            points=points,
+            rays=int(rays),
+            device_memory=int(out["device_bytes"]),
+            flipped_faces=int(out["flipped_faces"]),
+            reversed_faces=out["reversed"],
+        )
+
+    told = None if progress is None else _Monotone(progress)
+    clock = time.perf_counter()
+    result = attempt(t, smoothing_resolved, True, told)
+    if not isinstance(result, Result):  # faces with a reversed twin: cast without them
+        first_run = time.perf_counter() - clock
+        twins = _Twins(v, t, *result)
+        resolved = dict(smoothing_resolved)
+        if "uvs" in resolved:
+            resolved["uvs"] = resolved["uvs"][twins.kept]
+        result = attempt(t[twins.kept], resolved, False, told)
+        clock = time.perf_counter()
+        twins.fill(result)
+        result.timings["twins: first run"] = first_run
+        result.timings["twins: values given"] = time.perf_counter() - clock
     clock = time.perf_counter()
     # The core's own values (finite, >= 0, float32): normalize_values' checks would only cost
     # time (1 ms a million values).
-    normalized = _core.normalize(values, normalize, int(threads))
-    timings["normalize"] = time.perf_counter() - clock
-    timings["total"] = time.perf_counter() - start
-    return Result(
-        raw=raw,
-        values=values,
-        normalized=normalized,
-        valid_rays=out["valid_rays"],
-        timings=timings,
-        engine=out["engine"] + (f" [fell back: {fallback}]" if fallback else ""),
-        points=points,
-        rays=int(rays),
-        device_memory=int(out["device_bytes"]),
-        flipped_faces=int(out["flipped_faces"]),
-        reversed_faces=out["reversed"],
+    result.normalized = _core.normalize(result.values, normalize, int(threads))
+    result.timings["normalize"] = time.perf_counter() - clock
+    result.timings["total"] = time.perf_counter() - start
+    return result
+
+
+# A closed mesh wound outward keeps nearly every ray (29-30 of 30 on the test meshes; open ones
+# 25-27, an open hemisphere 13). One wound inside out keeps 1.5-2.5 of 30: its rays leave
+# through the near wall. Below a quarter, the values mean little and the caller should know.
+FEW_RAYS_KEPT = 0.25
+
+
+def few_rays_kept(valid_rays, rays, orientation) -> Optional[str]:
+    """What to tell a caller whose points kept, on average, fewer than FEW_RAYS_KEPT of their
+    rays (valid_rays of a Result of `rays` rays and that orientation), or None. The add-on
+    reports the same words."""
+    mean = float(valid_rays.mean()) if valid_rays.size else 0.0
+    if mean >= FEW_RAYS_KEPT * rays:
+        return None
+    hint = {
+        "as_is": " (orientation='as_is' trusts the winding; 'auto' turns an inside-out part "
+                 "outward)",
+        "flip": " (orientation='flip' reversed every face)",
+    }.get(orientation, "")
+    return (
+        f"only {mean:.1f} of {rays} rays a point, on average, found the other side of the "
+        f"mesh, and {float((valid_rays == 0).mean()):.0%} of the points none (their values "
+        f"are their neighbours'): is the mesh inside out{hint}, open or flat?"
     )
+
+
+def _warn_if_few_rays_kept(valid_rays, rays, orientation):
+    message = few_rays_kept(valid_rays, rays, orientation)
+    if message:
+        warnings.warn(message, RuntimeWarning, stacklevel=4)
+
+
+class _Twins:
+    """Faces with a reversed twin (a double-sided mesh), left out of the cast: their values,
+    and those of vertices only they use, are their twins' (core's mesh_twins.h)."""
+
+    def __init__(self, v, t, dropped, twin, corner):
+        self.t, self.dropped, self.twin = t, dropped.astype(np.int64), twin.astype(np.int64)
+        self.corner = corner.astype(np.int64)
+        self.kept = np.ones(len(t), dtype=bool)
+        self.kept[self.dropped] = False
+        self.vertex_count = len(v)
+
+    def fill(self, result: Result) -> None:
+        """Result of the mesh without the twins -> Result of the whole mesh, in place."""
+        names = ("raw", "values", "valid_rays")
+        if result.points == "faces":
+            for name in names:
+                part = getattr(result, name)
+                whole = np.empty(len(self.t), dtype=part.dtype)
+                whole[self.kept] = part
+                whole[self.dropped] = whole[self.twin]
+                setattr(result, name, whole)
+        else:
+            # A vertex that only faces left out use (the back of a double-sided mesh on
+            # vertices of its own) takes the value of the twin's corner at its position.
+            used = np.zeros(self.vertex_count, dtype=bool)
+            used[self.t[self.kept].ravel()] = True
+            corners = np.arange(3)
+            own = self.t[self.dropped]  # (k, 3)
+            theirs = self.t[self.twin[:, None], (self.corner[:, None] - corners) % 3]
+            lonely = ~used[own]
+            for name in names:
+                part = getattr(result, name).copy()
+                part[own[lonely]] = part[theirs[lonely]]
+                setattr(result, name, part)
+        if result.reversed_faces is not None:
+            whole = np.zeros(len(self.t), dtype=bool)
+            whole[self.kept] = result.reversed_faces
+            result.reversed_faces = whole
+        result.twin_faces = len(self.dropped)
+
+
+class _Monotone:
+    """The caller's progress, never told less than it was told already: the run cast again
+    without twin faces reports from 0 again."""
+
+    def __init__(self, progress):
+        self.progress, self.high = progress, 0.0
+
+    def __call__(self, fraction):
+        self.high = max(self.high, fraction)
+        self.progress(self.high)
+
 
 
 def cone_rays(

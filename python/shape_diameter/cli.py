@@ -8,10 +8,10 @@ never needs them.
 ``--json`` prints one object per input on a line of stdout, when that input is done:
 status ("ok" or "error"), error, exit_status, warnings, input, faces, vertices (of the mesh as
 read), points ("faces" or "vertices"), point_count, rays, cone, sampling, seed, normalize,
-smooth, engine, seconds (compute()'s stages: Result.timings), Mrays_per_s (point_count * rays
-/ seconds["cast"] / 1e6), io_seconds (load, write), total_seconds (the whole input) and
-outputs (mesh, values: paths or null); an input that failed has status, error, exit_status,
-warnings, input and outputs only.
+smooth, engine, flipped_faces and twin_faces (Result's), seconds (compute()'s stages:
+Result.timings), Mrays_per_s (points cast * rays / seconds["cast"] / 1e6), io_seconds (load,
+write), total_seconds (the whole input) and outputs (mesh, values: paths or null); an input
+that failed has status, error, exit_status, warnings, input and outputs only.
 
 The console script enters through ``_shape_diameter_entry`` and console_main(), which take
 Ctrl-C over (see console_main); main() called from Python leaves signals alone.
@@ -701,6 +701,7 @@ def _report(args, job, vertices, triangles, result, io_seconds, total_seconds) -
     point_count = len(result.raw)
     timings = {stage: float(seconds) for stage, seconds in result.timings.items()}
     cast = timings.get("cast", timings.get("total", 0.0))
+    cast_points = point_count - (result.twin_faces if args.points == "faces" else 0)
     return {
         "input": job.source,
         "status": "ok",
@@ -718,10 +719,12 @@ def _report(args, job, vertices, triangles, result, io_seconds, total_seconds) -
         "smooth": args.smooth,
         "engine": result.engine,
         "flipped_faces": result.flipped_faces,
+        "twin_faces": result.twin_faces,
         "seconds": timings,
         # Rays cast per second over the casting stage alone (or the whole
-        # computation where the engine does not time casting separately).
-        "Mrays_per_s": point_count * int(result.rays) / cast / 1e6 if cast > 0 else None,
+        # computation where the engine does not time casting separately); faces that took
+        # a twin's values cast nothing.
+        "Mrays_per_s": cast_points * int(result.rays) / cast / 1e6 if cast > 0 else None,
         "io_seconds": io_seconds,
         "total_seconds": total_seconds,
         "outputs": {"mesh": job.output, "values": job.values},

@@ -7,10 +7,16 @@ trimesh (the ``cli`` extra) is imported on the first call, never by ``import sha
 from __future__ import annotations
 
 
-def load_mesh(path, *, source_faces: bool = False):
+def load_mesh(path, *, source_faces: bool = False, uvs: bool = False):
     """Read a mesh file as the command line does: returns (vertices float64 (n, 3),
     triangles int64 (m, 3), 0-based), ready for compute(); with source_faces=True also
-    int64 (m,): the 0-based index of the file's face each triangle comes from.
+    int64 (m,): the 0-based index of the file's face each triangle comes from; with uvs=True
+    also (last) the texture coordinates of every triangle corner, float32 (m, 3, 2) (corner k
+    of triangle i at [i, k], v = 0 at the bottom of the image), ready for compute()'s and
+    smooth()'s `uvs` (texture smoothing), or None when the file has none for every face. UVs
+    are read from OBJ ``vt``, glTF/GLB ``TEXCOORD_0`` (of primitives with a material) and PLY
+    texture coordinates (texture_u/texture_v, u/v, s/t, or a per-face texcoord list); OFF and
+    STL have none.
 
     Reads .obj, .ply, .off, .stl, .gltf and .glb (the suffix names the format). Vertices
     come in the file's order (STL: corners at the same position merged, numbered by first
@@ -32,4 +38,6 @@ def load_mesh(path, *, source_faces: bool = False):
             f"shape_diameter.load_mesh reads files with trimesh: pip install "
             f"'shape_diameter[cli]' ({exc})"
         ) from exc
+    if uvs:
+        return mesh_io.load_mesh_with_uvs(path, source_faces=source_faces)
     return mesh_io.load_mesh(path, source_faces=source_faces)

@@ -58,10 +58,11 @@ def load_mesh(path, *, source_faces: bool = False):
     return (vertices, triangles, source) if source_faces else (vertices, triangles)
 
 
-def load_mesh_with_uvs(path) -> tuple[np.ndarray, np.ndarray, "np.ndarray | None"]:
+def load_mesh_with_uvs(path, *, source_faces: bool = False):
     """load_mesh, plus the texture coordinates of every face corner.
 
-    Returns (vertices, triangles, uvs): uvs float32 (m, 3, 2), corner k of triangle i at
+    Returns (vertices, triangles, uvs), or with source_faces=True (vertices, triangles,
+    source, uvs) (source as load_mesh gives it): uvs float32 (m, 3, 2), corner k of triangle i at
     uvs[i, k], with v = 0 at the bottom of the image (OBJ and Blender's convention; glTF's
     top-down v is flipped by trimesh), or None when the file has no UVs for every face. Read
     from OBJ ``vt`` (through the ``f v/vt`` references, polygons fanned as load_mesh fans
@@ -69,7 +70,7 @@ def load_mesh_with_uvs(path) -> tuple[np.ndarray, np.ndarray, "np.ndarray | None
     with one) and PLY texture coordinates (texture_u/texture_v, u/v, s/t or a per-face
     texcoord list). OFF and STL have none.
     """
-    vertices, triangles, _, ply_uvs = _read(path, want_uvs=True)
+    vertices, triangles, source, ply_uvs = _read(path, want_uvs=True)
     path = os.fspath(path)
     suffix = os.path.splitext(path)[1].lower()
     uvs = None
@@ -86,7 +87,7 @@ def load_mesh_with_uvs(path) -> tuple[np.ndarray, np.ndarray, "np.ndarray | None
         uvs = _scene_corner_uvs(scene)
     if uvs is not None and (uvs.shape != (len(triangles), 3, 2) or not np.isfinite(uvs).all()):
         uvs = None
-    return vertices, triangles, uvs
+    return (vertices, triangles, source, uvs) if source_faces else (vertices, triangles, uvs)
 
 
 def _read(path, want_uvs: bool = False):

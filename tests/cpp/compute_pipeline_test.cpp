@@ -99,6 +99,37 @@ TEST(ComputePipeline, FlipGivesTheValuesOfTheMeshWoundRight) {
   EXPECT_TRUE(same_bits(flipped.raw, clean.raw));
 }
 
+// A double-sided box (its faces again, reversed) stops at its twins, in every orientation, and
+// is cast without them when asked: the values of the single-sided box.
+TEST(ComputePipeline, ReversedTwinsStopTheRunAndSayWhich) {
+  const test::Arrays single = grid_box(10);
+  test::Arrays both = single;
+  const std::size_t faces = single.triangles.size() / 3;
+  for (std::size_t f = 0; f < faces; ++f)
+    both.triangles.insert(both.triangles.end(), {single.triangles[3 * f],
+                                                 single.triangles[3 * f + 2],
+                                                 single.triangles[3 * f + 1]});
+  for (Orientation orientation : {Orientation::Auto, Orientation::AsIs, Orientation::Flip}) {
+    const Output out = compute(both.mesh(), options_for(orientation, 2));
+    ASSERT_EQ(out.twins.dropped.size(), faces);
+    EXPECT_TRUE(out.raw.empty());
+    EXPECT_EQ(out.twins.dropped.front(), faces);
+    EXPECT_EQ(out.twins.twin.back(), faces - 1);
+    EXPECT_EQ(out.twins.corner.front(), 0);  // corner 0 of (a, c, b) is corner 0 of (a, b, c)
+    EXPECT_GE(stage(out, "twins"), 0.0);
+  }
+  Options ignoring = options_for(Orientation::AsIs, 2);
+  ignoring.find_twins = false;
+  const Output cast_all = compute(both.mesh(), ignoring);
+  EXPECT_EQ(cast_all.raw.size(), 2 * faces);
+  const Output clean = compute(single.mesh(), options_for(Orientation::AsIs, 2));
+  EXPECT_TRUE(clean.twins.empty());
+  const std::vector<float> first_side(cast_all.raw.begin(), cast_all.raw.begin() + faces);
+  // Cast with its twins, a face sees the far wall's two coincident faces: some rays keep the
+  // wrong one (the reason compute() stops).
+  EXPECT_FALSE(same_bits(first_side, clean.raw));
+}
+
 TEST(ComputePipeline, ARunCancelledDuringTheBackgroundBuildEndsCleanly) {
   // Cancelled at the report after 'prepare' (the second), while the build may still run: the
   // run waits for it before unwinding, so no thread is left reading a freed mesh (ASan and

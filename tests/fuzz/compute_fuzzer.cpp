@@ -8,7 +8,9 @@
 //   options, make_mesh and make_cone), std::length_error (an octree past its 24-bit pointers)
 //   and sdf::Cancelled when the progress callback asked to stop;
 // * a computation that returns has one value per point, every raw value finite and >= 0, and
-//   valid_rays in [0, rays] (all raw values 0 when the result says no point had a value).
+//   valid_rays in [0, rays] (all raw values 0 when the result says no point had a value);
+// * or it stopped at faces with reversed twins, each after its twin, at its twin's positions
+//   wound the other way; the mesh without them, cast again, keeps the contract above.
 // Anything else calls abort(), which libFuzzer reports as a crash with the input saved.
 //
 // Input layout (little-endian; every byte string is a valid input, short ones are padded
@@ -150,6 +152,21 @@ void describe(const sdf::Options& o, int cancel_at, const std::vector<double>& v
 
 }  // namespace
 
+void check_twins(const sdf::Mesh& mesh, const sdf::ReversedTwins& twins) {
+  if (twins.twin.size() != twins.dropped.size() || twins.corner.size() != twins.dropped.size())
+    fail("twins' arrays differ in length");
+  for (std::size_t i = 0; i < twins.dropped.size(); ++i) {
+    const std::uint32_t face = twins.dropped[i], twin = twins.twin[i];
+    if (face >= mesh.triangles.size() || twin >= face) fail("a twin is not an earlier face");
+    if (i > 0 && face <= twins.dropped[i - 1]) fail("faces left out are not increasing");
+    if (twins.corner[i] > 2) fail("a twin's corner is not 0, 1 or 2");
+    for (int k = 0; k < 3; ++k)
+      if (mesh.vertices[mesh.triangles[face][k]] !=
+          mesh.vertices[mesh.triangles[twin][(twins.corner[i] + 3 - k) % 3]])
+        fail("a face left out is not at its twin's positions, wound the other way");
+  }
+}
+
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   Reader in(data, size);
   sdf::Options options;
@@ -219,14 +236,47 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     fail("compute threw something other than a documented error:", e.what());
   }
 
+  std::size_t triangle_count_cast = triangle_count;
+  if (!out.twins.empty()) {
+    check_twins(mesh, out.twins);
+    // What the caller does (api.py): the mesh cast again without the faces left out.
+    std::vector<std::int64_t> kept;
+    std::size_t next = 0;
+    for (std::size_t f = 0; f < triangle_count; ++f) {
+      if (next < out.twins.dropped.size() && out.twins.dropped[next] == f) {
+        ++next;
+        continue;
+      }
+      kept.insert(kept.end(), triangles.begin() + 3 * f, triangles.begin() + 3 * f + 3);
+    }
+    triangle_count_cast = kept.size() / 3;
+    options.find_twins = false;
+    calls = 0;
+    try {
+      out = sdf::compute(sdf::make_mesh(vertices.data(), vertex_count, kept.data(),
+                                        triangle_count_cast),
+                         options, progress);
+    } catch (const std::invalid_argument& e) {
+      return outcome("compute without twins refused:", e.what());
+    } catch (const std::length_error& e) {
+      return outcome("compute without twins refused:", e.what());
+    } catch (const sdf::Cancelled&) {
+      if (cancel_at == 0) fail("Cancelled without a cancel request");
+      return outcome("cancelled");
+    } catch (const std::exception& e) {
+      fail("compute without twins threw something other than a documented error:", e.what());
+    }
+    if (!out.twins.empty()) fail("twins reported with find_twins off");
+  }
   const std::size_t points =
-      options.points == sdf::PointKind::Faces ? triangle_count : vertex_count;
+      options.points == sdf::PointKind::Faces ? triangle_count_cast : vertex_count;
   if (out.raw.size() != points || out.valid_rays.size() != points)
     fail("output size is not the point count");
-  if (out.orientation.flipped_faces > triangle_count) fail("more faces flipped than there are");
+  if (out.orientation.flipped_faces > triangle_count_cast)
+    fail("more faces flipped than there are");
   if ((options.orientation == sdf::Orientation::AsIs && out.orientation.flipped_faces != 0) ||
       (options.orientation == sdf::Orientation::Flip &&
-       out.orientation.flipped_faces != triangle_count))
+       out.orientation.flipped_faces != triangle_count_cast))
     fail("flipped_faces does not match the orientation asked for");
   for (std::size_t i = 0; i < points; ++i) {
     if (!std::isfinite(out.raw[i])) fail("a raw value is not finite");

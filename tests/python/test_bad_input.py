@@ -9,6 +9,8 @@ import os
 import signal
 import threading
 import time
+import warnings
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -16,6 +18,9 @@ import pytest
 import shape_diameter
 import shapes
 from shape_diameter.api import MAX_RAYS
+from shape_diameter.mesh_io import load_mesh
+
+DATA = Path(__file__).resolve().parents[1] / "data"
 
 
 @pytest.fixture(scope="module")
@@ -569,7 +574,10 @@ def test_open_mesh_fills_faces_whose_rays_all_escape():
     centroids = V[F].mean(axis=1)
     polar = np.degrees(np.arccos(centroids[:, 2] / np.linalg.norm(centroids, axis=1)))
     F = F[polar > 130.0]
-    result = shape_diameter.compute(V, F)  # no RuntimeWarning: some faces have values
+    # Not the warning that no ray found anything (some faces have values), but the one that
+    # few did: 2.3 of 30 a face.
+    with pytest.warns(RuntimeWarning, match=r"only \d\.\d of 30 rays .*open or flat"):
+        result = shape_diameter.compute(V, F)
     assert result.raw.shape == (len(F),)
     assert np.isfinite(result.raw).all() and (result.raw > 0).all()
 
@@ -710,6 +718,26 @@ def test_inside_out_mesh_warns_when_its_winding_is_trusted(sphere):
     with pytest.warns(RuntimeWarning, match=r"inside out"):
         result = shape_diameter.compute(V, F[:, ::-1], orientation="as_is")
     assert (result.raw == 0).all() and (result.valid_rays == 0).all()
+
+
+@pytest.mark.parametrize("name, orientation", [("horse.ply", "as_is"), ("spot.obj", "flip")])
+def test_a_real_mesh_wound_inside_out_warns_that_few_rays_were_kept(name, orientation):
+    # Rays that leave through the near wall: 1.5-2.5 of 30 kept, half the faces none. Some
+    # still hit (the legs, the ears), so the all-or-nothing warning above never fired.
+    V, F = load_mesh(DATA / name)
+    with pytest.warns(RuntimeWarning, match=rf"only \d+\.\d of 30 rays .*inside out.*{orientation}"):
+        result = shape_diameter.compute(V, F, orientation=orientation)
+    assert result.valid_rays.mean() < 0.25 * 30
+
+
+def test_meshes_wound_outward_or_merely_open_do_not_warn():
+    # An open hemisphere keeps 13 of 30 rays: open, but measured.
+    V, F = shapes.icosphere(1.0, 3)
+    hemisphere = F[V[F].mean(axis=1)[:, 2] > 0]
+    for v, f in ((V, hemisphere), load_mesh(DATA / "horse.ply")):
+        with warnings.catch_warnings():
+            warnings.simplefilter("error")
+            shape_diameter.compute(v, f)
 
 
 # --------------------------------------------------------------------------- progress

@@ -24,7 +24,7 @@ DATA = Path(__file__).resolve().parents[1] / "data"
 RAYS = 12  # enough rays to be a real run, few enough to keep the file fast
 JSON_KEYS = {
     "input", "faces", "vertices", "points", "point_count", "rays", "cone", "sampling",
-    "seed", "normalize", "smooth", "engine", "flipped_faces", "seconds", "Mrays_per_s",
+    "seed", "normalize", "smooth", "engine", "flipped_faces", "twin_faces", "seconds", "Mrays_per_s",
     "io_seconds", "total_seconds", "outputs", "status", "error", "exit_status", "warnings",
 }  # fmt: skip
 

@@ -151,9 +151,9 @@ def test_a_mesh_wound_right_is_cast_while_its_orientation_is_decided(monkeypatch
 @pytest.mark.parametrize("orientation", ["flip", "as_is"])
 def test_other_orientations_are_applied_before_the_cast(monkeypatch, orientation):
     v, f = load_mesh(DATA / "spot.obj")
-    cpu = sd.compute(v, f, engine="cpu", orientation=orientation)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", RuntimeWarning)  # 'flip' turns spot inside out
+        cpu = sd.compute(v, f, engine="cpu", orientation=orientation)
         device = on_device_tree(monkeypatch, v, f, OPENCL[0], orientation=orientation)
     assert "orientation (beside cast)" not in device.timings
     same_bits(device, cpu)
@@ -248,3 +248,17 @@ def test_leaves_of_several_triangles_give_the_same_bits(monkeypatch, leaf_size):
     cpu = sd.compute(v, f, engine="cpu")
     monkeypatch.setenv("SDF_OPENCL_EXTRA_OPTIONS", f"-DSDF_LBVH_LEAF_SIZE={leaf_size}")
     same_bits(on_device_tree(monkeypatch, v, f, OPENCL[0]), cpu)
+
+
+@pytest.mark.parametrize("orientation", ["auto", "as_is", "flip"])
+def test_twins_found_beside_the_cast_give_the_cpu_engines_bits(monkeypatch, orientation):
+    # A double-sided mesh: the device stops casting when the host finds the twins beside it,
+    # and the mesh without them is cast again.
+    v, f = load_mesh(DATA / "spot.obj")
+    f = np.vstack([f, f[:, [2, 1, 0]]])
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", RuntimeWarning)  # 'flip' turns spot inside out
+        cpu = sd.compute(v, f, engine="cpu", orientation=orientation)
+        device = on_device_tree(monkeypatch, v, f, OPENCL[0], orientation=orientation)
+    assert device.twin_faces == cpu.twin_faces == len(f) // 2
+    same_bits(device, cpu)

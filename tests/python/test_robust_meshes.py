@@ -146,3 +146,89 @@ def test_a_mesh_wider_than_float_range_is_refused_readably():
     vertices = np.array([[1e300, 0, 0], [0, 1, 0], [0, 0, 1]], dtype=float)
     with pytest.raises(ValueError, match=r"spans 1e\+300 units on an axis"):
         sd.compute(vertices, [[0, 1, 2]])
+
+
+# Double-sided meshes: every face again, wound the other way, at the same positions. Cast with
+# both, a ray meets two coincident walls and keeps either (values up to 12x off, normals of
+# shared vertices cancelled): compute() casts one face of each pair and gives the other its
+# values, so the whole mesh gets the single-sided mesh's values, bit for bit.
+def double_sided(v, t, split: bool, twins_first: bool = False):
+    back = (t + len(v) if split else t)[:, [0, 2, 1]]
+    vertices = np.vstack([v, v]) if split else v
+    return vertices, np.vstack([back, t] if twins_first else [t, back])
+
+
+@pytest.mark.parametrize("split", [False, True], ids=["shared vertices", "own vertices"])
+@pytest.mark.parametrize("points", ["faces", "vertices"])
+def test_a_double_sided_mesh_gets_the_single_sided_values(split, points):
+    v, t = load_mesh(DATA / "spot.obj")
+    single = sd.compute(v, t, points=points)
+    vertices, triangles = double_sided(v, t, split)
+    both = sd.compute(vertices, triangles, points=points)
+    assert both.twin_faces == len(t)
+    n = len(single.raw)
+    for name in ("raw", "values", "normalized", "valid_rays"):
+        whole, part = getattr(both, name), getattr(single, name)
+        np.testing.assert_array_equal(whole[:n], part, err_msg=name)
+        if points == "faces" or split:  # the twins' faces, or the back's own vertices
+            np.testing.assert_array_equal(whole[n:], part, err_msg=name)
+
+
+def test_twins_listed_first_keep_their_places_and_are_oriented():
+    # The reversed copies come first: they are the faces cast ('auto' turns them outward),
+    # and the faces after them take their values.
+    v, t = load_mesh(DATA / "spot.obj")
+    single = sd.compute(v, t)
+    vertices, triangles = double_sided(v, t, split=False, twins_first=True)
+    both = sd.compute(vertices, triangles)
+    assert both.twin_faces == len(t) and both.flipped_faces == len(t)
+    np.testing.assert_array_equal(both.reversed_faces, np.arange(2 * len(t)) < len(t))
+    np.testing.assert_array_equal(both.raw[: len(t)], single.raw)
+    np.testing.assert_array_equal(both.raw[len(t):], single.raw)
+
+
+@pytest.mark.parametrize("smoothing", ["kring", "projected", "texture"])
+def test_a_double_sided_mesh_smooths_as_the_single_sided_one(smoothing):
+    v, t = box(1.0, 2.0, 3.0, divisions=6)
+    uvs = np.random.default_rng(5).random((len(t), 3, 2)).astype(np.float32)
+    options = {"texture_size": 64} if smoothing == "texture" else None
+    single = sd.compute(v, t, smoothing=smoothing, uvs=uvs, smoothing_options=options)
+    vertices, triangles = double_sided(v, t, split=True)
+    both = sd.compute(vertices, triangles, smoothing=smoothing, uvs=np.vstack([uvs, uvs]),
+                      smoothing_options=options)
+    assert both.twin_faces == len(t)
+    np.testing.assert_array_equal(both.values[: len(t)], single.values)
+    np.testing.assert_array_equal(both.values[len(t):], single.values)
+
+
+def test_a_few_twins_among_single_faces():
+    # Ten faces doubled (a flap, a decal): only they are left out, and the rest of the mesh
+    # gets the values it has without them.
+    v, t = load_mesh(DATA / "spot.obj")
+    chosen = np.arange(0, 1000, 100)
+    triangles = np.vstack([t, t[chosen][:, [1, 0, 2]]])
+    single = sd.compute(v, t)
+    result = sd.compute(v, triangles)
+    assert result.twin_faces == 10
+    np.testing.assert_array_equal(result.raw[: len(t)], single.raw)
+    np.testing.assert_array_equal(result.raw[len(t):], single.raw[chosen])
+
+
+def test_the_progress_of_a_double_sided_mesh_never_goes_back():
+    v, t = load_mesh(DATA / "spot.obj")
+    told = []
+    result = sd.compute(*double_sided(v, t, split=True), progress=told.append)
+    assert result.twin_faces == len(t)
+    assert told and told[-1] == 1.0 and all(a <= b for a, b in zip(told, told[1:]))
+    assert "twins: first run" in result.timings
+
+
+def test_faces_at_the_same_positions_wound_alike_are_not_twins():
+    # A doubled face wound alike measures alike: both are cast (a rotated copy starts its rays
+    # from another edge, so only an exact copy is compared).
+    v, t = load_mesh(DATA / "spot.obj")
+    assert sd.compute(v, np.vstack([t, t[:, [1, 2, 0]]])).twin_faces == 0
+    result = sd.compute(v, np.vstack([t, t]))
+    assert result.twin_faces == 0
+    np.testing.assert_array_equal(result.raw[: len(t)], sd.compute(v, t).raw)
+    np.testing.assert_array_equal(result.raw[len(t):], result.raw[: len(t)])

@@ -698,3 +698,19 @@ def test_cli_smoothing_errors(tmp_path, capsys, argv, message):
     assert _cli(*argv) == 2
     err = capsys.readouterr().err
     assert message in err and len(err.strip().splitlines()) == 1
+
+
+def test_the_public_reader_gives_the_uvs_texture_smoothing_needs():
+    # Texture smoothing from Python needed UVs, and the reader that gives them was private.
+    pytest.importorskip("trimesh")
+    v, t, uvs = shape_diameter.load_mesh(DATA / "spot.obj", uvs=True)
+    _, rt, ruvs, _ = _read_obj(DATA / "spot.obj")
+    np.testing.assert_array_equal(t, rt)
+    np.testing.assert_array_equal(uvs, ruvs)
+    v2, t2, source, uvs2 = shape_diameter.load_mesh(DATA / "spot.obj", source_faces=True, uvs=True)
+    np.testing.assert_array_equal(uvs2, uvs)
+    np.testing.assert_array_equal(source, shape_diameter.load_mesh(DATA / "spot.obj", source_faces=True)[2])
+    assert shape_diameter.load_mesh(DATA / "cow.obj", uvs=True)[2] is None
+    result = shape_diameter.compute(v, t, rays=4, smoothing="texture", uvs=uvs,
+                        smoothing_options={"texture_size": 64})
+    assert np.isfinite(result.values).all()
