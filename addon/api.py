@@ -36,7 +36,9 @@ class ObjectResult:
     (domain 'POINT'), except valid_rays: per triangle (or vertex). A vertex in no face has no
     thickness: values and normalized 0, colors (0, 0, 0, 0), valid_rays 0. warnings: what the
     operator reports, first those about the whole run (objects skipped as not meshes, long or
-    large texture work; the same in every result), then this object's own."""
+    large texture work; the same in every result), then this object's own. timings: seconds
+    of the core's stages (shape_diameter.Result.timings), 'bake' where an image was baked, and
+    'total': the object's whole computation, bake included."""
 
     object_name: str
     domain: str
@@ -67,11 +69,14 @@ def compute_objects(objects, *, depsgraph=None, write=True, progress=None, **opt
     (smoothing_iterations=1) or 'texture' (texture_size=1024, an integer in [16, 16384];
     texture_radius=0: automatic, or texels in [0, 1024]; needs a UV map), attribute_name='sdf',
     normalized_name='sdf_normalized', color_name='sdf_color' (empty: not written),
-    bake_image=False, uv_map='' (the active one), image_name='{object}_sdf', bake_margin=4,
-    use_modifiers=False, apply_scale=True; and any further keyword that
+    bake_image=False, uv_map='' (the active one), image_name='{object}_sdf', bake_margin=4
+    (texels around each UV island, an integer in [0, 16384]), use_modifiers=False,
+    apply_scale=True; and any further keyword that
     shape_diameter.compute() accepts. write=False computes without writing. progress: called
     now and then with the fraction done (0 to 1); returning False stops the run, which raises
-    Cancelled having written nothing. The baked image is ObjectResult.image:
+    Cancelled having written nothing. A mesh that several objects share is computed once,
+    from the first of them in `objects` (the operator: from the active object, where it is
+    one of them). The baked image is ObjectResult.image:
     bpy.data.images[result.image]. Warnings about the whole run are also issued
     (RuntimeWarning) before computing. Texture work estimated to need more than 80% of this
     machine's memory raises UserError, nothing computed."""

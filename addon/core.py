@@ -97,6 +97,12 @@ def has(name):
         return False
 
 
+def few_rays_kept(valid_rays, rays, orientation):
+    """The core's words for a run whose points kept few of their rays (an inside-out mesh
+    trusted as wound, ...), or None: shape_diameter.api.few_rays_kept."""
+    return load().api.few_rays_kept(valid_rays, rays, orientation)
+
+
 def uv_faces_outside(uvs):
     """Faces whose UVs (m, 3, 2) lie wholly outside the [0, 1] square: a bake leaves them out."""
     return load().smoothing.uv_faces_outside(uvs)

@@ -12,6 +12,7 @@ the scripting API:
 
 import os
 import threading
+import time
 from dataclasses import dataclass, field, fields
 
 import bpy
@@ -31,6 +32,9 @@ class UserError(ValueError):
 class Cancelled(Exception):
     """Raised in the progress callback when the user cancels."""
 
+    def __init__(self, message="cancelled: nothing was written"):
+        super().__init__(message)
+
 
 SMOOTHING_METHODS = ("none", "kring", "projected", "texture")
 
@@ -44,6 +48,7 @@ NOT_MEASURED = 0.0
 # and would refuse a bad one only in the bake, after the cast).
 TEXTURE_SIZE_RANGE = (16, 16384)
 TEXTURE_RADIUS_RANGE = (0.0, 1024.0)
+BAKE_MARGIN_RANGE = (0, 16384)  # texels grown around each UV island (the core's bound)
 
 
 @dataclass
@@ -154,6 +159,11 @@ class Options:
                 f"texture_radius must be a number in [{lo:g}, {hi:g}] texels (0: 2 per 256 "
                 f"texels of the texture), got {radius!r}"
             )
+        lo, hi = BAKE_MARGIN_RANGE
+        margin = self.bake_margin
+        integer = isinstance(margin, (int, np.integer)) and not isinstance(margin, bool)
+        if not integer or not lo <= margin <= hi:
+            raise UserError(f"bake_margin must be an integer in [{lo}, {hi}] texels, got {margin!r}")
 
     def check(self):
         if self.points not in ("faces", "vertices"):
@@ -242,13 +252,15 @@ def _attribute_problem(ob, options):
     return None
 
 
-def prepare(depsgraph, objects, options, for_writing=True):
+def prepare(depsgraph, objects, options, for_writing=True, active=None):
     """Tasks for the mesh objects among `objects`, plus the warnings about the whole run
     (objects skipped as not meshes, long or large texture work), to report before computing;
     a warning about one object (its mesh shared with others) goes into its task's warnings.
-    Raises UserError, having changed nothing, when the run cannot go ahead (texture work too
-    large for this machine's memory included). for_writing=False (a dry run of the
-    scripting API) skips the checks of the attributes to be written."""
+    A mesh several objects share is computed once, from `active` when it is one of them (the
+    operator's active object: its transform is the one the user looks at), else from the
+    first of them in `objects`. Raises UserError, having changed nothing, when the run cannot
+    go ahead (texture work too large for this machine's memory included). for_writing=False
+    (a dry run of the scripting API) skips the checks of the attributes to be written."""
     options.check_values()
     if for_writing:
         options.check()
@@ -263,6 +275,12 @@ def prepare(depsgraph, objects, options, for_writing=True):
     if others:
         notices.append(f"Skipped what is not a mesh: {', '.join(others)}")
 
+    # The object each shared mesh is computed from: the active one where it shares it.
+    source = {}
+    for ob in meshes:
+        source.setdefault(ob.data.session_uid, ob)
+    if active is not None and active.type == "MESH" and active in meshes:
+        source[active.data.session_uid] = active
     tasks = {}
     for ob in meshes:
         problem = _mode_problem(ob)
@@ -275,8 +293,14 @@ def prepare(depsgraph, objects, options, for_writing=True):
             raise UserError(f"{ob.name} has no faces")
         uid = me.session_uid
         if uid in tasks:
-            tasks[uid].shared_by.append(ob.name)
+            if ob is not source[uid]:  # (the source joined its task when it was made)
+                tasks[uid].shared_by.append(ob.name)
             continue
+        if source[uid] is not ob:  # computed from another user, in this place of the order
+            shared = ob
+            ob = source[uid]
+        else:
+            shared = None
         matrix = ob.matrix_world if options.apply_scale else None
         original = mesh_data.topology(me)
         if options.use_modifiers:
@@ -298,7 +322,17 @@ def prepare(depsgraph, objects, options, for_writing=True):
         else:
             triangles = mesh_data.triangulation(me, matrix)
             uvs = _corner_uvs(ob, me, options, triangles.flipped)
+        # Checked here, before any object is computed, so that the message names the object
+        # (the core's own check would come after the earlier objects' work).
+        if not np.isfinite(triangles.vertices).all():
+            raise UserError(
+                f"{ob.name} has vertices whose coordinates are not finite (NaN or infinite"
+                f"{' after its modifiers' if options.use_modifiers else ''}): fix them, e.g. "
+                "by deleting those vertices in Edit Mode"
+            )
         task = Task(ob.name, ob.session_uid, uid, original, triangles, corner_uvs=uvs)
+        if shared is not None:
+            task.shared_by.append(shared.name)
         if options.bake_image:
             task.image_name = options.image_name.replace("{object}", ob.name)
             problem = _image_problem(bpy.data, task.image_name)
@@ -454,11 +488,16 @@ def compute(tasks, options, progress=None, cancelled=None):
                 progress(done + share * fraction)
 
         step(0.0)
+        computing = time.perf_counter()
         mesh = task.mesh
         loose = None  # vertex values: the vertices in no face
         # Smoothing, when chosen, is the core's too: compute() casts, then smooths
         # (Result.values; Result.raw keeps the values as cast).
-        result = core.compute(mesh.vertices, mesh.triangles, compute_options, step, task.corner_uvs)
+        try:
+            result = core.compute(mesh.vertices, mesh.triangles, compute_options, step,
+                                  task.corner_uvs)
+        except ValueError as ex:  # the core refused this mesh: say which object it was
+            raise UserError(f"{task.object_name}: {ex}") from ex
         if options.points == "faces":
             task.values = polygon_means(result.values, mesh)
             task.normalized = core.normalize(task.values, options.normalize)
@@ -479,9 +518,11 @@ def compute(tasks, options, progress=None, cancelled=None):
                     "vertices, wire edges) have no thickness: their values are 0 and their "
                     "colour transparent black"
                 )
+        task.timings = dict(result.timings)
         if options.bake_image:
             # The normalised field through the UV map; blurred in texture space when that is
             # the smoothing chosen (the paper's texture-space smoothing, 4.4).
+            started = time.perf_counter()
             radius = options.bake_radius()
             per_point = (
                 task.normalized[mesh.triangle_polygons]
@@ -503,6 +544,7 @@ def compute(tasks, options, progress=None, cancelled=None):
                 engine=options.engine,
                 threads=int(options.extra.get("threads") or 0),
             )
+            task.timings["bake"] = time.perf_counter() - started
             # Faces whose UVs lie wholly outside [0, 1] are left out of the image (the image
             # came out empty for a UDIM layout, without a word). Counted here rather than by
             # catching the core's warning: warnings.catch_warnings is process-wide, and this
@@ -520,11 +562,15 @@ def compute(tasks, options, progress=None, cancelled=None):
                 f"{task.object_name}: no ray found the other side of the mesh (is it open, "
                 "flat or inside out?); every value is 0"
             )
+        else:
+            few = core.few_rays_kept(result.valid_rays, options.rays, options.orientation)
+            if few:
+                task.warnings.append(f"{task.object_name}: {few}")
         task.colors = core.colors(task.normalized) if options.color_name else None
         if loose is not None and task.colors is not None:
             task.colors[loose] = 0.0  # transparent black: a colour the map never gives
         task.engine = result.engine
-        task.timings = dict(result.timings)
+        task.timings["total"] = time.perf_counter() - computing
         done += share
     if progress is not None:
         progress(1.0)

@@ -120,6 +120,13 @@ def bad_coordinates():
     return {}
 
 
+def too_wide():
+    good, suzanne = suzanne_and_sphere()
+    suzanne.data.vertices[10].co = (1e31, 0.0, 0.0)
+    select_only(good, suzanne)
+    return {}
+
+
 def modifiers_change_topology():
     good, suzanne = suzanne_and_sphere()
     suzanne.modifiers.new("subdivide", "SUBSURF")
@@ -153,7 +160,8 @@ CASES = [
     (attribute_on_another_domain, "attribute 'sdf_normalized' exists as FLOAT on POINT"),
     (color_of_another_type, "attribute 'sdf_color' exists as FLOAT_COLOR on POINT"),
     (vertices_after_faces, "attribute 'sdf' exists as FLOAT on FACE; the result is FLOAT on POINT"),
-    (bad_coordinates, "vertices must be finite"),
+    (bad_coordinates, "suzanne has vertices whose coordinates are not finite"),
+    (too_wide, "suzanne: the mesh spans 1e\\+31 units on an axis"),  # the core's, named
     (modifiers_change_topology, "The modifiers of suzanne change its topology"),
     (same_names, "names must differ"),
     (empty_name, "attribute name is empty"),

@@ -309,6 +309,36 @@ def test_the_api_says_what_it_skipped_as_the_operator_does():
     assert results[1].shared_by == ["twin"]
 
 
+def test_a_shared_mesh_is_computed_from_the_active_object():
+    # A linked duplicate at 10 times the scale, made active: the operator computed the mesh
+    # from whichever object came first in the selection (a trial's), not the one looked at.
+    api = addon_module("api")
+    suzanne = import_obj("suzanne.obj")
+    big = bpy.data.objects.new("big", suzanne.data)
+    bpy.context.scene.collection.objects.link(big)
+    big.scale = (10.0, 10.0, 10.0)
+    bpy.context.view_layer.update()
+    for ob in (suzanne, big):
+        ob.select_set(True)
+    bpy.context.view_layer.objects.active = big
+    assert run(rays=8) == {"FINISHED"}
+    expected = api.compute_object(big, rays=8, write=False).values
+    # (the operator's cone angle goes through radians: the last bit may differ)
+    np.testing.assert_allclose(attribute_array(suzanne.data, "sdf"), expected, rtol=1e-6)
+    # The API keeps the order it is given.
+    results = api.compute_objects([suzanne, big], rays=8, write=False)
+    assert results[0].object_name == "suzanne" and results[0].shared_by == ["big"]
+
+
+def test_an_inside_out_mesh_trusted_as_wound_warns_that_few_rays_were_kept():
+    api = addon_module("api")
+    spot = import_obj("spot.obj")
+    with pytest.warns(RuntimeWarning, match="only"):  # the package's, on the console
+        result = api.compute_object(spot, rays=8, orientation="flip", write=False)
+    assert any(w.startswith("spot: only ") and "orientation='flip'" in w for w in result.warnings)
+    assert not any("only " in w for w in api.compute_object(spot, rays=8, write=False).warnings)
+
+
 def test_a_vertex_group_of_the_results_name_is_refused_first():
     # Blender cannot make an attribute of a vertex group's name: this failed only after the
     # computation, with Blender's own error.

@@ -137,6 +137,9 @@ def test_bake_through_a_chosen_uv_map_and_the_api():
         ob, rays=8, bake_image=True, uv_map="Flat", texture_size=64, image_name="flat {object}"
     )
     assert result.image == "flat spot"
+    # The bake's own time is in the object's timings, and within its total.
+    assert 0 < result.timings["bake"] < result.timings["total"]
+    assert result.timings["total"] > result.timings["cast"] + result.timings["bake"]
     pixels = image_pixels(bpy.data.images["flat spot"])
     covered = pixels[..., 3] > 0
     assert covered[:28, :28].any() and not covered[36:, :].any() and not covered[:, 36:].any()
@@ -185,6 +188,11 @@ BAD_TEXTURE_OPTIONS = [
     ({"texture_size": True}, r"texture_size must be an integer in \[16, 16384\], got True"),
     ({"texture_radius": -1.0}, r"texture_radius must be a number in \[0, 1024\].*got -1.0"),
     ({"texture_radius": float("nan")}, r"texture_radius must be a number in \[0, 1024\]"),
+    # bake_margin failed after the cast (-1, 100000), or passed as 2.5 and '4' (a trial's).
+    ({"bake_margin": -1}, r"bake_margin must be an integer in \[0, 16384\] texels, got -1"),
+    ({"bake_margin": 16385}, r"bake_margin must be an integer in \[0, 16384\].*got 16385"),
+    ({"bake_margin": 2.5}, r"bake_margin must be an integer in \[0, 16384\].*got 2.5"),
+    ({"bake_margin": "4"}, r"bake_margin must be an integer in \[0, 16384\].*got '4'"),
 ]
 
 

@@ -121,6 +121,7 @@ def modal_operator(monkeypatch, **values):
         workspace=None,
         screen=None,
         selected_objects=bpy.context.selected_objects,
+        active_object=bpy.context.active_object,
         evaluated_depsgraph_get=bpy.context.evaluated_depsgraph_get,
         preferences=bpy.context.preferences,
     )
