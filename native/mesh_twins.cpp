@@ -7,6 +7,7 @@
 #include <mutex>
 #include <tuple>
 
+#include "concurrent_union_find.h"
 #include "parallel.h"
 #include "prefetch.h"
 #include "uninitialized_vector.h"
@@ -16,9 +17,9 @@ namespace sdf {
 namespace {
 
 constexpr std::size_t kGrain = 1 << 14;
-// Faces handled per batch of prefetches: their corners' hashes, then their table slots, are
-// asked for together (a subdivided mesh's corners, and the table, are read out of order).
-constexpr std::size_t kBatch = 16;
+// How far ahead of its use a read is asked for (faces): a subdivided mesh's corners, and the
+// table, are read out of order.
+constexpr std::size_t kAhead = 16;
 
 std::uint64_t mix(std::uint64_t h) {
   h = (h ^ (h >> 30)) * 0xBF58476D1CE4E5B9ull;
@@ -38,18 +39,60 @@ std::uint64_t position_hash(glm::vec3 p) {
   return mix((std::uint64_t{bits_of(p.x)} << 32 | bits_of(p.y)) ^ mix(bits_of(p.z)));
 }
 
-// The corner of face `other` at the position of corner k of `face`, or -1.
-int corner_at(const Mesh& mesh, std::size_t face, int k, std::size_t other) {
-  const glm::vec3 p = mesh.vertices[mesh.triangles[face][k]];
-  for (int j = 0; j < 3; ++j)
-    if (mesh.vertices[mesh.triangles[other][j]] == p) return j;  // == : -0 equals +0
-  return -1;
-}
+// The faces as the caller wound them: corner k of a face the orientation reversed is the
+// mesh's corner (3 - k) % 3 (orientation.cpp swaps corners 1 and 2).
+struct CallerCorners {
+  const Mesh& mesh;
+  const std::uint8_t* reversed;  // per face, or null
 
-// Two faces of three distinct positions each: the same positions when each corner finds one.
-bool same_positions(const Mesh& mesh, std::size_t face, std::size_t other) {
-  return corner_at(mesh, face, 0, other) >= 0 && corner_at(mesh, face, 1, other) >= 0 &&
-         corner_at(mesh, face, 2, other) >= 0;
+  glm::vec3 position(std::size_t face, int k) const {
+    const int stored = reversed && reversed[face] ? (3 - k) % 3 : k;
+    return mesh.vertices[mesh.triangles[face][stored]];
+  }
+
+  // The corner of face `other` at the position of corner k of `face`, or -1.
+  int corner_at(std::size_t face, int k, std::size_t other) const {
+    const glm::vec3 p = position(face, k);
+    for (int j = 0; j < 3; ++j)
+      if (position(other, j) == p) return j;  // == : -0 equals +0
+    return -1;
+  }
+
+  // Two faces of three distinct positions each: the same positions when each corner finds one.
+  bool same_positions(std::size_t face, std::size_t other) const {
+    return corner_at(face, 0, other) >= 0 && corner_at(face, 1, other) >= 0 &&
+           corner_at(face, 2, other) >= 0;
+  }
+};
+
+using Found = std::vector<std::tuple<std::uint32_t, std::uint32_t, std::uint8_t>>;
+
+// Keeps the pairs whose later face lies in a doubled part: a set of faces joined by shared
+// vertices, every one of which is `paired` (at positions where faces of both windings lie). A double-sided mesh is such parts (its
+// back a part of its own, or both sides one part on shared vertices); two solids that meet at
+// a wall are not (each has faces away from the wall): each wall face measures its own solid
+// and keeps its own value (a review found the slab's 0.25 given to the cube's wall). Runs only
+// where twins were found.
+void keep_doubled_parts(const Mesh& mesh, const std::vector<std::uint8_t>& paired, Found& found,
+                        unsigned threads) {
+  const std::size_t n = mesh.triangles.size();
+  ConcurrentUnionFind sets(mesh.vertices.size(), threads);
+  parallel_for(n, kGrain, threads, [&](std::size_t begin, std::size_t end) {
+    for (std::size_t f = begin; f < end; ++f) {
+      const glm::uvec3 t = mesh.triangles[f];
+      sets.unite(t.x, t.y);
+      sets.unite(t.x, t.z);
+    }
+  });
+  // A part is doubled until one of its faces has no twin.
+  std::vector<std::uint8_t> single(mesh.vertices.size(), 0);
+  for (std::size_t f = 0; f < n; ++f)
+    if (!paired[f]) single[sets.find(mesh.triangles[f].x)] = 1;
+  found.erase(std::remove_if(found.begin(), found.end(),
+                             [&](const auto& pair) {
+                               return single[sets.find(mesh.triangles[std::get<0>(pair)].x)];
+                             }),
+              found.end());
 }
 
 // A face that found its positions' slot held by another face at the same positions.
@@ -60,8 +103,9 @@ struct Join {
 
 }  // namespace
 
-ReversedTwins reversed_twins(const Mesh& mesh, unsigned threads) {
+ReversedTwins reversed_twins(const Mesh& mesh, unsigned threads, const std::uint8_t* reversed) {
   ReversedTwins out;
+  const CallerCorners corners{mesh, reversed};
   const std::size_t n = mesh.triangles.size(), nv = mesh.vertices.size();
   if (n < 2) return out;
 
@@ -95,31 +139,36 @@ ReversedTwins reversed_twins(const Mesh& mesh, unsigned threads) {
   std::mutex joins_lock;
   parallel_for(n, kGrain, threads, [&](std::size_t begin, std::size_t end) {
     std::vector<Join> mine;
-    std::uint64_t key[kBatch];
-    for (std::size_t first = begin; first < end; first += kBatch) {
-      const std::size_t count = std::min(kBatch, end - first);
-      for (std::size_t i = 0; i < count; ++i)
-        for (int k = 0; k < 3; ++k) prefetch(&hash[mesh.triangles[first + i][k]]);
-      for (std::size_t i = 0; i < count; ++i) {
-        key[i] = key_of(first + i);
-        prefetch(&slot[key[i] & mask]);
-      }
-      for (std::size_t i = 0; i < count; ++i) {
-        if (key[i] == 0) continue;
-        const std::size_t face = first + i;
-        const std::uint64_t entry = (key[i] & 0xffffffff00000000ull) | (face + 1);
-        for (std::size_t s = key[i] & mask;; s = (s + 1) & mask) {
-          std::uint64_t held = slot[s].load(std::memory_order_relaxed);
-          if (held == 0 &&
-              slot[s].compare_exchange_strong(held, entry, std::memory_order_relaxed))
-            break;
-          const std::size_t other = static_cast<std::uint32_t>(held) - 1;
-          if ((held >> 32) == (key[i] >> 32) && same_positions(mesh, face, other)) {
-            mine.push_back({s, static_cast<std::uint32_t>(face)});
-            break;
-          }
+    auto insert = [&](std::size_t face, std::uint64_t key) {
+      const std::uint64_t entry = (key & 0xffffffff00000000ull) | (face + 1);
+      for (std::size_t s = key & mask;; s = (s + 1) & mask) {
+        std::uint64_t held = slot[s].load(std::memory_order_relaxed);
+        if (held == 0 && slot[s].compare_exchange_strong(held, entry, std::memory_order_relaxed))
+          return;
+        const std::size_t other = static_cast<std::uint32_t>(held) - 1;
+        if ((held >> 32) == (key >> 32) && corners.same_positions(face, other)) {
+          mine.push_back({s, static_cast<std::uint32_t>(face)});
+          return;
         }
       }
+    };
+    // A pipeline over the faces: face f's corners' hashes are asked for, face f - kAhead's key
+    // is made and its slot asked for, face f - 2 kAhead is inserted. Both reads are misses on
+    // a large mesh; batches (ask for 16, then use them) left the table's miss exposed (measured
+    // 1.6x slower on one thread).
+    std::uint64_t key[kAhead];  // face g's at g % kAhead, from its making to its insertion
+    for (std::size_t f = begin; f < end + 2 * kAhead; ++f) {
+      if (f >= begin + 2 * kAhead && f - 2 * kAhead < end) {
+        const std::size_t h = f - 2 * kAhead;
+        if (key[h % kAhead] != 0) insert(h, key[h % kAhead]);
+      }
+      if (f >= begin + kAhead && f - kAhead < end) {
+        const std::size_t g = f - kAhead;  // takes the place h left
+        key[g % kAhead] = key_of(g);
+        prefetch(&slot[key[g % kAhead] & mask]);
+      }
+      if (f < end)
+        for (int k = 0; k < 3; ++k) prefetch(&hash[mesh.triangles[f][k]]);
     }
     if (mine.empty()) return;
     std::lock_guard<std::mutex> hold(joins_lock);
@@ -140,18 +189,24 @@ ReversedTwins reversed_twins(const Mesh& mesh, unsigned threads) {
   auto equal = [](const Join& a, const Join& b) { return a.slot == b.slot && a.face == b.face; };
   std::sort(joins.begin(), joins.end(), order);
   joins.erase(std::unique(joins.begin(), joins.end(), equal), joins.end());
-  std::vector<std::tuple<std::uint32_t, std::uint32_t, std::uint8_t>> found;
+  Found found;
+  std::vector<std::uint8_t> paired(n, 0);  // in a group of faces with both windings
   for (std::size_t i = 0; i < joins.size();) {
     const std::uint32_t lowest = joins[i].face;
+    const std::size_t before = found.size();
     std::size_t j = i + 1;
     for (; j < joins.size() && joins[j].slot == joins[i].slot; ++j) {
       const std::uint32_t face = joins[j].face;
-      const int c0 = corner_at(mesh, face, 0, lowest), c1 = corner_at(mesh, face, 1, lowest);
+      const int c0 = corners.corner_at(face, 0, lowest), c1 = corners.corner_at(face, 1, lowest);
       if (c1 == (c0 + 2) % 3)  // its next corner is the twin's previous: opposite windings
         found.emplace_back(face, lowest, static_cast<std::uint8_t>(c0));
     }
+    if (found.size() > before)
+      for (std::size_t k = i; k < j; ++k) paired[joins[k].face] = 1;
     i = j;
   }
+  if (found.empty()) return out;
+  keep_doubled_parts(mesh, paired, found, threads);
   std::sort(found.begin(), found.end());
   for (const auto& [face, twin, corner] : found) {
     out.dropped.push_back(face);

@@ -26,11 +26,17 @@ struct ReversedTwins {
 };
 
 // Every face whose three corner positions (as the engines see them: the mesh's float
-// positions, -0 equal to +0) are those of a lower-index face wound the other way, with the
-// lowest such face. A face with two corners at one position has no twin; faces at the same
-// positions wound the same way are left alone (they measure alike). Expected linear time: a
+// positions, -0 equal to +0) are those of the lowest-index face there, wound the other way,
+// and that face; only in doubled parts: sets of faces joined by shared vertices whose every
+// face has such a twin (the back of a double-sided mesh, on vertices of its own or shared).
+// Two solids meeting at a wall are no such part: each wall face keeps measuring its own
+// solid. A face with two corners at one position has no twin; faces at the same positions
+// wound the same way are left alone (they measure alike). Expected linear time: a
 // lock-free hash table of faces keyed by their positions, on `threads` (0 = every core); the
-// result does not depend on it.
-ReversedTwins reversed_twins(const Mesh& mesh, unsigned threads = 0);
+// result does not depend on it. reversed: null, or per face 1 where the mesh holds the
+// caller's face with corners 1 and 2 swapped (orientation.h's report): windings and corners
+// are then told as the caller wound the faces.
+ReversedTwins reversed_twins(const Mesh& mesh, unsigned threads = 0,
+                             const std::uint8_t* reversed = nullptr);
 
 }  // namespace sdf

@@ -256,71 +256,88 @@ struct ReverseFacesFirst {};
 // Thrown from beside the cast when faces have reversed twins: the caller casts without them.
 struct TwinsFound {};
 
-// Casts `mesh` as it is wound while deciding beside the cast (only reading the mesh) its
-// 'auto' orientation, and whether faces have reversed twins. Twins: the devices stop at their
-// next launch (launches are kept short while deciding) and out.twins says which. Nothing to
-// reverse: the cast stands (it is the cast of the oriented mesh). Faces to reverse: the
-// devices stop, the faces are reversed, and the mesh is cast again on the devices' trees of
-// the first cast, rewound (a face's box does not depend on its winding: only the faces go up
-// again and the triangles' records are remade). Either way the values are those of casting
-// the oriented mesh. `flipped`: orientation 'flip' reversed every face before this cast.
+// Casts `mesh` while deciding beside the cast (only reading the mesh) its 'auto' orientation
+// and whether faces have reversed twins (orientations 'as_is' and 'flip' were applied before).
+// Faces to reverse: the devices stop at their next launch (launches are kept short while the
+// orientation is decided), the faces are reversed, and the mesh is cast again on the devices'
+// trees of the first cast, rewound (a face's box does not depend on its winding: only the
+// faces go up again and the triangles' records are remade); the twins are looked for beside
+// that cast. Twins: the devices stop at their next launch and out.twins says which (the
+// search takes less than a first launch: launches need not be short for it). Otherwise the
+// cast stands: it is the cast of the oriented mesh.
 void cast_speculatively(const Options& options, const Plan& plan, cl::CastInput input,
                         Mesh& mesh, const Cone& cone, Output& out, const ProgressFn& progress,
-                        const std::function<void()>& beside_cast, bool flipped) {
+                        const std::function<void()>& beside_cast) {
   StageTimings orientation_steps;
   double orientation_seconds = 0.0, twins_seconds = 0.0;
   const bool orienting = options.orientation == Orientation::Auto;
-  std::atomic<bool> deciding{true};
-  input.short_launches = &deciding;
-  auto decide_beside = [&] {
+  const unsigned threads = options.threads;
+  std::atomic<bool> deciding{orienting};
+  input.short_launches = orienting ? &deciding : nullptr;
+  // Twins are told in the caller's winding: through the faces the orientation reversed.
+  auto find_twins = [&] {
+    if (!options.find_twins) return;
     Stopwatch clock;
+    const std::uint8_t* reversed =
+        out.orientation.reversed.empty() ? nullptr : out.orientation.reversed.data();
+    out.twins = reversed_twins(mesh, threads, reversed);
+    twins_seconds = clock.lap();
+    if (!out.twins.empty()) throw TwinsFound{};
+  };
+  auto decide_beside = [&] {
     if (orienting) {
-      out.orientation = decide_orientation(mesh, Orientation::Auto, options.threads,
+      Stopwatch clock;
+      out.orientation = decide_orientation(mesh, Orientation::Auto, threads,
                                            &orientation_steps);
       orientation_seconds = clock.lap();
+      if (out.orientation.flipped_faces > 0) throw ReverseFacesFirst{};
+      deciding = false;
     }
-    if (options.find_twins) {
-      out.twins = reversed_twins(mesh, options.threads);
-      twins_seconds = clock.lap();
-      // A face's corner 0 stays where it was when every face is flipped; corners 1 and 2 swap.
-      if (flipped)
-        for (std::uint8_t& corner : out.twins.corner) corner = static_cast<std::uint8_t>((3 - corner) % 3);
-      if (!out.twins.empty()) throw TwinsFound{};
-    }
-    if (out.orientation.flipped_faces > 0 && orienting) throw ReverseFacesFirst{};
-    deciding = false;
+    find_twins();
     if (beside_cast) beside_cast();
   };
-  auto record_decisions = [&] {
+  bool recorded = false;
+  auto record = [&] {
+    if (recorded) return;
+    recorded = true;
     if (orienting) {
       out.timings.emplace_back("orientation (beside cast)", orientation_seconds);
       for (const auto& [name, seconds] : orientation_steps)
         out.timings.emplace_back(name, seconds);
     }
+  };
+  auto record_twins = [&] {
     if (options.find_twins) out.timings.emplace_back("twins (beside cast)", twins_seconds);
   };
   cl::KeptTrees trees;  // freed on the way out, whichever way that is
   input.trees = &trees;
   Stopwatch first;
   try {
-    cast_on_opencl(options, plan, input, mesh, cone, out, progress, decide_beside);
-    record_decisions();
-    return;
-  } catch (const ReverseFacesFirst&) {
+    try {
+      cast_on_opencl(options, plan, input, mesh, cone, out, progress, decide_beside);
+      record();
+      record_twins();
+      return;
+    } catch (const ReverseFacesFirst&) {
+    }
+    // What the first cast took until it stopped (its stages are not recorded), then the faces
+    // reversed and the stages of the cast that counts.
+    out.timings.emplace_back("cast (discarded)", first.lap());
+    record();
+    apply_orientation(mesh, out.orientation, options.threads);
+    out.timings.emplace_back("orientation: reverse faces", first.lap());
+    input.short_launches = nullptr;
+    input.rewind_trees = true;
+    cast_on_opencl(options, plan, input, mesh, cone, out, progress, [&] {
+      find_twins();
+      if (beside_cast) beside_cast();
+    });
+    record_twins();
   } catch (const TwinsFound&) {
     out.timings.emplace_back("cast (discarded)", first.lap());
-    record_decisions();
-    return;
+    record();
+    record_twins();
   }
-  // What the first cast took until it stopped (its stages are not recorded), then the faces
-  // reversed and the stages of the cast that counts.
-  out.timings.emplace_back("cast (discarded)", first.lap());
-  record_decisions();
-  apply_orientation(mesh, out.orientation, options.threads);
-  out.timings.emplace_back("orientation: reverse faces", first.lap());
-  input.short_launches = nullptr;
-  input.rewind_trees = true;
-  cast_on_opencl(options, plan, input, mesh, cone, out, progress, beside_cast);
 }
 #endif
 
@@ -434,8 +451,7 @@ Output compute(Mesh mesh, const Options& options, const ProgressFn& progress,
     }
     input.size = count;
     if (speculate) {
-      cast_speculatively(options, plan, input, mesh, cone, out, progress, timed_beside_cast,
-                         options.orientation == Orientation::Flip);
+      cast_speculatively(options, plan, input, mesh, cone, out, progress, timed_beside_cast);
       if (!out.twins.empty()) {  // the cast stopped: no values
         out.raw.clear();
         out.valid_rays.clear();

@@ -40,7 +40,9 @@ class Result:
     """int32: rays kept per point; 0 means the point's value was filled from its neighbours."""
     timings: dict = field(default_factory=dict)
     """Seconds per stage: devices (finding OpenCL devices; the first run of a process loads
-    the drivers), prepare (orientation, points, their Morton order, and with
+    the drivers), twins (the search for faces with a reversed twin: twin_faces; 'twins
+    (beside cast)' where a GPU makes the tree; where some were found, 'twins (first run)',
+    the run that found them until it stopped, and 'twins: values given'), prepare (orientation, points, their Morton order, and with
     threads=0 the copy of the mesh the build reads; its steps follow as 'prepare: ...'),
     build, build wait, cast (cast and reduce, fused), fill, normalize, total; on OpenCL also
     setup, upload and download; with smoothing, smooth (its steps follow as 'smooth: ...'),
@@ -72,11 +74,13 @@ class Result:
     `t = triangles.copy(); t[r.reversed_faces] = t[r.reversed_faces][:, [0, 2, 1]]`:
     smooth(vertices, t, r.raw, ...) then gives compute()'s smoothing (where twin_faces is 0)."""
     twin_faces: int = 0
-    """Faces left out of the cast because an earlier face of the array lies at the same three
-    positions wound the other way (a double-sided mesh: cast with both, a ray meets two
-    coincident walls and keeps either); each takes that face's values, and a vertex only
-    such faces use takes the value of the vertex at its position. Orientation and smoothing
-    ran on the mesh without them (they are never in reversed_faces)."""
+    """Faces of a double-sided mesh left out of the cast: a face is, when the lowest-index
+    face at its three positions is wound the other way and every face of its part (faces
+    joined by shared vertices) has such a twin (the back of a double-sided mesh; two solids
+    meeting at a wall have faces elsewhere, and keep theirs). Cast with both, a ray meets two
+    coincident walls and keeps either. Each takes that face's values, and a vertex only such
+    faces use the value of the twin's vertex at its position. Orientation and smoothing ran
+    on the mesh without them (they are never in reversed_faces)."""
 
 
 def engines() -> list:
@@ -288,9 +292,9 @@ def compute(
     chosen = _resolve_engine(engine)
     choosing = time.perf_counter() - clock  # 'auto' lists the devices (drivers load once)
 
-    def attempt(t, smoothing_resolved, find_twins, progress):
-        """The cast (and smoothing) of the mesh with triangles `t`: a Result, or, where
-        find_twins found faces with a reversed twin, the core's (dropped, twin, corner)."""
+    def attempt(v, t, smoothing_resolved, find_twins, progress):
+        """The cast (and smoothing) of the mesh (v, t): a Result, or, where find_twins found
+        faces with a reversed twin, the core's (dropped, twin, corner) and its timings."""
         # With smoothing, casting reports [0, 0.9] of the progress and smoothing the rest.
         cast_progress = progress
         if progress is not None and smoothing != "none":
@@ -330,7 +334,7 @@ def compute(
 
         out, failure = run_with_fallback(run, chosen, engine)
         if out["twins"] is not None:
-            return out["twins"]
+            return out["twins"], out["timings"]
         fallback = _fallback_line(chosen, failure)
         if prepare_failure:
             raise prepare_failure[0]
@@ -341,8 +345,6 @@ def compute(
                 RuntimeWarning,
                 stacklevel=3,
             )
-        else:
-            _warn_if_few_rays_kept(out["valid_rays"], int(rays), orientation)
         timings = dict(out["timings"])
         if engine == "auto":
             timings["devices"] = timings.get("devices", 0.0) + choosing
@@ -398,18 +400,27 @@ def compute(
 
     told = None if progress is None else _Monotone(progress)
     clock = time.perf_counter()
-    result = attempt(t, smoothing_resolved, True, told)
+    result = attempt(v, t, smoothing_resolved, True, told)
     if not isinstance(result, Result):  # faces with a reversed twin: cast without them
+        found, first_timings = result
         first_run = time.perf_counter() - clock
-        twins = _Twins(v, t, *result)
+        twins = _Twins(v, t, *found)
         resolved = dict(smoothing_resolved)
         if "uvs" in resolved:
             resolved["uvs"] = resolved["uvs"][twins.kept]
-        result = attempt(t[twins.kept], resolved, False, told)
+        result = attempt(twins.v, twins.t_cast, resolved, False, told)
         clock = time.perf_counter()
         twins.fill(result)
-        result.timings["twins: first run"] = first_run
+        # The run that found them, until it stopped (the search's own time within it), and
+        # the values given to the faces left out.
+        result.timings["twins (first run)"] = first_run
+        for name in ("twins", "twins (beside cast)"):
+            if name in first_timings:
+                result.timings[name] = first_timings[name]
         result.timings["twins: values given"] = time.perf_counter() - clock
+    if result.valid_rays.any():  # (none anywhere has its own warning)
+        _warn_if_few_rays_kept(result.valid_rays, int(rays), orientation,
+                               t if points == "vertices" else None)
     clock = time.perf_counter()
     # The core's own values (finite, >= 0, float32): normalize_values' checks would only cost
     # time (1 ms a million values).
@@ -444,15 +455,25 @@ def few_rays_kept(valid_rays, rays, orientation) -> Optional[str]:
     )
 
 
-def _warn_if_few_rays_kept(valid_rays, rays, orientation):
+def _warn_if_few_rays_kept(valid_rays, rays, orientation, triangles=None):
+    """Warns as few_rays_kept says; with per-vertex values, the triangles: vertices no face
+    uses cast nothing and do not count."""
+    if valid_rays.size and valid_rays.mean() >= FEW_RAYS_KEPT * rays:
+        return  # the common case, without the count below
+    if triangles is not None:
+        used = np.zeros(len(valid_rays), dtype=bool)
+        used[triangles.ravel()] = True
+        valid_rays = valid_rays[used]
     message = few_rays_kept(valid_rays, rays, orientation)
     if message:
-        warnings.warn(message, RuntimeWarning, stacklevel=4)
+        warnings.warn(message, RuntimeWarning, stacklevel=3)
 
 
 class _Twins:
     """Faces with a reversed twin (a double-sided mesh), left out of the cast: their values,
-    and those of vertices only they use, are their twins' (core's mesh_twins.h)."""
+    and those of vertices only they use, are their twins' (core's mesh_twins.h). Those
+    vertices are left out of the cast too (v, t_cast): k-ring smoothing merges vertices at
+    one position, and would average their stand-in values into the front's."""
 
     def __init__(self, v, t, dropped, twin, corner):
         self.t, self.dropped, self.twin = t, dropped.astype(np.int64), twin.astype(np.int64)
@@ -460,6 +481,15 @@ class _Twins:
         self.kept = np.ones(len(t), dtype=bool)
         self.kept[self.dropped] = False
         self.vertex_count = len(v)
+        used = np.zeros(len(v), dtype=bool)
+        used[t[self.kept].ravel()] = True
+        self.lonely = np.zeros(len(v), dtype=bool)
+        self.lonely[t[self.dropped].ravel()] = True
+        self.lonely &= ~used
+        self.v, self.t_cast = v, t[self.kept]
+        if self.lonely.any():
+            number = np.cumsum(~self.lonely) - 1  # the kept vertices, renumbered in order
+            self.v, self.t_cast = v[~self.lonely], number[self.t_cast]
 
     def fill(self, result: Result) -> None:
         """Result of the mesh without the twins -> Result of the whole mesh, in place."""
@@ -472,18 +502,17 @@ class _Twins:
                 whole[self.dropped] = whole[self.twin]
                 setattr(result, name, whole)
         else:
-            # A vertex that only faces left out use (the back of a double-sided mesh on
-            # vertices of its own) takes the value of the twin's corner at its position.
-            used = np.zeros(self.vertex_count, dtype=bool)
-            used[self.t[self.kept].ravel()] = True
-            corners = np.arange(3)
+            # A vertex only faces left out use (the back of a double-sided mesh on vertices of
+            # its own) takes the value of the twin's corner at its position.
             own = self.t[self.dropped]  # (k, 3)
-            theirs = self.t[self.twin[:, None], (self.corner[:, None] - corners) % 3]
-            lonely = ~used[own]
+            theirs = self.t[self.twin[:, None], (self.corner[:, None] - np.arange(3)) % 3]
+            lonely = self.lonely[own]
             for name in names:
-                part = getattr(result, name).copy()
-                part[own[lonely]] = part[theirs[lonely]]
-                setattr(result, name, part)
+                part = getattr(result, name)
+                whole = np.empty(self.vertex_count, dtype=part.dtype)
+                whole[~self.lonely] = part
+                whole[own[lonely]] = whole[theirs[lonely]]
+                setattr(result, name, whole)
         if result.reversed_faces is not None:
             whole = np.zeros(len(self.t), dtype=bool)
             whole[self.kept] = result.reversed_faces

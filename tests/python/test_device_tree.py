@@ -16,6 +16,7 @@ from shape_diameter.mesh_io import load_mesh
 from shape_diameter import _core
 
 from opencl_devices import OPENCL
+from shapes import box
 from test_opencl import DATA
 
 KERNELS = ["bvh_per_ray", "bvh_per_point"]
@@ -262,3 +263,22 @@ def test_twins_found_beside_the_cast_give_the_cpu_engines_bits(monkeypatch, orie
         device = on_device_tree(monkeypatch, v, f, OPENCL[0], orientation=orientation)
     assert device.twin_faces == cpu.twin_faces == len(f) // 2
     same_bits(device, cpu)
+
+
+def test_twins_among_faces_to_reverse_are_found_beside_the_second_cast(monkeypatch):
+    # Every third face of spot reversed ('auto' puts them back: the first cast stops and the
+    # mesh is cast again), and a double-sided box beside it: its twins are told in the
+    # caller's winding, found beside the second cast.
+    v, f = load_mesh(DATA / "spot.obj")
+    g = f.copy()
+    g[::3] = g[::3, ::-1]
+    bv, bf = box(0.3, 0.2, 0.1, divisions=2)
+    back = bf[:, [0, 2, 1]] + len(bv)
+    v = np.vstack([v, bv + [2.0, 0.0, 0.0], bv + [2.0, 0.0, 0.0]])
+    g = np.vstack([g, bf + len(v) - 2 * len(bv), back + len(v) - 2 * len(bv)])
+    cpu = sd.compute(v, g, engine="cpu")
+    device = on_device_tree(monkeypatch, v, g, OPENCL[0])
+    assert device.twin_faces == cpu.twin_faces == len(bf)
+    assert device.flipped_faces == cpu.flipped_faces > 0
+    same_bits(device, cpu)
+    np.testing.assert_array_equal(device.raw[-len(bf):], device.raw[-2 * len(bf):-len(bf)])

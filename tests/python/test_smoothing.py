@@ -714,3 +714,16 @@ def test_the_public_reader_gives_the_uvs_texture_smoothing_needs():
     result = shape_diameter.compute(v, t, rays=4, smoothing="texture", uvs=uvs,
                         smoothing_options={"texture_size": 64})
     assert np.isfinite(result.values).all()
+
+
+def test_kring_on_vertices_leaves_out_the_values_of_vertices_no_face_uses():
+    # Copies of every vertex that no face uses, at the same positions, with other values: the
+    # merge of vertices at one position averaged them in (a review's: the back of a
+    # double-sided mesh, left out of the cast, moved the front's values by 10% median).
+    v, t = shape_diameter.load_mesh(DATA / "spot.obj")
+    values = np.random.default_rng(2).random(len(v)).astype(np.float32)
+    alone = shape_diameter.smooth(v, t, values, "kring", points="vertices")
+    stray = shape_diameter.smooth(np.vstack([v, v]), t, np.concatenate([values, 10 * values]),
+                                  "kring", points="vertices")
+    np.testing.assert_array_equal(stray[: len(v)], alone)
+    np.testing.assert_array_equal(stray[len(v):], alone)  # they take their merged vertex's
