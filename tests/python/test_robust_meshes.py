@@ -270,7 +270,9 @@ def test_the_progress_of_a_double_sided_mesh_never_goes_back():
     result = sd.compute(*double_sided(v, t, split=True), progress=told.append)
     assert result.twin_faces == len(t)
     assert told and told[-1] == 1.0 and all(a <= b for a, b in zip(told, told[1:]))
-    assert {"twins (first run)", "twins", "twins: values given"} <= set(result.timings)
+    assert {"twins (first run)", "twins: values given"} <= set(result.timings)
+    # The search's own time: before the cast, or beside it where a GPU makes the tree.
+    assert {"twins", "twins (beside cast)"} & set(result.timings)
 
 
 def test_faces_at_the_same_positions_wound_alike_are_not_twins():
