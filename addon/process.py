@@ -274,6 +274,16 @@ def prepare(depsgraph, objects, options, for_writing=True, active=None):
         raise UserError(f"Not a mesh: {', '.join(others)}")
     if others:
         notices.append(f"Skipped what is not a mesh: {', '.join(others)}")
+    # A mesh without faces (a wire rig, a point helper) has no thickness: skipped as what is
+    # not a mesh is, unless nothing else is left (a trial's: one stopped the whole run).
+    faceless = [ob for ob in meshes if len(ob.data.polygons) == 0]
+    if len(faceless) == len(meshes):
+        raise UserError(f"{faceless[0].name} has no faces"
+                        + (f" (nor have {', '.join(ob.name for ob in faceless[1:])})"
+                           if len(faceless) > 1 else ""))
+    if faceless:
+        notices.append(f"Skipped meshes without faces: {', '.join(ob.name for ob in faceless)}")
+        meshes = [ob for ob in meshes if len(ob.data.polygons) > 0]
 
     # The object each shared mesh is computed from: the active one where it shares it.
     source = {}
@@ -289,8 +299,6 @@ def prepare(depsgraph, objects, options, for_writing=True, active=None):
         if problem:
             raise UserError(problem)
         me = ob.data
-        if len(me.polygons) == 0:
-            raise UserError(f"{ob.name} has no faces")
         uid = me.session_uid
         if uid in tasks:
             if ob is not source[uid]:  # (the source joined its task when it was made)
