@@ -22,6 +22,7 @@ from __future__ import annotations
 import argparse
 import contextlib
 import fnmatch
+import io
 import json
 import logging
 import os
@@ -47,6 +48,7 @@ DEFAULT_SUFFIX = ".sdf.ply"
 EXIT_USAGE = 2
 EXIT_ENVIRONMENT = 1
 EXIT_INTERRUPTED = 130  # 128 + SIGINT, as shells report a run killed by Ctrl-C
+EXIT_STDOUT_CLOSED = 141  # 128 + SIGPIPE: what `... | head` leaves a command that goes on
 
 
 class CommandError(Exception):
@@ -55,6 +57,20 @@ class CommandError(Exception):
     def __init__(self, message: str, status: int = EXIT_USAGE):
         super().__init__(message)
         self.status = status
+
+
+class _StdoutClosed(Exception):
+    """Standard output's reader went away (`shape-diameter ... --json | head -1`): the run
+    stops quietly, as programs killed by SIGPIPE do (a trial saw a traceback, or every later
+    input reported as failed though its files were written)."""
+
+
+def _say(text: str) -> None:
+    """A line on standard output."""
+    try:
+        print(text, flush=True)
+    except BrokenPipeError as exc:
+        raise _StdoutClosed() from exc
 
 
 class _Parser(argparse.ArgumentParser):
@@ -310,6 +326,11 @@ def main(argv=None, *, interrupts=None) -> int:
         return _fail(exc, exc.status)
     except KeyboardInterrupt:
         return _fail("interrupted", EXIT_INTERRUPTED)
+    except _StdoutClosed:
+        # Python flushes stdout again at exit: point it at nothing, so no second error.
+        with contextlib.suppress(OSError, ValueError):
+            os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+        return EXIT_STDOUT_CLOSED
     finally:
         if interrupts is not None:
             interrupts.disarm()
@@ -332,7 +353,7 @@ def console_main(pending=None) -> int:
         return status
     if status != EXIT_INTERRUPTED:  # it came after the last check: still, the loop stops
         _fail("interrupted", EXIT_INTERRUPTED)
-    return _die_by_sigint()
+    return _die_by(interrupts.pending[0])
 
 
 class _Interrupts:
@@ -351,9 +372,14 @@ class _Interrupts:
             raise KeyboardInterrupt
 
     def take_over(self) -> bool:
-        """Install the handler (held, not armed); False where signals cannot be taken."""
+        """Install the handler (held, not armed); False where signals cannot be taken. SIGTERM
+        and SIGHUP (`timeout`, batch schedulers, a closed terminal) stop the run as Ctrl-C
+        does, outputs cleaned up: they left temporary files behind (a trial's)."""
         try:
             signal.signal(signal.SIGINT, self._handle)
+            for name in ("SIGTERM", "SIGHUP"):
+                if hasattr(signal, name):
+                    signal.signal(getattr(signal, name), self._handle)
         except (ValueError, OSError):  # not the main thread
             return False
         return True
@@ -380,15 +406,17 @@ class _Interrupts:
         return callback
 
 
-def _die_by_sigint() -> int:
+def _die_by(signum) -> int:
+    """Death by the signal that stopped the run (SIGINT, SIGTERM or SIGHUP), as a shell
+    expects of a program it interrupted."""
     with contextlib.suppress(OSError, ValueError):  # e.g. a closed pipe
         sys.stdout.flush()
     with contextlib.suppress(OSError, ValueError):
         sys.stderr.flush()
     if os.name == "posix":
-        signal.signal(signal.SIGINT, signal.SIG_DFL)
-        os.kill(os.getpid(), signal.SIGINT)
-    return EXIT_INTERRUPTED  # where the signal did not end the process
+        signal.signal(signum, signal.SIG_DFL)
+        os.kill(os.getpid(), signum)
+    return 128 + int(signum)  # where the signal did not end the process
 
 
 def _fail(message, status: int) -> int:
@@ -459,7 +487,7 @@ def _run(args, interrupts) -> int:
                       "exit_status": status, "warnings": warned,
                       "outputs": {"mesh": None, "values": None}}  # fmt: skip
         if args.json:
-            print(json.dumps(report), flush=True)
+            _say(json.dumps(report))
     return first_failure
 
 
@@ -482,15 +510,18 @@ def _plan(args, write_suffixes) -> list:
         else:
             sources.append(source)
     several = len(sources) > 1 or len(problems) > 0 or any(map(os.path.isdir, args.input))
+    # ("there are 1 inputs" was said of a folder holding one mesh)
+    what = (f"there are {len(sources)} inputs" if len(sources) > 1
+            else "the input is a folder")
     if several and args.output:
         raise CommandError(
-            f"-o/--output names one file, but there are {len(sources)} inputs: leave it out "
-            f"to write each next to its input (INPUT{DEFAULT_SUFFIX})"
+            f"-o/--output names one file, but {what}: leave it out to write each next to its "
+            f"input (INPUT{DEFAULT_SUFFIX})"
         )
     if several and args.values:
         raise CommandError(
-            f"--values names one file, but there are {len(sources)} inputs: use --save-values "
-            "to write each input's values next to its output (INPUT.sdf.npy)"
+            f"--values names one file, but {what}: use --save-values to write each input's "
+            "values next to its output (INPUT.sdf.npy)"
         )
     jobs = []
     for source in sources:
@@ -499,11 +530,15 @@ def _plan(args, write_suffixes) -> list:
             continue
         output = args.output or default_output(source)
         values = args.values or (default_values(output) if args.save_values else None)
-        if args.output or os.path.exists(source):  # (a missing input fails on its own)
-            _check_writable_path(output, write_suffixes)
-        if args.values or (values and os.path.exists(source)):
-            _check_writable_path(values, None)
-        _check_distinct(source, output, values)
+        try:
+            if args.output or os.path.exists(source):  # (a missing input fails on its own)
+                _check_writable_path(output, write_suffixes)
+            if args.values or (values and os.path.exists(source)):
+                _check_writable_path(values, None)
+            _check_distinct(source, output, values)
+        except CommandError as exc:  # this input's failure: the others go on (a trial's)
+            jobs.append(_Job(source, problem=str(exc)))
+            continue
         jobs.append(_Job(source, output, values))
     _check_no_collisions([job for job in jobs if job.problem is None])
     return jobs
@@ -605,13 +640,24 @@ def _compute_one(args, job, mesh_io, smoothing_options, several, warned, interru
     computed = time.perf_counter()
     interrupts.check()
 
-    with _warnings_to(job, warned):  # GLB and STL: float32 coordinates
-        mesh_io.save_colored(job.output, vertices, triangles, colormap(result.normalized),
-                             args.points)
+    def save_mesh():
+        with _warnings_to(job, warned):  # GLB and STL: float32 coordinates
+            mesh_io.save_colored(job.output, vertices, triangles, colormap(result.normalized),
+                                 args.points)
+
     if job.values:
-        with written_whole(job.values) as temporary, open(temporary, "wb") as stream:
-            np.save(stream, np.asarray(result.values, dtype=np.float32))  # (a path gains .npy)
-            interrupts.check()  # (before the temporary file takes the output's place)
+        # The values are written first and take their place after the mesh: a failure in
+        # either leaves neither (the mesh was written and the report said nothing was).
+        with written_whole(job.values) as temporary:
+            with open(temporary, "wb") as stream:
+                # Through memory: a pipe (a FIFO) has no position for np.save to ask.
+                npy = io.BytesIO()
+                np.save(npy, np.asarray(result.values, dtype=np.float32))
+                stream.write(npy.getbuffer())
+            interrupts.check()  # (before the temporary files take the outputs' places)
+            save_mesh()
+    else:
+        save_mesh()
     finished = time.perf_counter()
 
     # The CLI's own stages, apart from compute()'s: reading and writing files.
@@ -619,10 +665,9 @@ def _compute_one(args, job, mesh_io, smoothing_options, several, warned, interru
     report = _report(args, job, vertices, triangles, result, io_seconds, finished - started)
     report["warnings"] = list(warned)
     if not args.quiet and not args.json:
-        print(
+        _say(
             f"{job.source}: {report['point_count']} {args.points}, {args.rays} rays, "
-            f"{report['total_seconds']:.2f} s on {result.engine} -> {job.output}",
-            flush=True,
+            f"{report['total_seconds']:.2f} s on {result.engine} -> {job.output}"
         )
     return report
 

@@ -27,10 +27,24 @@ def written_whole(path):
     re-raised with a message naming `path`.
 
     A symbolic link at `path` is kept: the file it points to is replaced. The new file gets
-    the permissions of the one it replaces, or the usual ones (0666 less the umask).
+    the permissions of the one it replaces, or the usual ones (0666 less the umask). A path
+    that is a device or a pipe is written into directly (yielded as it is).
     """
     path = os.fspath(path)
     target = os.path.realpath(path) if os.path.islink(path) else path
+    try:
+        mode = os.stat(target).st_mode
+    except OSError:
+        mode = stat.S_IFREG  # not there (yet): made whole below
+    if not stat.S_ISREG(mode) and not stat.S_ISDIR(mode):
+        # A device or a pipe (--values /dev/null, a FIFO): written into, never replaced. Run
+        # as root, a replace made /dev/null a plain file for the whole machine (a trial's,
+        # with /dev/full).
+        try:
+            yield target
+        except OSError as exc:
+            raise _named(path, exc) from exc
+        return
     folder, name = os.path.split(os.path.abspath(target))
     try:
         temporary, descriptor = _create_beside(folder, name)

@@ -5,6 +5,7 @@ import io
 import json
 import os
 import shutil
+import stat
 import subprocess
 import sys
 from pathlib import Path
@@ -396,7 +397,8 @@ def test_a_failed_values_write_leaves_no_part_of_it(tmp_path, capsys, monkeypatc
     captured = capsys.readouterr()
     _assert_one_line_error(captured.err)
     assert f"{values}: cannot write (No space left on device); nothing written" in captured.err
-    assert sorted(p.name for p in tmp_path.iterdir()) == ["out.ply"]
+    # Nor the mesh: both are written together (it was, while the report said nothing was).
+    assert list(tmp_path.iterdir()) == []
 
 
 def test_outputs_replace_files_whole_and_keep_links_and_permissions(tmp_path):
@@ -607,3 +609,43 @@ def test_ctrl_c_stops_a_long_run_when_stderr_is_not_a_terminal(tmp_path):
     _, err = run.communicate(timeout=60)
     assert run.returncode == -signal.SIGINT and "interrupted" in err  # (test_cli_interrupt.py)
     assert time.perf_counter() - start < 5.0
+
+
+def test_values_into_a_pipe_or_a_device_write_into_it(tmp_path):
+    # --values /dev/null (or a FIFO) was replaced by a plain file: run as root, /dev/null of
+    # the whole machine (a trial's, with /dev/full).
+    import threading
+
+    fifo = tmp_path / "values.npy"
+    os.mkfifo(fifo)
+    got = []
+    reader = threading.Thread(target=lambda: got.append(fifo.read_bytes()))
+    reader.start()
+    assert cli.main([str(DATA / "suzanne.obj"), "-o", str(tmp_path / "a.ply"), "--rays",
+                     str(RAYS), "--values", str(fifo), "-q"]) == 0
+    reader.join(timeout=60)
+    assert stat.S_ISFIFO(os.stat(fifo).st_mode)
+    values = np.load(io.BytesIO(got[0]))
+    expected = shape_diameter.compute(*load_mesh(DATA / "suzanne.obj"), rays=RAYS).values
+    np.testing.assert_array_equal(values, expected)
+    assert cli.main([str(DATA / "suzanne.obj"), "-o", str(tmp_path / "b.ply"), "--rays",
+                     str(RAYS), "--values", os.devnull, "-q"]) == 0
+    assert stat.S_ISCHR(os.stat(os.devnull).st_mode)
+
+
+def test_one_input_whose_output_cannot_be_written_fails_alone(tmp_path, capsys):
+    # An output path that is a folder stopped the whole batch, with no JSON (a trial's).
+    for name in ("a", "b"):
+        (tmp_path / f"{name}.obj").write_bytes((DATA / "suzanne.obj").read_bytes())
+    (tmp_path / "a.sdf.ply").mkdir()
+    assert cli.main([str(tmp_path), "--rays", str(RAYS), "--json", "-q"]) == 2
+    reports = [json.loads(line) for line in capsys.readouterr().out.splitlines()]
+    assert [r["status"] for r in reports] == ["error", "ok"]
+    assert "is a folder" in reports[0]["error"]
+    assert (tmp_path / "b.sdf.ply").is_file()
+
+
+def test_output_with_a_folder_of_one_mesh_says_it_is_a_folder(tmp_path, capsys):
+    (tmp_path / "a.obj").write_bytes((DATA / "suzanne.obj").read_bytes())
+    assert cli.main([str(tmp_path), "-o", str(tmp_path / "x.ply")]) == 2
+    assert "but the input is a folder" in capsys.readouterr().err

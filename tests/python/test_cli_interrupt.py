@@ -113,3 +113,32 @@ def test_a_ctrl_c_that_a_library_swallows_still_stops_the_run(tmp_path):
     done = _run_python(code, tmp_path)
     assert (done.returncode, done.stdout, done.stderr) == (-signal.SIGINT, "", INTERRUPTED)
     assert list(tmp_path.iterdir()) == []
+
+
+@pytest.mark.parametrize("signum", [signal.SIGTERM, signal.SIGHUP])
+def test_sigterm_and_sighup_stop_the_run_as_ctrl_c_does(tmp_path, signum):
+    # `timeout`, batch schedulers and a closed terminal send these: they left hidden
+    # temporary files behind (a trial's), and said nothing.
+    output = tmp_path / "out.ply"
+    run = subprocess.Popen([SCRIPT, DATA / "spot.obj", "-o", output, *LONG],
+                           stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    time.sleep(1.5)
+    run.send_signal(signum)
+    out, err = run.communicate(timeout=60)
+    assert (run.returncode, out, err) == (-signum, "", INTERRUPTED)
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_a_closed_standard_output_stops_the_run_quietly(tmp_path):
+    # shape-diameter FOLDER --json | head -c1: a traceback (--json), or every later input
+    # reported as failed (without).
+    for name in ("a", "b"):  # the second's line comes after the reader is gone
+        (tmp_path / f"{name}.obj").write_bytes((DATA / "spot.obj").read_bytes())
+    for extra in (["--json"], []):
+        run = subprocess.Popen([SCRIPT, tmp_path, "--engine", "cpu", "--rays", "512", *extra],
+                               stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+        run.stdout.read(1)
+        run.stdout.close()
+        err = run.stderr.read().decode()
+        run.stderr.close()
+        assert run.wait(timeout=60) == 141 and err == "", (extra, err)
