@@ -42,6 +42,7 @@
 #include <cstring>
 #include <limits>
 #include <stdexcept>
+#include <string>
 #include <vector>
 
 #include "sdf.h"
@@ -222,19 +223,26 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     if (!(fraction >= 0.0 && fraction <= 1.0)) fail("progress outside [0, 1]");
     return cancel_at == 0 || ++calls < cancel_at;
   };
+  // compute() on the mesh `make` gives, the only exceptions the documented ones: false when it
+  // ended the run cleanly (a refusal, or the cancel asked for), which `outcome` has told.
   sdf::Output out;
-  try {
-    out = sdf::compute(mesh, options, progress);
-  } catch (const std::invalid_argument& e) {
-    return outcome("compute refused:", e.what());
-  } catch (const std::length_error& e) {
-    return outcome("compute refused:", e.what());
-  } catch (const sdf::Cancelled&) {
-    if (cancel_at == 0) fail("Cancelled without a cancel request");
-    return outcome("cancelled");
-  } catch (const std::exception& e) {
-    fail("compute threw something other than a documented error:", e.what());
-  }
+  auto computed = [&](const std::string& call, auto&& make) {
+    try {
+      out = sdf::compute(make(), options, progress);
+      return true;
+    } catch (const std::invalid_argument& e) {
+      outcome((call + " refused:").c_str(), e.what());
+    } catch (const std::length_error& e) {
+      outcome((call + " refused:").c_str(), e.what());
+    } catch (const sdf::Cancelled&) {
+      if (cancel_at == 0) fail("Cancelled without a cancel request");
+      outcome("cancelled");
+    } catch (const std::exception& e) {
+      fail((call + " threw something other than a documented error:").c_str(), e.what());
+    }
+    return false;
+  };
+  if (!computed("compute", [&] { return mesh; })) return 0;
 
   std::size_t triangle_count_cast = triangle_count;
   if (!out.twins.empty()) {
@@ -252,20 +260,10 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     triangle_count_cast = kept.size() / 3;
     options.find_twins = false;
     calls = 0;
-    try {
-      out = sdf::compute(sdf::make_mesh(vertices.data(), vertex_count, kept.data(),
-                                        triangle_count_cast),
-                         options, progress);
-    } catch (const std::invalid_argument& e) {
-      return outcome("compute without twins refused:", e.what());
-    } catch (const std::length_error& e) {
-      return outcome("compute without twins refused:", e.what());
-    } catch (const sdf::Cancelled&) {
-      if (cancel_at == 0) fail("Cancelled without a cancel request");
-      return outcome("cancelled");
-    } catch (const std::exception& e) {
-      fail("compute without twins threw something other than a documented error:", e.what());
-    }
+    if (!computed("compute without twins", [&] {
+          return sdf::make_mesh(vertices.data(), vertex_count, kept.data(), triangle_count_cast);
+        }))
+      return 0;
     if (!out.twins.empty()) fail("twins reported with find_twins off");
   }
   const std::size_t points =
