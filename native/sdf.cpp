@@ -271,7 +271,6 @@ void cast_speculatively(const Options& options, const Plan& plan, cl::CastInput 
   StageTimings orientation_steps;
   double orientation_seconds = 0.0, twins_seconds = 0.0;
   const bool orienting = options.orientation == Orientation::Auto;
-  const unsigned threads = options.threads;
   std::atomic<bool> deciding{orienting};
   input.short_launches = orienting ? &deciding : nullptr;
   // Twins are told in the caller's winding: through the faces the orientation reversed.
@@ -280,14 +279,14 @@ void cast_speculatively(const Options& options, const Plan& plan, cl::CastInput 
     Stopwatch clock;
     const std::uint8_t* reversed =
         out.orientation.reversed.empty() ? nullptr : out.orientation.reversed.data();
-    out.twins = reversed_twins(mesh, threads, reversed);
+    out.twins = reversed_twins(mesh, options.threads, reversed);
     twins_seconds = clock.lap();
     if (!out.twins.empty()) throw TwinsFound{};
   };
   auto decide_beside = [&] {
     if (orienting) {
       Stopwatch clock;
-      out.orientation = decide_orientation(mesh, Orientation::Auto, threads,
+      out.orientation = decide_orientation(mesh, Orientation::Auto, options.threads,
                                            &orientation_steps);
       orientation_seconds = clock.lap();
       if (out.orientation.flipped_faces > 0) throw ReverseFacesFirst{};
