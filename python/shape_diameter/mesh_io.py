@@ -20,8 +20,9 @@ load_mesh(source_faces=True) says which face each triangle comes from.
 * STL: a triangle soup by design, so corners at the same position are merged
   (in order of first use) to give the mesh back its connectivity; triangle order
   is kept.
-* glTF/GLB: every mesh node of the scene, with its transform applied, in the
-  order of the scene graph; vertices as stored in each primitive.
+* glTF/GLB: every mesh node of the scene, with its transform applied, in the file's
+  order (depth first: roots in the scene's order, a node before its children, a mesh's
+  primitives in order; see ``gltf_order``); vertices as stored in each primitive.
 """
 
 from __future__ import annotations
@@ -33,6 +34,7 @@ import warnings
 import numpy as np
 import trimesh
 
+from .gltf_order import mesh_nodes_in_file_order
 from .mesh_file_checks import check_complete, check_suffix, format_name, off_sections
 from .output_files import written_whole
 
@@ -84,7 +86,7 @@ def load_mesh_with_uvs(path, *, source_faces: bool = False):
             scene = trimesh.load(path, process=False, force="scene")
         except Exception:  # e.g. a texture image that cannot be decoded: read without
             scene = trimesh.load(path, process=False, force="scene", skip_materials=True)
-        uvs = _scene_corner_uvs(scene)
+        uvs = _scene_corner_uvs(scene, mesh_nodes_in_file_order(path, scene))
     if uvs is not None and (uvs.shape != (len(triangles), 3, 2) or not np.isfinite(uvs).all()):
         uvs = None
     return (vertices, triangles, source, uvs) if source_faces else (vertices, triangles, uvs)
@@ -144,7 +146,9 @@ def _read(path, want_uvs: bool = False):
             if in_place is not None:
                 vertices, triangles, source, uvs = in_place
             else:
-                vertices, triangles, other_kinds = _flatten(scene)
+                nodes = (mesh_nodes_in_file_order(path, scene) if suffix in (".gltf", ".glb")
+                         else scene.graph.nodes_geometry)
+                vertices, triangles, other_kinds = _flatten(scene, nodes)
                 if suffix != ".obj":  # (a PLY only where trimesh kept no elements: never seen)
                     source = np.arange(len(triangles), dtype=np.int64)
                 elif len(source) != len(triangles):
@@ -316,11 +320,11 @@ def _obj_corner_uvs(path: str):
     return np.asarray(texcoords, dtype=np.float32)[np.asarray(corners, dtype=np.int64)]
 
 
-def _scene_corner_uvs(scene: trimesh.Scene):
-    """Corner UVs of the triangles _flatten gathers (same meshes, order and winding), or None
-    when one of those meshes has no per-vertex UVs."""
+def _scene_corner_uvs(scene: trimesh.Scene, nodes: list):
+    """Corner UVs of the triangles _flatten gathers from ``nodes`` (same meshes, order and
+    winding), or None when one of those meshes has no per-vertex UVs."""
     parts = []
-    for node in scene.graph.nodes_geometry:
+    for node in nodes:
         transform, name = scene.graph[node]
         geometry = scene.geometry[name]
         if not isinstance(geometry, trimesh.Trimesh) or len(geometry.faces) == 0:
@@ -390,8 +394,9 @@ def _plain_obj(path: str):
 _KIND_NAMES = {"PointCloud": "a point cloud", "Path2D": "2D paths", "Path3D": "lines"}
 
 
-def _flatten(scene: trimesh.Scene) -> tuple[np.ndarray, np.ndarray, set]:
-    """Concatenate the scene's triangle meshes, each placed by its node transform.
+def _flatten(scene: trimesh.Scene, nodes: list) -> tuple[np.ndarray, np.ndarray, set]:
+    """Concatenate the triangle meshes of the scene's ``nodes``, in that order, each placed
+    by its node transform.
 
     Done here rather than with ``force="mesh"`` because trimesh's own
     concatenation copies each mesh's colours and textures, which needs SciPy or
@@ -400,7 +405,7 @@ def _flatten(scene: trimesh.Scene) -> tuple[np.ndarray, np.ndarray, set]:
     """
     vertex_parts, triangle_parts, other_kinds = [], [], set()
     offset = 0
-    for node in scene.graph.nodes_geometry:
+    for node in nodes:
         transform, name = scene.graph[node]
         geometry = scene.geometry[name]
         if not isinstance(geometry, trimesh.Trimesh):
