@@ -5,6 +5,7 @@ buffers, never a Python loop over elements (docs.blender.org/api/current/bpy.typ
 Called on the main thread only.
 """
 
+import json
 from dataclasses import dataclass
 
 import bpy
@@ -127,6 +128,35 @@ def new_image(name, rgba):
 def attribute_signature(me):
     """[(name, data_type, domain)] of every attribute, in order."""
     return [(a.name, a.data_type, a.domain) for a in me.attributes]
+
+
+# A mesh property recording the attributes this add-on wrote, {name: [data_type, domain]}
+# as JSON: an attribute it lists, still of that type and domain, is ours to replace with
+# one of another domain (Points switched between faces and vertices); any other is the user's.
+OUTPUTS_PROPERTY = "shape_diameter_outputs"
+
+
+def written_outputs(me):
+    """{name: (data_type, domain)} of the attributes an earlier run wrote on the mesh."""
+    try:
+        record = json.loads(me.get(OUTPUTS_PROPERTY, "{}"))
+        return {name: tuple(kind) for name, kind in record.items()}
+    except (TypeError, ValueError, AttributeError):  # edited by hand into something else
+        return {}
+
+
+def is_written_output(me, attribute):
+    """Whether an earlier run wrote this attribute, as it is now."""
+    return written_outputs(me).get(attribute.name) == (attribute.data_type, attribute.domain)
+
+
+def record_outputs(me, outputs):
+    """Adds [(name, data_type, domain)] to the record; entries whose attribute is gone or
+    changed are dropped."""
+    record = {name: kind for name, kind in written_outputs(me).items()
+              if (a := me.attributes.get(name)) is not None and (a.data_type, a.domain) == kind}
+    record.update({name: (data_type, domain) for name, data_type, domain in outputs})
+    me[OUTPUTS_PROPERTY] = json.dumps({name: list(kind) for name, kind in record.items()})
 
 
 def read_attribute(attribute):

@@ -243,7 +243,8 @@ def _attribute_problem(ob, options):
                 "name for the result"
             )
         existing = ob.data.attributes.get(name)
-        if existing is not None and (existing.data_type, existing.domain) != (data_type, domain):
+        if (existing is not None and (existing.data_type, existing.domain) != (data_type, domain)
+                and not mesh_data.is_written_output(ob.data, existing)):
             return (
                 f"{ob.name}: attribute {name!r} exists as {existing.data_type} on "
                 f"{existing.domain}; the result is {data_type} on {domain}: rename or remove "
@@ -610,11 +611,12 @@ def write(bpy_data, tasks, options):
             raise UserError(problem + "; nothing was written")
         targets.append((ob, task))
 
-    undo = []  # how to take back each change, most recent last
+    undo = []  # functions taking back each change, most recent last
     new_images = []  # (image, the name it takes once everything is written)
     try:
         for ob, task in targets:
             me = ob.data
+            undo.append(_record_restorer(me))
             if options.points == "faces":
                 colors = (
                     mesh_data.polygon_loop_expand(task.colors, task.topology.loop_totals)
@@ -624,11 +626,7 @@ def write(bpy_data, tasks, options):
             else:
                 colors = task.colors
             # Restored last on failure: Blender 5.x keeps the names of removed attributes.
-            colors_before = (
-                me.color_attributes.active_color_name,
-                me.color_attributes.default_color_name,
-            )
-            undo.append((me, None, colors_before))
+            undo.append(_colors_restorer(me))
             data = {options.attribute_name: task.values}
             if options.normalized_name:
                 data[options.normalized_name] = task.normalized
@@ -636,18 +634,25 @@ def write(bpy_data, tasks, options):
                 data[options.color_name] = colors
             for name, data_type, domain in options.outputs():
                 attribute = me.attributes.get(name)
+                if attribute is not None and (attribute.data_type, attribute.domain) != (
+                    data_type, domain
+                ):  # an earlier run's, on the other domain (_attribute_problem checked)
+                    undo.append(_recreator(me, attribute))
+                    me.attributes.remove(attribute)
+                    attribute = None
                 if attribute is None:
                     attribute = me.attributes.new(name, data_type, domain)
                     if attribute is None or attribute.name != name:
                         if attribute is not None:
                             me.attributes.remove(attribute)
                         raise RuntimeError(f"Blender could not create attribute {name!r}")
-                    undo.append((me, name, None))
+                    undo.append(_remover(me, name))
                 else:
-                    undo.append((me, name, mesh_data.read_attribute(attribute)))
+                    undo.append(_rewriter(me, attribute))
                 mesh_data.write_attribute(attribute, data[name])
             if options.color_name:
                 me.color_attributes.active_color = me.color_attributes[options.color_name]
+            mesh_data.record_outputs(me, options.outputs())
             me.update()
         # Images are made under a temporary name and replace the old ones (same name) only
         # when everything else is written: users of an old image (materials) get the new one.
@@ -658,15 +663,8 @@ def write(bpy_data, tasks, options):
     except BaseException:
         for image, _ in new_images:
             bpy_data.images.remove(image)
-        for me, name, before in reversed(undo):
-            if name is None:
-                colors = me.color_attributes
-                colors.active_color_name, colors.default_color_name = before
-            elif before is None:
-                me.attributes.remove(me.attributes[name])
-            else:
-                mesh_data.write_attribute(me.attributes[name], before)
-            me.update()
+        for take_back in reversed(undo):
+            take_back()
         raise
     for image, name in new_images:
         old = bpy_data.images.get((name, None))
@@ -675,6 +673,53 @@ def write(bpy_data, tasks, options):
             bpy_data.images.remove(old)
         image.name = name
     return [ob for ob, _ in targets]
+
+
+def _remover(me, name):
+    def take_back():
+        me.attributes.remove(me.attributes[name])
+        me.update()
+    return take_back
+
+
+def _rewriter(me, attribute):
+    name, before = attribute.name, mesh_data.read_attribute(attribute)
+
+    def take_back():
+        mesh_data.write_attribute(me.attributes[name], before)
+        me.update()
+    return take_back
+
+
+def _recreator(me, attribute):
+    """Puts back an attribute about to be removed (at the end of its domain's list)."""
+    name, data_type, domain = attribute.name, attribute.data_type, attribute.domain
+    before = mesh_data.read_attribute(attribute)
+
+    def take_back():
+        mesh_data.write_attribute(me.attributes.new(name, data_type, domain), before)
+        me.update()
+    return take_back
+
+
+def _colors_restorer(me):
+    colors = me.color_attributes
+    before = (colors.active_color_name, colors.default_color_name)
+
+    def take_back():
+        colors.active_color_name, colors.default_color_name = before
+    return take_back
+
+
+def _record_restorer(me):
+    before = me.get(mesh_data.OUTPUTS_PROPERTY)
+
+    def take_back():
+        if before is None:
+            me.pop(mesh_data.OUTPUTS_PROPERTY, None)
+        else:
+            me[mesh_data.OUTPUTS_PROPERTY] = before
+    return take_back
 
 
 def _image_problem(bpy_data, name):

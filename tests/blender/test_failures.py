@@ -105,9 +105,12 @@ def color_of_another_type():
     return {}
 
 
-def vertices_after_faces():
-    good, _ = suzanne_and_sphere()
-    select_only(good)  # has FACE results; POINT results under the same names cannot replace them
+def vertices_over_the_users_attribute():
+    # The sphere's FACE results are the add-on's own and could be replaced by POINT ones;
+    # suzanne's FACE attribute of the same name is the user's, and is kept.
+    good, suzanne = suzanne_and_sphere()
+    suzanne.data.attributes.new("sdf", "FLOAT", "FACE")
+    select_only(good, suzanne)
     return {"points": "vertices"}
 
 
@@ -156,7 +159,8 @@ CASES = [
     (attribute_of_another_type, "attribute 'sdf' exists as INT on FACE"),
     (attribute_on_another_domain, "attribute 'sdf_normalized' exists as FLOAT on POINT"),
     (color_of_another_type, "attribute 'sdf_color' exists as FLOAT_COLOR on POINT"),
-    (vertices_after_faces, "attribute 'sdf' exists as FLOAT on FACE; the result is FLOAT on POINT"),
+    (vertices_over_the_users_attribute,
+     "suzanne: attribute 'sdf' exists as FLOAT on FACE; the result is FLOAT on POINT"),
     (bad_coordinates, "suzanne has vertices whose coordinates are not finite"),
     (too_wide, "suzanne: the mesh spans 1e\\+31 units on an axis"),  # the core's, named
     (modifiers_change_topology, "The modifiers of suzanne change its topology"),
@@ -224,6 +228,36 @@ def test_a_write_failing_half_way_is_rolled_back(monkeypatch):
         run(rays=12)
     assert len(calls) > 5  # the rollback wrote the replaced values back
     assert snapshot_all() == before
+
+
+def test_a_write_failing_after_replacing_a_domain_is_rolled_back(monkeypatch):
+    """Switching Points removes the earlier run's attributes of the other domain; a failure
+    later in the write puts them back, with their data (at the end of their domain's list,
+    so the comparison sorts them)."""
+    mesh_data = addon_module("mesh_data")
+    good, suzanne = suzanne_and_sphere()
+    select_only(good, suzanne)
+    assert run(rays=4) == {"FINISHED"}
+    original = mesh_data.write_attribute
+    calls = []
+
+    def failing(attribute, data):
+        calls.append(attribute.name)
+        if len(calls) == 5:
+            raise MemoryError("out of memory while writing")
+        original(attribute, data)
+
+    def state():
+        return {name: {**shot, "attributes": sorted(shot["attributes"]), "active_attribute": 0}
+                for name, shot in snapshot_all().items()}
+
+    monkeypatch.setattr(mesh_data, "write_attribute", failing)
+    before = state()
+    records = {me.name: me.get(mesh_data.OUTPUTS_PROPERTY) for me in bpy.data.meshes}
+    with pytest.raises(RuntimeError, match="MemoryError"):
+        run(rays=4, points="vertices")
+    assert state() == before
+    assert {me.name: me.get(mesh_data.OUTPUTS_PROPERTY) for me in bpy.data.meshes} == records
 
 
 def test_core_that_cannot_load_is_reported(monkeypatch):

@@ -55,6 +55,28 @@ def test_uv_sphere_vertices_match_the_analytic_sphere():
     assert np.abs(relative).max() < 0.03
 
 
+def test_switching_points_replaces_the_earlier_runs_attributes():
+    # A trial's: Faces then Vertices failed on the first run's own FACE attributes, which
+    # had to be removed by hand. The add-on records what it wrote and replaces those.
+    ob = uv_sphere(radius=0.5, segments=16, rings=8)
+    me = ob.data
+    values = {}
+    for points, domain, color_domain, count in [
+        ("faces", "FACE", "CORNER", len(me.polygons)),
+        ("vertices", "POINT", "POINT", len(me.vertices)),
+        ("faces", "FACE", "CORNER", len(me.polygons)),
+    ]:
+        assert run(points=points, rays=8, color_name="sdf_color") == {"FINISHED"}
+        assert (me.attributes["sdf"].domain, me.attributes["sdf_color"].domain) == (
+            domain, color_domain)
+        assert len(attribute_array(me, "sdf")) == count
+        assert me.color_attributes.active_color_name == "sdf_color"
+        values.setdefault(points, []).append(attribute_array(me, "sdf"))
+    names = [a.name for a in me.attributes]
+    assert len(names) == len(set(names))
+    np.testing.assert_array_equal(*values["faces"])  # the same run's values, rewritten
+
+
 def test_an_inside_out_mesh_is_measured_outward_unless_told_otherwise():
     ob = uv_sphere(radius=1.0, segments=32, rings=16)
     assert run() == {"FINISHED"}
