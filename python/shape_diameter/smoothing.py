@@ -414,10 +414,14 @@ def run_checked(v, t, values, points, method, o, threads, progress, engine="cpu"
     # A few faces just over the square's edge are common (spot.obj's layout: 0.05% at 1.5M
     # faces) and lose little; most of them outside is a UDIM or offset layout.
     if out["faces_outside"] > 0.01 * len(t):
+        # A bake (the add-on's) asks for the image: say that it leaves these faces out.
+        reach = ("the image leaves them out and texture smoothing does not reach them (they "
+                 "keep their values)" if o["return_image"] else
+                 "texture smoothing does not reach them and they keep their values")
         warnings.warn(
-            f"{out['faces_outside']} of {len(t)} faces have UVs wholly outside the [0, 1] square (UDIM tiles or an offset "
-            "layout): texture smoothing does not reach them and they keep their values; "
-            "move each tile's UVs into the square to smooth them",
+            f"{out['faces_outside']} of {len(t)} faces have UVs wholly outside the [0, 1] "
+            f"square (UDIM tiles or an offset layout): {reach}; move each tile's UVs into the "
+            "square to include them",
             RuntimeWarning,
             stacklevel=stacklevel,
         )

@@ -407,6 +407,11 @@ def test_texture_warns_about_faces_outside_the_uv_square(spot, engine):
                                                 r"wholly outside the \[0, 1\] square"):  # fmt: skip
             out = smooth(v, t, faces, "texture", uvs=shifted, engine=engine)
         np.testing.assert_array_equal(out[away], faces[away])
+    # A bake (return_image) says the image leaves them out.
+    with pytest.warns(RuntimeWarning, match=r"square \(UDIM tiles or an offset layout\): the "
+                                            r"image leaves them out"):
+        smooth(v, t, faces, "texture", uvs=shifted, engine=engine, return_image=True,
+               texture_size=64)
     with pytest.warns(RuntimeWarning, match=rf"^{away.sum()} of {len(t)} faces"):
         shape_diameter.compute(v, t, rays=8, smoothing="texture", uvs=shifted, engine=engine)
     # A few faces just over the edge (under 1%) lose little and warn nothing.
