@@ -84,6 +84,22 @@ def _one_line(text) -> str:
     return " ".join(str(text).split())
 
 
+# The library's warnings name its Python arguments; on the command line they are options.
+_OPTION_SPELLING = {
+    "orientation='as_is'": "--orientation as_is",
+    "orientation='flip'": "--orientation flip",
+    "; 'auto' turns": "; --orientation auto turns",
+    "a smaller texture_size": "a smaller --texture-size",
+    " and valid_rays is 0 everywhere": "",
+}
+
+
+def _in_option_spelling(message: str) -> str:
+    for python, option in _OPTION_SPELLING.items():
+        message = message.replace(python, option)
+    return message
+
+
 def _int_in(low: int, high: int):
     def parse(text: str) -> int:
         try:
@@ -107,14 +123,14 @@ def _cone_degrees(text: str) -> float:
     return value
 
 
-def _positive_float(name: str, high: float):
+def _positive_float(high: float):
     def parse(text: str) -> float:
         try:
             value = float(text)
         except ValueError:
             raise argparse.ArgumentTypeError(f"not a number: {text!r}") from None
         if not 0.0 <= value <= high:
-            raise argparse.ArgumentTypeError(f"{name} must be in [0, {high:g}], got {text}")
+            raise argparse.ArgumentTypeError(f"must be in [0, {high:g}], got {text}")
         return value
 
     return parse
@@ -199,7 +215,7 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument(
         "--seed",
         type=_int_in(0, 2**32 - 1),
-        default=0,
+        default=None,  # 0; None tells that it was not given (_check_combinations)
         metavar="S",
         help="seed of --sampling random (default: 0)",
     )
@@ -233,7 +249,7 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument(
         "--bvh-quality",
         choices=("auto", "high", "fast"),
-        default="auto",
+        default=None,  # auto; None tells that it was not given (_check_combinations)
         help="high: SAH everywhere (fastest to cast); fast: Morton splits below 1024 "
         "triangles (fastest to build); auto: fast on GPUs at <= 64 rays (default: auto)",
     )
@@ -274,7 +290,7 @@ def build_parser() -> argparse.ArgumentParser:
     )
     parser.add_argument(
         "--radius",
-        type=_positive_float("--radius", 16384.0),
+        type=_positive_float(16384.0),
         metavar="PX",
         help="--smooth texture: blur radius in texels (default: 2 per 256 texels, 8 at 1024)",
     )
@@ -465,6 +481,7 @@ def _run(args, interrupts) -> int:
     logging.getLogger("trimesh").setLevel(logging.CRITICAL + 1)
     interrupts.arm()  # a Ctrl-C held during the imports stops the run here
 
+    _check_combinations(args)
     smoothing_options = _smoothing_options(args)
     jobs = _plan(args, mesh_io.WRITE_SUFFIXES)
     several = len(jobs) > 1 or any(os.path.isdir(source) for source in args.input)
@@ -689,10 +706,25 @@ def _warnings_to(job, warned: list):
             yield
         finally:
             for warning in caught:
-                message = _one_line(warning.message)
+                message = _in_option_spelling(_one_line(warning.message))
                 warned.append(message)
                 print(f"{PROG}: warning: {_naming_a_file(job, message)}", file=sys.stderr,
                       flush=True)  # fmt: skip
+
+
+def _check_combinations(args) -> None:
+    """An option that would do nothing beside the others is an error, as a smoothing flag of
+    another method is: in a pipeline, a mistyped command should not pass silently. Fills in
+    the defaults left as None to tell whether an option was given."""
+    if args.seed is not None and args.sampling != "random":
+        raise CommandError("--seed applies to --sampling random")
+    if args.bvh_quality is not None and args.accel != "bvh":
+        raise CommandError("--bvh-quality applies to --accel bvh")
+    if args.values and args.save_values:
+        raise CommandError("--values and --save-values both say where values go: give one "
+                           "(--values for one INPUT, --save-values for several)")
+    args.seed = 0 if args.seed is None else args.seed
+    args.bvh_quality = args.bvh_quality or "auto"
 
 
 def _smoothing_options(args) -> dict:

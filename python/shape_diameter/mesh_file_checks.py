@@ -110,6 +110,9 @@ def _check_kind(suffix: str, head: bytes, size: int) -> None:
             raise _not_valid(suffix, "it is not text", head, size)
     elif suffix == ".glb" and seems != "GLB":
         raise _not_valid(suffix, "no 'glTF' header", head, size)
+    elif suffix == ".glb" and len(head) >= 12 and size < int.from_bytes(head[8:12], "little"):
+        raise ValueError(f"truncated: its header declares {int.from_bytes(head[8:12], 'little')} "
+                         f"bytes, the file has {size}")
     elif suffix == ".gltf" and seems != "glTF":
         raise _not_valid(suffix, "not JSON text", head, size)
 
@@ -287,7 +290,12 @@ def _check_stl(data: bytes) -> None:
         pass
     else:
         if looks_like(data[:4096], len(data)) == "STL":
-            return  # ASCII STL: trimesh finds no triangles in broken text
+            # trimesh finds no triangles in broken text: a cut file would be "empty".
+            last_line = data.rstrip().rsplit(b"\n", 1)[-1].strip()
+            if not last_line.lower().startswith(b"endsolid"):
+                raise ValueError("truncated: ASCII STL text ends with an 'endsolid' line, "
+                                 "this file does not")
+            return
         raise _not_valid(".stl", "text that does not start with 'solid'", data)
     if len(data) < 84:
         raise _not_valid(".stl", "too short for a binary STL, and not ASCII STL text", data)

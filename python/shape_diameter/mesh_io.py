@@ -113,7 +113,7 @@ def _read(path, want_uvs: bool = False):
             # polygons of more than four corners.
             vertices, triangles, source = _read_off(path)
         elif suffix == ".obj":
-            text, source = _plain_obj(path)
+            text, source, obj_has_lines = _plain_obj(path)
             scene = trimesh.load(
                 io.BytesIO(text),
                 file_type="obj",
@@ -157,6 +157,8 @@ def _read(path, want_uvs: bool = False):
         except ValueError as exc:
             raise ValueError(f"{path}: cannot read mesh ({exc})") from exc
     if len(triangles) == 0:
+        if suffix == ".obj" and obj_has_lines:  # its vertices alone reached trimesh
+            other_kinds = {"lines"}
         found = f" (it holds {', '.join(sorted(other_kinds))})" if other_kinds else ""
         raise ValueError(f"{path}: no triangles found{found}")
     if suffix == ".stl":
@@ -343,8 +345,10 @@ def _scene_corner_uvs(scene: trimesh.Scene, nodes: list):
 
 
 def _plain_obj(path: str):
-    """The OBJ file reduced to ``v`` lines and triangular ``f`` lines, in order, and for each
-    triangle the index of the ``f`` record it comes from (int64).
+    """The OBJ file reduced to ``v`` lines and triangular ``f`` lines, in order, for each
+    triangle the index of the ``f`` record it comes from (int64), and whether it has ``l``
+    (line) records, which are dropped. Faces using a vertex the file does not have are
+    refused here: trimesh's own words for them are numpy's, or it wraps a negative index.
 
     Dropping the texture and normal references keeps trimesh from splitting
     vertices at seams; fanning polygons here keeps each polygon's triangles at
@@ -358,6 +362,8 @@ def _plain_obj(path: str):
     text = text.replace("\\\r\n", " ").replace("\\\n", " ")  # continuation lines
     out, source = [], []
     vertex_count = face_count = 0
+    highest = (0, "")  # the highest vertex a face uses, and that face's line
+    has_lines = False
     for line in text.splitlines():
         fields = line.split()
         if not fields:
@@ -382,12 +388,23 @@ def _plain_obj(path: str):
             if 0 in refs:
                 raise ValueError(f"face {line.strip()[:60]!r} uses index 0 (OBJ counts from 1)")
             refs = [index if index > 0 else vertex_count + 1 + index for index in refs]
+            if refs and min(refs) < 1:  # trimesh would count on from the end of the list
+                raise ValueError(f"face {line.strip()[:60]!r} counts back past the first "
+                                 "vertex (a negative index counts back from its line)")
+            if refs and max(refs) > highest[0]:
+                highest = (max(refs), line.strip()[:60])
             # Fewer than three corners is not a face; trimesh skips these too.
             for k in range(1, len(refs) - 1):
                 out.append(f"f {refs[0]} {refs[k]} {refs[k + 1]}")
                 source.append(face_count)
             face_count += 1
-    return ("\n".join(out) + "\n").encode("ascii"), np.array(source, dtype=np.int64)
+        elif fields[0] == "l":
+            has_lines = True
+    if highest[0] > vertex_count:
+        raise ValueError(f"face {highest[1]!r} uses vertex {highest[0]}, but the file has "
+                         f"{vertex_count} vertices")
+    text = ("\n".join(out) + "\n").encode("ascii")
+    return text, np.array(source, dtype=np.int64), has_lines
 
 
 # How non-mesh geometry is named in the "no triangles" message.
