@@ -3,8 +3,7 @@
 #   .venv-bpy45  bpy 4.5 LTS, Python 3.11, numpy < 2 (bpy 4.x does not pin it)
 #   .venv-bpy51  bpy >= 5.1, Python 3.13, numpy 2.x
 # and remakes one when its requirements change. PY311 and PY313 name the interpreters.
-PY311=${PY311:-$HOME/.pyenv/versions/3.11.7/bin/python3.11}
-PY313=${PY313:-$HOME/.pyenv/versions/3.13.0/bin/python3.13}
+source "$(dirname "${BASH_SOURCE[0]}")/pythons.sh"
 
 venv() {  # venv DIR PYTHON REQUIREMENT...
   local dir=$1 python=$2
@@ -20,5 +19,11 @@ venv() {  # venv DIR PYTHON REQUIREMENT...
   fi
 }
 
-bpy45_venv() { venv .venv-bpy45 "$PY311" "bpy>=4.5,<4.6" "numpy<2" "pytest>=7"; }  # as in build_extension.sh
-bpy51_venv() { venv .venv-bpy51 "$PY313" "bpy>=5.1" "pytest>=7"; }
+bpy45_venv() {  # as in build_extension.sh
+  need_python PY311 3.11 "bpy 4.5"
+  venv .venv-bpy45 "$PY311" "bpy>=4.5,<4.6" "numpy<2" "pytest>=7"
+}
+bpy51_venv() {
+  need_python PY313 3.13 "bpy 5.1 and later"
+  venv .venv-bpy51 "$PY313" "bpy>=5.1" "pytest>=7"
+}

@@ -3,7 +3,7 @@
 # Builds the Blender extension: dist/shape_diameter-<version>-linux_x64.zip.
 #
 #  1. one wheel of the package per CPython that Blender ships: cp311 (Blender 4.2 LTS to 5.0)
-#     and cp313 (Blender 5.1 and later), built by the pyenv Pythons in build venvs
+#     and cp313 (Blender 5.1 and later), built by those Pythons (scripts/pythons.sh finds them) in build venvs
 #     (build/ext-venv-cpXY) without build isolation, into cached CMake build directories
 #     (build/ext-<wheel tag>), so a second run recompiles only what changed;
 #  2. the extension tree in build/extension: addon/*, blender_manifest.toml, wheels/;
@@ -16,8 +16,9 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 ROOT=$PWD
 
-PY311=${PY311:-$HOME/.pyenv/versions/3.11.7/bin/python3.11}
-PY313=${PY313:-$HOME/.pyenv/versions/3.13.0/bin/python3.13}
+source scripts/pythons.sh
+need_python PY311 3.11 "the extension's wheel for Blender 4.2 to 5.0"
+need_python PY313 3.13 "the extension's wheel for Blender 5.1 and later"
 BPY45_VENV=${BPY45_VENV:-.venv-bpy45}
 log() { echo "build_extension: $*"; }
 

@@ -87,7 +87,8 @@ def engines() -> list:
     """The engines that can run here. Each is a dict with 'name' (what `engine=` takes),
     'type' ('CPU' or 'GPU') and 'description'; OpenCL devices add 'device', 'platform',
     'driver', 'memory' (bytes), 'compute_units' and 'double' (double precision: texture
-    smoothing runs on a device only with it). "cpu" is always there; OpenCL devices are
+    smoothing runs on a device only with it), among others ('threads' on "cpu"; 'index',
+    'vendor', 'version', 'max_allocation', 'clock_mhz' on devices). "cpu" is always there; OpenCL devices are
     listed when an OpenCL driver is installed (none is needed otherwise)."""
     threads = _core.hardware_threads()
     found = [

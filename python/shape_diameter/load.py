@@ -20,8 +20,9 @@ def load_mesh(path, *, source_faces: bool = False, uvs: bool = False):
 
     Reads .obj, .ply, .off, .stl, .gltf and .glb (the suffix names the format). Vertices
     come in the file's order (STL: corners at the same position merged, numbered by first
-    use; glTF/GLB: every mesh of the scene with its transform applied, in the order trimesh
-    lists the scene's nodes, which is not the file's).
+    use; glTF/GLB: every mesh node of the scene with its transform applied, in the file's
+    order: depth first, roots in the scene's order, a node before its children, a mesh's
+    primitives in order).
     Triangles come in the file's face order, each polygon of k corners fanned in place into
     k - 2 consecutive triangles (corners 0, j, j + 1), so compute()'s per-face values for
     face i of the file are the rows where source_faces == i. (OBJ faces are counted over its
