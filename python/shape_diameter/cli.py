@@ -21,7 +21,6 @@ from __future__ import annotations
 
 import argparse
 import contextlib
-import fnmatch
 import io
 import json
 import logging
@@ -36,27 +35,13 @@ import numpy as np
 from . import __version__
 from .api import MAX_RAYS, compute
 from .colormap import colormap
-from .mesh_file_checks import READ_SUFFIXES
+from .cli_jobs import DEFAULT_SUFFIX, EXIT_ENVIRONMENT, EXIT_USAGE, CommandError, plan
 from .output_files import written_whole
 from .smoothing import DEVICE_ERRORS
 
 PROG = "shape-diameter"
-DEFAULT_SUFFIX = ".sdf.ply"
-# Exit statuses: 2 for anything wrong with what the user gave (options, input
-# file, output path), as argparse does; 1 when this machine is the problem (a missing
-# dependency, an OpenCL device that fails or is too small, memory, a failed write).
-EXIT_USAGE = 2
-EXIT_ENVIRONMENT = 1
 EXIT_INTERRUPTED = 130  # 128 + SIGINT, as shells report a run killed by Ctrl-C
 EXIT_STDOUT_CLOSED = 141  # 128 + SIGPIPE: what `... | head` leaves a command that goes on
-
-
-class CommandError(Exception):
-    """A failure reported as one line on stderr, exiting with `status`."""
-
-    def __init__(self, message: str, status: int = EXIT_USAGE):
-        super().__init__(message)
-        self.status = status
 
 
 class _StdoutClosed(Exception):
@@ -98,6 +83,25 @@ def _in_option_spelling(message: str) -> str:
     for python, option in _OPTION_SPELLING.items():
         message = message.replace(python, option)
     return message
+
+
+class _ListEngines(argparse.Action):
+    """--list-engines: what --engine takes on this machine, one line each, then exit."""
+
+    def __init__(self, option_strings, dest, **kwargs):
+        super().__init__(option_strings, dest, nargs=0, default=argparse.SUPPRESS, **kwargs)
+
+    def __call__(self, parser, namespace, values, option_string=None):
+        from .api import engines
+
+        found = engines()
+        width = max(len(engine["name"]) for engine in found)
+        for engine in found:
+            _say(f"{engine['name']:<{width}}  {engine['type']}  {engine['description']}")
+        _say("auto picks the best OpenCL GPU, else cpu; opencl the best OpenCL device"
+             + ("; opencl:all shares the work between the devices"
+                if sum(e["name"].startswith("opencl:") for e in found) > 1 else ""))
+        parser.exit()
 
 
 def _int_in(low: int, high: int):
@@ -144,16 +148,6 @@ SMOOTHING_FLAGS = {
     "texture_size": ("texture", "texture_size"),
     "radius": ("texture", "radius"),
 }
-
-
-def default_output(input_path: str) -> str:
-    """INPUT with its suffix replaced by .sdf.ply, in the same folder."""
-    return os.path.splitext(input_path)[0] + DEFAULT_SUFFIX
-
-
-def default_values(output_path: str) -> str:
-    """--save-values: OUTPUT with its suffix replaced by .npy (cow.sdf.ply -> cow.sdf.npy)."""
-    return os.path.splitext(output_path)[0] + ".npy"
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -304,6 +298,19 @@ def build_parser() -> argparse.ArgumentParser:
         "INPUT's order (STL: positions merged, by first use)",
     )
     parser.add_argument(
+        "--output-dir",
+        metavar="DIR",
+        help="write each input's outputs into DIR (made if missing) instead of next to the "
+        "input, same names (DIR/cow.sdf.ply); two inputs of one name are refused",
+    )
+    parser.add_argument(
+        "--skip-existing",
+        action="store_true",
+        help="leave out an input whose outputs (the mesh, and the values with --save-values "
+        "or --values) exist already, as after an interrupted batch: outputs are written whole, "
+        "the mesh and its values together, so an existing one is finished",
+    )
+    parser.add_argument(
         "--save-values",
         action="store_true",
         help="save each input's values as --values does, next to its output with .npy in "
@@ -322,6 +329,8 @@ def build_parser() -> argparse.ArgumentParser:
         help="no progress bar and no line per input done; warnings and errors still go to "
         "stderr, --json to stdout",
     )
+    parser.add_argument("--list-engines", action=_ListEngines,
+                        help="list the engines --engine takes here, and exit")
     parser.add_argument("--version", action="version", version=f"%(prog)s {__version__}")
     return parser
 
@@ -458,14 +467,6 @@ def _failure(exc: BaseException):
     raise exc
 
 
-class _Job:
-    """One input file and the outputs it writes; `problem` when it cannot even start (a
-    folder without meshes)."""
-
-    def __init__(self, source: str, output=None, values=None, problem=None):
-        self.source, self.output, self.values, self.problem = source, output, values, problem
-
-
 def _run(args, interrupts) -> int:
     try:
         from . import mesh_io
@@ -483,7 +484,7 @@ def _run(args, interrupts) -> int:
 
     _check_combinations(args)
     smoothing_options = _smoothing_options(args)
-    jobs = _plan(args, mesh_io.WRITE_SUFFIXES)
+    jobs = plan(args, mesh_io.WRITE_SUFFIXES)
     several = len(jobs) > 1 or any(os.path.isdir(source) for source in args.input)
     first_failure = 0
     for job in jobs:
@@ -491,6 +492,11 @@ def _run(args, interrupts) -> int:
         try:
             if job.problem is not None:
                 raise CommandError(job.problem)
+            if job.done:
+                report = _skipped(args, job)
+                if args.json:
+                    _say(json.dumps(report))
+                continue
             interrupts.check()
             report = _compute_one(args, job, mesh_io, smoothing_options, several, warned,
                                   interrupts)  # fmt: skip
@@ -506,109 +512,6 @@ def _run(args, interrupts) -> int:
         if args.json:
             _say(json.dumps(report))
     return first_failure
-
-
-def _plan(args, write_suffixes) -> list:
-    """The inputs (folders expanded) and their outputs, checked before any work: paths that
-    cannot be written, an output that is an input, two inputs writing one file."""
-    sources, problems = [], {}
-    for source in args.input:
-        if os.path.isdir(source):
-            try:
-                found = _meshes_in(source)
-            except OSError as exc:  # e.g. no permission to list it
-                found, problems[source] = [], f"{source}: cannot list the folder ({exc.strerror})"
-            sources += found
-            if not found:
-                problems.setdefault(source, f"{source}: no mesh files in the folder (looked for "
-                                            f"{', '.join(READ_SUFFIXES)}; skipped *.sdf.*, the "
-                                            "outputs of this command)")  # fmt: skip
-                sources.append(source)
-        else:
-            sources.append(source)
-    several = len(sources) > 1 or len(problems) > 0 or any(map(os.path.isdir, args.input))
-    # ("there are 1 inputs" was said of a folder holding one mesh)
-    what = (f"there are {len(sources)} inputs" if len(sources) > 1
-            else "the input is a folder")
-    if several and args.output:
-        raise CommandError(
-            f"-o/--output names one file, but {what}: leave it out to write each next to its "
-            f"input (INPUT{DEFAULT_SUFFIX})"
-        )
-    if several and args.values:
-        raise CommandError(
-            f"--values names one file, but {what}: use --save-values to write each input's "
-            "values next to its output (INPUT.sdf.npy)"
-        )
-    jobs = []
-    for source in sources:
-        if source in problems:
-            jobs.append(_Job(source, problem=problems[source]))
-            continue
-        output = args.output or default_output(source)
-        values = args.values or (default_values(output) if args.save_values else None)
-        try:
-            if args.output or os.path.exists(source):  # (a missing input fails on its own)
-                _check_writable_path(output, write_suffixes)
-            if args.values or (values and os.path.exists(source)):
-                _check_writable_path(values, None)
-            _check_distinct(source, output, values)
-        except CommandError as exc:  # this input's failure: the others go on (a trial's)
-            jobs.append(_Job(source, problem=str(exc)))
-            continue
-        jobs.append(_Job(source, output, values))
-    _check_no_collisions([job for job in jobs if job.problem is None])
-    return jobs
-
-
-def _meshes_in(folder: str) -> list:
-    """The mesh files of a folder (not of its subfolders), by name; hidden files, the outputs
-    of this command (*.sdf.*) and its temporary files are skipped."""
-    found = []
-    for entry in sorted(os.scandir(folder), key=lambda e: e.name):
-        name = entry.name
-        if (name.startswith(".") or fnmatch.fnmatch(name, "*.sdf.*")
-                or os.path.splitext(name)[1].lower() not in READ_SUFFIXES
-                or not entry.is_file()):  # fmt: skip
-            continue
-        found.append(os.path.join(folder, name))
-    return found
-
-
-def _check_no_collisions(jobs) -> None:
-    """Refuse, before any work, two inputs writing one file, and an input that another
-    input's run would overwrite (a.obj and a.ply both make a.sdf.ply)."""
-    written, writer = {}, {}  # real path of an output -> the input writing it, its job
-    for job in jobs:
-        for path in (job.output, job.values):
-            if path is None:
-                continue
-            key = os.path.realpath(path)
-            if key in written and writer[key] is not job:
-                if _same_file(written[key], job.source):
-                    raise CommandError(f"{job.source}: is given twice")
-                raise CommandError(
-                    f"{written[key]} and {job.source} would both write {path}: give them "
-                    "separate runs, or rename one"
-                )
-            written[key], writer[key] = job.source, job
-    identities = {}  # each input: its real path and, where it exists, (device, inode)
-    for job in jobs:
-        identities[os.path.realpath(job.source)] = job.source
-        with contextlib.suppress(OSError):
-            status = os.stat(job.source)
-            identities[(status.st_dev, status.st_ino)] = job.source
-    for key, source in written.items():
-        other = identities.get(key)
-        if other is None:
-            with contextlib.suppress(OSError):
-                status = os.stat(key)
-                other = identities.get((status.st_dev, status.st_ino))
-        if other is not None and other != source:
-            raise CommandError(
-                f"{other} is an input, and {source}'s output: it would be overwritten; "
-                "leave it out of the inputs (a folder input skips *.sdf.* files)"
-            )
 
 
 def _compute_one(args, job, mesh_io, smoothing_options, several, warned, interrupts) -> dict:
@@ -712,6 +615,14 @@ def _warnings_to(job, warned: list):
                       flush=True)  # fmt: skip
 
 
+def _skipped(args, job) -> dict:
+    """--skip-existing: an input whose outputs exist; its --json object."""
+    if not args.quiet and not args.json:
+        _say(f"{job.source}: skipped, {job.output} exists")
+    return {"input": job.source, "status": "skipped", "error": None, "exit_status": 0,
+            "warnings": [], "outputs": {"mesh": job.output, "values": job.values}}
+
+
 def _check_combinations(args) -> None:
     """An option that would do nothing beside the others is an error, as a smoothing flag of
     another method is: in a pipeline, a mistyped command should not pass silently. Fills in
@@ -720,6 +631,8 @@ def _check_combinations(args) -> None:
         raise CommandError("--seed applies to --sampling random")
     if args.bvh_quality is not None and args.accel != "bvh":
         raise CommandError("--bvh-quality applies to --accel bvh")
+    if args.output and args.output_dir is not None:
+        raise CommandError("-o/--output names the output itself: leave out --output-dir")
     if args.values and args.save_values:
         raise CommandError("--values and --save-values both say where values go: give one "
                            "(--values for one INPUT, --save-values for several)")
@@ -738,38 +651,6 @@ def _smoothing_options(args) -> dict:
             raise CommandError(f"--{flag.replace('_', '-')} applies to --smooth {method}")
         options[name] = value
     return options
-
-
-def _check_writable_path(path: str, suffixes) -> None:
-    """Fail before the long computation, not after it."""
-    if suffixes is not None and os.path.splitext(path)[1].lower() not in suffixes:
-        raise CommandError(f"{path}: output must end in one of {', '.join(suffixes)}")
-    if os.path.isdir(path):
-        raise CommandError(f"{path}: is a folder")
-    folder = os.path.dirname(os.path.abspath(path))
-    if not os.path.isdir(folder):
-        raise CommandError(f"{path}: folder {folder} does not exist")
-
-
-def _check_distinct(source: str, output: str, values) -> None:
-    """Outputs are overwritten: never the input, and not one output by the other."""
-    if _same_file(output, source):
-        raise CommandError(f"{output}: is the input file; give another -o OUTPUT")
-    if values and _same_file(values, source):
-        raise CommandError(f"{values}: is the input file; give another --values FILE.npy")
-    if values and _same_file(values, output):
-        raise CommandError(f"{values}: is also the mesh output; give --values another file")
-
-
-def _same_file(a: str, b: str) -> bool:
-    """Whether two paths name one file: the same path once links are resolved, or (hard
-    links, case-insensitive file systems) the same existing file."""
-    if os.path.realpath(a) == os.path.realpath(b):
-        return True
-    try:
-        return os.path.samefile(a, b)
-    except OSError:  # one of them does not exist (yet)
-        return False
 
 
 def _report(args, job, vertices, triangles, result, io_seconds, total_seconds) -> dict:

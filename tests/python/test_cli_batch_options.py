@@ -1,0 +1,100 @@
+# SPDX-License-Identifier: GPL-3.0-or-later
+"""Options for batches: --output-dir, --skip-existing, and --list-engines."""
+
+import json
+import shutil
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+pytest.importorskip("trimesh")
+
+import shape_diameter
+from shape_diameter import cli
+
+DATA = Path(__file__).resolve().parents[1] / "data"
+
+
+@pytest.fixture
+def two_meshes(tmp_path):
+    folder = tmp_path / "in"
+    folder.mkdir()
+    for name in ("spot.obj", "suzanne.obj"):
+        shutil.copy(DATA / name, folder / name)
+    return folder
+
+
+def _run_json(capsys, argv):
+    status = cli.main([str(arg) for arg in argv] + ["--json", "--rays", "4"])
+    captured = capsys.readouterr()
+    return status, [json.loads(line) for line in captured.out.splitlines()], captured.err
+
+
+def test_output_dir_is_made_and_takes_every_output(tmp_path, capsys, two_meshes):
+    out = tmp_path / "made" / "here"
+    status, reports, _ = _run_json(capsys, [two_meshes, "--output-dir", out, "--save-values"])
+    assert status == 0
+    assert sorted(p.name for p in out.iterdir()) == [
+        "spot.sdf.npy", "spot.sdf.ply", "suzanne.sdf.npy", "suzanne.sdf.ply"]
+    assert sorted(p.name for p in two_meshes.iterdir()) == ["spot.obj", "suzanne.obj"]
+    for report in reports:
+        stem = Path(report["input"]).stem
+        assert report["outputs"] == {"mesh": str(out / f"{stem}.sdf.ply"),
+                                     "values": str(out / f"{stem}.sdf.npy")}
+
+
+def test_output_dir_refuses_two_inputs_of_one_name(tmp_path, capsys, two_meshes):
+    other = tmp_path / "other"
+    other.mkdir()
+    shutil.copy(DATA / "spot.obj", other / "spot.obj")
+    out = tmp_path / "out"
+    assert cli.main([str(two_meshes), str(other), "--output-dir", str(out)]) == 2
+    assert "would both write" in capsys.readouterr().err
+    assert list(out.iterdir()) == []
+
+
+@pytest.mark.parametrize("argv, message", [
+    (["-o", "{tmp}/a.ply", "--output-dir", "{tmp}/d"], "-o/--output names the output itself"),
+    (["--output-dir", "{tmp}/a_file"], "a_file: --output-dir is a file, not a folder"),
+])
+def test_output_dir_errors(tmp_path, capsys, argv, message):
+    (tmp_path / "a_file").write_text("")
+    argv = [DATA / "spot.obj"] + [a.replace("{tmp}", str(tmp_path)) for a in argv]
+    assert cli.main([str(a) for a in argv]) == 2
+    assert message in capsys.readouterr().err
+
+
+def test_skip_existing_leaves_finished_inputs_and_runs_the_rest(tmp_path, capsys, two_meshes):
+    out = tmp_path / "out"
+    argv = [two_meshes, "--output-dir", out, "--save-values", "--skip-existing"]
+    status, first, _ = _run_json(capsys, argv)
+    assert status == 0 and [r["status"] for r in first] == ["ok", "ok"]
+    spot_mesh = (out / "spot.sdf.ply").stat().st_mtime_ns
+    # An interrupted batch: suzanne's values are missing, so suzanne runs again.
+    (out / "suzanne.sdf.npy").unlink()
+    status, second, _ = _run_json(capsys, argv)
+    assert status == 0
+    assert [(Path(r["input"]).name, r["status"]) for r in second] == [
+        ("spot.obj", "skipped"), ("suzanne.obj", "ok")]
+    assert second[0]["outputs"] == first[0]["outputs"]
+    assert (out / "spot.sdf.ply").stat().st_mtime_ns == spot_mesh
+    v, t = shape_diameter.load_mesh(two_meshes / "suzanne.obj")
+    expected = shape_diameter.compute(v, t, rays=4).raw
+    np.testing.assert_array_equal(np.load(out / "suzanne.sdf.npy"), expected)
+
+
+def test_skip_existing_says_so_without_json(tmp_path, capsys):
+    mesh = tmp_path / "spot.obj"
+    shutil.copy(DATA / "spot.obj", mesh)
+    (tmp_path / "spot.sdf.ply").write_text("")
+    assert cli.main([str(mesh), "--skip-existing"]) == 0
+    assert capsys.readouterr().out == f"{mesh}: skipped, {tmp_path / 'spot.sdf.ply'} exists\n"
+
+
+def test_list_engines_lists_what_engine_takes(capsys):
+    assert cli.main(["--list-engines"]) == 0
+    lines = capsys.readouterr().out.splitlines()
+    names = [line.split()[0] for line in lines[:-1]]
+    assert names == [engine["name"] for engine in shape_diameter.engines()]
+    assert lines[-1].startswith("auto picks")
