@@ -207,12 +207,9 @@ def test_engine_failure_changes_nothing(monkeypatch):
     assert snapshot_all() == before
 
 
-def test_a_write_failing_half_way_is_rolled_back(monkeypatch):
-    """The all-or-nothing write: the first mesh is fully written (replacing its earlier
-    results) before writing the second fails; everything is put back."""
+def _fifth_write_fails(monkeypatch):
+    """Makes the fifth attribute write raise MemoryError; returns the names written to."""
     mesh_data = addon_module("mesh_data")
-    good, suzanne = suzanne_and_sphere()
-    select_only(good, suzanne)
     original = mesh_data.write_attribute
     calls = []
 
@@ -223,6 +220,15 @@ def test_a_write_failing_half_way_is_rolled_back(monkeypatch):
         original(attribute, data)
 
     monkeypatch.setattr(mesh_data, "write_attribute", failing)
+    return calls
+
+
+def test_a_write_failing_half_way_is_rolled_back(monkeypatch):
+    """The all-or-nothing write: the first mesh is fully written (replacing its earlier
+    results) before writing the second fails; everything is put back."""
+    good, suzanne = suzanne_and_sphere()
+    select_only(good, suzanne)
+    calls = _fifth_write_fails(monkeypatch)
     before = snapshot_all()
     with pytest.raises(RuntimeError, match="MemoryError"):
         run(rays=12)
@@ -232,26 +238,18 @@ def test_a_write_failing_half_way_is_rolled_back(monkeypatch):
 
 def test_a_write_failing_after_replacing_a_domain_is_rolled_back(monkeypatch):
     """Switching Points removes the earlier run's attributes of the other domain; a failure
-    later in the write puts them back, with their data (at the end of their domain's list,
-    so the comparison sorts them)."""
+    later in the write puts them back, with their data. They come back at the end of their
+    domain's list, so the comparison sorts them and leaves out the active attribute's index."""
     mesh_data = addon_module("mesh_data")
     good, suzanne = suzanne_and_sphere()
     select_only(good, suzanne)
     assert run(rays=4) == {"FINISHED"}
-    original = mesh_data.write_attribute
-    calls = []
-
-    def failing(attribute, data):
-        calls.append(attribute.name)
-        if len(calls) == 5:
-            raise MemoryError("out of memory while writing")
-        original(attribute, data)
+    _fifth_write_fails(monkeypatch)
 
     def state():
         return {name: {**shot, "attributes": sorted(shot["attributes"]), "active_attribute": 0}
                 for name, shot in snapshot_all().items()}
 
-    monkeypatch.setattr(mesh_data, "write_attribute", failing)
     before = state()
     records = {me.name: me.get(mesh_data.OUTPUTS_PROPERTY) for me in bpy.data.meshes}
     with pytest.raises(RuntimeError, match="MemoryError"):
