@@ -387,6 +387,13 @@ PYBIND11_MODULE(_core, m) {
   m.def("bvh_stats", &bvh_stats, py::arg("vertices"), py::arg("triangles"),
         py::arg("threads") = 0);
   m.def("opencl_unavailable_reason", &opencl_unavailable_reason);
+  m.def("opencl_gpu_lost_to_fork", [] {
+#ifdef SDF_HAVE_OPENCL
+    return sdf::cl::gpu_lost_to_fork();
+#else
+    return false;
+#endif
+  });
   m.def("host_layout", &host_layout);
 #ifdef SDF_HAVE_OPENCL
   m.def("opencl_layout", [](int index) {

@@ -2,13 +2,24 @@
 #include "cl_api.h"
 
 #include <dlfcn.h>
+#include <pthread.h>
 
+#include <atomic>
 #include <cstdlib>
 #include <mutex>
 
 namespace sdf::cl {
 
+const char* const kForkedReason =
+    "OpenCL cannot be used in a process forked from one that had used it (its driver's threads "
+    "do not survive a fork); start worker processes with multiprocessing's 'spawn' or "
+    "'forkserver' method, or fork before the first use of OpenCL";
+
 namespace {
+
+std::atomic<bool> forked{false};
+
+void mark_forked() { forked.store(true, std::memory_order_relaxed); }
 
 struct Loaded {
   Api api;
@@ -40,11 +51,14 @@ Loaded load() {
   }
   SDF_CL_FUNCTIONS(SDF_CL_RESOLVE)
 #undef SDF_CL_RESOLVE
+  pthread_atfork(nullptr, nullptr, mark_forked);
   loaded.ok = true;
   return loaded;
 }
 
 }  // namespace
+
+bool forked_after_load() { return forked.load(std::memory_order_relaxed); }
 
 const Api* api(std::string* why) {
   static const Loaded loaded = load();

@@ -52,6 +52,14 @@ struct Api {
 // Loads once; later calls return the same answer. Thread-safe.
 const Api* api(std::string* why = nullptr);
 
+// True in a process forked from one that had loaded OpenCL: the driver's threads did not come
+// along while its locks and handles did, and any call can hang for ever (a trial's fork-started
+// Pool workers did). Such a process lists no device and releases nothing.
+bool forked_after_load();
+
+// What a forked process is told instead of its parent's devices.
+extern const char* const kForkedReason;
+
 // "CL_OUT_OF_RESOURCES" for -5, and so on; "CL error N" for codes it does not know.
 std::string error_name(cl_int code);
 

@@ -55,7 +55,9 @@ class Kernel {
     kernel_ = api()->clCreateKernel(program, name, &err);
     check(err, "clCreateKernel");
   }
-  ~Kernel() { api()->clReleaseKernel(kernel_); }
+  ~Kernel() {
+    if (!forked_after_load()) api()->clReleaseKernel(kernel_);
+  }
   Kernel(const Kernel&) = delete;
   Kernel& operator=(const Kernel&) = delete;
   template <class T>
@@ -117,7 +119,9 @@ class Buffer {
     check(err, "clCreateBuffer");
     if (data && bytes) write_buffer(s, mem_, data, bytes);
   }
-  ~Buffer() { api()->clReleaseMemObject(mem_); }
+  ~Buffer() {
+    if (!forked_after_load()) api()->clReleaseMemObject(mem_);
+  }
   Buffer(const Buffer&) = delete;
   Buffer& operator=(const Buffer&) = delete;
   cl_mem get() const { return mem_; }

@@ -2,6 +2,7 @@
 #include "devices.h"
 
 #include <algorithm>
+#include <atomic>
 #include <cctype>
 #include <cerrno>
 #include <cstdint>
@@ -57,6 +58,9 @@ struct Found {
   std::string why;
 };
 
+// Set once a GPU was found; read in a forked process, which must not enumerate again.
+std::atomic<bool> found_a_gpu{false};
+
 Found enumerate() {
   Found found;
   // SDF_OPENCL_MAX_MEMORY (bytes) caps what the engine may use on every device: to leave room
@@ -111,6 +115,7 @@ Found enumerate() {
     }
   }
   if (found.devices.empty()) found.why = "OpenCL platforms are installed but offer no usable device";
+  for (const Device& d : found.devices) found_a_gpu = found_a_gpu || d.gpu;
   return found;
 }
 
@@ -135,9 +140,14 @@ std::string listing() {
 
 double Device::score() const { return (gpu ? 1e12 : 0.0) + double(compute_units) * clock_mhz; }
 
-const std::vector<Device>& devices() { return found().devices; }
+const std::vector<Device>& devices() {
+  static const std::vector<Device> none;
+  return forked_after_load() ? none : found().devices;
+}
 
-std::string unavailable_reason() { return found().why; }
+std::string unavailable_reason() { return forked_after_load() ? kForkedReason : found().why; }
+
+bool gpu_lost_to_fork() { return forked_after_load() && found_a_gpu; }
 
 std::vector<const Device*> select_devices(const std::string& engine) {
   const std::vector<Device>& all = devices();

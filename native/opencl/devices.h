@@ -29,6 +29,9 @@ struct Device {
 const std::vector<Device>& devices();
 std::string unavailable_reason();
 
+// Whether this process was forked from one that had found an OpenCL GPU, which it cannot use.
+bool gpu_lost_to_fork();
+
 // Resolves an engine string to devices: "opencl" (the best device), "opencl:N" (the N-th of
 // devices()), "opencl:all" (every GPU, or every device when there is no GPU), or
 // "opencl:<text>" (the devices whose name contains <text>, case-insensitive; the first one).

@@ -109,6 +109,12 @@ def _resolve_engine(engine: str) -> str:
         return engine
     if any(d["type"] == "GPU" for d in _core.opencl_devices()):
         return "opencl"
+    if _core.opencl_gpu_lost_to_fork():  # a fork-started worker: it hung (a trial's Pool)
+        warnings.warn(
+            f"engine='auto' runs on the CPU: {_core.opencl_unavailable_reason()}",
+            RuntimeWarning,
+            stacklevel=3,
+        )
     return "cpu"
 
 

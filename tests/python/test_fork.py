@@ -1,0 +1,62 @@
+# SPDX-License-Identifier: GPL-3.0-or-later
+"""Worker processes forked after the parent used OpenCL (multiprocessing's default start
+method on Linux): OpenCL calls there hung for ever (a trial's Pool). Now such a process lists
+no OpenCL device, 'auto' runs on the CPU (with a warning where the parent had a GPU) and an
+explicit OpenCL engine is refused, saying why."""
+
+import json
+import subprocess
+import sys
+import textwrap
+from pathlib import Path
+
+from opencl_devices import OPENCL
+
+SPOT = Path(__file__).resolve().parents[1] / "data" / "spot.obj"
+
+SCRIPT = textwrap.dedent("""
+    import json, multiprocessing, sys, warnings
+    import shape_diameter as sd
+
+    V, F = sd.load_mesh(sys.argv[1])
+    DEVICE = sys.argv[2]
+
+    def work(engine):
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            try:
+                result = sd.compute(V, F, engine=engine, rays=4)
+                outcome = [float(result.raw.sum()), result.engine]
+            except ValueError as exc:
+                outcome = ["ValueError", str(exc)]
+        return outcome, [str(w.message) for w in caught], [e["name"] for e in sd.engines()]
+
+    if __name__ == "__main__":
+        parent = sd.compute(V, F, engine=DEVICE, rays=4)  # the parent uses OpenCL
+        gpu = any(e["type"] == "GPU" for e in sd.engines())
+        with multiprocessing.get_context("fork").Pool(1) as pool:
+            done = pool.map_async(work, ["auto", DEVICE, "cpu"]).get(timeout=120)
+        print(json.dumps({"parent": float(parent.raw.sum()), "gpu": gpu, "done": done}))
+""")
+
+
+def test_a_forked_worker_runs_on_the_cpu_and_refuses_opencl_instead_of_hanging(tmp_path):
+    script = tmp_path / "fork_after_opencl.py"
+    script.write_text(SCRIPT)
+    run = subprocess.run([sys.executable, "-W", "ignore::DeprecationWarning", str(script),
+                          str(SPOT), OPENCL[0]],
+                         capture_output=True, text=True, timeout=300)
+    assert run.returncode == 0, run.stderr
+    report = json.loads(run.stdout.splitlines()[-1])
+    (auto, auto_warnings, listed), (device, _, _), (cpu, _, _) = report["done"]
+    assert listed == ["cpu"]  # the parent's devices are not offered
+    assert auto[1].startswith("cpu") and cpu[1].startswith("cpu")
+    assert auto[0] == cpu[0]
+    assert abs(auto[0] - report["parent"]) <= 1e-4 * abs(report["parent"])  # same rule
+    assert device[0] == "ValueError"
+    assert "cannot be used in a process forked from one that had used it" in device[1]
+    assert "'spawn'" in device[1]
+    if report["gpu"]:  # 'auto' would have taken the GPU: it says why it did not
+        assert any("engine='auto' runs on the CPU" in w for w in auto_warnings), auto_warnings
+    else:
+        assert auto_warnings == []
