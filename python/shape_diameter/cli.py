@@ -301,7 +301,7 @@ def build_parser() -> argparse.ArgumentParser:
         "--output-dir",
         metavar="DIR",
         help="write each input's outputs into DIR (made if missing) instead of next to the "
-        "input, same names (DIR/cow.sdf.ply); two inputs of one name are refused",
+        "input, same names (DIR/cow.sdf.ply); of two inputs of one name, the second fails",
     )
     parser.add_argument(
         "--skip-existing",

@@ -124,17 +124,20 @@ def _meshes_in(folder: str) -> list:
     found = []
     for entry in sorted(os.scandir(folder), key=lambda e: e.name):
         name = entry.name
+        # A link to nothing is kept: it fails as an input of its own (a trial's vanished).
         if (name.startswith(".") or fnmatch.fnmatch(name, "*.sdf.*")
                 or os.path.splitext(name)[1].lower() not in READ_SUFFIXES
-                or not entry.is_file()):  # fmt: skip
+                or not (entry.is_file() or entry.is_symlink() and not entry.is_dir())):  # fmt: skip
             continue
         found.append(os.path.join(folder, name))
     return found
 
 
 def _check_no_collisions(jobs) -> None:
-    """Refuse, before any work, two inputs writing one file, and an input that another
-    input's run would overwrite (a.obj and a.ply both make a.sdf.ply)."""
+    """Before any work: a second input writing a file that an earlier one writes (a.obj and
+    a.ply both make a.sdf.ply) fails on its own, the others go on (one such pair in a folder
+    of thousands stopped the whole batch, a trial's); an input given twice, or one that
+    another input's run would overwrite, refuses the run."""
     written, writer = {}, {}  # real path of an output -> the input writing it, its job
     for job in jobs:
         for path in (job.output, job.values):
@@ -144,11 +147,14 @@ def _check_no_collisions(jobs) -> None:
             if key in written and writer[key] is not job:
                 if _same_file(written[key], job.source):
                     raise CommandError(f"{job.source}: is given twice")
-                raise CommandError(
-                    f"{written[key]} and {job.source} would both write {path}: give them "
-                    "separate runs, or rename one"
-                )
-            written[key], writer[key] = job.source, job
+                job.problem = (f"{job.source}: would write {path}, which {written[key]} writes: "
+                               "give them separate runs, or rename one")
+                break
+        if job.problem is not None:
+            continue
+        for path in (job.output, job.values):
+            if path is not None:
+                written[os.path.realpath(path)], writer[os.path.realpath(path)] = job.source, job
     identities = {}  # each input: its real path and, where it exists, (device, inode)
     for job in jobs:
         identities[os.path.realpath(job.source)] = job.source

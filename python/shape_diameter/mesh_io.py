@@ -96,6 +96,8 @@ def _read(path, want_uvs: bool = False):
     """(vertices, triangles, source faces, PLY corner UVs or None) of a mesh file."""
     path = os.fspath(path)
     if not os.path.exists(path):
+        if os.path.islink(path):
+            raise ValueError(f"{path}: a link to nothing (it points to {os.readlink(path)})")
         raise ValueError(f"{path}: no such file")
     if not os.path.isfile(path):
         raise ValueError(f"{path}: not a file")

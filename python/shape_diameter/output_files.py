@@ -19,6 +19,10 @@ import stat
 TEMPORARY_SUFFIX = ".part"
 
 
+class WriteError(OSError):
+    """A failed write, its message naming the file (and whether an old one was kept)."""
+
+
 @contextlib.contextmanager
 def written_whole(path):
     """Yield a temporary path to write `path`'s content into; on leaving without an
@@ -42,6 +46,8 @@ def written_whole(path):
         # with /dev/full).
         try:
             yield target
+        except WriteError:  # another file's, written inside this one's (mesh and values)
+            raise
         except OSError as exc:
             raise _named(path, exc) from exc
         return
@@ -59,7 +65,7 @@ def written_whole(path):
     except BaseException as exc:
         with contextlib.suppress(OSError):
             os.unlink(temporary)
-        if isinstance(exc, OSError):
+        if isinstance(exc, OSError) and not isinstance(exc, WriteError):
             raise _named(path, exc) from exc
         raise
 
@@ -74,7 +80,7 @@ def _create_beside(folder: str, name: str):
     raise FileExistsError(f"no free temporary name in {folder}")
 
 
-def _named(path: str, exc: OSError) -> OSError:
+def _named(path: str, exc: OSError) -> WriteError:
     reason = exc.strerror or str(exc) or type(exc).__name__
     kept = "the existing file is left as it was" if os.path.exists(path) else "nothing written"
-    return OSError(f"{path}: cannot write ({reason}); {kept}")
+    return WriteError(f"{path}: cannot write ({reason}); {kept}")

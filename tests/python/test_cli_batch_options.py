@@ -44,14 +44,16 @@ def test_output_dir_is_made_and_takes_every_output(tmp_path, capsys, two_meshes)
                                      "values": str(out / f"{stem}.sdf.npy")}
 
 
-def test_output_dir_refuses_two_inputs_of_one_name(tmp_path, capsys, two_meshes):
+def test_output_dir_fails_the_second_input_of_one_name(tmp_path, capsys, two_meshes):
     other = tmp_path / "other"
     other.mkdir()
     shutil.copy(DATA / "spot.obj", other / "spot.obj")
     out = tmp_path / "out"
-    assert cli.main([str(two_meshes), str(other), "--output-dir", str(out)]) == 2
-    assert "would both write" in capsys.readouterr().err
-    assert list(out.iterdir()) == []
+    status, reports, _ = _run_json(capsys, [two_meshes, other, "--output-dir", out])
+    assert status == 2
+    assert [r["status"] for r in reports] == ["ok", "ok", "error"]
+    assert reports[2]["error"].startswith(f"{other / 'spot.obj'}: would write {out / 'spot.sdf.ply'}")
+    assert sorted(p.name for p in out.iterdir()) == ["spot.sdf.ply", "suzanne.sdf.ply"]
 
 
 @pytest.mark.parametrize("argv, message", [

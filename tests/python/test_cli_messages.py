@@ -145,3 +145,25 @@ def test_warnings_name_options_not_python_arguments(tmp_path, capsys):
     err = capsys.readouterr().err
     assert err.endswith("no ray of any point found the other side of the mesh (is it open, "
                         "flat or inside out?); every value is 0\n"), err
+
+
+def test_a_failed_write_names_the_file_that_failed_once(tmp_path):
+    # With --save-values the mesh is written inside the values' write: its error was wrapped
+    # again, naming the values file ("x.sdf.npy: cannot write (x.sdf.ply: cannot write ...)").
+    import resource
+    import subprocess
+    import sys
+
+    mesh = tmp_path / "spot.obj"
+    mesh.write_bytes((DATA / "spot.obj").read_bytes())
+
+    def small_files():  # 64 kB: the PLY (about 300 kB) cannot be written
+        resource.setrlimit(resource.RLIMIT_FSIZE, (65536, 65536))
+
+    run = subprocess.run([sys.executable, "-m", "shape_diameter", str(mesh), "--save-values",
+                          "--rays", "4", "-q"],
+                         capture_output=True, text=True, preexec_fn=small_files, timeout=120)
+    assert run.returncode == 1
+    assert run.stderr == (f"shape-diameter: error: {tmp_path / 'spot.sdf.ply'}: cannot write "
+                          "(File too large); nothing written\n")
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["spot.obj"]
