@@ -367,9 +367,8 @@ def prepare(depsgraph, objects, options, for_writing=True, active=None):
 # radius too: a 2048^2 bake with texture smoothing at a radius of 1024 texels ran for half a
 # minute on 2 cores without a word. It is estimated before computing, from the core's figures
 # (shape_diameter.smoothing.texture_cost: the blur's reads, the buffers) and the add-on's
-# own, measured on a 2-core AMD EPYC with bpy 4.5 on Spot:
-SECONDS_PER_BLUR_READ = 4e-9  # one CPU thread (texture_cost's measurement)
-SECONDS_PER_TEXEL = 6.4e-8  # one CPU thread: drawing, dilating, reading back (4096^2: 0.54 s)
+# own, measured on a 2-core AMD EPYC with bpy 4.5 on Spot (TextureCost.cpu_seconds is the
+# core's side):
 SECONDS_PER_BAKED_TEXEL = 1.2e-7  # Blender's side of a bake: its image made, filled, packed
 BAKED_BYTES_PER_TEXEL = 56  # a bake at its peak, Blender's image included: 52.5-56.7 measured
 # (4096^2 and 8192^2; 8192^2 without blur: 10.2 s and 3.4 GB in all). Every baked image is
@@ -405,8 +404,7 @@ def texture_work(tasks, options):
     for task in tasks:
         for radius, bake in passes:
             cost = core.texture_cost(options.texture_size, radius, task.corner_uvs)
-            seconds += (cost.blur_reads * SECONDS_PER_BLUR_READ
-                        + cost.texels * SECONDS_PER_TEXEL) / threads
+            seconds += cost.cpu_seconds(threads)
             peak = max(peak, cost.bytes)
             if bake:
                 seconds += cost.texels * SECONDS_PER_BAKED_TEXEL

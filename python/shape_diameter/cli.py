@@ -33,11 +33,12 @@ import warnings
 import numpy as np
 
 from . import __version__
-from .api import MAX_RAYS, compute
+from . import _core
+from .api import MAX_RAYS, _resolve_engine, compute
 from .colormap import colormap
 from .cli_jobs import DEFAULT_SUFFIX, EXIT_ENVIRONMENT, EXIT_USAGE, CommandError, plan
 from .output_files import written_whole
-from .smoothing import DEVICE_ERRORS
+from .smoothing import DEVICE_ERRORS, texture_cost
 
 PROG = "shape-diameter"
 EXIT_INTERRUPTED = 130  # 128 + SIGINT, as shells report a run killed by Ctrl-C
@@ -537,6 +538,8 @@ def _compute_one(args, job, mesh_io, smoothing_options, several, warned, interru
 
     bar = None if args.quiet else (os.path.basename(job.source) if several else PROG)
     with _progress_bar(bar) as progress, _warnings_to(job, warned):
+        if uvs is not None and (notice := _long_texture_work(args, smoothing_options, uvs)):
+            _warn(job, warned, notice)  # now, not once the work is done
         progress = interrupts.checked(progress)
         result = compute(
             vertices,
@@ -609,10 +612,34 @@ def _warnings_to(job, warned: list):
             yield
         finally:
             for warning in caught:
-                message = _in_option_spelling(_one_line(warning.message))
-                warned.append(message)
-                print(f"{PROG}: warning: {_naming_a_file(job, message)}", file=sys.stderr,
-                      flush=True)  # fmt: skip
+                _warn(job, warned, str(warning.message))
+
+
+def _warn(job, warned: list, message: str) -> None:
+    """A warning about an input: one line on stderr naming its file, kept for --json."""
+    message = _in_option_spelling(_one_line(message))
+    warned.append(message)
+    print(f"{PROG}: warning: {_naming_a_file(job, message)}", file=sys.stderr, flush=True)
+
+
+# Texture smoothing estimated past this on the CPU threads is announced before it starts (a
+# 8192^2 run at a radius of 8192 texels went on for an hour without a word, a trial's).
+LONG_TEXTURE_SECONDS = 10.0
+
+
+def _long_texture_work(args, smoothing_options, uvs):
+    """Words for texture smoothing estimated to run long on the CPU, or None."""
+    if _resolve_engine(args.engine) != "cpu":
+        return None  # a device blurs far faster than the estimate's CPU threads
+    size = smoothing_options.get("texture_size", 1024)
+    cost = texture_cost(size, smoothing_options.get("radius"), uvs)
+    threads = args.threads or _core.hardware_threads()
+    seconds = cost.cpu_seconds(threads)
+    if seconds <= LONG_TEXTURE_SECONDS:
+        return None
+    return (f"texture smoothing at {size} x {size} texels: about {seconds:.0f} s on {threads} "
+            f"CPU threads and {cost.bytes / 2**20:.0f} MiB (an estimate); a smaller --radius or "
+            "--texture-size costs less")
 
 
 def _skipped(args, job) -> dict:

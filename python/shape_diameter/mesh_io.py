@@ -389,13 +389,16 @@ def _plain_obj(path: str):
                 raise ValueError(f"malformed face {line.strip()[:60]!r}") from None
             if 0 in refs:
                 raise ValueError(f"face {line.strip()[:60]!r} uses index 0 (OBJ counts from 1)")
+            if len(refs) < 3:  # trimesh drops it: a file cut inside its last face read "ok"
+                raise ValueError(f"face {line.strip()[:60]!r} has {len(refs)} corner"
+                                 f"{'s' if len(refs) != 1 else ''}, fewer than a face's 3 (is "
+                                 "the file cut short?)")
             refs = [index if index > 0 else vertex_count + 1 + index for index in refs]
             if refs and min(refs) < 1:  # trimesh would count on from the end of the list
                 raise ValueError(f"face {line.strip()[:60]!r} counts back past the first "
                                  "vertex (a negative index counts back from its line)")
             if refs and max(refs) > highest[0]:
                 highest = (max(refs), line.strip()[:60])
-            # Fewer than three corners is not a face; trimesh skips these too.
             for k in range(1, len(refs) - 1):
                 out.append(f"f {refs[0]} {refs[k]} {refs[k + 1]}")
                 source.append(face_count)
@@ -533,7 +536,10 @@ def _warn_if_float32_moves(path: str, vertices: np.ndarray) -> None:
         moved = float(np.max(np.abs(vertices.astype(np.float32) - vertices)))
     size = float(np.max(np.ptp(vertices, axis=0)))
     if not moved <= PRECISION_WARNING * size:  # also inf: beyond float32's range
-        share = f"{moved / size:.2g} of the mesh's size" if size > 0 else "the mesh is a point"
+        if size > 0 and moved < 0.1 * size:
+            share = f"{moved / size:.2g} of the mesh's size"
+        else:  # e.g. a unit cube at 1e8: every corner lands on one float32
+            share = "as much as the mesh is wide: its shape is lost"
         warnings.warn(
             f"{path}: {format_name(os.path.splitext(path)[1].lower())} holds 32-bit float "
             f"coordinates: vertices move by up to {moved:.3g} units ({share}); write .ply, "

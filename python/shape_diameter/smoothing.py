@@ -297,6 +297,10 @@ def uv_faces_outside(uvs) -> int:
 # texels): 15.6-16.0 bytes a texel without a blur, 19.5-20.0 with one.
 TEXTURE_BYTES_PER_TEXEL = 20
 TEXTURE_BYTES_PER_TEXEL_NO_BLUR = 16
+# Seconds on one CPU thread (2-core AMD EPYC, Spot): a read of the blur, and a texel's
+# drawing, dilating and reading back (4096^2 texels: 0.54 s).
+SECONDS_PER_BLUR_READ = 4e-9
+SECONDS_PER_TEXEL = 6.4e-8
 
 
 class TextureCost(NamedTuple):
@@ -312,6 +316,11 @@ class TextureCost(NamedTuple):
     1024: 18.3 s for 8.5e9 reads, as estimated here, on 2 threads)."""
     bytes: int
     """Peak memory of the CPU path's own buffers, beyond the mesh, values and UVs."""
+
+    def cpu_seconds(self, threads: int) -> float:
+        """Estimated seconds on `threads` CPU threads (a GPU blurs far faster)."""
+        return (self.blur_reads * SECONDS_PER_BLUR_READ
+                + self.texels * SECONDS_PER_TEXEL) / max(1, threads)
 
 
 def texture_cost(texture_size=1024, radius=None, uvs=None) -> TextureCost:

@@ -98,6 +98,10 @@ OBJ_FILES = {
     "past the last vertex": ("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\nf 1 2 5\n",
                              "cannot read mesh (face 'f 1 2 5' uses vertex 5, but the file has "
                              "3 vertices)"),
+    # trimesh dropped it: a file cut inside its last face line read "ok".
+    "a face of two corners": ("v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 3 2\nf 1 4",
+                              "cannot read mesh (face 'f 1 4' has 2 corners, fewer than a "
+                              "face's 3 (is the file cut short?))"),
     # trimesh wrapped it around to a vertex from the end, and the run went on.
     "back past the first vertex": ("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 -7\n",
                                    "cannot read mesh (face 'f 1 2 -7' counts back past the "
@@ -167,3 +171,18 @@ def test_a_failed_write_names_the_file_that_failed_once(tmp_path):
     assert run.stderr == (f"shape-diameter: error: {tmp_path / 'spot.sdf.ply'}: cannot write "
                           "(File too large); nothing written\n")
     assert sorted(p.name for p in tmp_path.iterdir()) == ["spot.obj"]
+
+
+def test_long_texture_work_is_announced(tmp_path, capsys, monkeypatch):
+    # An 8192^2 run at a radius of 8192 texels went on for an hour without a word.
+    monkeypatch.setattr(cli, "LONG_TEXTURE_SECONDS", 0.0)
+    assert cli.main([SPOT, "-o", str(tmp_path / "o.ply"), "--rays", "4", "--engine", "cpu",
+                     "--smooth", "texture", "--texture-size", "64", "--threads", "2",
+                     "-q"]) == 0
+    err = capsys.readouterr().err
+    assert "warning: " in err and "texture smoothing at 64 x 64 texels: about 0 s on 2 CPU " \
+        "threads and 0 MiB (an estimate)" in err, err
+    monkeypatch.setattr(cli, "LONG_TEXTURE_SECONDS", 10.0)  # the real threshold: quiet
+    assert cli.main([SPOT, "-o", str(tmp_path / "o.ply"), "--rays", "4", "--engine", "cpu",
+                     "--smooth", "texture", "--texture-size", "64", "-q"]) == 0
+    assert "texture smoothing at" not in capsys.readouterr().err
