@@ -30,7 +30,13 @@ def _interrupt(command, delay, **options):
     else:
         run.send_signal(signal.SIGINT)
     out, err = run.communicate(timeout=60)
-    return run.returncode, out, err
+    return run.returncode, out, _without_the_long_work_notice(err)
+
+
+def _without_the_long_work_notice(err):
+    """LONG is announced as long texture work before it starts: that line is expected."""
+    return "".join(line for line in err.splitlines(keepends=True)
+                   if "texture smoothing at 8192 x 8192 texels: about" not in line)
 
 
 # 0.1-0.2 s: numpy and the native core being imported (a traceback once); 0.25-0.45 s:
@@ -125,7 +131,7 @@ def test_sigterm_and_sighup_stop_the_run_as_ctrl_c_does(tmp_path, signum):
     time.sleep(1.5)
     run.send_signal(signum)
     out, err = run.communicate(timeout=60)
-    assert (run.returncode, out, err) == (-signum, "", INTERRUPTED)
+    assert (run.returncode, out, _without_the_long_work_notice(err)) == (-signum, "", INTERRUPTED)
     assert list(tmp_path.iterdir()) == []
 
 
