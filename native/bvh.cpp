@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
 // Builds in three phases, each spread over every thread:
-//  1. references: the triangles with area, as PrimRefs in face order;
+//  1. references: the triangles with area, as PrimRefs in face order, slivers lying across
+//     the axes cut into pieces of their own (bvh_split.h);
 //  2. top levels: nodes of at least kTopLevelNode triangles are split one level at a time, all
 //     threads binning and partitioning the level's nodes together (chunks of kChunk
 //     triangles, bins merged, a stable partition into a second buffer);
@@ -17,6 +18,7 @@
 #include <string>
 
 #include "bvh_sah.h"
+#include "bvh_split.h"
 #include "bvh_subtree.h"
 #include "parallel.h"
 
@@ -25,6 +27,7 @@ namespace sdf {
 using bvh_build::BinMapping;
 using bvh_build::Bins;
 using bvh_build::Box;
+using bvh_build::PieceCounts;
 using bvh_build::PrimRef;
 using bvh_build::Range;
 using bvh_build::Split;
@@ -42,16 +45,19 @@ constexpr std::size_t kTopLevelNode = 16384;
 
 // The triangles with area (zero-area ones can never be hit: Moller-Trumbore's determinant is
 // 0), in face order, with the bounds of the whole, into refs; scratch (as large) is used on
-// the way and the two may be swapped. Returns how many there are.
+// the way and the two may be swapped. Returns how many there are. Each ref's `bins` holds the
+// piece level its triangle wants (bvh_split.h), and `wanted` counts them.
 std::size_t make_references(const Mesh& mesh, unsigned threads,
                             UninitializedVector<PrimRef>& refs,
-                            UninitializedVector<PrimRef>& scratch, Range& root) {
+                            UninitializedVector<PrimRef>& scratch, Range& root,
+                            PieceCounts& wanted) {
   const std::size_t faces = mesh.triangles.size();
   const std::size_t chunks = (faces + kChunk - 1) / kChunk;
   // One pass over the vertices: each chunk writes its references from its first face's
   // place in scratch; they are moved together only if some triangle had no area.
   std::vector<std::size_t> offset(chunks + 1, 0);
   std::vector<Range> chunk_bounds(chunks);
+  std::vector<PieceCounts> chunk_wanted(chunks, PieceCounts{});
   PrimRef* out = scratch.data();
   parallel_for(chunks, 1, threads, [&](std::size_t b, std::size_t e) {
     for (std::size_t c = b; c < e; ++c) {
@@ -69,7 +75,9 @@ std::size_t make_references(const Mesh& mesh, unsigned threads,
         r.lo = glm::min(v0, glm::min(v1, v2)) + 0.0f;
         r.hi = glm::max(v0, glm::max(v1, v2)) + 0.0f;
         r.id = static_cast<std::uint32_t>(f);
-        r.bins = 0;
+        r.bins = static_cast<std::uint32_t>(
+            bvh_build::wanted_piece_level(Box{r.lo, r.hi}, glm::length(normal)));
+        ++chunk_wanted[c][r.bins];
         const bvh_build::Float4 lo = bvh_build::lo4(r), hi = bvh_build::hi4(r), c2 = lo + hi;
         bounds.grow(lo, hi);
         centroids.grow(c2, c2);
@@ -95,6 +103,9 @@ std::size_t make_references(const Mesh& mesh, unsigned threads,
     root.bounds.grow(c.bounds);
     root.centroids.grow(c.centroids);
   }
+  wanted = PieceCounts{};
+  for (const PieceCounts& w : chunk_wanted)
+    for (int k = 0; k < bvh_build::kPieceLevels; ++k) wanted[k] += w[k];
   return count;
 }
 
@@ -324,7 +335,10 @@ Bvh build_bvh(const Mesh& mesh, const BvhConfig& config) {
   // Not zero-filled: that would be a serial pass over 32 bytes per face.
   UninitializedVector<PrimRef> refs(faces), scratch(faces);
   Range root;
-  const std::size_t count = make_references(mesh, config.threads, refs, scratch, root);
+  PieceCounts wanted;
+  std::size_t count = make_references(mesh, config.threads, refs, scratch, root, wanted);
+  if (count > wanted[0])
+    count = bvh_build::split_slivers(mesh, wanted, count, config.threads, refs, scratch, root);
   Bvh bvh;
   if (count == 0) return bvh;
 
