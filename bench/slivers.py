@@ -3,7 +3,9 @@
 the same build without cutting (SDF_BVH_SPLIT=0), in one run, alternating: CAD-like fans and
 needles, and real meshes, whose few slivers must cost nothing.
 
-    .venv/bin/python bench/slivers.py [--rounds 3] [--engine cpu]
+    .venv/bin/python bench/slivers.py [--rounds 3] [--engine cpu] [--bvh-quality auto]
+
+(On a GPU, --bvh-quality high: the tree a GPU makes for itself is not cut.)
 
 Prints a table: mesh, faces, BVH references with cutting, cast ms without and with, the
 ratio, and whether the values are equal (they must be: cutting changes the tree, not a hit).
@@ -49,9 +51,10 @@ def needles(count, seed=0):
     return vertices, np.vstack([box_faces, np.stack([k, k + count, k + 2 * count], 1)])
 
 
-def cast_ms(vertices, faces, engine, cut):
+def cast_ms(vertices, faces, args, cut):
     os.environ["SDF_BVH_SPLIT"] = "1" if cut else "0"
-    result = sd.compute(vertices, faces, engine=engine, orientation="as_is")
+    result = sd.compute(vertices, faces, engine=args.engine, bvh_quality=args.bvh_quality,
+                        orientation="as_is")
     return result.timings["cast"] * 1e3, result.raw
 
 
@@ -59,12 +62,14 @@ def main():
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--rounds", type=int, default=3)
     parser.add_argument("--engine", default="cpu")
+    parser.add_argument("--bvh-quality", default="auto", choices=("auto", "high", "fast"))
     args = parser.parse_args()
     cases = [(f"cylinder, {s} sections", *cylinder(s)) for s in (500, 2000, 8000)]
     cases += [(f"needles, {n}", *needles(n)) for n in (2000, 8000)]
     cases += [(name, *read_off(DATA / f"{name}.off"))
               for name in ("ChineseDragon-10kv", "armadillo", "bunny00")]
-    print(f"engine {args.engine}, best of {args.rounds} alternating rounds\n")
+    print(f"engine {args.engine}, bvh_quality {args.bvh_quality}, best of {args.rounds} "
+          "alternating rounds\n")
     print("| mesh | faces | BVH refs | cast ms uncut | cast ms cut | uncut/cut | values equal |")
     print("|---|---:|---:|---:|---:|---:|---|")
     for name, vertices, faces in cases:
@@ -74,7 +79,7 @@ def main():
         values = {}
         for _ in range(args.rounds):
             for cut in (False, True):
-                ms, values[cut] = cast_ms(vertices, faces, args.engine, cut)
+                ms, values[cut] = cast_ms(vertices, faces, args, cut)
                 times[cut].append(ms)
         uncut, cut = min(times[False]), min(times[True])
         print(f"| {name} | {len(faces):,} | {refs:,} | {uncut:.1f} | {cut:.1f} | "
