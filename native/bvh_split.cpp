@@ -3,10 +3,11 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <cstdlib>
-#include <string>
 #include <limits>
 #include <numeric>
+#include <string>
 #include <vector>
 
 #include <glm/glm.hpp>
@@ -70,6 +71,16 @@ Box clipped_box(const dvec3 corners[3], const Box& box) {
     lo = glm::min(lo, polygon[from][i]);
     hi = glm::max(hi, polygon[from][i]);
   }
+  // The corners made on a plane are rounded in double (a few ulps of the largest coordinate
+  // of the triangle; a review found one 1e-17 inside the exact part): widened by more than
+  // that before the outward rounding to floats.
+  double largest = 0.0;
+  for (int k = 0; k < 3; ++k)
+    largest = std::max({largest, std::fabs(corners[k].x), std::fabs(corners[k].y),
+                        std::fabs(corners[k].z)});
+  const double slack = 64.0 * std::numeric_limits<double>::epsilon() * largest;
+  lo -= slack;
+  hi += slack;
   Box out;
   for (int a = 0; a < 3; ++a) {
     float l = static_cast<float>(lo[a]), h = static_cast<float>(hi[a]);
@@ -99,9 +110,12 @@ void cut(const dvec3 corners[3], const Box& box, int pieces, std::uint32_t id, P
   cut(corners, clipped_box(corners, above), pieces / 2, id, out);
 }
 
-// The largest cap on the piece level whose added references fit the budget.
+// The largest cap on the piece level whose added references fit the budget (and leave the
+// nodes, about two a reference, within the int32 indices of SdfBvhNode).
 int piece_cap(const PieceCounts& wanted, std::size_t count) {
-  const double budget = kBudget * static_cast<double>(count);
+  const double budget = std::min(kBudget * static_cast<double>(count),
+                                 double(std::numeric_limits<std::int32_t>::max() / 4) -
+                                     static_cast<double>(count));
   for (int cap = kPieceLevels - 1; cap > 0; --cap) {
     double added = 0.0;
     for (int k = 1; k < kPieceLevels; ++k)

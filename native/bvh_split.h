@@ -27,7 +27,7 @@ int wanted_piece_level(const Box& box, float twice_area);
 
 // Replaces refs[0, count) by the references of their pieces (in order, a triangle's pieces
 // together), each triangle cut into 2^min(wanted, cap) pieces, the cap the largest that keeps
-// the added references within half of count. A ref's `bins` holds its wanted level on entry.
+// the added references within twice count. A ref's `bins` holds its wanted level on entry.
 // refs and scratch are reallocated to the new count; root's bounds stay, its centroids are
 // remade. Returns the new count. Deterministic for any thread count.
 std::size_t split_slivers(const Mesh& mesh, const PieceCounts& wanted, std::size_t count,

@@ -34,7 +34,7 @@ struct FramesOnDevice {
   FramesOnDevice(const FramesOnDevice&) = delete;
   FramesOnDevice& operator=(const FramesOnDevice&) = delete;
   ~FramesOnDevice() {
-    if (!state || state->broken) return;
+    if (!state || state->broken || forked_after_load()) return;
     for (cl_mem mem : {origins, axes})
       if (mem) api()->clReleaseMemObject(mem);
   }

@@ -94,7 +94,7 @@ struct TextureUploads {
   TextureUploads(const TextureUploads&) = delete;
   TextureUploads& operator=(const TextureUploads&) = delete;
   ~TextureUploads() {
-    if (!state || state->broken) return;
+    if (!state || state->broken || forked_after_load()) return;
     for (cl_mem mem : {uvs, face_island, triangles, group_first, corners, merged})
       if (mem) api()->clReleaseMemObject(mem);
   }

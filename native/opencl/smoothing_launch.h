@@ -72,7 +72,8 @@ class FinishOnUnwind {
   explicit FinishOnUnwind(cl_command_queue queue)
       : queue_(queue), exceptions_(std::uncaught_exceptions()) {}
   ~FinishOnUnwind() {
-    if (std::uncaught_exceptions() > exceptions_) api()->clFinish(queue_);  // errors ignored
+    if (std::uncaught_exceptions() > exceptions_ && !forked_after_load())
+      api()->clFinish(queue_);  // errors ignored
   }
   FinishOnUnwind(const FinishOnUnwind&) = delete;
   FinishOnUnwind& operator=(const FinishOnUnwind&) = delete;

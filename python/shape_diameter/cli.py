@@ -34,7 +34,7 @@ import numpy as np
 
 from . import __version__
 from . import _core
-from .api import MAX_RAYS, _resolve_engine, compute
+from .api import MAX_RAYS, compute, engines
 from .colormap import colormap
 from .cli_jobs import DEFAULT_SUFFIX, EXIT_ENVIRONMENT, EXIT_USAGE, CommandError, plan
 from .output_files import written_whole
@@ -97,11 +97,15 @@ class _ListEngines(argparse.Action):
 
         found = engines()
         width = max(len(engine["name"]) for engine in found)
-        for engine in found:
-            _say(f"{engine['name']:<{width}}  {engine['type']}  {engine['description']}")
-        _say("auto picks the best OpenCL GPU, else cpu; opencl the best OpenCL device"
-             + ("; opencl:all shares the work between the devices"
-                if sum(e["name"].startswith("opencl:") for e in found) > 1 else ""))
+        try:
+            for engine in found:
+                _say(f"{engine['name']:<{width}}  {engine['type']}  {engine['description']}")
+            _say("auto picks the best OpenCL GPU, else cpu; opencl the best OpenCL device"
+                 + ("; opencl:all shares the work between the devices"
+                    if sum(e["name"].startswith("opencl:") for e in found) > 1 else ""))
+        except _StdoutClosed:
+            _quiet_stdout()
+            parser.exit(EXIT_STDOUT_CLOSED)
         parser.exit()
 
 
@@ -353,13 +357,17 @@ def main(argv=None, *, interrupts=None) -> int:
     except KeyboardInterrupt:
         return _fail("interrupted", EXIT_INTERRUPTED)
     except _StdoutClosed:
-        # Python flushes stdout again at exit: point it at nothing, so no second error.
-        with contextlib.suppress(OSError, ValueError):
-            os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+        _quiet_stdout()
         return EXIT_STDOUT_CLOSED
     finally:
         if interrupts is not None:
             interrupts.disarm()
+
+
+def _quiet_stdout() -> None:
+    """Python flushes stdout again at exit: point it at nothing, so no second error."""
+    with contextlib.suppress(OSError, ValueError):
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
 
 
 def console_main(pending=None) -> int:
@@ -629,8 +637,8 @@ LONG_TEXTURE_SECONDS = 10.0
 
 def _long_texture_work(args, smoothing_options, uvs):
     """Words for texture smoothing estimated to run long on the CPU, or None."""
-    if _resolve_engine(args.engine) != "cpu":
-        return None  # a device blurs far faster than the estimate's CPU threads
+    if _texture_on_gpus(args.engine):
+        return None  # a GPU blurs far faster than the estimate's CPU threads
     size = smoothing_options.get("texture_size", 1024)
     cost = texture_cost(size, smoothing_options.get("radius"), uvs)
     threads = args.threads or _core.hardware_threads()
@@ -640,6 +648,22 @@ def _long_texture_work(args, smoothing_options, uvs):
     return (f"texture smoothing at {size} x {size} texels: about {seconds:.0f} s on {threads} "
             f"CPU threads and {cost.bytes / 2**20:.0f} MiB (an estimate); a smaller --radius or "
             "--texture-size costs less")
+
+
+def _texture_on_gpus(engine: str) -> bool:
+    """Whether texture smoothing on `engine` runs on GPUs: every device it names is one, with
+    the double precision texture smoothing needs there (else the CPU threads blur)."""
+    devices = [e for e in engines() if e["name"] != "cpu"]
+    gpus = [e for e in devices if e["type"] == "GPU"]
+    if engine in ("auto", "opencl", "opencl:all"):
+        chosen = gpus or devices if engine != "auto" else gpus
+    elif engine.startswith("opencl:") and engine[7:].isdigit():
+        chosen = [e for e in devices if e["name"] == engine]
+    elif engine.startswith("opencl:"):
+        chosen = [e for e in devices if engine[7:].lower() in e["device"].lower()][:1]
+    else:
+        chosen = []
+    return bool(chosen) and all(e["type"] == "GPU" and e["double"] for e in chosen)
 
 
 def _skipped(args, job) -> dict:

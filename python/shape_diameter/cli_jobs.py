@@ -111,8 +111,10 @@ def plan(args, write_suffixes) -> list:
             continue
         # Outputs are written whole or not at all, the mesh and its values together: files
         # that exist are a finished run's (or a user's: --skip-existing trusts them).
-        done = args.skip_existing and all(os.path.exists(path) for path in (output, values)
-                                          if path is not None)
+        # A missing input is not done: it fails as it would without the option (a mistyped
+        # name beside an old output was "skipped", status 0).
+        done = args.skip_existing and os.path.exists(source) and all(
+            os.path.exists(path) for path in (output, values) if path is not None)
         jobs.append(Job(source, output, values, done=done))
     _check_no_collisions([job for job in jobs if job.problem is None])
     return jobs
@@ -124,11 +126,16 @@ def _meshes_in(folder: str) -> list:
     found = []
     for entry in sorted(os.scandir(folder), key=lambda e: e.name):
         name = entry.name
-        # A link to nothing is kept: it fails as an input of its own (a trial's vanished).
         if (name.startswith(".") or fnmatch.fnmatch(name, "*.sdf.*")
-                or os.path.splitext(name)[1].lower() not in READ_SUFFIXES
-                or not (entry.is_file() or entry.is_symlink() and not entry.is_dir())):  # fmt: skip
+                or os.path.splitext(name)[1].lower() not in READ_SUFFIXES):  # fmt: skip
             continue
+        # A link to nothing, or to itself, is kept: it fails as an input of its own (one
+        # vanished, one stopped the whole folder).
+        try:
+            if not (entry.is_file() or entry.is_symlink() and not entry.is_dir()):
+                continue
+        except OSError:
+            pass
         found.append(os.path.join(folder, name))
     return found
 

@@ -291,7 +291,8 @@ def _check_stl(data: bytes) -> None:
     else:
         if looks_like(data[:4096], len(data)) == "STL":
             # trimesh finds no triangles in broken text: a cut file would be "empty".
-            last_line = data.rstrip().rsplit(b"\n", 1)[-1].strip()
+            # (A DOS end-of-file byte or NULs after it are padding, which trimesh reads past.)
+            last_line = data.rstrip(b" \t\r\n\x00\x1a").rsplit(b"\n", 1)[-1].strip()
             if not last_line.lower().startswith(b"endsolid"):
                 raise ValueError("truncated: ASCII STL text ends with an 'endsolid' line, "
                                  "this file does not")

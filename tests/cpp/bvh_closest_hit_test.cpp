@@ -140,6 +140,11 @@ TEST_P(BvhShape, EveryTrianglePresentAndBoxesNest) {
       }
     } else {
       EXPECT_LE(node.count, BvhConfig().max_leaf_size);
+      for (int k = node.first; k < node.first + node.count; ++k) {
+        const auto& t = bvh.triangles[k];
+        // A whole triangle's leaf holds its corner; a piece's need not.
+        if (seen[t.id] == 1) EXPECT_TRUE(box_contains(node, {t.v0_x, t.v0_y, t.v0_z}));
+      }
     }
   }
   EXPECT_LT(bvh_depth(bvh), SDF_BVH_STACK_SIZE);

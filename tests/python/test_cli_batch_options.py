@@ -100,3 +100,33 @@ def test_list_engines_lists_what_engine_takes(capsys):
     names = [line.split()[0] for line in lines[:-1]]
     assert names == [engine["name"] for engine in shape_diameter.engines()]
     assert lines[-1].startswith("auto picks")
+
+
+def test_skip_existing_does_not_skip_a_missing_input(tmp_path, capsys):
+    # A mistyped name beside an old output was "skipped", status 0 (a review's).
+    (tmp_path / "gone.sdf.ply").write_text("")
+    status, reports, _ = _run_json(capsys, [tmp_path / "gone.obj", "--skip-existing"])
+    assert status == 2
+    assert reports[0]["status"] == "error" and "no such file" in reports[0]["error"]
+
+
+def test_list_engines_into_a_closed_pipe_stops_quietly(tmp_path):
+    import os
+    import subprocess
+    import sys
+
+    read, write = os.pipe()
+    os.close(read)
+    run = subprocess.run([sys.executable, "-m", "shape_diameter", "--list-engines"],
+                         stdout=write, stderr=subprocess.PIPE, text=True, timeout=120)
+    os.close(write)
+    assert (run.returncode, run.stderr) == (141, "")
+
+
+def test_a_link_to_itself_in_a_folder_fails_alone(tmp_path, capsys, two_meshes):
+    # It stopped the whole folder: "cannot list the folder (Too many levels of symbolic links)".
+    (two_meshes / "loop.obj").symlink_to(two_meshes / "loop.obj")
+    status, reports, _ = _run_json(capsys, [two_meshes])
+    assert status == 2
+    assert [(Path(r["input"]).name, r["status"]) for r in reports] == [
+        ("loop.obj", "error"), ("spot.obj", "ok"), ("suzanne.obj", "ok")]

@@ -82,6 +82,15 @@ def test_a_truncated_ascii_stl_says_so(tmp_path, capsys):
         f"{path}: truncated: ASCII STL text ends with an 'endsolid' line, this file does not")
 
 
+def test_an_ascii_stl_with_padding_after_endsolid_is_read(tmp_path):
+    # A DOS end-of-file byte after endsolid: trimesh reads it; the truncation check refused it.
+    from shape_diameter.mesh_io import load_mesh
+
+    path = tmp_path / "padded.stl"
+    path.write_bytes(trimesh.exchange.stl.export_stl_ascii(_sphere()).encode() + b"\r\n\x1a")
+    assert len(load_mesh(path)[1]) == len(_sphere().faces)
+
+
 def test_a_truncated_glb_says_so(tmp_path, capsys):
     # It said "cannot read mesh (chunk was not expected length!)".
     path, declared = _truncated_glb(tmp_path)
