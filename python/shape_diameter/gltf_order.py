@@ -25,7 +25,7 @@ def mesh_nodes_in_file_order(path: str, scene: trimesh.Scene) -> list:
     in the file's order. Nodes the file's tree does not account for (none are known) keep
     trimesh's order, after the others. Raises ValueError for a node tree it cannot follow."""
     try:
-        return _ordered(_json_header(path), scene)
+        return _ordered(json_header(path), scene)
     except (struct.error, KeyError, TypeError, IndexError, AttributeError) as exc:
         raise ValueError(f"its node tree cannot be followed ({type(exc).__name__}: {exc})") from exc
 
@@ -48,7 +48,7 @@ def _ordered(header: dict, scene: trimesh.Scene) -> list:
     return ordered + [node for node in scene.graph.nodes_geometry if node not in placed]
 
 
-def _json_header(path: str) -> dict:
+def json_header(path: str) -> dict:
     with open(path, "rb") as stream:
         data = stream.read()
     if data[:4] == _GLB_MAGIC:

@@ -34,7 +34,8 @@ import warnings
 import numpy as np
 import trimesh
 
-from .gltf_order import mesh_nodes_in_file_order
+from .gltf_checks import check_gltf
+from .gltf_order import json_header, mesh_nodes_in_file_order
 from .mesh_file_checks import check_complete, check_suffix, format_name, off_sections
 from .output_files import written_whole
 
@@ -125,6 +126,8 @@ def _read(path, want_uvs: bool = False):
                 skip_materials=True,
             )
         else:
+            if suffix in (".gltf", ".glb"):
+                check_gltf(json_header(path), uvs=want_uvs)
             # skip_materials: textures are irrelevant here, and decoding them
             # needs Pillow, which the ``cli`` extra does not pull in.
             scene = trimesh.load(path, process=False, force="scene", skip_materials=True)

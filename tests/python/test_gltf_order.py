@@ -2,6 +2,7 @@
 
 import base64
 import json
+import re
 import struct
 
 import numpy as np
@@ -99,3 +100,48 @@ def test_a_gltf_node_tree_that_cannot_be_followed_is_a_clear_error(tmp_path):
     path.write_text(json.dumps(header))
     with pytest.raises(ValueError, match=r"scene\.gltf: cannot read mesh"):
         load_mesh(path)
+
+
+# What trimesh reads wrongly without a word (a game-asset trial's, each computed as 'ok'):
+# refused, saying what.
+UNREAD = {
+    "draco": (lambda h: h.update(extensionsRequired=["KHR_draco_mesh_compression"]),
+              "requires the glTF extension KHR_draco_mesh_compression"),
+    "quantized positions": (lambda h: h["accessors"][1].update(normalized=True),
+                            "mesh 0 primitive 0's POSITION is stored as normalized integers"),
+    "sparse positions": (lambda h: h["accessors"][1].update(sparse={"count": 1}),
+                         "mesh 0 primitive 0's POSITION is a sparse accessor"),
+    "triangle fan": (lambda h: h["meshes"][2]["primitives"][0].update(mode=6),
+                     "mesh 2 primitive 0 is a triangle fan"),
+    "camera with a mesh": (lambda h: h["nodes"][3].update(camera=0),
+                           "node 3 is a camera holding a mesh"),
+}
+
+
+@pytest.mark.parametrize("case", sorted(UNREAD))
+def test_what_the_reader_would_get_wrong_is_refused(tmp_path, case):
+    change, message = UNREAD[case]
+    path = _scene_file(tmp_path, ".gltf")
+    header = json.loads(path.read_text())
+    change(header)
+    path.write_text(json.dumps(header))
+    with pytest.raises(ValueError, match=re.escape(message)):
+        load_mesh(path)
+
+
+def test_harmless_required_extensions_are_read(tmp_path):
+    path = _scene_file(tmp_path, ".gltf")
+    header = json.loads(path.read_text())
+    header["extensionsRequired"] = ["KHR_materials_unlit", "KHR_texture_transform"]
+    path.write_text(json.dumps(header))
+    assert len(load_mesh(path)[1]) == len(FILE_ORDER)
+
+
+def test_quantized_uvs_are_refused_only_where_uvs_are_read(tmp_path):
+    path = _scene_file(tmp_path, ".gltf")
+    header = json.loads(path.read_text())
+    header["accessors"][2].update(normalized=True)  # the first primitive's TEXCOORD_0
+    path.write_text(json.dumps(header))
+    assert len(load_mesh(path)[1]) == len(FILE_ORDER)
+    with pytest.raises(ValueError, match="TEXCOORD_0 is stored as normalized integers"):
+        load_mesh_with_uvs(path)
