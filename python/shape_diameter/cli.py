@@ -93,8 +93,6 @@ class _ListEngines(argparse.Action):
         super().__init__(option_strings, dest, nargs=0, default=argparse.SUPPRESS, **kwargs)
 
     def __call__(self, parser, namespace, values, option_string=None):
-        from .api import engines
-
         found = engines()
         width = max(len(engine["name"]) for engine in found)
         try:

@@ -145,13 +145,13 @@ def _check_no_collisions(jobs) -> None:
     a.ply both make a.sdf.ply) fails on its own, the others go on (one such pair in a folder
     of thousands stopped the whole batch, a trial's); an input given twice, or one that
     another input's run would overwrite, refuses the run."""
-    written, writer = {}, {}  # real path of an output -> the input writing it, its job
+    written = {}  # real path of an earlier input's output -> that input
     for job in jobs:
         for path in (job.output, job.values):
             if path is None:
                 continue
             key = os.path.realpath(path)
-            if key in written and writer[key] is not job:
+            if key in written:
                 if _same_file(written[key], job.source):
                     raise CommandError(f"{job.source}: is given twice")
                 job.problem = (f"{job.source}: would write {path}, which {written[key]} writes: "
@@ -161,7 +161,7 @@ def _check_no_collisions(jobs) -> None:
             continue
         for path in (job.output, job.values):
             if path is not None:
-                written[os.path.realpath(path)], writer[os.path.realpath(path)] = job.source, job
+                written[os.path.realpath(path)] = job.source
     identities = {}  # each input: its real path and, where it exists, (device, inode)
     for job in jobs:
         identities[os.path.realpath(job.source)] = job.source

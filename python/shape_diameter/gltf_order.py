@@ -20,12 +20,13 @@ _GLB_MAGIC = b"glTF"
 _JSON_CHUNK = 0x4E4F534A
 
 
-def mesh_nodes_in_file_order(path: str, scene: trimesh.Scene) -> list:
-    """trimesh's geometry nodes of ``scene``, loaded from the glTF/GLB file at ``path``,
-    in the file's order. Nodes the file's tree does not account for (none are known) keep
-    trimesh's order, after the others. Raises ValueError for a node tree it cannot follow."""
+def mesh_nodes_in_file_order(header: dict, scene: trimesh.Scene) -> list:
+    """trimesh's geometry nodes of ``scene``, loaded from the glTF/GLB file whose JSON is
+    ``header`` (json_header), in the file's order. Nodes the file's tree does not account for
+    (none are known) keep trimesh's order, after the others. Raises ValueError for a node tree
+    it cannot follow."""
     try:
-        return _ordered(json_header(path), scene)
+        return _ordered(header, scene)
     except (struct.error, KeyError, TypeError, IndexError, AttributeError) as exc:
         raise ValueError(f"its node tree cannot be followed ({type(exc).__name__}: {exc})") from exc
 
@@ -37,7 +38,7 @@ def _ordered(header: dict, scene: trimesh.Scene) -> list:
     geometry_nodes = set(scene.graph.nodes_geometry)
     children = scene.graph.transforms.children
     ordered = []
-    for index in _depth_first(header, len(nodes)):
+    for index in _depth_first(header):
         frame = frames[index]
         if frame in geometry_nodes:
             ordered.append(frame)
@@ -73,7 +74,7 @@ def _frame_names(nodes: list, base_frame: str) -> list:
     return names
 
 
-def _depth_first(header: dict, node_count: int) -> list:
+def _depth_first(header: dict) -> list:
     """Indices of the scene's nodes, each node before its children; a node met twice
     (which the glTF specification forbids) counts once."""
     scenes = header.get("scenes", [])
@@ -84,7 +85,7 @@ def _depth_first(header: dict, node_count: int) -> list:
     nodes = header.get("nodes", [])
     while stack:
         index = stack.pop()
-        if index in seen or not 0 <= index < node_count:
+        if index in seen or not 0 <= index < len(nodes):
             continue
         seen.add(index)
         order.append(index)

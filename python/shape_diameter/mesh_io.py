@@ -87,7 +87,7 @@ def load_mesh_with_uvs(path, *, source_faces: bool = False):
             scene = trimesh.load(path, process=False, force="scene")
         except Exception:  # e.g. a texture image that cannot be decoded: read without
             scene = trimesh.load(path, process=False, force="scene", skip_materials=True)
-        uvs = _scene_corner_uvs(scene, mesh_nodes_in_file_order(path, scene))
+        uvs = _scene_corner_uvs(scene, mesh_nodes_in_file_order(json_header(path), scene))
     if uvs is not None and (uvs.shape != (len(triangles), 3, 2) or not np.isfinite(uvs).all()):
         uvs = None
     return (vertices, triangles, source, uvs) if source_faces else (vertices, triangles, uvs)
@@ -109,7 +109,7 @@ def _read(path, want_uvs: bool = False):
         raise ValueError(f"{path}: {exc}") from None
     except OSError as exc:  # e.g. no permission to read it
         raise ValueError(f"{path}: cannot read mesh ({exc.strerror or exc})") from exc
-    uvs, other_kinds = None, set()
+    uvs, other_kinds, header = None, set(), None
     try:
         if suffix == ".off":
             # Read here: trimesh groups an OFF's triangles by polygon size, and fails on
@@ -127,7 +127,8 @@ def _read(path, want_uvs: bool = False):
             )
         else:
             if suffix in (".gltf", ".glb"):
-                check_gltf(json_header(path), uvs=want_uvs)
+                header = json_header(path)
+                check_gltf(header, uvs=want_uvs)
             # skip_materials: textures are irrelevant here, and decoding them
             # needs Pillow, which the ``cli`` extra does not pull in.
             scene = trimesh.load(path, process=False, force="scene", skip_materials=True)
@@ -151,7 +152,7 @@ def _read(path, want_uvs: bool = False):
             if in_place is not None:
                 vertices, triangles, source, uvs = in_place
             else:
-                nodes = (mesh_nodes_in_file_order(path, scene) if suffix in (".gltf", ".glb")
+                nodes = (mesh_nodes_in_file_order(header, scene) if header is not None
                          else scene.graph.nodes_geometry)
                 vertices, triangles, other_kinds = _flatten(scene, nodes)
                 if suffix != ".obj":  # (a PLY only where trimesh kept no elements: never seen)
