@@ -113,10 +113,14 @@ def corner_uvs(me, name, flipped=False):
 
 
 def new_image(name, rgba):
-    """A packed float RGBA image holding `rgba` (height, width, 4), Blender's row order."""
+    """A packed float RGBA image holding `rgba` (height, width, 4), Blender's row order, kept
+    by a fake user (with no user Blender drops it when the file is saved: a trial's bake was
+    gone after a save and reload) and tagged Non-Color (it holds values, not colours)."""
     height, width = rgba.shape[:2]
     image = bpy.data.images.new(name, width, height, alpha=True, float_buffer=True)
     try:
+        image.use_fake_user = True
+        image.colorspace_settings.name = "Non-Color"
         image.pixels.foreach_set(np.ascontiguousarray(rgba, dtype=np.float32).reshape(-1))
         image.pack()
     except BaseException:

@@ -253,6 +253,43 @@ def _attribute_problem(ob, options):
     return None
 
 
+def _not_a_mesh(ob):
+    """How a run names an object it cannot measure, with what would make it a mesh where
+    Blender has a way (a trial's collection instance read just 'Inst (empty)')."""
+    if ob.type == "EMPTY" and ob.instance_type == "COLLECTION":
+        return f"{ob.name} (a collection instance: Make Instances Real first)"
+    if ob.type in ("CURVE", "SURFACE", "FONT", "META"):
+        return f"{ob.name} ({ob.type.lower()}: convert it to a mesh first)"
+    return f"{ob.name} ({ob.type.lower()})"
+
+
+# Modifiers that leave the vertices where they are (normals, UVs, weights, splitting into
+# triangles): a run without Use Modifiers loses nothing of the shape to them.
+_SHAPE_KEEPING_MODIFIERS = {
+    "WEIGHTED_NORMAL", "NORMAL_EDIT", "UV_PROJECT", "UV_WARP", "VERTEX_WEIGHT_EDIT",
+    "VERTEX_WEIGHT_MIX", "VERTEX_WEIGHT_PROXIMITY", "DATA_TRANSFER", "TRIANGULATE",
+}
+
+
+def _shape_changes(ob):
+    """What changes `ob`'s shape in the viewport beyond its base mesh ('modifiers (Mirror)',
+    'shape keys', both), or '': a run without Use Modifiers measured a half of a mirrored
+    model, or a cube a shape key flattens, without a word (a trial's)."""
+    found = []
+    modifiers = [m.name for m in ob.modifiers
+                 if m.show_viewport and m.type not in _SHAPE_KEEPING_MODIFIERS]
+    if modifiers:
+        found.append(f"its modifiers ({', '.join(modifiers)})")
+    keys = ob.data.shape_keys
+    if keys is not None and len(keys.key_blocks) > 1 and (
+        not keys.use_relative
+        or (ob.show_only_shape_key and ob.active_shape_key_index > 0)
+        or any(k.value != 0.0 and not k.mute for k in keys.key_blocks[1:])
+    ):
+        found.append("its shape keys")
+    return " and ".join(found)
+
+
 def prepare(depsgraph, objects, options, for_writing=True, active=None):
     """Tasks for the mesh objects among `objects`, plus the warnings about the whole run
     (objects skipped as not meshes, long or large texture work), to report before computing;
@@ -270,7 +307,7 @@ def prepare(depsgraph, objects, options, for_writing=True, active=None):
         raise UserError("Nothing selected: select one or more mesh objects")
     meshes = [ob for ob in objects if ob.type == "MESH"]
     notices = []
-    others = [f"{ob.name} ({ob.type.lower()})" for ob in objects if ob.type != "MESH"]
+    others = [_not_a_mesh(ob) for ob in objects if ob.type != "MESH"]
     if not meshes:
         raise UserError(f"Not a mesh: {', '.join(others)}")
     if others:
@@ -314,6 +351,13 @@ def prepare(depsgraph, objects, options, for_writing=True, active=None):
         original = mesh_data.topology(me)
         if options.use_modifiers:
             evaluated = ob.evaluated_get(depsgraph)
+            if not evaluated.is_evaluated:  # its base mesh would be computed without a word
+                raise UserError(
+                    f"{ob.name} is not evaluated in this view layer (its collection is excluded "
+                    "or disabled, it is disabled in viewports, or it is in no scene), so Use "
+                    "Modifiers cannot apply its modifiers and shape keys: include it, or turn "
+                    "off Use Modifiers"
+                )
             temp = evaluated.to_mesh()
             try:
                 if not mesh_data.topology(temp).matches(original):
@@ -340,6 +384,13 @@ def prepare(depsgraph, objects, options, for_writing=True, active=None):
                 "by deleting those vertices in Edit Mode"
             )
         task = Task(ob.name, ob.session_uid, uid, original, triangles, corner_uvs=uvs)
+        if not options.use_modifiers:
+            left_out = _shape_changes(ob)
+            if left_out:
+                task.warnings.append(
+                    f"{ob.name}: {left_out} change its shape in the viewport and are left out "
+                    "(Use Modifiers is off): the values are those of its base mesh"
+                )
         if shared is not None:
             task.shared_by.append(shared.name)
         if options.bake_image:
@@ -625,6 +676,7 @@ def write(bpy_data, tasks, options):
                 colors = task.colors
             # Restored last on failure: Blender 5.x keeps the names of removed attributes.
             undo.append(_colors_restorer(me))
+            default_before = me.color_attributes.default_color_name
             data = {options.attribute_name: task.values}
             if options.normalized_name:
                 data[options.normalized_name] = task.normalized
@@ -650,6 +702,10 @@ def write(bpy_data, tasks, options):
                 mesh_data.write_attribute(attribute, data[name])
             if options.color_name:
                 me.color_attributes.active_color = me.color_attributes[options.color_name]
+                # The render colour too, where it was ours or none: replacing our attribute
+                # of the other domain left bpy 4.5 rendering no colour (a trial's).
+                if default_before in ("", options.color_name):
+                    me.color_attributes.default_color_name = options.color_name
             mesh_data.record_outputs(me, options.outputs())
             me.update()
         # Images are made under a temporary name and replace the old ones (same name) only

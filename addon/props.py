@@ -254,7 +254,8 @@ def options():
         ),
         "normalized_name": StringProperty(
             name="Normalized",
-            description="FLOAT attribute for the normalised values in [0, 1] (empty: not written)",
+            description="FLOAT attribute for the normalised values in [0, 1], each object "
+            "to its own range (empty: not written)",
             default="sdf_normalized",
         ),
         "color_name": StringProperty(

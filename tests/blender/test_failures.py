@@ -152,7 +152,7 @@ def internal_name():
 
 CASES = [
     (nothing_selected, "Nothing selected"),
-    (not_a_mesh, "Not a mesh: empty \\(empty\\), curve \\(curve\\)"),
+    (not_a_mesh, "Not a mesh: empty \\(empty\\), curve \\(curve: convert it to a mesh first\\)"),
     (only_faceless, "nothing has no faces \\(nor have points\\)"),
     (edit_mode, "(suzanne|Sphere) is in Edit Mode"),
     (linked_mesh, "linked: its mesh 'library_mesh' is linked from"),

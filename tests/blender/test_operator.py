@@ -71,6 +71,8 @@ def test_switching_points_replaces_the_earlier_runs_attributes():
             domain, color_domain)
         assert len(attribute_array(me, "sdf")) == count
         assert me.color_attributes.active_color_name == "sdf_color"
+        # And the render colour: bpy 4.5 lost it when the other domain's was replaced.
+        assert me.color_attributes.default_color_name == "sdf_color"
         values.setdefault(points, []).append(attribute_array(me, "sdf"))
     names = [a.name for a in me.attributes]
     assert len(names) == len(set(names))
@@ -267,6 +269,46 @@ def test_use_modifiers_computes_on_the_deformed_mesh():
         bpy.data.meshes.remove(temp)
 
 
+def test_use_modifiers_refuses_an_object_the_view_layer_does_not_evaluate():
+    # A trial's: in an excluded collection its base mesh was computed without a word, even
+    # under a Subdivision Surface modifier that the topology check refuses.
+    api = addon_module("api")
+    ob = import_obj("suzanne.obj")
+    ob.modifiers.new("deform", "SIMPLE_DEFORM").factor = 1.5
+    hidden = bpy.data.collections.new("hidden")
+    bpy.context.scene.collection.children.link(hidden)
+    hidden.objects.link(ob)
+    bpy.context.scene.collection.objects.unlink(ob)
+    bpy.context.view_layer.layer_collection.children["hidden"].exclude = True
+    before = snapshot(ob.data)
+    with pytest.raises(api.UserError, match="suzanne is not evaluated in this view layer"):
+        api.compute_object(ob, rays=4, use_modifiers=True)
+    assert snapshot(ob.data) == before
+    assert api.compute_object(ob, rays=4).object_name == "suzanne"  # its base mesh, as asked
+
+
+def test_modifiers_and_shape_keys_left_out_are_named_in_a_warning():
+    # A trial's: a mirror-modelled half and a cube flattened by a shape key were measured as
+    # their base meshes with no word that the viewport shows something else.
+    api = addon_module("api")
+    half = import_obj("suzanne.obj")
+    half.modifiers.new("Mirror", "MIRROR")
+    half.modifiers.new("Normals", "WEIGHTED_NORMAL")  # keeps the shape: not named
+    keyed = uv_sphere(segments=16, rings=8)
+    keyed.shape_key_add(name="Basis")
+    keyed.shape_key_add(name="Flat").value = 0.0
+    plain = uv_sphere(segments=16, rings=8)
+    results = api.compute_objects([half, keyed, plain], rays=4)
+    assert [w for w in results[0].warnings if "left out" in w] == [
+        "suzanne: its modifiers (Mirror) change its shape in the viewport and are left out "
+        "(Use Modifiers is off): the values are those of its base mesh"]
+    assert not any("left out" in w for r in results[1:] for w in r.warnings)  # key at 0
+    keyed.data.shape_keys.key_blocks["Flat"].value = 0.5
+    result = api.compute_object(keyed, rays=4)
+    assert any("its shape keys change its shape" in w for w in result.warnings)
+    assert not any("left out" in w for w in api.compute_object(keyed, rays=4, use_modifiers=True).warnings)
+
+
 def test_every_selected_mesh_and_a_shared_mesh():
     sphere = uv_sphere(segments=32, rings=16)
     suzanne = import_obj("suzanne.obj")
@@ -329,6 +371,18 @@ def test_the_api_says_what_it_skipped_as_the_operator_does():
     assert results[1].warnings == [results[0].warnings[0], shared]
     assert results[0].warnings == [results[0].warnings[0]]
     assert results[1].shared_by == ["twin"]
+
+
+def test_what_is_not_a_mesh_is_named_with_how_to_make_it_one():
+    api = addon_module("api")
+    instance = bpy.data.objects.new("Inst", None)
+    instance.instance_type = "COLLECTION"
+    instance.instance_collection = bpy.data.collections.new("kit")
+    curve = bpy.data.objects.new("Path", bpy.data.curves.new("Path", "CURVE"))
+    with pytest.raises(api.UserError) as caught:
+        api.compute_objects([instance, curve])
+    assert str(caught.value) == ("Not a mesh: Inst (a collection instance: Make Instances Real "
+                                 "first), Path (curve: convert it to a mesh first)")
 
 
 def test_a_shared_mesh_is_computed_from_the_active_object():

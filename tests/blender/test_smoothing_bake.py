@@ -126,6 +126,19 @@ def test_bake_replaces_the_image_and_keeps_its_users():
     assert tuple(node.image.size) == (64, 64) and node.image.is_float
 
 
+def test_a_baked_image_survives_saving_the_file(tmp_path):
+    # A trial's: the new image had no user, and a save and reload dropped it.
+    ob = import_obj("spot.obj")
+    assert run(rays=8, bake_image=True, texture_size=32) == {"FINISHED"}
+    image = bpy.data.images["spot_sdf"]
+    assert image.use_fake_user and image.colorspace_settings.name == "Non-Color"
+    expected = image_pixels(image)
+    path = str(tmp_path / "baked.blend")
+    bpy.ops.wm.save_as_mainfile(filepath=path)
+    bpy.ops.wm.open_mainfile(filepath=path)
+    np.testing.assert_array_equal(image_pixels(bpy.data.images["spot_sdf"]), expected)
+
+
 def test_bake_through_a_chosen_uv_map_and_the_api():
     api = addon_module("api")
     ob = import_obj("spot.obj")
