@@ -168,6 +168,7 @@ py::dict compute(const Doubles& vertices, const Int64s& triangles, int rays, dou
   result["fill"] = fill_name(out.fill);
   result["engine"] = out.engine;
   result["device_bytes"] = out.device_bytes;
+  result["near_cutoff"] = out.near_cutoff;
   result["flipped_faces"] = out.orientation.flipped_faces;
   result["parts"] = out.orientation.parts;
   // Which faces were reversed (None when none was): what runs on the caller's arrays after

@@ -361,8 +361,10 @@ Output compute(Mesh mesh, const Options& options, const ProgressFn& progress,
 #endif
   // A mesh far from unit size is computed scaled by a power of two (unit_scale.h).
   const int exponent = unit_scale_exponent(mesh.max_extent);
+  const float near_cutoff = minimum_closeness(mesh);  // in the caller's units
   if (exponent != 0) scale_mesh(mesh, exponent, options.threads);
   Output out;
+  out.near_cutoff = near_cutoff;
   Stopwatch clock;
   // The first OpenCL run of a process loads the drivers and lists their devices (50-130 ms
   // on the development machine's PoCL).

@@ -56,6 +56,7 @@ struct Output {
   FillResult fill = FillResult::NothingToFill;
   std::string engine;                      // what ran, e.g. "cpu (2 threads, bvh)"
   std::uint64_t device_bytes = 0;          // OpenCL buffers on the device (0 on the CPU)
+  float near_cutoff = 0.0f;                // hits nearer than this are ignored (input units)
   OrientationReport orientation;           // faces the computation reversed
   // Faces with a reversed twin, in the caller's winding (Options::find_twins). When there are
   // any, the computation stopped on finding them: raw and valid_rays are empty.

@@ -73,6 +73,12 @@ class Result:
     smoothed on is `triangles` with those faces' corners swapped, e.g.
     `t = triangles.copy(); t[r.reversed_faces] = t[r.reversed_faces][:, [0, 2, 1]]`:
     smooth(vertices, t, r.raw, ...) then gives compute()'s smoothing (where twin_faces is 0)."""
+    near_cutoff: float = 0.0
+    """Hits nearer than this (in mesh units) were ignored: 2e-5 of the largest side of the
+    whole mesh's bounding box (paper 4.2; it lets self-intersecting meshes work). A part
+    thinner than a few times this, in a mesh much larger than it, measures high or keeps no
+    ray: compute it apart. `raw < 4 * near_cutoff` (where valid_rays > 0) marks values
+    within its reach."""
     twin_faces: int = 0
     """Faces of a double-sided mesh left out of the cast: a face is, when the lowest-index
     face at its three positions is wound the other way and every face of its part (faces
@@ -401,6 +407,7 @@ def compute(
             points=points,
             rays=int(rays),
             device_memory=int(out["device_bytes"]),
+            near_cutoff=float(out["near_cutoff"]),
             flipped_faces=int(out["flipped_faces"]),
             reversed_faces=out["reversed"],
         )

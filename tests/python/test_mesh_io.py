@@ -464,9 +464,11 @@ def test_ply_obj_and_off_give_the_coordinates_back_exactly(tmp_path, case, suffi
 
 
 @pytest.mark.parametrize("suffix", [".glb", ".stl"])
-@pytest.mark.parametrize("case", ["utm", "1e8"])
+@pytest.mark.parametrize("case", ["utm", "1e8", "1e6"])
 def test_glb_and_stl_warn_when_32_bit_floats_move_the_vertices(tmp_path, case, suffix):
-    vertices, triangles = _sphere(*FAR_AND_SMALL[case])
+    # 1e6: a sphere 0.25 wide, whose vertices move by up to an eighth of it (a trial's read
+    # 'as much as the mesh is wide').
+    vertices, triangles = _sphere(*FAR_AND_SMALL.get(case, (0.125, (1e6, 0.0, 0.0))))
     path = tmp_path / f"out{suffix}"
     with pytest.warns(RuntimeWarning) as caught:
         save_colored(path, vertices, triangles, _colours(len(triangles), 5))
@@ -474,10 +476,12 @@ def test_glb_and_stl_warn_when_32_bit_floats_move_the_vertices(tmp_path, case, s
     message = str(caught[0].message)
     assert message.startswith(f"{path}: {suffix[1:].upper()} holds 32-bit float coordinates")
     assert "write .ply, .off or .obj to keep them exactly" in message
-    # A unit sphere at 1e8 collapses onto a few float32 values: said so, not as a share
-    # ("1 of the mesh's size", a trial found unclear); at UTM northings it moves a little.
-    if case == "1e8":
-        assert "as much as the mesh is wide: its shape is lost" in message, message
+    # A unit sphere at 1e8 collapses onto a few float32 values: said so, with the share as a
+    # percentage ("1 of the mesh's size", a trial found unclear); at UTM northings it moves a
+    # little.
+    if case in ("1e8", "1e6"):  # half and an eighth of the mesh's width
+        share = {"1e8": "50%", "1e6": "1[0-9]%"}[case]
+        assert re.search(rf"\({share} of the mesh's size: its shape is lost\)", message), message
     else:
         assert re.search(r"vertices move by up to [0-9.e-]+ units \([0-9.e-]+ of the mesh's "
                          r"size\)", message), message
