@@ -103,6 +103,12 @@ def few_rays_kept(valid_rays, rays, orientation):
     return load().api.few_rays_kept(valid_rays, rays, orientation)
 
 
+def parts_near_the_cutoff(vertices, triangles, result):
+    """The core's words for parts much smaller than the mesh whose values the near-hit cutoff
+    reaches (they read high), or None: shape_diameter.api.parts_near_the_cutoff."""
+    return load().api.parts_near_the_cutoff(vertices, triangles, result)
+
+
 def uv_faces_outside(uvs):
     """Faces whose UVs (m, 3, 2) lie wholly outside the [0, 1] square: a bake leaves them out."""
     return load().smoothing.uv_faces_outside(uvs)

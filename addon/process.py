@@ -624,6 +624,9 @@ def compute(tasks, options, progress=None, cancelled=None):
             few = core.few_rays_kept(result.valid_rays, options.rays, options.orientation)
             if few:
                 task.warnings.append(f"{task.object_name}: {few}")
+            near = core.parts_near_the_cutoff(mesh.vertices, mesh.triangles, result)
+            if near:
+                task.warnings.append(f"{task.object_name}: {near}")
         task.colors = core.colors(task.normalized) if options.color_name else None
         if loose is not None and task.colors is not None:
             task.colors[loose] = 0.0  # transparent black: a colour the map never gives

@@ -20,6 +20,7 @@
 #include "bvh.h"
 #include "bvh_stats.h"
 #include "normalize.h"
+#include "orientation_parts.h"
 #include "parallel.h"
 #include "python_cast_points.h"
 #include "python_progress.h"
@@ -458,6 +459,37 @@ PYBIND11_MODULE(_core, m) {
         }
         return py::make_tuple(values.not_finite, values.first_not_finite, values.min_index,
                               values.max_index);
+      },
+      py::arg("vertices"), py::arg("triangles"), py::arg("threads") = 0);
+  // Per face its part (faces joined through shared vertex positions: orientation's parts,
+  // orientation_parts.h) and per part the largest side of its bounding box: for compute()'s
+  // check of parts the near-hit cutoff, set by the whole mesh, reaches.
+  m.def(
+      "mesh_parts",
+      [](const Doubles& vertices, const Int64s& triangles, unsigned threads) {
+        const sdf::Mesh mesh = to_mesh(vertices, triangles, threads);
+        sdf::Parts parts;
+        std::vector<double> extents;
+        {
+          py::gil_scoped_release release;
+          parts = sdf::find_parts(mesh, threads);
+          std::vector<glm::vec3> lo(parts.count, glm::vec3(INFINITY));
+          std::vector<glm::vec3> hi(parts.count, glm::vec3(-INFINITY));
+          for (std::size_t v = 0; v < mesh.vertices.size(); ++v) {
+            const std::uint32_t part = parts.part_of_root[parts.root_of_vertex[v]];
+            if (part == sdf::kNoPart) continue;
+            lo[part] = glm::min(lo[part], mesh.vertices[v]);
+            hi[part] = glm::max(hi[part], mesh.vertices[v]);
+          }
+          extents.resize(parts.count);
+          for (std::size_t p = 0; p < parts.count; ++p) {
+            const glm::vec3 side = hi[p] - lo[p];
+            extents[p] = std::max({side.x, side.y, side.z});
+          }
+        }
+        return py::make_tuple(
+            py::array_t<std::uint32_t>(parts.part_of.size(), parts.part_of.data()),
+            py::array_t<double>(extents.size(), extents.data()));
       },
       py::arg("vertices"), py::arg("triangles"), py::arg("threads") = 0);
   m.attr("MAX_RAYS") = sdf::kMaxRays;

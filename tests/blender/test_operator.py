@@ -2,9 +2,11 @@
 """object.shape_diameter on real meshes: what it writes, against the Python package on the
 same triangles and against the analytic sphere."""
 
+import bmesh
 import bpy
 import numpy as np
 import pytest
+from mathutils import Matrix
 import shape_diameter
 from helpers import (
     addon_module,
@@ -307,6 +309,27 @@ def test_modifiers_and_shape_keys_left_out_are_named_in_a_warning():
     result = api.compute_object(keyed, rays=4)
     assert any("its shape keys change its shape" in w for w in result.warnings)
     assert not any("left out" in w for w in api.compute_object(keyed, rays=4, use_modifiers=True).warnings)
+
+
+def test_a_thin_part_far_from_the_rest_is_warned_of():
+    # The core's warning, as the add-on words it: a 1 mm plate and a ball 60 m away in one
+    # object; hits nearer than 2e-5 of the object's size (1.2 mm) are ignored.
+    api = addon_module("api")
+    me = bpy.data.meshes.new("scene")
+    bm = bmesh.new()
+    bmesh.ops.create_cube(bm, size=1.0)
+    bmesh.ops.subdivide_edges(bm, edges=bm.edges[:], cuts=7, use_grid_fill=True)
+    bmesh.ops.scale(bm, vec=(1.0, 1.0, 0.001), verts=bm.verts[:])
+    bmesh.ops.create_icosphere(bm, subdivisions=2, radius=0.25,
+                               matrix=Matrix.Translation((60.0, 0.0, 0.0)))
+    bm.to_mesh(me)
+    bm.free()
+    ob = bpy.data.objects.new("scene", me)
+    bpy.context.scene.collection.objects.link(ob)
+    with pytest.warns(RuntimeWarning, match="near-hit cutoff"):  # the core's own
+        result = api.compute_object(ob)
+    near = [w for w in result.warnings if "near-hit cutoff" in w]
+    assert len(near) == 1 and near[0].startswith("scene: 1 of the mesh's 2 parts")
 
 
 def test_every_selected_mesh_and_a_shared_mesh():
