@@ -258,6 +258,8 @@ Mesh copy_mesh(const Mesh& mesh, unsigned threads) {
   return copy;
 }
 
-float minimum_closeness(const Mesh& mesh) { return static_cast<float>(2e-5 * mesh.max_extent); }
+float minimum_closeness(const Mesh& mesh) {
+  return static_cast<float>(kNearCutoffShare * mesh.max_extent);
+}
 
 }  // namespace sdf

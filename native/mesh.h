@@ -72,9 +72,10 @@ inline glm::vec3 face_area_normal(const Mesh& mesh, std::size_t face) {
   return glm::cross(mesh.vertices[t.y] - v0, mesh.vertices[t.z] - v0);
 }
 
-// The shortest ray hit kept, 2e-5 of the largest bounding-box side (paper 4.2): it stops a ray
-// from hitting the surface it starts on, and lets self-intersecting and non-manifold meshes
-// work. In the engines' (centred) units, which equal input units.
+// The shortest ray hit kept, kNearCutoffShare of the largest bounding-box side (paper 4.2): it
+// stops a ray from hitting the surface it starts on, and lets self-intersecting and
+// non-manifold meshes work. In the engines' (centred) units, which equal input units.
+constexpr double kNearCutoffShare = 2e-5;
 float minimum_closeness(const Mesh& mesh);
 
 // A copy of `mesh`, made on `threads` (0 = every core): one thread copies a million faces'

@@ -13,10 +13,6 @@
 
 namespace sdf {
 
-struct PartBox {
-  glm::dvec3 lo{1e300}, hi{-1e300};
-};
-
 // Per part, the innermost other part that encloses it, or kNoPart. `volume` is each part's
 // signed volume, `encloser[p]` whether part p can enclose (its volume clearly non-zero); it
 // also needs 4 faces or more. P lies inside Q when Q encloses more volume than P (or as much,

@@ -5,6 +5,8 @@
 #include <atomic>
 #include <cstring>
 
+#include <glm/glm.hpp>
+
 #include "concurrent_union_find.h"
 #include "parallel.h"
 #include "prefetch.h"
@@ -125,6 +127,37 @@ Parts find_parts(const Mesh& mesh, unsigned threads) {
     parts.part_of[f] = previous_part;
   }
   return parts;
+}
+
+std::vector<PartBox> part_boxes(const Mesh& mesh, const Parts& parts, unsigned threads) {
+  const std::size_t nv = mesh.vertices.size();
+  auto add_vertices = [&](std::vector<PartBox>& boxes, std::size_t begin, std::size_t end) {
+    for (std::size_t v = begin; v < end; ++v) {
+      const std::uint32_t part = parts.part_of_root[parts.root_of_vertex[v]];
+      if (part == kNoPart) continue;
+      const glm::dvec3 p(mesh.vertices[v]);
+      boxes[part].lo = glm::min(boxes[part].lo, p);
+      boxes[part].hi = glm::max(boxes[part].hi, p);
+    }
+  };
+  const std::size_t chunks = (nv + kGrain - 1) / kGrain;
+  std::vector<PartBox> boxes(parts.count);
+  if (parts.count > 64 || chunks < 2) {
+    add_vertices(boxes, 0, nv);
+    return boxes;
+  }
+  std::vector<std::vector<PartBox>> chunk_boxes(chunks);
+  parallel_for(nv, kGrain, threads, [&](std::size_t begin, std::size_t end) {
+    std::vector<PartBox>& mine = chunk_boxes[begin / kGrain];
+    mine.resize(parts.count);
+    add_vertices(mine, begin, end);
+  });
+  for (const std::vector<PartBox>& chunk : chunk_boxes)
+    for (std::size_t p = 0; p < parts.count; ++p) {
+      boxes[p].lo = glm::min(boxes[p].lo, chunk[p].lo);
+      boxes[p].hi = glm::max(boxes[p].hi, chunk[p].hi);
+    }
+  return boxes;
 }
 
 }  // namespace sdf

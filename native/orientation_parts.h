@@ -6,6 +6,8 @@
 #include <cstdint>
 #include <vector>
 
+#include <glm/glm.hpp>
+
 #include "mesh.h"
 #include "uninitialized_vector.h"
 
@@ -26,5 +28,15 @@ struct Parts {
 // Linear expected time, parallel over `threads` (0 = every core); the result does not depend
 // on the thread count.
 Parts find_parts(const Mesh& mesh, unsigned threads);
+
+struct PartBox {
+  glm::dvec3 lo{1e300}, hi{-1e300};
+};
+
+// Bounding box of each part's face corners, from the vertices (read in order, where the
+// corners would be read scattered): the vertices of a part lie at its corners' positions.
+// Min and max are exact, so the chunks' boxes merge to the same box in any order; with many
+// parts (more than a box per part per chunk would hold cheaply) one serial pass does it.
+std::vector<PartBox> part_boxes(const Mesh& mesh, const Parts& parts, unsigned threads);
 
 }  // namespace sdf

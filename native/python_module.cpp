@@ -473,18 +473,9 @@ PYBIND11_MODULE(_core, m) {
         {
           py::gil_scoped_release release;
           parts = sdf::find_parts(mesh, threads);
-          std::vector<glm::vec3> lo(parts.count, glm::vec3(INFINITY));
-          std::vector<glm::vec3> hi(parts.count, glm::vec3(-INFINITY));
-          for (std::size_t v = 0; v < mesh.vertices.size(); ++v) {
-            const std::uint32_t part = parts.part_of_root[parts.root_of_vertex[v]];
-            if (part == sdf::kNoPart) continue;
-            lo[part] = glm::min(lo[part], mesh.vertices[v]);
-            hi[part] = glm::max(hi[part], mesh.vertices[v]);
-          }
-          extents.resize(parts.count);
-          for (std::size_t p = 0; p < parts.count; ++p) {
-            const glm::vec3 side = hi[p] - lo[p];
-            extents[p] = std::max({side.x, side.y, side.z});
+          for (const sdf::PartBox& box : sdf::part_boxes(mesh, parts, threads)) {
+            const glm::dvec3 side = box.hi - box.lo;
+            extents.push_back(std::max({side.x, side.y, side.z}));
           }
         }
         return py::make_tuple(
@@ -493,5 +484,6 @@ PYBIND11_MODULE(_core, m) {
       },
       py::arg("vertices"), py::arg("triangles"), py::arg("threads") = 0);
   m.attr("MAX_RAYS") = sdf::kMaxRays;
+  m.attr("NEAR_CUTOFF_SHARE") = sdf::kNearCutoffShare;
   bind_smoothing(m);
 }

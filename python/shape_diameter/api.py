@@ -475,9 +475,9 @@ def few_rays_kept(valid_rays, rays, orientation) -> Optional[str]:
 # A part is within the near-hit cutoff's reach when half its measured values lie under this
 # many times Result.near_cutoff; it is worth a word only when it could enclose a volume (4
 # faces or more) and is much smaller than the whole mesh (under this share of its largest
-# side), so that computing it on its own, with a cutoff of its own size, helps. Per part: scattered faces of ordinary models come that near
-# (13 of Suzanne's 968 as Blender triangulates her, 235 of ogre's 124k faces), whole parts
-# do not.
+# side), so that computing it on its own, with a cutoff of its own size, helps. Per part:
+# scattered faces of ordinary models come that near (13 of Suzanne's 968 as Blender
+# triangulates her, 235 of ogre's 124k faces), whole parts do not.
 NEAR_CUTOFF_FACTOR = 4.0
 SMALL_PART = 0.25
 
@@ -501,7 +501,7 @@ def parts_near_the_cutoff(vertices, triangles, result, threads=0) -> Optional[st
     measured = (valid > 0) & (point_part >= 0)
     counts = np.bincount(point_part[measured], minlength=len(extents))
     near = np.bincount(point_part[measured & (raw < bound)], minlength=len(extents))
-    width = result.near_cutoff / 2e-5
+    width = result.near_cutoff / _core.NEAR_CUTOFF_SHARE  # the whole mesh's largest side
     # Parts of 4 faces or more: fewer enclose nothing (a stray triangle has no thickness of
     # its own to lose; a soup of them would be all parts).
     solid = np.bincount(face_part, minlength=len(extents)) >= 4
