@@ -97,21 +97,11 @@ def has(name):
         return False
 
 
-def few_rays_kept(valid_rays, rays, orientation):
-    """The core's words for a run whose points kept few of their rays (an inside-out mesh
-    trusted as wound, ...), or None: shape_diameter.api.few_rays_kept."""
-    return load().api.few_rays_kept(valid_rays, rays, orientation)
-
-
-def parts_near_the_cutoff(vertices, triangles, result):
-    """The core's words for parts much smaller than the mesh whose values the near-hit cutoff
-    reaches (they read high), or None: shape_diameter.api.parts_near_the_cutoff."""
-    return load().api.parts_near_the_cutoff(vertices, triangles, result)
-
-
-def uv_faces_outside(uvs):
-    """Faces whose UVs (m, 3, 2) lie wholly outside the [0, 1] square: a bake leaves them out."""
-    return load().smoothing.uv_faces_outside(uvs)
+def collect_warnings():
+    """A context manager: the core's warnings raised inside, on this thread, go into the list
+    it gives instead of being printed (shape_diameter.collect_warnings: unlike
+    warnings.catch_warnings, safe on the add-on's worker thread)."""
+    return load().collect_warnings()
 
 
 def cpu_threads():

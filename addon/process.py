@@ -551,11 +551,15 @@ def compute(tasks, options, progress=None, cancelled=None):
         loose = None  # vertex values: the vertices in no face
         # Smoothing, when chosen, is the core's too: compute() casts, then smooths
         # (Result.values; Result.raw keeps the values as cast).
+        # The core's warnings (few rays kept, parts the near-hit cutoff reaches, no value
+        # anywhere, ...) are the object's, each said once: kept, not also printed.
         try:
-            result = core.compute(mesh.vertices, mesh.triangles, compute_options, step,
-                                  task.corner_uvs)
+            with core.collect_warnings() as caught:
+                result = core.compute(mesh.vertices, mesh.triangles, compute_options, step,
+                                      task.corner_uvs)
         except ValueError as ex:  # the core refused this mesh: say which object it was
             raise UserError(f"{task.object_name}: {ex}") from ex
+        task.warnings.extend(f"{task.object_name}: {message}" for message in caught)
         if options.points == "faces":
             task.values = polygon_means(result.values, mesh)
             task.normalized = core.normalize(task.values, options.normalize)
@@ -587,46 +591,25 @@ def compute(tasks, options, progress=None, cancelled=None):
                 if options.points == "faces"
                 else task.normalized
             )
-            task.image = core.bake(
-                mesh.vertices,
-                mesh.triangles,
-                per_point,
-                options.points,
-                task.corner_uvs,
-                options.texture_size,
-                radius,
-                options.bake_margin,
-                step,
-                # The engine and threads the user chose for the cast (it ran on 'auto'
-                # whatever was chosen).
-                engine=options.engine,
-                threads=int(options.extra.get("threads") or 0),
-            )
-            task.timings["bake"] = time.perf_counter() - started
-            # Faces whose UVs lie wholly outside [0, 1] are left out of the image (the image
-            # came out empty for a UDIM layout, without a word). Counted here rather than by
-            # catching the core's warning: warnings.catch_warnings is process-wide, and this
-            # runs on a worker thread.
-            outside = core.uv_faces_outside(task.corner_uvs)
-            if outside > 0.01 * len(mesh.triangles):
-                task.warnings.append(
-                    f"{task.object_name} (bake): {outside} of {len(mesh.triangles)} faces have "
-                    "UVs wholly outside the [0, 1] square (UDIM tiles or an offset layout) and "
-                    "are left out of the image; move each tile's UVs into the square"
+            with core.collect_warnings() as caught:  # e.g. faces whose UVs it leaves out
+                task.image = core.bake(
+                    mesh.vertices,
+                    mesh.triangles,
+                    per_point,
+                    options.points,
+                    task.corner_uvs,
+                    options.texture_size,
+                    radius,
+                    options.bake_margin,
+                    step,
+                    # The engine and threads the user chose for the cast (it ran on 'auto'
+                    # whatever was chosen).
+                    engine=options.engine,
+                    threads=int(options.extra.get("threads") or 0),
                 )
+            task.warnings.extend(f"{task.object_name} (bake): {message}" for message in caught)
+            task.timings["bake"] = time.perf_counter() - started
         task.valid_rays = result.valid_rays
-        if len(result.valid_rays) and not np.any(result.valid_rays):
-            task.warnings.append(
-                f"{task.object_name}: no ray found the other side of the mesh (is it open, "
-                "flat or inside out?); every value is 0"
-            )
-        else:
-            few = core.few_rays_kept(result.valid_rays, options.rays, options.orientation)
-            if few:
-                task.warnings.append(f"{task.object_name}: {few}")
-            near = core.parts_near_the_cutoff(mesh.vertices, mesh.triangles, result)
-            if near:
-                task.warnings.append(f"{task.object_name}: {near}")
         task.colors = core.colors(task.normalized) if options.color_name else None
         if loose is not None and task.colors is not None:
             task.colors[loose] = 0.0  # transparent black: a colour the map never gives

@@ -13,9 +13,11 @@ from .api import Result, compute, cone_rays, engines, reduce_lengths, sample_poi
 from .load import load_mesh
 from .normalization import normalize_values as normalize
 from .smoothing import smooth
+from .warning_log import collect_warnings
 
 __all__ = [
     "Result",
+    "collect_warnings",
     "compute",
     "cone_rays",
     "engines",

@@ -4,7 +4,6 @@
 from __future__ import annotations
 
 import time
-import warnings
 from dataclasses import dataclass, field
 from typing import Callable, Optional
 
@@ -20,6 +19,7 @@ from .smoothing import (
     run_with_fallback,
     unit_scale_exponent,
 )
+from .warning_log import recorded, warn
 
 SAMPLINGS = ("fibonacci", "random", "cgal")
 POINTS = ("faces", "vertices")
@@ -87,6 +87,10 @@ class Result:
     coincident walls and keeps either. Each takes that face's values, and a vertex only such
     faces use the value of the twin's vertex at its position. Orientation and smoothing ran
     on the mesh without them (they are never in reversed_faces)."""
+    warnings: list = field(default_factory=list)
+    """The messages of the warnings compute() gave (also issued as RuntimeWarnings, unless
+    inside collect_warnings()), in order: few rays kept, parts the near-hit cutoff reaches, an
+    'auto' engine on the CPU, ..."""
 
 
 def engines() -> list:
@@ -116,11 +120,7 @@ def _resolve_engine(engine: str) -> str:
     if any(d["type"] == "GPU" for d in _core.opencl_devices()):
         return "opencl"
     if _core.opencl_gpu_lost_to_fork():  # a fork-started worker: it hung (a trial's Pool)
-        warnings.warn(
-            f"engine='auto' runs on the CPU: {_core.opencl_unavailable_reason()}",
-            RuntimeWarning,
-            stacklevel=3,
-        )
+        warn(f"engine='auto' runs on the CPU: {_core.opencl_unavailable_reason()}", stacklevel=3)
     return "cpu"
 
 
@@ -219,6 +219,7 @@ def _fallback_line(failed, failure):
     return None if failure is None else f"{failed} failed: {failure}".splitlines()[0]
 
 
+@recorded
 def compute(
     vertices,
     triangles,
@@ -286,7 +287,9 @@ def compute(
 
     Points where no ray was kept (zero-area faces, rays escaping an open mesh, ...) take the
     mean of their neighbours' values (valid_rays == 0 marks them). Raises ValueError for bad
-    input; the GIL is released while native code runs.
+    input; the GIL is released while native code runs. Warnings (few rays kept, ...) are
+    issued as RuntimeWarnings and kept in Result.warnings (collect_warnings() keeps them from
+    being issued).
     """
     start = time.perf_counter()
     _check_integer("threads", threads, 0, 4096)  # first: the mesh's checks run on them
@@ -352,10 +355,9 @@ def compute(
         if prepare_failure:
             raise prepare_failure[0]
         if out["fill"] == "no-value-anywhere":
-            warnings.warn(
+            warn(
                 "no ray of any point found the other side of the mesh (is it open, flat or "
                 "inside out?); every value is 0 and valid_rays is 0 everywhere",
-                RuntimeWarning,
                 stacklevel=3,
             )
         timings = dict(out["timings"])
@@ -437,7 +439,7 @@ def compute(
                                t if points == "vertices" else None)
         message = parts_near_the_cutoff(v, t, result, int(threads))
         if message:
-            warnings.warn(message, RuntimeWarning, stacklevel=2)
+            warn(message, stacklevel=2)
     clock = time.perf_counter()
     # The core's own values (finite, >= 0, float32): normalize_values' checks would only cost
     # time (1 ms a million values).
@@ -528,7 +530,7 @@ def _warn_if_few_rays_kept(valid_rays, rays, orientation, triangles=None):
         valid_rays = valid_rays[used]
     message = few_rays_kept(valid_rays, rays, orientation)
     if message:
-        warnings.warn(message, RuntimeWarning, stacklevel=3)
+        warn(message, stacklevel=3)
 
 
 class _Twins:

@@ -29,7 +29,6 @@ from __future__ import annotations
 
 import io
 import os
-import warnings
 
 import numpy as np
 import trimesh
@@ -38,6 +37,7 @@ from .gltf_checks import check_gltf
 from .gltf_order import json_header, mesh_nodes_in_file_order
 from .mesh_file_checks import check_complete, check_suffix, format_name, off_sections
 from .output_files import written_whole
+from .warning_log import warn
 
 # Formats ``save_colored`` writes. PLY, OBJ and OFF go through our own writers: trimesh's
 # PLY holds float32 coordinates, its OBJ 8 fixed decimals, and its OFF drops colours. STL has
@@ -546,11 +546,10 @@ def _warn_if_float32_moves(path: str, vertices: np.ndarray) -> None:
             share = f"{moved / size:.0%} of the mesh's size: its shape is lost"
         else:  # e.g. a unit cube at 1e8: every corner lands on one float32
             share = "as much as the mesh is wide: its shape is lost"
-        warnings.warn(
+        warn(
             f"{path}: {format_name(os.path.splitext(path)[1].lower())} holds 32-bit float "
             f"coordinates: vertices move by up to {moved:.3g} units ({share}); write .ply, "
             ".off or .obj to keep them exactly",
-            RuntimeWarning,
             stacklevel=3,
         )
 

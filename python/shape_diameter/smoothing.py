@@ -13,13 +13,13 @@ rounding). Options are checked before any work and a wrong one raises ValueError
 from __future__ import annotations
 
 import math
-import warnings
 from typing import Callable, NamedTuple, Optional
 
 import numpy as np
 
 from . import _core
 from .normalization import check_finite_float32, check_threads
+from .warning_log import warn
 
 METHODS = ("none", "kring", "projected", "texture")
 
@@ -186,9 +186,8 @@ def smooth(
         chosen, engine,
     )  # fmt: skip
     if failure is not None:
-        warnings.warn(
+        warn(
             f"smoothing on {chosen} failed ({str(failure).splitlines()[0]}); ran on the CPU",
-            RuntimeWarning,
             stacklevel=2,
         )
     return out
@@ -427,21 +426,19 @@ def run_checked(v, t, values, points, method, o, threads, progress, engine="cpu"
         reach = ("the image leaves them out and texture smoothing does not reach them (they "
                  "keep their values)" if o["return_image"] else
                  "texture smoothing does not reach them and they keep their values")
-        warnings.warn(
+        warn(
             f"{out['faces_outside']} of {len(t)} faces have UVs wholly outside the [0, 1] "
             f"square (UDIM tiles or an offset layout): {reach}; move each tile's UVs into the "
             "square to include them",
-            RuntimeWarning,
             stacklevel=stacklevel,
         )
     if out["kept_off_device"]:
         width, height = o["texture_size"]
-        warnings.warn(
+        warn(
             f"texture smoothing ran on the CPU threads, not on {engine}: a face's UVs span "
             f"more than 65536 texels at {width} x {height} (a device walks each face in one "
             "work item; wrap-around faces of a spherical layout do this); the values are the "
             "same, and a smaller texture_size keeps it on the device",
-            RuntimeWarning,
             stacklevel=stacklevel,
         )
     if o["return_image"]:
