@@ -44,13 +44,16 @@ bool finite_vertex(const double* p) {
   return std::isfinite(p[0]) && std::isfinite(p[1]) && std::isfinite(p[2]);
 }
 
-// The box of the vertices the triangles use, with their marks; throws std::invalid_argument
-// naming the first index out of range. The indices are checked and the vertices they use
-// marked in one pass. A vertex no triangle uses takes no part in the box: one far away (a
-// stray point at a georeferenced mesh's origin) would otherwise set the near-hit threshold
-// and the unit scaling, and so every value (found by a new-user trial: one unused vertex 10
-// mesh widths away changed values by up to 28%, 1e5 widths away zeroed them).
-// Each block of corners marks its own bit set, merged after: marks shared by all threads
+// The box of the vertices the triangles with area use, with their marks; throws
+// std::invalid_argument naming the first index out of range. The indices are checked and the
+// vertices they use marked in one pass. A vertex no such triangle uses takes no part in the
+// box: one far away would otherwise set the near-hit threshold and the unit scaling, and so
+// every value (found by new-user trials: one unused vertex 10 mesh widths away changed values
+// by up to 28%, 1e5 widths away zeroed them; a zero-area face reaching a vertex at the origin
+// of a georeferenced building zeroed every value). Area is the exact double cross product's:
+// a face whose corners coincide or lie on one line casts nothing, and its corners count only
+// where no face has area (then every used vertex does).
+// Each block of faces marks its own bit set, merged after: marks shared by all threads
 // (atomic bytes) cost 3.3-4.6 ms on 1.21M faces on a 16-core host, most of it cache lines
 // passed between cores (a subdivided mesh's faces use its first vertices everywhere).
 struct UsedBox {
@@ -64,26 +67,63 @@ struct UsedBox {
   // pass that reads them.
   UsedBox(const double* vertices, std::size_t vertex_count, const std::int64_t* triangles,
           std::size_t triangle_count, unsigned threads, std::uint32_t* copy_to = nullptr) {
-    const std::size_t corners = 3 * triangle_count, words = (vertex_count + 63) / 64;
+    const std::size_t words = (vertex_count + 63) / 64;
+    auto point = [&](std::size_t i) {
+      return glm::dvec3(vertices[3 * i], vertices[3 * i + 1], vertices[3 * i + 2]);
+    };
     // At most 16 blocks: their sets take 16 x vertex_count / 8 bytes.
     const std::size_t blocks = std::max<std::size_t>(
-        1, std::min<std::size_t>({resolve_threads(threads), 16, corners / kGrain}));
+        1, std::min<std::size_t>({resolve_threads(threads), 16, 3 * triangle_count / kGrain}));
     std::vector<std::uint64_t> marks(blocks * words, 0);
     std::vector<std::size_t> first_bad_of(blocks, kNoItem);
-    parallel_for(blocks, 1, threads, [&](std::size_t b0, std::size_t b1) {
-      for (std::size_t b = b0; b < b1; ++b) {
-        std::uint64_t* mine = marks.data() + b * words;
-        for (std::size_t i = corners * b / blocks; i < corners * (b + 1) / blocks; ++i) {
-          const std::int64_t v = triangles[i];
-          if (v < 0 || static_cast<std::uint64_t>(v) >= vertex_count) {
-            first_bad_of[b] = i;
-            break;
+    std::vector<char> any_area_of(blocks, 0);
+    // Marks the corners of faces with area, or (every_face) of every face.
+    auto mark = [&](bool every_face) {
+      parallel_for(blocks, 1, threads, [&](std::size_t b0, std::size_t b1) {
+        for (std::size_t b = b0; b < b1; ++b) {
+          std::uint64_t* mine = marks.data() + b * words;
+          bool any_area = false;
+          const std::size_t end = triangle_count * (b + 1) / blocks;
+          for (std::size_t f = triangle_count * b / blocks; f < end; ++f) {
+            const std::int64_t* corner = triangles + 3 * f;
+            std::size_t bad = kNoItem;
+            for (std::size_t c = 0; c < 3 && bad == kNoItem; ++c)
+              if (corner[c] < 0 || static_cast<std::uint64_t>(corner[c]) >= vertex_count)
+                bad = 3 * f + c;
+            if (bad != kNoItem) {
+              first_bad_of[b] = bad;
+              break;
+            }
+            if (copy_to)
+              for (std::size_t c = 0; c < 3; ++c)
+                copy_to[3 * f + c] = static_cast<std::uint32_t>(corner[c]);
+            bool counts = every_face;
+            if (!every_face) {
+              const glm::dvec3 a = point(static_cast<std::size_t>(corner[0]));
+              const glm::dvec3 n = glm::cross(point(static_cast<std::size_t>(corner[1])) - a,
+                                              point(static_cast<std::size_t>(corner[2])) - a);
+              counts = n.x != 0.0 || n.y != 0.0 || n.z != 0.0;
+              any_area = any_area || counts;
+            }
+            if (counts)
+              for (std::size_t c = 0; c < 3; ++c) {
+                const auto v = static_cast<std::size_t>(corner[c]);
+                mine[v / 64] |= std::uint64_t{1} << (v % 64);
+              }
           }
-          mine[static_cast<std::size_t>(v) / 64] |= std::uint64_t{1} << (v % 64);
-          if (copy_to) copy_to[i] = static_cast<std::uint32_t>(v);
+          any_area_of[b] = any_area;
         }
-      }
-    });
+      });
+    };
+    mark(false);
+    const bool any_area =
+        std::any_of(any_area_of.begin(), any_area_of.end(), [](char a) { return a != 0; });
+    const bool all_checked = std::all_of(first_bad_of.begin(), first_bad_of.end(),
+                                         [](std::size_t i) { return i == kNoItem; });
+    if (!any_area && all_checked) {
+      copy_to = nullptr;  // copied already
+      mark(true);
+    }
     const std::size_t bad_index = *std::min_element(first_bad_of.begin(), first_bad_of.end());
     if (bad_index != kNoItem)
       throw std::invalid_argument("triangle " + std::to_string(bad_index / 3) +
@@ -92,9 +132,6 @@ struct UsedBox {
     // The marks merged, and per-chunk boxes merged (min and max of finite values are exact in
     // any order); chunks of whole words.
     used.resize(words);
-    auto point = [&](std::size_t i) {
-      return glm::dvec3(vertices[3 * i], vertices[3 * i + 1], vertices[3 * i + 2]);
-    };
     constexpr std::size_t kWordGrain = kGrain / 64;
     const std::size_t chunks = (words + kWordGrain - 1) / kWordGrain;
     std::vector<glm::dvec3> chunk_lo(chunks, lo), chunk_hi(chunks, hi);
@@ -215,7 +252,8 @@ Mesh make_mesh(const double* vertices, std::size_t vertex_count, const std::int6
                                 " units on an axis, more than the 1e30 that 32-bit floats "
                                 "leave room for; scale it down");
   }
-  // An unused vertex is still stored (points='vertices' gives it a value): it must fit the
+  // An unused vertex (or one only faces without area use) is still stored (points='vertices'
+  // gives it a value, and such a face's centroid is made of it): it must fit the
   // floats too, also once compute() has scaled a mesh far from unit size (unit_scale.h: a
   // tiny mesh's stray vertex would overflow; found by fuzzing).
   const double reach = std::min(1e30, std::ldexp(1e30, -unit_scale_exponent(mesh.max_extent)));
@@ -226,9 +264,9 @@ Mesh make_mesh(const double* vertices, std::size_t vertex_count, const std::int6
   });
   if (too_far != kNoItem)
     throw std::invalid_argument("vertex " + std::to_string(too_far) +
-                                ", used by no triangle, lies too far from the mesh for 32-bit "
-                                "floats (more than 1e30 units, or 1e30 times the mesh's "
-                                "width); remove it");
+                                ", used by no triangle with area, lies too far from the mesh "
+                                "for 32-bit floats (more than 1e30 units, or 1e30 times the "
+                                "mesh's width); remove it");
   mesh.vertices.resize(vertex_count);
   parallel_for(vertex_count, kGrain, threads, [&](std::size_t begin, std::size_t end) {
     for (std::size_t i = begin; i < end; ++i) mesh.vertices[i] = glm::vec3(point(i) - mesh.center);

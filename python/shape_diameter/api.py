@@ -11,6 +11,7 @@ import numpy as np
 
 from . import _core
 from .normalization import NORMALIZATIONS
+from .part_warnings import part_warnings
 from .smoothing import (
     check_smoothing,
     prepare_projected_for,
@@ -124,17 +125,29 @@ def _resolve_engine(engine: str) -> str:
     return "cpu"
 
 
+def _array(name, value, shape, rows):
+    """np.asarray(value), or ValueError naming `name` where its rows differ in length (numpy's
+    own words name no argument)."""
+    try:
+        return np.asarray(value)
+    except ValueError as error:
+        raise ValueError(f"{name} must have shape {shape}, but its rows differ in length"
+                         f"{rows}") from error
+
+
 def _check_mesh(vertices, triangles, threads=0):
     """The mesh as contiguous float64 and int64 arrays; ValueError naming what is wrong. The
     value checks run on `threads` (an already checked count, 0 = every core)."""
-    v = np.asarray(vertices)
-    t = np.asarray(triangles)
+    polygons = "polygons: triangulate them first (load_mesh does)"
+    v = _array("vertices", vertices, "(n, 3)", "")
+    t = _array("triangles", triangles, "(m, 3)", f" (of {polygons})")
     if v.ndim != 2 or v.shape[1] != 3:
         raise ValueError(f"vertices must have shape (n, 3), got {v.shape}")
     if v.dtype.kind not in "fiu":
         raise ValueError(f"vertices must be real numbers, got dtype {v.dtype}")
     if t.ndim != 2 or t.shape[1] != 3:
-        raise ValueError(f"triangles must have shape (m, 3), got {t.shape}")
+        hint = f": {t.shape[1]}-corner {polygons}" if t.ndim == 2 and t.shape[1] > 3 else ""
+        raise ValueError(f"triangles must have shape (m, 3), got {t.shape}{hint}")
     if t.dtype.kind not in "iu":
         raise ValueError(f"triangles must be integers, got dtype {t.dtype}")
     if v.shape[0] == 0:
@@ -437,8 +450,7 @@ def compute(
     if result.valid_rays.any():  # (none anywhere has its own warning)
         _warn_if_few_rays_kept(result.valid_rays, int(rays), orientation,
                                t if points == "vertices" else None)
-        message = parts_near_the_cutoff(v, t, result, int(threads))
-        if message:
+        for message in part_warnings(v, t, result, int(threads)):
             warn(message, stacklevel=2)
     clock = time.perf_counter()
     # The core's own values (finite, >= 0, float32): normalize_values' checks would only cost
@@ -471,51 +483,6 @@ def few_rays_kept(valid_rays, rays, orientation) -> Optional[str]:
         f"only {mean:.1f} of {rays} rays a point, on average, found the other side of the "
         f"mesh, and {float((valid_rays == 0).mean()):.0%} of the points none (their values "
         f"are their neighbours'): is the mesh inside out{hint}, open or flat?"
-    )
-
-
-# A part is within the near-hit cutoff's reach when half its measured values lie under this
-# many times Result.near_cutoff; it is worth a word only when it could enclose a volume (4
-# faces or more) and is much smaller than the whole mesh (under this share of its largest
-# side), so that computing it on its own, with a cutoff of its own size, helps. Per part:
-# scattered faces of ordinary models come that near (13 of Suzanne's 968 as Blender
-# triangulates her, 235 of ogre's 124k faces), whole parts do not.
-NEAR_CUTOFF_FACTOR = 4.0
-SMALL_PART = 0.25
-
-
-def parts_near_the_cutoff(vertices, triangles, result, threads=0) -> Optional[str]:
-    """What to tell a caller whose Result has parts (faces joined through shared vertices)
-    much smaller than the mesh whose values the near-hit cutoff reaches, or None: a 1 mm plate
-    beside a ball 60 m away read 1.5x high without a word (a trial's). The add-on reports the
-    same words."""
-    raw, valid = result.raw, result.valid_rays
-    bound = NEAR_CUTOFF_FACTOR * result.near_cutoff
-    if not raw.size or float(raw.min()) >= bound:
-        return None  # the common case, without the parts
-    face_part, extents = _core.mesh_parts(vertices, triangles, threads)
-    face_part = face_part.astype(np.int64)
-    if result.points == "faces":
-        point_part = face_part
-    else:  # a vertex in a part's faces; -1 for a vertex no face uses
-        point_part = np.full(len(raw), -1, dtype=np.int64)
-        point_part[np.asarray(triangles).reshape(-1)] = np.repeat(face_part, 3)
-    measured = (valid > 0) & (point_part >= 0)
-    counts = np.bincount(point_part[measured], minlength=len(extents))
-    near = np.bincount(point_part[measured & (raw < bound)], minlength=len(extents))
-    width = result.near_cutoff / _core.NEAR_CUTOFF_SHARE  # the whole mesh's largest side
-    # Parts of 4 faces or more: fewer enclose nothing (a stray triangle has no thickness of
-    # its own to lose; a soup of them would be all parts).
-    solid = np.bincount(face_part, minlength=len(extents)) >= 4
-    reached = solid & (counts > 0) & (near >= 0.5 * counts) & (extents < SMALL_PART * width)
-    if not reached.any():
-        return None
-    return (
-        f"{int(reached.sum())} of the mesh's {len(extents)} parts ({int(counts[reached].sum())} "
-        f"{result.points} measured) measure under {NEAR_CUTOFF_FACTOR:g} x the near-hit cutoff "
-        f"({result.near_cutoff:.3g} units: 2e-5 of the whole mesh's largest side, "
-        f"{width:.3g}); rays shorter than that are dropped, so their values read high. Compute "
-        "those parts on their own, where the cutoff follows their size"
     )
 
 

@@ -107,8 +107,20 @@ def test_triangles_of_a_wrong_dtype(sphere, dtype):
 
 def test_ragged_vertices_are_refused(sphere):
     _, F = sphere
-    with pytest.raises(ValueError, match=r"inhomogeneous|shape"):
+    with pytest.raises(ValueError, match=r"^vertices must have shape \(n, 3\), but its rows "
+                                         r"differ in length$"):
         shape_diameter.compute([[0.0, 0.0, 0.0], [1.0, 0.0]], F)
+
+
+def test_polygons_are_refused_with_advice():
+    # A trial's: quads mixed with triangles got numpy's words, naming no argument.
+    V = np.eye(5, 3)
+    with pytest.raises(ValueError, match=r"^triangles must have shape \(m, 3\), but its rows "
+                                         r"differ in length \(of polygons: triangulate"):
+        shape_diameter.compute(V, [[0, 1, 2, 3], [0, 1, 4]])
+    with pytest.raises(ValueError, match=r"got \(1, 4\): 4-corner polygons: triangulate them "
+                                         r"first \(load_mesh does\)$"):
+        shape_diameter.compute(V, [[0, 1, 2, 3]])
 
 
 # Positions in the flat triangle array: the first, one in the middle, the last. A validator
@@ -564,6 +576,33 @@ def test_zero_area_and_duplicated_triangles():
         assert result.raw[face] > 0
 
 
+@pytest.mark.parametrize("points", ["faces", "vertices"])
+@pytest.mark.parametrize("far", [1e3, 1e8])
+def test_zero_area_faces_reaching_far_vertices_change_nothing_else(points, far):
+    # A trial's: one face (0, 0, k) to a stray vertex far away set the near-hit cutoff and the
+    # centre (bunny00 with a vertex 1000 units off: 8.8% of faces >5% off; a building at UTM
+    # coordinates with one reaching the origin: every value 0). Now such faces' corners take
+    # no part in the box: the rest is bit for bit the clean mesh's. Three kinds: a repeated
+    # corner, three corners at one far position, corners on one line through a far point.
+    V, F = shapes.icosphere(1.0, 3)
+    n, m = len(V), len(F)
+    stray = np.array([[far, 0.0, 0.0], [far, 0.0, 0.0], [far, 0.0, 0.0], [2 * far, 0.0, 0.0]])
+    V2 = np.vstack([V, stray])
+    F2 = np.vstack([F, [[0, 0, n], [n, n + 1, n + 2], [n, n + 3, n + 2]]])
+    clean = shape_diameter.compute(V, F, points=points)
+    result = shape_diameter.compute(V2, F2, points=points)
+    assert result.near_cutoff == clean.near_cutoff
+    count = m if points == "faces" else n
+    assert np.array_equal(result.raw[:count], clean.raw)
+    if points == "faces":
+        assert (result.valid_rays[m:] == 0).all() and np.isfinite(result.raw[m:]).all()
+    # Where no face has area, every used vertex makes the box (it cannot be empty).
+    with pytest.warns(RuntimeWarning, match="no ray of any point"):
+        only = shape_diameter.compute(V2, F2[m:], points=points)
+    width = np.ptp(V2[np.unique(F2[m:])], axis=0).max()
+    assert (only.valid_rays == 0).all() and only.near_cutoff == pytest.approx(2e-5 * width)
+
+
 def test_open_mesh_fills_faces_whose_rays_all_escape():
     # Keep a dish of the sphere: the faces more than 130 degrees from +z. A ray from a face at
     # angle beta (from +z) at angle t to its inward normal meets the sphere 2t from the face's
@@ -661,6 +700,36 @@ def test_a_thin_part_in_a_large_scene_reads_high_and_is_warned_of(points):
             assert not said
 
 
+@pytest.mark.parametrize("points", ["faces", "vertices"])
+def test_a_part_that_keeps_no_ray_is_warned_of(points):
+    # A trial's: a 1 mm cube beside a 100 m slab keeps no ray (every hit within the 2 mm
+    # cutoff) and took the slab's median, 14,000x its size, without a word; so did an
+    # inside-out ball left as it was, and an open sheet beside a solid.
+    slab_v, slab_f = shapes.box(100.0, 100.0, 10.0, 2)
+    ball_v, ball_f = shapes.icosphere(1.0, 2)
+    sheet_v = np.array([[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [1.0, 1.0, 0.0]])
+    sheet_f = np.array([[0, 1, 2], [1, 3, 2], [0, 2, 1], [1, 2, 3]])  # a sheet, both sides
+    cases = {
+        "tiny": (shapes.box(0.001, 0.001, 0.001, 1), "as_is"),
+        "inside out": ((ball_v, ball_f[:, ::-1]), "as_is"),
+        "open": ((sheet_v, sheet_f), "auto"),
+    }
+    for name, ((part_v, part_f), orientation) in cases.items():
+        v = np.concatenate([slab_v, part_v + [0.0, 0.0, 20.0]])
+        f = np.concatenate([slab_f, part_f + len(slab_v)])
+        with shape_diameter.collect_warnings() as caught:
+            result = shape_diameter.compute(v, f, points=points, orientation=orientation)
+        said = [m for m in caught if "kept no ray" in m]
+        assert len(said) == 1 and said[0].startswith(
+            f"1 of the mesh's 2 parts ({len(part_f)} faces) kept no ray"), (name, caught)
+        part = slice(len(slab_f), None) if points == "faces" else slice(len(slab_v), None)
+        assert (result.valid_rays[part] == 0).all()
+    # Alone (nothing measured anywhere), the whole mesh's own warning says it, not this one.
+    with shape_diameter.collect_warnings() as caught:
+        shape_diameter.compute(ball_v, ball_f[:, ::-1], points=points, orientation="as_is")
+    assert not any("kept no ray" in m for m in caught) and caught
+
+
 def test_ordinary_models_thin_in_places_are_not_warned_of_the_cutoff():
     # Faces of real models come near the cutoff here and there (ChineseDragon: 12 of 20k
     # within 4x): only whole parts much smaller than the mesh are worth the warning.
@@ -727,8 +796,8 @@ def test_a_vertex_beyond_the_float_range_is_refused_by_name(sphere, scale, stray
     # Beyond 1e30 units, or beyond 1e30 widths of a mesh far below unit size, which compute()
     # scales up (a stray vertex of a 1e-25-wide mesh overflowed floats: found by fuzzing).
     V, F = sphere
-    with pytest.raises(ValueError, match=rf"vertex {len(V)}, used by no triangle, lies too "
-                                         r"far from the mesh for 32-bit floats"):
+    with pytest.raises(ValueError, match=rf"vertex {len(V)}, used by no triangle with area, "
+                                         r"lies too far from the mesh for 32-bit floats"):
         shape_diameter.compute(np.vstack([V * scale, [stray, 0.0, 0.0]]), F, points=points)
     # A little nearer, it takes no part.
     near = shape_diameter.compute(np.vstack([V * scale, [stray / 1e3, 0.0, 0.0]]), F,
