@@ -29,8 +29,13 @@ OrientationReport orient_auto(const Mesh& mesh, unsigned threads, bool fast_path
   OrientationReport report;
   const std::size_t n = mesh.triangles.size();
   std::vector<char> flip;
+  // Faces meet where their corners' positions do, whether or not they share the vertices: the
+  // windings agree across unwelded seams (a trial's cube with each side on vertices of its
+  // own, one side reversed, kept it so: values 0.48-5.2x), and the parts below join there.
+  UninitializedVector<std::uint32_t> same_place = weld_exact(mesh, threads);
+  const bool welds = any_shared_place(same_place, threads);
   {
-    const EdgeUses edges(mesh, threads);
+    const EdgeUses edges(mesh, threads, welds ? same_place.data() : nullptr);
     step.lap("orientation: edges");
     // Fast path: no manifold edge runs the same way in its two faces, so propagation would
     // reverse nothing (every patch already agrees).
@@ -39,7 +44,7 @@ OrientationReport orient_auto(const Mesh& mesh, unsigned threads, bool fast_path
   }
   step.lap("orientation: patches");
 
-  const Parts parts = find_parts(mesh, threads);
+  const Parts parts = find_parts(mesh, std::move(same_place), threads);
   report.parts = parts.count;
   step.lap("orientation: parts");
   const std::vector<PartBox> boxes = part_boxes(mesh, parts, threads);

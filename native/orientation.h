@@ -27,7 +27,8 @@ struct OrientationReport {
 };
 
 // Auto:
-// 1. Within each patch of faces joined by manifold edges (edges of exactly two faces), faces
+// 1. Within each patch of faces joined by manifold edges (edges of exactly two faces, an edge
+//    being its two ends' positions, so that unwelded seams and triangle soups join too), faces
 //    are made to agree with their neighbours (a shared edge runs opposite ways in two faces
 //    that agree), keeping the winding of the larger area where the patch disagrees.
 // 2. Patches that touch (share a vertex position, so unwelded seams count as touching) form a

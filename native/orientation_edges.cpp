@@ -43,7 +43,7 @@ struct UseBuckets {
 
 // Level one: parallel over blocks of faces, each writing its own ranges (bucket-major,
 // block-minor offsets).
-UseBuckets uses_by_bucket(const Mesh& mesh, unsigned threads) {
+UseBuckets uses_by_bucket(const Mesh& mesh, unsigned threads, const std::uint32_t* same_place) {
   const std::size_t n = mesh.triangles.size(), nv = mesh.vertices.size();
   UseBuckets out;
   int vertex_bits = 0;
@@ -54,7 +54,8 @@ UseBuckets uses_by_bucket(const Mesh& mesh, unsigned threads) {
       std::max<std::size_t>(1, std::min<std::size_t>(resolve_threads(threads), n / kFacesPerBlock));
   auto block_begin = [&](std::size_t b) { return n * b / blocks; };
   auto for_each_use = [&](std::size_t f, auto&& visit) {
-    const glm::uvec3 t = mesh.triangles[f];
+    glm::uvec3 t = mesh.triangles[f];
+    if (same_place) t = glm::uvec3(same_place[t.x], same_place[t.y], same_place[t.z]);
     for (std::uint32_t k = 0; k < 3; ++k) {
       const std::uint32_t a = t[k], b = t[(k + 1) % 3];
       if (a != b) visit(a, b, k);
@@ -165,11 +166,11 @@ void for_each_bucket(const UseBuckets& buckets, unsigned threads, Visit&& visit)
 
 struct EdgeUses::Buckets : UseBuckets {};
 
-EdgeUses::EdgeUses(const Mesh& mesh, unsigned threads)
+EdgeUses::EdgeUses(const Mesh& mesh, unsigned threads, const std::uint32_t* same_place)
     : buckets_(std::make_unique<Buckets>()), faces_(mesh.triangles.size()) {
   const std::size_t nv = mesh.vertices.size();
   if (faces_ == 0 || nv == 0) return;
-  static_cast<UseBuckets&>(*buckets_) = uses_by_bucket(mesh, threads);
+  static_cast<UseBuckets&>(*buckets_) = uses_by_bucket(mesh, threads, same_place);
   const std::size_t bucket_count = buckets_->offsets.size() - 1;
   // Sorted, and at once whether some pair disagrees: no scattered writes per face in the
   // common case.

@@ -25,10 +25,13 @@ struct EdgeNeighbours {
 
 // The mesh's edge uses (each face's three edges), grouped by edge once; the passes below read
 // them. Linear time and parallel over `threads` (0 = every core); no result depends on the
-// thread count.
+// thread count. same_place, when given, holds per vertex one vertex at exactly its position
+// (weld_exact, orientation_parts.h): edges are then told apart by their ends' positions, so
+// that faces on either side of an unwelded seam (a CAD export's sides, a UV seam's split
+// vertices, a triangle soup) are neighbours too.
 class EdgeUses {
  public:
-  EdgeUses(const Mesh& mesh, unsigned threads);
+  EdgeUses(const Mesh& mesh, unsigned threads, const std::uint32_t* same_place = nullptr);
   ~EdgeUses();
   EdgeUses(const EdgeUses&) = delete;
   EdgeUses& operator=(const EdgeUses&) = delete;

@@ -35,10 +35,10 @@ std::uint64_t position_hash(glm::vec3 p) {
   return h ^ (h >> 31);
 }
 
-// Per vertex, one vertex at exactly the same position, the same for all of them and its own
-// (which one depends on thread timing; only the grouping is used). A lock-free
-// open-addressing table: equal positions probe the same slots, and the first to claim an
-// empty one stands for them. A slot holds the hash's high half beside the vertex, so that a
+}  // namespace
+
+// A lock-free open-addressing table: equal positions probe the same slots, and the first to
+// claim an empty one stands for them. A slot holds the hash's high half beside the vertex, so that a
 // probe past another position rarely has to load that vertex (a cache miss on a mesh whose
 // vertex order is scattered).
 UninitializedVector<std::uint32_t> weld_exact(const Mesh& mesh, unsigned threads) {
@@ -83,12 +83,27 @@ UninitializedVector<std::uint32_t> weld_exact(const Mesh& mesh, unsigned threads
   return rep;
 }
 
-}  // namespace
+bool any_shared_place(const UninitializedVector<std::uint32_t>& same_place, unsigned threads) {
+  std::atomic<bool> any{false};
+  parallel_for(same_place.size(), kGrain, threads, [&](std::size_t begin, std::size_t end) {
+    for (std::size_t v = begin; v < end; ++v)
+      if (same_place[v] != v) {
+        any.store(true, std::memory_order_relaxed);
+        return;
+      }
+  });
+  return any.load();
+}
 
 Parts find_parts(const Mesh& mesh, unsigned threads) {
+  return find_parts(mesh, weld_exact(mesh, threads), threads);
+}
+
+Parts find_parts(const Mesh& mesh, UninitializedVector<std::uint32_t> same_place,
+                 unsigned threads) {
   const std::size_t n = mesh.triangles.size(), nv = mesh.vertices.size();
   // Vertices at one position start in one set (each points at the one standing for them).
-  ConcurrentUnionFind sets(weld_exact(mesh, threads), threads);
+  ConcurrentUnionFind sets(std::move(same_place), threads);
   parallel_for(n, kGrain, threads, [&](std::size_t begin, std::size_t end) {
     for (std::size_t first = begin; first < end; first += kBatch) {
       const std::size_t last = std::min(end, first + kBatch);

@@ -25,9 +25,20 @@ struct Parts {
   std::vector<std::uint32_t> part_of_root;
 };
 
+// Per vertex, one vertex at exactly the same position (-0 and +0 alike), the same for all of
+// them and its own (which one depends on thread timing; only the grouping is meaningful).
+// Linear expected time, parallel over `threads` (0 = every core).
+UninitializedVector<std::uint32_t> weld_exact(const Mesh& mesh, unsigned threads);
+
+// Whether some vertex shares its position with another (weld_exact's `same_place` is not the
+// identity).
+bool any_shared_place(const UninitializedVector<std::uint32_t>& same_place, unsigned threads);
+
 // Linear expected time, parallel over `threads` (0 = every core); the result does not depend
-// on the thread count.
+// on the thread count. same_place: weld_exact(mesh), when made already.
 Parts find_parts(const Mesh& mesh, unsigned threads);
+Parts find_parts(const Mesh& mesh, UninitializedVector<std::uint32_t> same_place,
+                 unsigned threads);
 
 struct PartBox {
   glm::dvec3 lo{1e300}, hi{-1e300};

@@ -9,7 +9,7 @@ import pytest
 
 import shape_diameter as sd
 from shape_diameter.mesh_io import load_mesh
-from shapes import icosphere
+from shapes import box, icosphere
 
 DATA = Path(__file__).resolve().parents[1] / "data"
 RIGHT_WAY_OUT = ["bunny00.off", "armadillo.off", "fandisk.obj", "spot.obj", "cow.obj",
@@ -51,6 +51,35 @@ def test_scattered_reversed_faces_are_put_back():
     np.testing.assert_array_equal(messy, before)  # the caller's array is untouched
     as_is = sd.compute(vertices, messy, orientation="as_is")
     assert (np.abs(as_is.raw - clean.raw) > 1e-3 * clean.raw).any()
+
+
+def test_reversed_faces_are_put_back_across_unwelded_seams():
+    # A trial's: faces meet at positions, not only at shared vertices. A triangle soup (each
+    # face on vertices of its own, as an STL or trimesh's process=False gives) and a box whose
+    # sides each have their own vertices (a CAD export), some faces reversed, were left so.
+    vertices, triangles = icosphere(1.0, 3)
+    soup_v = vertices[triangles].reshape(-1, 3)
+    soup_t = np.arange(len(soup_v)).reshape(-1, 3)
+    clean = sd.compute(soup_v, soup_t)
+    reversed_ = np.random.default_rng(5).random(len(soup_t)) < 0.1
+    messy = soup_t.copy()
+    messy[reversed_] = messy[reversed_][:, [0, 2, 1]]
+    result = sd.compute(soup_v, messy)
+    assert result.flipped_faces == reversed_.sum()
+    np.testing.assert_array_equal(result.raw, clean.raw)
+    # One side of the box, on vertices of its own, reversed: a patch of its own before.
+    box_v, box_t = box(2.0, 1.0, 1.0, 4)
+    corners = box_v[box_t]
+    side = np.isclose(corners[:, :, 0], 1.0).all(axis=1)  # the +x side
+    sides_v = np.vstack([box_v, corners[side].reshape(-1, 3)])
+    sides_t = box_t.copy()
+    sides_t[side] = len(box_v) + np.arange(3 * side.sum()).reshape(-1, 3)
+    clean = sd.compute(sides_v, sides_t)
+    messy = sides_t.copy()
+    messy[side] = messy[side][:, [0, 2, 1]]
+    result = sd.compute(sides_v, messy)
+    assert result.flipped_faces == side.sum()
+    np.testing.assert_array_equal(result.raw, clean.raw)
 
 
 @pytest.mark.parametrize("points", ["faces", "vertices"])
