@@ -15,6 +15,9 @@
 #if defined(__unix__) || defined(__APPLE__)
 #include <pthread.h>
 #endif
+#if defined(__linux__)
+#include <sched.h>
+#endif
 
 namespace sdf {
 
@@ -122,10 +125,27 @@ const bool fork_handler_set = [] {
 
 }  // namespace
 
+namespace {
+
+// The CPUs this process may run on: its affinity (taskset, a container's or a farm slot's
+// cpuset), which hardware_concurrency ignores (a trial's: a slot pinned to 1 of 2 cores ran 2
+// threads; pinned to 4 of 64, it would run 64). Read once: pinning comes at a process's start.
+unsigned available_cores() {
+#if defined(__linux__)
+  cpu_set_t set;
+  if (sched_getaffinity(0, sizeof set, &set) == 0 && CPU_COUNT(&set) > 0)
+    return static_cast<unsigned>(CPU_COUNT(&set));
+#endif
+  const unsigned cores = std::thread::hardware_concurrency();  // (more than 1024 CPUs, too)
+  return cores > 0 ? cores : 1;
+}
+
+}  // namespace
+
 unsigned resolve_threads(unsigned requested) {
   if (requested > 0) return requested;
-  unsigned cores = std::thread::hardware_concurrency();
-  return cores > 0 ? cores : 1;
+  static const unsigned cores = available_cores();
+  return cores;
 }
 
 void parallel_for(std::size_t n, std::size_t grain, unsigned threads,

@@ -286,8 +286,8 @@ def compute(
         build costs more than the slower cast; 'high' otherwise). Same values either way.
     progress: called with the fraction done in [0, 1] from the calling thread; if it raises,
         the computation stops and the exception propagates.
-    threads: CPU threads, 0 for every core (then the BVH builds beside orientation and
-        sampling, each on every core).
+    threads: CPU threads, 0 for every core the process may use (its affinity; then the BVH
+        builds beside orientation and sampling, each on every core).
     smoothing: 'none', 'kring', 'projected' or 'texture' (paper 4.4; see smooth()), applied
         to the SDF after filling: Result.values and Result.normalized are the smoothed field,
         Result.raw stays as cast. 'projected' and 'texture' run on the engine that cast (an

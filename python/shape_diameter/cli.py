@@ -51,12 +51,20 @@ class _StdoutClosed(Exception):
     input reported as failed though its files were written)."""
 
 
+class _StdoutFailed(Exception):
+    """Writing to standard output failed otherwise (a full disk behind `> file`): the run
+    stops with one line saying so (a trial saw a traceback with --json, and without it the
+    input being computed named as what failed, though its files were written)."""
+
+
 def _say(text: str) -> None:
     """A line on standard output."""
     try:
         print(text, flush=True)
     except BrokenPipeError as exc:
         raise _StdoutClosed() from exc
+    except OSError as exc:
+        raise _StdoutFailed(exc.strerror or str(exc)) from exc
 
 
 class _Parser(argparse.ArgumentParser):
@@ -255,7 +263,7 @@ def build_parser() -> argparse.ArgumentParser:
         type=_int_in(0, 4096),
         default=0,
         metavar="N",
-        help="CPU engine threads, 0 for every core (default: 0)",
+        help="CPU engine threads, 0 for every core this process may use (default: 0)",
     )
     parser.add_argument(
         "--smooth",
@@ -357,6 +365,10 @@ def main(argv=None, *, interrupts=None) -> int:
     except _StdoutClosed:
         _quiet_stdout()
         return EXIT_STDOUT_CLOSED
+    except _StdoutFailed as exc:
+        _quiet_stdout()
+        return _fail(f"standard output: cannot write ({exc}); the outputs of the inputs "
+                     "reported before were written", EXIT_ENVIRONMENT)
     finally:
         if interrupts is not None:
             interrupts.disarm()
@@ -368,6 +380,15 @@ def _quiet_stdout() -> None:
         os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
 
 
+def _open_closed_streams() -> None:
+    """A program started with standard output or error closed (`2>&-`, a daemon's wrapper) has
+    None for them in Python: its messages then go nowhere instead of the run failing on its
+    first (a trial's: exit status 1, no output written, no word)."""
+    for name in ("stdout", "stderr"):
+        if getattr(sys, name) is None:
+            setattr(sys, name, open(os.devnull, "w"))  # noqa: SIM115 (the process's own)
+
+
 def console_main(pending=None) -> int:
     """The command as a program (the console script, ``python -m shape_diameter``): main()
     on sys.argv, and after Ctrl-C, once outputs are cleaned up and the one-line message is
@@ -377,6 +398,7 @@ def console_main(pending=None) -> int:
     `pending`: the list the entry point's SIGINT handler has been appending to while the
     modules were imported (see _shape_diameter_entry); None where it could not take SIGINT.
     """
+    _open_closed_streams()
     interrupts = _Interrupts([] if pending is None else pending)
     if not interrupts.take_over():
         return main(interrupts=None)

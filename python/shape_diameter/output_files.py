@@ -35,22 +35,23 @@ def written_whole(path):
     that is a device or a pipe is written into directly (yielded as it is).
     """
     path = os.fspath(path)
-    target = os.path.realpath(path) if os.path.islink(path) else path
     try:
-        mode = os.stat(target).st_mode
+        mode = os.stat(path).st_mode  # through links
     except OSError:
         mode = stat.S_IFREG  # not there (yet): made whole below
     if not stat.S_ISREG(mode) and not stat.S_ISDIR(mode):
         # A device or a pipe (--values /dev/null, a FIFO): written into, never replaced. Run
         # as root, a replace made /dev/null a plain file for the whole machine (a trial's,
-        # with /dev/full).
+        # with /dev/full). Opened by its own name: /dev/stdout on a pipe is a link to
+        # /proc/self/fd/1, whose target, 'pipe:[N]', names no file (a trial's).
         try:
-            yield target
+            yield path
         except WriteError:  # another file's, written inside this one's (mesh and values)
             raise
         except OSError as exc:
             raise _named(path, exc) from exc
         return
+    target = os.path.realpath(path) if os.path.islink(path) else path
     folder, name = os.path.split(os.path.abspath(target))
     try:
         temporary, descriptor = _create_beside(folder, name)

@@ -649,3 +649,43 @@ def test_output_with_a_folder_of_one_mesh_says_it_is_a_folder(tmp_path, capsys):
     (tmp_path / "a.obj").write_bytes((DATA / "suzanne.obj").read_bytes())
     assert cli.main([str(tmp_path), "-o", str(tmp_path / "x.ply")]) == 2
     assert "but the input is a folder" in capsys.readouterr().err
+
+
+def _shell(command, tmp_path):
+    """`command` in bash, with $SD the command as users run it (its console entry)."""
+    entry = f"{sys.executable} -c 'import _shape_diameter_entry as e, sys; sys.exit(e.main())'"
+    return subprocess.run(["bash", "-c", f"SD=\"{entry}\"; {command}"], cwd=tmp_path,
+                          capture_output=True, timeout=120, check=False)
+
+
+def test_a_closed_stderr_loses_only_the_messages(tmp_path):
+    # A trial's: with standard error closed (2>&-, a daemon's wrapper) the run failed on its
+    # first message, writing nothing, with exit status 1 and no word.
+    shutil.copy(DATA / "suzanne.obj", tmp_path / "a.obj")
+    done = _shell(f"eval $SD a.obj --rays {RAYS} 2>&-; echo status $?", tmp_path)
+    assert done.stdout.decode().split()[-2:] == ["status", "0"], done
+    assert (tmp_path / "a.sdf.ply").is_file()
+
+
+def test_values_into_dev_stdout_on_a_pipe(tmp_path):
+    # A trial's: /dev/stdout on a pipe links to /proc/self/fd/1, 'pipe:[N]': 'cannot write
+    # (No such file or directory)'.
+    shutil.copy(DATA / "suzanne.obj", tmp_path / "a.obj")
+    done = _shell(f"eval $SD a.obj -o b.ply -q --rays {RAYS} --values /dev/stdout | cat > v.npy; "
+                  "echo ${PIPESTATUS[0]}", tmp_path)
+    assert done.stdout.decode().split() == ["0"], done
+    values = np.load(tmp_path / "v.npy")
+    expected = shape_diameter.compute(*load_mesh(DATA / "suzanne.obj"), rays=RAYS).values
+    np.testing.assert_array_equal(values, expected)
+
+
+def test_a_stdout_that_cannot_be_written_says_so_in_one_line(tmp_path):
+    # A trial's: --json into /dev/full gave a traceback; without --json the input was named as
+    # what failed, though its outputs were written.
+    shutil.copy(DATA / "suzanne.obj", tmp_path / "a.obj")
+    for options in ("--json -q", ""):
+        done = _shell(f"eval $SD a.obj --rays {RAYS} {options} > /dev/full", tmp_path)
+        assert done.returncode == 1, done
+        _assert_one_line_error(done.stderr.decode())
+        assert "standard output: cannot write (No space left on device)" in done.stderr.decode()
+        assert (tmp_path / "a.sdf.ply").is_file()

@@ -5,10 +5,13 @@ no OpenCL device, 'auto' runs on the CPU (with a warning where the parent had a 
 explicit OpenCL engine is refused, saying why."""
 
 import json
+import os
 import subprocess
 import sys
 import textwrap
 from pathlib import Path
+
+import pytest
 
 from opencl_devices import OPENCL
 
@@ -60,3 +63,18 @@ def test_a_forked_worker_runs_on_the_cpu_and_refuses_opencl_instead_of_hanging(t
         assert any("engine='auto' runs on the CPU" in w for w in auto_warnings), auto_warnings
     else:
         assert auto_warnings == []
+
+
+@pytest.mark.skipif(not hasattr(os, "sched_setaffinity"), reason="Linux affinity only")
+def test_every_core_means_the_cores_the_process_may_use():
+    # A trial's: a farm slot pinned to one core (taskset, a cpuset) ran a thread per core of
+    # the machine. threads=0 now takes the process's affinity.
+    code = ("import shape_diameter as sd, shapes; "
+            "print(sd.engines()[0]['threads'], "
+            "sd.compute(*shapes.icosphere(1.0, 1), engine='cpu').engine)")
+    done = subprocess.run(
+        [sys.executable, "-c", code], capture_output=True, text=True, timeout=120, check=True,
+        preexec_fn=lambda: os.sched_setaffinity(0, {min(os.sched_getaffinity(0))}),
+        env={**os.environ, "PYTHONPATH": os.path.dirname(__file__)},
+    )  # fmt: skip
+    assert done.stdout.split()[:3] == ["1", "cpu", "(1"], done.stdout
