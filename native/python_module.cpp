@@ -396,6 +396,17 @@ PYBIND11_MODULE(_core, m) {
     return false;
 #endif
   });
+  m.def("opencl_select", [](const std::string& engine) {
+#ifdef SDF_HAVE_OPENCL
+    std::vector<int> indices;
+    for (const sdf::cl::Device* d : sdf::cl::select_devices(engine)) indices.push_back(d->index);
+    return indices;
+#else
+    throw std::invalid_argument("this build of shape_diameter has no OpenCL engine (engine '" +
+                                engine + "')");
+#endif
+  }, "The indices of the devices an OpenCL engine string selects; ValueError as compute() "
+     "would raise it (OpenCL not available, no device matching).");
   m.def("host_layout", &host_layout);
 #ifdef SDF_HAVE_OPENCL
   m.def("opencl_layout", [](int index) {

@@ -34,7 +34,7 @@ import numpy as np
 
 from . import __version__
 from . import _core
-from .api import MAX_RAYS, compute, engines
+from .api import MAX_RAYS, _check_engine, compute, engines
 from .colormap import colormap
 from .cli_jobs import DEFAULT_SUFFIX, EXIT_ENVIRONMENT, EXIT_USAGE, CommandError, plan
 from .output_files import written_whole
@@ -512,6 +512,7 @@ def _run(args, interrupts) -> int:
     interrupts.arm()  # a Ctrl-C held during the imports stops the run here
 
     _check_combinations(args)
+    _refuse_unusable_engine(args.engine)
     smoothing_options = _smoothing_options(args)
     jobs = plan(args, mesh_io.WRITE_SUFFIXES)
     several = len(jobs) > 1 or any(os.path.isdir(source) for source in args.input)
@@ -709,6 +710,22 @@ def _check_combinations(args) -> None:
                            "(--values for one INPUT, --save-values for several)")
     args.seed = 0 if args.seed is None else args.seed
     args.bvh_quality = args.bvh_quality or "auto"
+
+
+def _refuse_unusable_engine(engine: str) -> None:
+    """The engine, before any input is read: a mistyped name is a bad option (status 2) and
+    OpenCL missing on this machine is the machine's (status 1), said once, not as a failure of
+    every input (a trial's batch reported each asset as broken, status 2)."""
+    try:
+        _check_engine(engine)
+    except ValueError as exc:
+        raise CommandError(_in_option_spelling(str(exc)), EXIT_USAGE) from exc
+    if engine.startswith("opencl"):
+        try:
+            _core.opencl_select(engine)
+        except ValueError as exc:
+            status = EXIT_USAGE if _core.opencl_devices() else EXIT_ENVIRONMENT
+            raise CommandError(f"--engine {engine}: {exc}", status) from exc
 
 
 def _smoothing_options(args) -> dict:

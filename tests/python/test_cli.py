@@ -689,3 +689,25 @@ def test_a_stdout_that_cannot_be_written_says_so_in_one_line(tmp_path):
         _assert_one_line_error(done.stderr.decode())
         assert "standard output: cannot write (No space left on device)" in done.stderr.decode()
         assert (tmp_path / "a.sdf.ply").is_file()
+
+
+def test_an_engine_that_cannot_run_is_refused_before_any_input(tmp_path, capsys):
+    # A trial's: a mistyped device, or a node without OpenCL, failed every input in turn, each
+    # reported as a broken asset (status 2) after being read.
+    for name in ("a", "b"):
+        shutil.copy(DATA / "suzanne.obj", tmp_path / f"{name}.obj")
+    assert cli.main([str(tmp_path), "--engine", "opencl:no-such-device", "--json", "-q"]) == 2
+    out, err = capsys.readouterr()
+    assert out == "" and err.count("\n") == 1
+    assert err.startswith("shape-diameter: error: --engine opencl:no-such-device: no OpenCL "
+                          "device matches 'no-such-device'")
+    assert not list(tmp_path.glob("*.sdf.*"))
+    # No OpenCL on the machine: its problem (status 1), once.
+    done = subprocess.run(
+        [sys.executable, "-m", "shape_diameter", str(tmp_path), "--engine", "opencl", "-q"],
+        capture_output=True, text=True, timeout=120, check=False,
+        env={**os.environ, "OCL_ICD_VENDORS": str(tmp_path / "none")},
+    )  # fmt: skip
+    assert done.returncode == 1, done
+    _assert_one_line_error(done.stderr, done.stdout)
+    assert "--engine opencl: OpenCL is not available" in done.stderr
