@@ -3,6 +3,8 @@
 
 from __future__ import annotations
 
+import functools
+import os
 import time
 from dataclasses import dataclass, field
 from typing import Callable, Optional
@@ -133,6 +135,23 @@ def _array(name, value, shape, rows):
     except ValueError as error:
         raise ValueError(f"{name} must have shape {shape}, but its rows differ in length"
                          f"{rows}") from error
+
+
+def _unwritable_program_cache():
+    """The OpenCL program cache's folder when it cannot be made or written, else None: the
+    core then compiles in every process without a word (a trial's, about 9 s a run on PoCL)."""
+    folder = _core.opencl_cache_directory()
+    return folder if folder and not _writable_folder(folder) else None
+
+
+@functools.lru_cache(maxsize=None)
+def _writable_folder(folder) -> bool:
+    """Whether `folder` can be made (if missing) and written; checked once a process."""
+    try:
+        os.makedirs(folder, exist_ok=True)
+    except OSError:
+        return False
+    return os.access(folder, os.W_OK)
 
 
 def _check_mesh(vertices, triangles, threads=0):
@@ -319,6 +338,10 @@ def compute(
         raise ValueError("return_image is an option of shape_diameter.smooth(), not compute()")
     clock = time.perf_counter()
     chosen = _resolve_engine(engine)
+    if chosen.startswith("opencl") and (folder := _unwritable_program_cache()):
+        warn(f"the OpenCL program cache {folder} cannot be written: each process compiles the "
+             "kernels again (seconds each, more on PoCL); set SDF_CACHE_DIR to a writable "
+             "folder", stacklevel=2)
     choosing = time.perf_counter() - clock  # 'auto' lists the devices (drivers load once)
 
     def attempt(v, t, smoothing_resolved, find_twins, progress):

@@ -245,6 +245,23 @@ def test_program_cache_skips_the_compiler_and_rebuilds_a_corrupt_entry(tmp_path)
     assert run_python(code, SDF_CACHE_DIR=cache) == {"compiled": 0, "from_cache": 1}
 
 
+def test_a_program_cache_that_cannot_be_written_is_warned_of(tmp_path):
+    # A trial's: every run compiled again (about 9 s on PoCL) without a word.
+    (tmp_path / "file").write_text("")
+    code = (
+        "import json, warnings, shape_diameter as sd, shapes\n"
+        "with warnings.catch_warnings(record=True) as caught:\n"
+        "    warnings.simplefilter('always')\n"
+        "    sd.compute(*shapes.icosphere(1.0, 1), engine='opencl:0', rays=3)\n"
+        "    sd.compute(*shapes.icosphere(1.0, 1), engine='cpu', rays=3)\n"
+        "print(json.dumps([str(w.message) for w in caught]))\n"
+    )
+    said = run_python(code, SDF_CACHE_DIR=tmp_path / "file" / "cache",
+                      PYTHONPATH=Path(__file__).parent)
+    assert len(said) == 1 and "cannot be written: each process compiles" in said[0], said
+    assert said[0].startswith(f"the OpenCL program cache {tmp_path / 'file' / 'cache'}")
+
+
 def test_works_without_any_opencl_library():
     code = (
         "import json, numpy as np, shape_diameter as sd\n"
