@@ -95,7 +95,10 @@ def _in_option_spelling(message: str) -> str:
 
 
 class _ListEngines(argparse.Action):
-    """--list-engines: what --engine takes on this machine, one line each, then exit."""
+    """--list-engines: what --engine takes on this machine, one line each (with --json, each
+    engines() entry as a JSON object), then exit; the note on 'auto' goes to stderr, so that
+    stdout holds the engines alone (a trial's `| awk '{print $1}'` listed 'auto' too). It
+    runs as it is parsed (no INPUT needed): --json is looked for in the parser's arguments."""
 
     def __init__(self, option_strings, dest, **kwargs):
         super().__init__(option_strings, dest, nargs=0, default=argparse.SUPPRESS, **kwargs)
@@ -103,12 +106,16 @@ class _ListEngines(argparse.Action):
     def __call__(self, parser, namespace, values, option_string=None):
         found = engines()
         width = max(len(engine["name"]) for engine in found)
+        as_json = "--json" in getattr(parser, "arguments", ())
         try:
             for engine in found:
-                _say(f"{engine['name']:<{width}}  {engine['type']}  {engine['description']}")
-            _say("auto picks the best OpenCL GPU, else cpu; opencl the best OpenCL device"
-                 + ("; opencl:all shares the work between the devices"
-                    if sum(e["name"].startswith("opencl:") for e in found) > 1 else ""))
+                _say(json.dumps(engine) if as_json else
+                     f"{engine['name']:<{width}}  {engine['type']}  {engine['description']}")
+            if not as_json:
+                print("auto picks the best OpenCL GPU, else cpu; opencl the best OpenCL device"
+                      + ("; opencl:all shares the work between the devices"
+                         if sum(e["name"].startswith("opencl:") for e in found) > 1 else ""),
+                      file=sys.stderr)
         except _StdoutClosed:
             _quiet_stdout()
             parser.exit(EXIT_STDOUT_CLOSED)
@@ -353,7 +360,9 @@ def main(argv=None, *, interrupts=None) -> int:
     without them (a call from Python) the process's signal handling is left alone.
     """
     try:
-        args = build_parser().parse_args(argv)
+        parser = build_parser()
+        parser.arguments = sys.argv[1:] if argv is None else list(map(str, argv))
+        args = parser.parse_args(argv)
     except SystemExit as done:  # --help, --version, or an option error already printed
         return done.code if isinstance(done.code, int) else 0
     try:

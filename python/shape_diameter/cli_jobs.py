@@ -73,7 +73,8 @@ def plan(args, write_suffixes) -> list:
             if not found:
                 problems.setdefault(source, f"{source}: no mesh files in the folder (looked for "
                                             f"{', '.join(READ_SUFFIXES)}; skipped *.sdf.*, the "
-                                            "outputs of this command)")  # fmt: skip
+                                            "outputs of this command; subfolders are not "
+                                            "searched: name their meshes, e.g. with find)")  # fmt: skip
                 sources.append(source)
         else:
             sources.append(source)

@@ -6,6 +6,8 @@ trimesh (the ``cli`` extra) is imported on the first call, never by ``import sha
 
 from __future__ import annotations
 
+import os
+
 
 def load_mesh(path, *, source_faces: bool = False, uvs: bool = False):
     """Read a mesh file as the command line does: returns (vertices float64 (n, 3),
@@ -40,6 +42,7 @@ def load_mesh(path, *, source_faces: bool = False, uvs: bool = False):
             f"shape_diameter.load_mesh reads files with trimesh: pip install "
             f"'shape_diameter[cli]' ({exc})"
         ) from exc
+    path = os.fsdecode(path)  # bytes too (os.walk(b'...') on names that are not UTF-8)
     if uvs:
         return mesh_io.load_mesh_with_uvs(path, source_faces=source_faces)
     return mesh_io.load_mesh(path, source_faces=source_faces)

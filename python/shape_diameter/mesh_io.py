@@ -169,10 +169,18 @@ def _read(path, want_uvs: bool = False):
         raise ValueError(f"{path}: no triangles found{found}")
     if suffix == ".stl":
         vertices, triangles = _merge_identical(vertices, triangles)
-    if not np.all(np.isfinite(vertices)):
-        raise ValueError(f"{path}: vertex coordinates are not all finite")
-    if triangles.min() < 0 or triangles.max() >= len(vertices):
-        raise ValueError(f"{path}: a face refers to a vertex that does not exist")
+    not_finite = np.flatnonzero(~np.isfinite(vertices).all(axis=1))
+    if len(not_finite):  # numbered from 0, as the file's vertices are read
+        raise ValueError(f"{path}: {len(not_finite)} vertices have a coordinate that is not "
+                         f"finite (NaN or infinite; the first: vertex {not_finite[0]}, counting "
+                         "from 0)")
+    outside = np.flatnonzero(((triangles < 0) | (triangles >= len(vertices))).any(axis=1))
+    if len(outside):
+        face = int(source[outside[0]])
+        index = int(triangles[outside[0]][(triangles[outside[0]] < 0)
+                                          | (triangles[outside[0]] >= len(vertices))][0])
+        raise ValueError(f"{path}: face {face} (counting from 0) refers to vertex {index}, but "
+                         f"the file has {len(vertices)} vertices (0 to {len(vertices) - 1})")
     return vertices, triangles, source, uvs
 
 

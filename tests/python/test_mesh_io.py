@@ -1,6 +1,7 @@
 # SPDX-License-Identifier: GPL-3.0-or-later
 """Mesh files through trimesh: the file's numbering is kept, bad files are refused clearly."""
 
+import os
 import re
 import shutil
 from pathlib import Path
@@ -10,6 +11,7 @@ import pytest
 
 trimesh = pytest.importorskip("trimesh")
 
+import shape_diameter
 from polygon_files import cube_of_quads, fanned, prism, write_polygons
 from shape_diameter.mesh_io import WRITE_SUFFIXES, load_mesh, save_colored
 
@@ -524,3 +526,45 @@ def test_save_colored_refuses_bad_arguments(tmp_path):
         save_colored(tmp_path / "out.ply", vertices, triangles, good, per="edges")
     with pytest.raises(ValueError, match=r"\(507, 4\)"):
         save_colored(tmp_path / "out.ply", vertices, triangles, good, per="vertices")
+
+
+def test_load_mesh_takes_bytes_and_path_objects():
+    # A trial's: b'a.obj' (os.walk over bytes, for names that are not UTF-8) was read as
+    # "cannot read 'b'.obj'' files".
+    expected = shape_diameter.load_mesh(str(DATA / "suzanne.obj"))
+    for path in (os.fsencode(DATA / "suzanne.obj"), DATA / "suzanne.obj"):
+        got = shape_diameter.load_mesh(path)
+        assert all(np.array_equal(a, b) for a, b in zip(got, expected))
+
+
+@pytest.mark.parametrize("suffix", [".off", ".ply"])
+def test_a_bad_coordinate_or_index_is_named(tmp_path, suffix):
+    # A trial's: "vertex coordinates are not all finite" and "a face refers to a vertex that
+    # does not exist", naming neither.
+    vertices = np.array([[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]])
+    faces = np.array([[0, 2, 1], [0, 1, 3], [1, 2, 3], [0, 3, 2]])
+
+    def write(v, f):
+        path = tmp_path / f"m{suffix}"
+        if suffix == ".off":
+            lines = ["OFF", f"{len(v)} {len(f)} 0", *(" ".join(f"{x:.17g}" for x in p) for p in v),
+                     *(f"3 {a} {b} {c}" for a, b, c in f)]
+        else:
+            lines = ["ply", "format ascii 1.0", f"element vertex {len(v)}",
+                     "property float x", "property float y", "property float z",
+                     f"element face {len(f)}", "property list uchar int vertex_indices",
+                     "end_header", *(" ".join(f"{x:.17g}" for x in p) for p in v),
+                     *(f"3 {a} {b} {c}" for a, b, c in f)]
+        path.write_text("\n".join(lines) + "\n")
+        return path
+
+    bad = vertices.copy()
+    bad[2, 1] = np.nan
+    with pytest.raises(ValueError, match=r"1 vertices have a coordinate that is not finite "
+                                         r"\(NaN or infinite; the first: vertex 2, counting"):
+        load_mesh(write(bad, faces))
+    far = faces.copy()
+    far[2, 1] = 9
+    with pytest.raises(ValueError, match=r"face 2 \(counting from 0\) refers to vertex 9, but "
+                                         r"the file has 4 vertices \(0 to 3\)"):
+        load_mesh(write(vertices, far))
