@@ -50,26 +50,37 @@ OrientationReport orient_auto(const Mesh& mesh, unsigned threads, bool fast_path
   const std::vector<PartBox> boxes = part_boxes(mesh, parts, threads);
   // Signed volume of each part about its bounding-box centre, in double. The terms in
   // parallel; their sum in face order, as always, so that no rounding changes.
-  UninitializedVector<double> term(n);
+  // And each face's area, for the threshold below.
+  UninitializedVector<double> term(n), area(n);
   parallel_for(n, kGrain, threads, [&](std::size_t begin, std::size_t end) {
     for (std::size_t f = begin; f < end; ++f) {
       const PartBox& box = boxes[parts.part_of[f]];
       const glm::dvec3 c = 0.5 * (box.lo + box.hi);
       const glm::uvec3 t = mesh.triangles[f];
-      const glm::dvec3 p0 = glm::dvec3(mesh.vertices[t.x]) - c, p1 = glm::dvec3(mesh.vertices[t.y]) - c,
+      const glm::dvec3 p0 = glm::dvec3(mesh.vertices[t.x]) - c,
+                       p1 = glm::dvec3(mesh.vertices[t.y]) - c,
                        p2 = glm::dvec3(mesh.vertices[t.z]) - c;
       const double v = glm::dot(p0, glm::cross(p1, p2)) / 6.0;
       term[f] = flip[f] ? -v : v;
+      area[f] = 0.5 * glm::length(glm::cross(p1 - p0, p2 - p0));
     }
   });
-  std::vector<double> volume(parts.count, 0.0);
-  for (std::size_t f = 0; f < n; ++f) volume[parts.part_of[f]] += term[f];
+  std::vector<double> volume(parts.count, 0.0), surface(parts.count, 0.0);
+  for (std::size_t f = 0; f < n; ++f) {
+    volume[parts.part_of[f]] += term[f];
+    surface[parts.part_of[f]] += area[f];
+  }
   step.lap("orientation: volumes");
-  // A part's volume says 'inside out' when clearly negative, 'outward' when clearly positive.
+  // A part's volume says 'inside out' when clearly negative, 'outward' when clearly positive:
+  // beyond 1e-6 x its surface's area x its box's diagonal. The float coordinates of a flat
+  // sheet tilted off the axes lie up to about 6e-8 of the diagonal off its plane, which gives
+  // it a volume of at most area x that: the threshold is 16x more. (It was 1e-6 x the
+  // diagonal cubed: an inside-out cylinder 1000 times longer than its radius read as flat, and
+  // stayed inside out; now up to 500,000 times.)
   std::vector<char> negative(parts.count), clear(parts.count);
   for (std::size_t p = 0; p < parts.count; ++p) {
     const double diagonal = glm::length(boxes[p].hi - boxes[p].lo);
-    const double threshold = 1e-6 * diagonal * diagonal * diagonal;
+    const double threshold = 1e-6 * diagonal * surface[p];
     negative[p] = volume[p] < -threshold;
     clear[p] = negative[p] || volume[p] > threshold;
   }

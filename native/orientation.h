@@ -33,7 +33,7 @@ struct OrientationReport {
 //    that agree), keeping the winding of the larger area where the patch disagrees.
 // 2. Patches that touch (share a vertex position, so unwelded seams count as touching) form a
 //    part; a part whose signed volume, taken about its bounding-box centre, is clearly
-//    negative (below -1e-6 of its bounding-box diagonal cubed) is reversed. Open parts are
+//    negative (below -1e-6 x its area x its bounding-box diagonal) is reversed. Open parts are
 //    judged the same way: their volume is indicative, and only a clearly negative one is
 //    acted on (a flat sheet, volume 0, is left alone).
 // 3. Except a part that lies inside another (orientation_nesting.h: the inner wall of a hollow

@@ -204,6 +204,27 @@ TEST(OrientationPaths, AnOpenBoxEnclosesNothing) {
   EXPECT_EQ(flipped(a), a.triangles.size() / 3 - box_faces);
 }
 
+// Every face on vertices of its own (a triangle soup made of a mesh: an STL's, a CAD export's
+// sides): faces meet where their corners' positions do.
+test::Arrays unwelded(const test::Arrays& a) {
+  test::Arrays out;
+  for (std::int64_t v : a.triangles) {
+    for (int c = 0; c < 3; ++c) out.vertices.push_back(a.vertices[3 * v + c]);
+    out.triangles.push_back(static_cast<std::int64_t>(out.triangles.size()));
+  }
+  return out;
+}
+
+TEST(OrientationPaths, FacesMeetAcrossUnweldedSeams) {
+  test::Arrays a = unwelded(torus(120, 80, 0.0, 14));
+  reverse_every(a, 7);
+  expect_all_paths_agree(a);
+  EXPECT_EQ(flipped(a), (a.triangles.size() / 3 + 6) / 7);
+  reverse_every(a, 1);  // inside out, with every 7th face outward: all put back outward
+  expect_all_paths_agree(a);
+  EXPECT_EQ(flipped(a), a.triangles.size() / 3 - (a.triangles.size() / 3 + 6) / 7);
+}
+
 TEST(OrientationPaths, TriangleSoupAgreesWithTheReference) {
   // Separate triangles, many overlapping: 20k parts, boxes and volumes per part.
   expect_all_paths_agree(test::soup(20000, 3));

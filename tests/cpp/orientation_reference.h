@@ -16,20 +16,45 @@
 
 namespace sdf::test {
 
-inline std::vector<char> reference_consistent_flips(const Mesh& mesh) {
+inline std::vector<std::uint32_t> reference_weld_exact(const Mesh& mesh) {
+  struct Keyed {
+    float x, y, z;
+    std::uint32_t v;
+    bool operator<(const Keyed& o) const {
+      return std::tie(x, y, z, v) < std::tie(o.x, o.y, o.z, o.v);
+    }
+    bool same_place(const Keyed& o) const { return x == o.x && y == o.y && z == o.z; }
+  };
+  std::vector<Keyed> keyed(mesh.vertices.size());
+  for (std::uint32_t v = 0; v < keyed.size(); ++v)
+    keyed[v] = Keyed{mesh.vertices[v].x, mesh.vertices[v].y, mesh.vertices[v].z, v};
+  std::sort(keyed.begin(), keyed.end());
+  std::vector<std::uint32_t> rep(mesh.vertices.size());
+  for (std::size_t i = 0; i < keyed.size(); ++i)
+    rep[keyed[i].v] = (i > 0 && keyed[i].same_place(keyed[i - 1])) ? rep[keyed[i - 1].v] : keyed[i].v;
+  return rep;
+}
+
+// Edges are their ends' positions: corners are listed by `rep` (one vertex per position).
+inline std::vector<char> reference_consistent_flips(const Mesh& mesh,
+                                                    const std::vector<std::uint32_t>& rep) {
   const std::size_t n = mesh.triangles.size(), nv = mesh.vertices.size();
+  auto welded = [&](std::size_t f) {
+    const glm::uvec3 t = mesh.triangles[f];
+    return glm::uvec3(rep[t.x], rep[t.y], rep[t.z]);
+  };
   struct Corner {
     std::uint32_t face, next, prev;
   };
   std::vector<std::uint32_t> offsets(nv + 1, 0);
-  for (const glm::uvec3& t : mesh.triangles)
-    for (int k = 0; k < 3; ++k) ++offsets[t[k] + 1];
+  for (std::size_t f = 0; f < n; ++f)
+    for (int k = 0; k < 3; ++k) ++offsets[welded(f)[k] + 1];
   for (std::size_t v = 0; v < nv; ++v) offsets[v + 1] += offsets[v];
   std::vector<Corner> around(offsets[nv]);
   {
     std::vector<std::uint32_t> cursor(offsets.begin(), offsets.end() - 1);
     for (std::uint32_t f = 0; f < n; ++f) {
-      const glm::uvec3 t = mesh.triangles[f];
+      const glm::uvec3 t = welded(f);
       for (int k = 0; k < 3; ++k) around[cursor[t[k]]++] = Corner{f, t[(k + 1) % 3], t[(k + 2) % 3]};
     }
   }
@@ -37,7 +62,7 @@ inline std::vector<char> reference_consistent_flips(const Mesh& mesh) {
   std::vector<std::uint32_t> neighbour(3 * n, kNone);
   std::vector<char> same(3 * n, 0);
   for (std::uint32_t f = 0; f < n; ++f) {
-    const glm::uvec3 t = mesh.triangles[f];
+    const glm::uvec3 t = welded(f);
     for (int k = 0; k < 3; ++k) {
       const std::uint32_t a = t[k], b = t[(k + 1) % 3];
       if (a == b) continue;
@@ -86,29 +111,10 @@ inline std::vector<char> reference_consistent_flips(const Mesh& mesh) {
   return flip;
 }
 
-inline std::vector<std::uint32_t> reference_weld_exact(const Mesh& mesh) {
-  struct Keyed {
-    float x, y, z;
-    std::uint32_t v;
-    bool operator<(const Keyed& o) const {
-      return std::tie(x, y, z, v) < std::tie(o.x, o.y, o.z, o.v);
-    }
-    bool same_place(const Keyed& o) const { return x == o.x && y == o.y && z == o.z; }
-  };
-  std::vector<Keyed> keyed(mesh.vertices.size());
-  for (std::uint32_t v = 0; v < keyed.size(); ++v)
-    keyed[v] = Keyed{mesh.vertices[v].x, mesh.vertices[v].y, mesh.vertices[v].z, v};
-  std::sort(keyed.begin(), keyed.end());
-  std::vector<std::uint32_t> rep(mesh.vertices.size());
-  for (std::size_t i = 0; i < keyed.size(); ++i)
-    rep[keyed[i].v] = (i > 0 && keyed[i].same_place(keyed[i - 1])) ? rep[keyed[i - 1].v] : keyed[i].v;
-  return rep;
-}
-
 inline OrientationReport reference_orient_auto(Mesh& mesh) {
   OrientationReport report;
-  std::vector<char> flip = reference_consistent_flips(mesh);
   const std::vector<std::uint32_t> rep = reference_weld_exact(mesh);
+  std::vector<char> flip = reference_consistent_flips(mesh, rep);
   std::vector<std::uint32_t> parent(mesh.vertices.size());
   std::iota(parent.begin(), parent.end(), 0u);
   auto find = [&](std::uint32_t x) {
@@ -133,7 +139,7 @@ inline OrientationReport reference_orient_auto(Mesh& mesh) {
       lo[part_of[f]] = glm::min(lo[part_of[f]], p);
       hi[part_of[f]] = glm::max(hi[part_of[f]], p);
     }
-  std::vector<double> volume(report.parts, 0.0);
+  std::vector<double> volume(report.parts, 0.0), area(report.parts, 0.0);
   for (std::size_t f = 0; f < mesh.triangles.size(); ++f) {
     const std::uint32_t part = part_of[f];
     const glm::dvec3 c = 0.5 * (lo[part] + hi[part]);
@@ -142,6 +148,7 @@ inline OrientationReport reference_orient_auto(Mesh& mesh) {
                      p2 = glm::dvec3(mesh.vertices[t.z]) - c;
     const double v = glm::dot(p0, glm::cross(p1, p2)) / 6.0;
     volume[part] += flip[f] ? -v : v;
+    area[part] += 0.5 * glm::length(glm::cross(p1 - p0, p2 - p0));
   }
   // Nesting: part p lies in part q (at least 4 faces, volume clearly non-zero and larger than
   // p's, or as large with a lower number, a box holding p's) when three rays from the centroid
@@ -155,7 +162,7 @@ inline OrientationReport reference_orient_auto(Mesh& mesh) {
   }
   for (std::size_t p = 0; p < parts; ++p) {
     const double diagonal = glm::length(hi[p] - lo[p]);
-    threshold[p] = 1e-6 * diagonal * diagonal * diagonal;
+    threshold[p] = 1e-6 * diagonal * area[p];
   }
   const glm::dvec3 rays[3] = {glm::normalize(glm::dvec3(0.5377, 0.8271, -0.1642)),
                               glm::normalize(glm::dvec3(-0.7311, 0.2893, 0.6179)),

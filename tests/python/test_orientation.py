@@ -9,7 +9,7 @@ import pytest
 
 import shape_diameter as sd
 from shape_diameter.mesh_io import load_mesh
-from shapes import box, icosphere
+from shapes import box, cylinder, icosphere
 
 DATA = Path(__file__).resolve().parents[1] / "data"
 RIGHT_WAY_OUT = ["bunny00.off", "armadillo.off", "fandisk.obj", "spot.obj", "cow.obj",
@@ -156,6 +156,35 @@ def test_a_flat_open_sheet_is_not_flipped_on_rounding():
     with pytest.warns(RuntimeWarning, match="no ray"):
         result = sd.compute(grid, triangles)
     assert result.flipped_faces == 0
+
+
+def test_a_long_thin_part_inside_out_is_turned():
+    # A trial's: its volume was weighed against 1e-6 x its diagonal cubed, so a cylinder
+    # 2000 times longer than its radius read as flat and stayed inside out (every value 0).
+    vertices, triangles = cylinder(0.005, 10.0, 32, 16)
+    outward = sd.compute(vertices, triangles)
+    result = sd.compute(vertices, triangles[:, [0, 2, 1]])
+    assert result.flipped_faces == len(triangles)
+    np.testing.assert_array_equal(result.raw, outward.raw)
+
+
+@pytest.mark.parametrize("offset", [0.0, 1000.0])
+def test_a_tilted_flat_sheet_is_not_flipped_on_rounding(offset):
+    # Off the axes, its float corners leave its plane by rounding: a volume of noise, either
+    # sign, that the threshold must not take for a winding.
+    grid = np.array([[x, y, 0.0] for y in range(9) for x in range(9)], dtype=float) / 8.0
+    quads = [(y * 9 + x, y * 9 + x + 1, y * 9 + x + 10, y * 9 + x + 9)
+             for y in range(8) for x in range(8)]
+    triangles = np.array([t for a, b, c, d in quads for t in ((a, b, c), (a, c, d))])
+    angle = 0.7
+    turn = np.array([[1.0, 0.0, 0.0], [0.0, np.cos(angle), -np.sin(angle)],
+                     [0.0, np.sin(angle), np.cos(angle)]])
+    tilted = grid @ turn.T @ np.array([[np.cos(0.3), -np.sin(0.3), 0.0],
+                                      [np.sin(0.3), np.cos(0.3), 0.0], [0.0, 0.0, 1.0]]).T
+    for t in (triangles, triangles[:, [0, 2, 1]]):
+        with sd.collect_warnings():  # (no ray finds another side)
+            result = sd.compute(tilted + offset, t)
+        assert result.flipped_faces == 0
 
 
 def test_flip_reverses_everything_and_bad_values_are_refused():
