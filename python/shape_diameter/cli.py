@@ -322,6 +322,14 @@ def build_parser() -> argparse.ArgumentParser:
         "input, same names (DIR/cow.sdf.ply); of two inputs of one name, the second fails",
     )
     parser.add_argument(
+        "-r",
+        "--recursive",
+        action="store_true",
+        help="a folder input stands for the meshes of its subfolders too (not through links "
+        "to folders); with --output-dir, each output goes to the same subfolder of DIR "
+        "(DIR/a/cow.sdf.ply for FOLDER/a/cow.obj)",
+    )
+    parser.add_argument(
         "--skip-existing",
         action="store_true",
         help="leave out an input whose outputs (the mesh, and the values with --save-values "

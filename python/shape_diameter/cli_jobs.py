@@ -27,11 +27,12 @@ class CommandError(Exception):
         self.status = status
 
 
-def default_output(input_path: str, folder=None) -> str:
-    """INPUT with its suffix replaced by .sdf.ply, in the same folder or in `folder`."""
+def default_output(input_path: str, folder=None, below="") -> str:
+    """INPUT with its suffix replaced by .sdf.ply, in the same folder or in `folder` (in its
+    subfolder `below`: where --recursive found it, under the input folder)."""
     stem = os.path.splitext(input_path)[0]
     if folder is not None:
-        stem = os.path.join(folder, os.path.basename(stem))
+        stem = os.path.join(folder, below, os.path.basename(stem))
     return stem + DEFAULT_SUFFIX
 
 
@@ -63,18 +64,24 @@ def plan(args, write_suffixes) -> list:
     """The inputs (folders expanded) and their outputs, checked before any work: paths that
     cannot be written, an output that is an input, two inputs writing one file."""
     sources, problems = [], {}
+    below = {}  # a mesh --recursive found: its subfolder, under the folder given
+    recursive = getattr(args, "recursive", False)
     for source in args.input:
         if os.path.isdir(source):
             try:
-                found = _meshes_in(source)
+                found = _meshes_under(source) if recursive else _meshes_in(source)
+                for path in found:
+                    subfolder = os.path.relpath(os.path.dirname(path), source)
+                    below[path] = "" if subfolder == os.curdir else subfolder
             except OSError as exc:  # e.g. no permission to list it
                 found, problems[source] = [], f"{source}: cannot list the folder ({exc.strerror})"
             sources += found
             if not found:
-                problems.setdefault(source, f"{source}: no mesh files in the folder (looked for "
+                where = ("in the folder or its subfolders" if recursive else
+                         "in the folder (--recursive searches its subfolders)")
+                problems.setdefault(source, f"{source}: no mesh files {where} (looked for "
                                             f"{', '.join(READ_SUFFIXES)}; skipped *.sdf.*, the "
-                                            "outputs of this command; subfolders are not "
-                                            "searched: name their meshes, e.g. with find)")  # fmt: skip
+                                            "outputs of this command)")  # fmt: skip
                 sources.append(source)
         else:
             sources.append(source)
@@ -99,7 +106,10 @@ def plan(args, write_suffixes) -> list:
         if source in problems:
             jobs.append(Job(source, problem=problems[source]))
             continue
-        output = args.output or default_output(source, args.output_dir)
+        subfolder = below.get(source, "")
+        if args.output_dir is not None and subfolder:
+            _make_folder(os.path.join(args.output_dir, subfolder))
+        output = args.output or default_output(source, args.output_dir, subfolder)
         values = args.values or (default_values(output) if args.save_values else None)
         try:
             if args.output or os.path.exists(source):  # (a missing input fails on its own)
@@ -119,6 +129,19 @@ def plan(args, write_suffixes) -> list:
         jobs.append(Job(source, output, values, done=done))
     _check_no_collisions([job for job in jobs if job.problem is None])
     return jobs
+
+
+def _meshes_under(folder: str) -> list:
+    """The mesh files of a folder and of its subfolders (depth first, each folder's meshes
+    before its subfolders', by name), as _meshes_in finds them; hidden subfolders are skipped,
+    and links to folders are not followed (no loops)."""
+    found = _meshes_in(folder)
+    subfolders = sorted(entry.name for entry in os.scandir(folder)
+                        if not entry.name.startswith(".")
+                        and entry.is_dir(follow_symlinks=False))  # fmt: skip
+    for name in subfolders:
+        found += _meshes_under(os.path.join(folder, name))
+    return found
 
 
 def _meshes_in(folder: str) -> list:

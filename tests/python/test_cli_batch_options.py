@@ -136,3 +136,30 @@ def test_a_link_to_itself_in_a_folder_fails_alone(tmp_path, capsys, two_meshes):
     assert status == 2
     assert [(Path(r["input"]).name, r["status"]) for r in reports] == [
         ("loop.obj", "error"), ("spot.obj", "ok"), ("suzanne.obj", "ok")]
+
+
+def test_recursive_takes_subfolders_and_output_dir_mirrors_them(tmp_path, capsys):
+    # A trial's asset tree: nest/a/model.obj and nest/b/model.obj. Without --recursive the
+    # folder held "no mesh files"; given as files with --output-dir, the second collided.
+    nest = tmp_path / "nest"
+    for sub in ("a", "b", "b/deeper", ".hidden"):
+        (nest / sub).mkdir(parents=True)
+        shutil.copy(DATA / "suzanne.obj", nest / sub / "model.obj")
+    (nest / "loop").symlink_to(nest, target_is_directory=True)  # not followed
+    status, reports, err = _run_json(capsys, [nest])
+    assert status == 2 and "--recursive searches its subfolders" in err
+    status, reports, _ = _run_json(capsys, [nest, "-r", "--save-values"])
+    assert status == 0
+    assert [Path(r["input"]).relative_to(nest).as_posix() for r in reports] == [
+        "a/model.obj", "b/model.obj", "b/deeper/model.obj"]
+    assert (nest / "b" / "deeper" / "model.sdf.ply").is_file()
+    out = tmp_path / "out"
+    status, reports, _ = _run_json(capsys, [nest, "--recursive", "--output-dir", out,
+                                            "--save-values"])
+    assert status == 0
+    assert sorted(p.relative_to(out).as_posix() for p in out.rglob("*.sdf.*")) == [
+        "a/model.sdf.npy", "a/model.sdf.ply", "b/deeper/model.sdf.npy",
+        "b/deeper/model.sdf.ply", "b/model.sdf.npy", "b/model.sdf.ply"]
+    # Run again: the outputs beside the inputs are not taken for meshes.
+    status, reports, _ = _run_json(capsys, [nest, "-r", "--skip-existing"])
+    assert status == 0 and [r["status"] for r in reports] == ["skipped"] * 3
