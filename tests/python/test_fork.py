@@ -75,6 +75,7 @@ def test_every_core_means_the_cores_the_process_may_use():
     done = subprocess.run(
         [sys.executable, "-c", code], capture_output=True, text=True, timeout=120, check=True,
         preexec_fn=lambda: os.sched_setaffinity(0, {min(os.sched_getaffinity(0))}),
-        env={**os.environ, "PYTHONPATH": os.path.dirname(__file__)},
+        env={**os.environ, "PYTHONPATH": os.pathsep.join(
+            [os.path.dirname(__file__), *filter(None, [os.environ.get("PYTHONPATH")])])},
     )  # fmt: skip
     assert done.stdout.split()[:3] == ["1", "cpu", "(1"], done.stdout

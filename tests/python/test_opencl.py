@@ -256,8 +256,9 @@ def test_a_program_cache_that_cannot_be_written_is_warned_of(tmp_path):
         "    sd.compute(*shapes.icosphere(1.0, 1), engine='cpu', rays=3)\n"
         "print(json.dumps([str(w.message) for w in caught]))\n"
     )
-    said = run_python(code, SDF_CACHE_DIR=tmp_path / "file" / "cache",
-                      PYTHONPATH=Path(__file__).parent)
+    path = os.pathsep.join([str(Path(__file__).parent),
+                            *filter(None, [os.environ.get("PYTHONPATH")])])
+    said = run_python(code, SDF_CACHE_DIR=tmp_path / "file" / "cache", PYTHONPATH=path)
     assert len(said) == 1 and "cannot be written: each process compiles" in said[0], said
     assert said[0].startswith(f"the OpenCL program cache {tmp_path / 'file' / 'cache'}")
 
