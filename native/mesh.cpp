@@ -50,9 +50,10 @@ bool finite_vertex(const double* p) {
 // box: one far away would otherwise set the near-hit threshold and the unit scaling, and so
 // every value (found by new-user trials: one unused vertex 10 mesh widths away changed values
 // by up to 28%, 1e5 widths away zeroed them; a zero-area face reaching a vertex at the origin
-// of a georeferenced building zeroed every value). Area is the exact double cross product's:
-// a face whose corners coincide or lie on one line casts nothing, and its corners count only
-// where no face has area (then every used vertex does).
+// of a georeferenced building zeroed every value). A face has area where its cross product,
+// in double, is not zero: exactly zero where corners coincide, zero or a rounding's worth
+// (then the face counts) where they lie on one line. The corners of faces without area count
+// only where no face has any (then every used vertex does).
 // Each block of faces marks its own bit set, merged after: marks shared by all threads
 // (atomic bytes) cost 3.3-4.6 ms on 1.21M faces on a 16-core host, most of it cache lines
 // passed between cores (a subdivided mesh's faces use its first vertices everywhere).

@@ -72,15 +72,19 @@ OrientationReport orient_auto(const Mesh& mesh, unsigned threads, bool fast_path
   }
   step.lap("orientation: volumes");
   // A part's volume says 'inside out' when clearly negative, 'outward' when clearly positive:
-  // beyond 1e-6 x its surface's area x its box's diagonal. The float coordinates of a flat
-  // sheet tilted off the axes lie up to about 6e-8 of the diagonal off its plane, which gives
-  // it a volume of at most area x that: the threshold is 16x more. (It was 1e-6 x the
-  // diagonal cubed: an inside-out cylinder 1000 times longer than its radius read as flat, and
-  // stayed inside out; now up to 500,000 times.)
+  // beyond 1e-6 x its surface's area x the larger of its box's diagonal and its farthest
+  // coordinate. A flat sheet tilted off the axes has corners rounded off its plane (float
+  // coordinates, about 6e-8 of each coordinate, the mesh centred on its box), a volume of at
+  // most area x that: the threshold is 16x more (a review's small sheet 1500 units from a
+  // large sphere took the rounding for a winding in 25 of 80 placements). It was 1e-6 x the
+  // diagonal cubed: an inside-out cylinder 1000 times longer than its radius read as flat
+  // and stayed inside out; now up to 500,000 times.
   std::vector<char> negative(parts.count), clear(parts.count);
   for (std::size_t p = 0; p < parts.count; ++p) {
     const double diagonal = glm::length(boxes[p].hi - boxes[p].lo);
-    const double threshold = 1e-6 * diagonal * surface[p];
+    const glm::dvec3 far = glm::max(glm::abs(boxes[p].lo), glm::abs(boxes[p].hi));
+    const double reach = std::max(diagonal, std::max(far.x, std::max(far.y, far.z)));
+    const double threshold = 1e-6 * reach * surface[p];
     negative[p] = volume[p] < -threshold;
     clear[p] = negative[p] || volume[p] > threshold;
   }

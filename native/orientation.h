@@ -33,9 +33,12 @@ struct OrientationReport {
 //    that agree), keeping the winding of the larger area where the patch disagrees.
 // 2. Patches that touch (share a vertex position, so unwelded seams count as touching) form a
 //    part; a part whose signed volume, taken about its bounding-box centre, is clearly
-//    negative (below -1e-6 x its area x its bounding-box diagonal) is reversed. Open parts are
-//    judged the same way: their volume is indicative, and only a clearly negative one is
-//    acted on (a flat sheet, volume 0, is left alone).
+//    negative (below -1e-6 x its area x the larger of its bounding-box diagonal and its
+//    farthest coordinate) is reversed. Open parts are judged the same way: their volume is
+//    indicative, and only a clearly negative one is acted on. A flat sheet whose box centre
+//    lies on its plane (volume 0, its corners' rounding under the threshold) is left alone;
+//    one whose centre lies off it (a triangle's) is turned to face away from the centre: a
+//    sheet has no inside, and casts nothing either way.
 // 3. Except a part that lies inside another (orientation_nesting.h: the inner wall of a hollow
 //    solid, a bubble): it keeps its winding relative to the innermost part around it, reversed
 //    only when that one is. A cavity wound inward stays so; a mesh wound inside out as a whole

@@ -116,20 +116,23 @@ class WorkerPool {
 // made by fork() has none of them, so it starts a pool of its own.
 WorkerPool* pool = new WorkerPool();
 
+// available_cores() once a process: 0 until read, and again in a forked child (a Pool's
+// initializer may pin its worker before the worker's first use).
+std::atomic<unsigned> cores_read{0};
+
 #if defined(__unix__) || defined(__APPLE__)
 const bool fork_handler_set = [] {
-  pthread_atfork(nullptr, nullptr, [] { pool = new WorkerPool(); });
+  pthread_atfork(nullptr, nullptr, [] {
+    pool = new WorkerPool();
+    cores_read.store(0, std::memory_order_relaxed);
+  });
   return true;
 }();
 #endif
 
-}  // namespace
-
-namespace {
-
 // The CPUs this process may run on: its affinity (taskset, a container's or a farm slot's
 // cpuset), which hardware_concurrency ignores (a trial's: a slot pinned to 1 of 2 cores ran 2
-// threads; pinned to 4 of 64, it would run 64). Read once: pinning comes at a process's start.
+// threads; pinned to 4 of 64, it would run 64). Read at a process's first use (below).
 unsigned available_cores() {
 #if defined(__linux__)
   cpu_set_t set;
@@ -144,7 +147,11 @@ unsigned available_cores() {
 
 unsigned resolve_threads(unsigned requested) {
   if (requested > 0) return requested;
-  static const unsigned cores = available_cores();
+  unsigned cores = cores_read.load(std::memory_order_relaxed);
+  if (cores == 0) {
+    cores = available_cores();
+    cores_read.store(cores, std::memory_order_relaxed);
+  }
   return cores;
 }
 

@@ -123,7 +123,7 @@ def _resolve_engine(engine: str) -> str:
     if any(d["type"] == "GPU" for d in _core.opencl_devices()):
         return "opencl"
     if _core.opencl_gpu_lost_to_fork():  # a fork-started worker: it hung (a trial's Pool)
-        warn(f"engine='auto' runs on the CPU: {_core.opencl_unavailable_reason()}", stacklevel=3)
+        warn(f"engine='auto' runs on the CPU: {_core.opencl_unavailable_reason()}")
     return "cpu"
 
 
@@ -137,11 +137,17 @@ def _array(name, value, shape, rows):
                          f"{rows}") from error
 
 
+_UNWRITABLE_CACHES_WARNED_OF = set()
+
+
 def _unwritable_program_cache():
-    """The OpenCL program cache's folder when it cannot be made or written, else None: the
-    core then compiles in every process without a word (a trial's, about 9 s a run on PoCL)."""
+    """The OpenCL program cache's folder when it cannot be made or written and was not warned
+    of yet, else None: the core then compiles in every process without a word (a trial's,
+    about 9 s a run on PoCL)."""
     folder = _core.opencl_cache_directory()
-    return folder if folder and not _writable_folder(folder) else None
+    if not folder or folder in _UNWRITABLE_CACHES_WARNED_OF or _writable_folder(folder):
+        return None
+    return folder
 
 
 @functools.lru_cache(maxsize=None)
@@ -341,7 +347,8 @@ def compute(
     if chosen.startswith("opencl") and (folder := _unwritable_program_cache()):
         warn(f"the OpenCL program cache {folder} cannot be written: each process compiles the "
              "kernels again (seconds each, more on PoCL); set SDF_CACHE_DIR to a writable "
-             "folder", stacklevel=2)
+             "folder")
+        _UNWRITABLE_CACHES_WARNED_OF.add(folder)  # once a process: a batch said it per input
     choosing = time.perf_counter() - clock  # 'auto' lists the devices (drivers load once)
 
     def attempt(v, t, smoothing_resolved, find_twins, progress):
@@ -393,8 +400,7 @@ def compute(
         if out["fill"] == "no-value-anywhere":
             warn(
                 "no ray of any point found the other side of the mesh (is it open, flat or "
-                "inside out?); every value is 0 and valid_rays is 0 everywhere",
-                stacklevel=3,
+                "inside out?); every value is 0 and valid_rays is 0 everywhere"
             )
         timings = dict(out["timings"])
         if engine == "auto":
@@ -428,7 +434,7 @@ def compute(
                 return run_checked(
                     v, smooth_t, raw, points, smoothing, smoothing_resolved, int(threads),
                     None if progress is None else lambda f: progress(0.9 + 0.1 * f),
-                    engine_name, ready, stages, stacklevel=6,
+                    engine_name, ready, stages
                 )
 
             values, failure = run_with_fallback(run_smoothing, smooth_engine, engine)
@@ -474,7 +480,7 @@ def compute(
         _warn_if_few_rays_kept(result.valid_rays, int(rays), orientation,
                                t if points == "vertices" else None)
         for message in part_warnings(v, t, result, int(threads)):
-            warn(message, stacklevel=2)
+            warn(message)
     clock = time.perf_counter()
     # The core's own values (finite, >= 0, float32): normalize_values' checks would only cost
     # time (1 ms a million values).
@@ -520,7 +526,7 @@ def _warn_if_few_rays_kept(valid_rays, rays, orientation, triangles=None):
         valid_rays = valid_rays[used]
     message = few_rays_kept(valid_rays, rays, orientation)
     if message:
-        warn(message, stacklevel=3)
+        warn(message)
 
 
 class _Twins:

@@ -106,7 +106,9 @@ class _ListEngines(argparse.Action):
     def __call__(self, parser, namespace, values, option_string=None):
         found = engines()
         width = max(len(engine["name"]) for engine in found)
-        as_json = "--json" in getattr(parser, "arguments", ())
+        # (argparse takes unambiguous abbreviations: --js is --json)
+        as_json = any(len(a) > 2 and "--json".startswith(a)
+                      for a in getattr(parser, "arguments", ()))
         try:
             for engine in found:
                 _say(json.dumps(engine) if as_json else
@@ -119,6 +121,9 @@ class _ListEngines(argparse.Action):
         except _StdoutClosed:
             _quiet_stdout()
             parser.exit(EXIT_STDOUT_CLOSED)
+        except _StdoutFailed as exc:
+            _quiet_stdout()
+            parser.exit(EXIT_ENVIRONMENT, f"{PROG}: error: standard output: cannot write ({exc})\n")
         parser.exit()
 
 

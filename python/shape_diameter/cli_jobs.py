@@ -69,7 +69,7 @@ def plan(args, write_suffixes) -> list:
     for source in args.input:
         if os.path.isdir(source):
             try:
-                found = _meshes_under(source) if recursive else _meshes_in(source)
+                found = _meshes_under(source, problems) if recursive else _meshes_in(source)
                 for path in found:
                     subfolder = os.path.relpath(os.path.dirname(path), source)
                     below[path] = "" if subfolder == os.curdir else subfolder
@@ -108,7 +108,13 @@ def plan(args, write_suffixes) -> list:
             continue
         subfolder = below.get(source, "")
         if args.output_dir is not None and subfolder:
-            _make_folder(os.path.join(args.output_dir, subfolder))
+            folder = os.path.join(args.output_dir, subfolder)
+            try:
+                os.makedirs(folder, exist_ok=True)
+            except OSError as exc:  # this input's failure: the others go on
+                jobs.append(Job(source, problem=f"{source}: cannot make its output folder "
+                                                f"{folder} ({exc.strerror})"))
+                continue
         output = args.output or default_output(source, args.output_dir, subfolder)
         values = args.values or (default_values(output) if args.save_values else None)
         try:
@@ -131,16 +137,23 @@ def plan(args, write_suffixes) -> list:
     return jobs
 
 
-def _meshes_under(folder: str) -> list:
+def _meshes_under(folder: str, problems: dict) -> list:
     """The mesh files of a folder and of its subfolders (depth first, each folder's meshes
     before its subfolders', by name), as _meshes_in finds them; hidden subfolders are skipped,
-    and links to folders are not followed (no loops)."""
+    and links to folders are not followed (no loops). A subfolder that cannot be listed is
+    in the list too, with its problem in `problems` (the rest of the tree goes on); the
+    folder given raises OSError as _meshes_in does."""
     found = _meshes_in(folder)
     subfolders = sorted(entry.name for entry in os.scandir(folder)
                         if not entry.name.startswith(".")
                         and entry.is_dir(follow_symlinks=False))  # fmt: skip
     for name in subfolders:
-        found += _meshes_under(os.path.join(folder, name))
+        path = os.path.join(folder, name)
+        try:
+            found += _meshes_under(path, problems)
+        except OSError as exc:  # e.g. no permission to list it
+            problems[path] = f"{path}: cannot list the folder ({exc.strerror})"
+            found.append(path)
     return found
 
 

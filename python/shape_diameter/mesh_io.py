@@ -557,8 +557,7 @@ def _warn_if_float32_moves(path: str, vertices: np.ndarray) -> None:
         warn(
             f"{path}: {format_name(os.path.splitext(path)[1].lower())} holds 32-bit float "
             f"coordinates: vertices move by up to {moved:.3g} units ({share}); write .ply, "
-            ".off or .obj to keep them exactly",
-            stacklevel=3,
+            ".off or .obj to keep them exactly"
         )
 
 

@@ -182,13 +182,12 @@ def smooth(
     chosen = _resolve_engine(engine) if method in ("projected", "texture") else "cpu"
     out, failure = run_with_fallback(
         lambda engine_name: run_checked(v, t, values, points, method, resolved, threads,
-                                        progress, engine_name, stacklevel=5),
+                                        progress, engine_name),
         chosen, engine,
     )  # fmt: skip
     if failure is not None:
         warn(
-            f"smoothing on {chosen} failed ({str(failure).splitlines()[0]}); ran on the CPU",
-            stacklevel=2,
+            f"smoothing on {chosen} failed ({str(failure).splitlines()[0]}); ran on the CPU"
         )
     return out
 
@@ -279,15 +278,6 @@ def _weld_argument(o):
     return -1.0 if o["weld_tolerance"] is None else o["weld_tolerance"]
 
 
-def uv_faces_outside(uvs) -> int:
-    """Faces whose per-corner UVs (m, 3, 2) lie wholly outside the [0, 1] square (UDIM tiles
-    or an offset layout): texture smoothing and bakes leave them out. The core's rule
-    (smoothing_texture.cpp), for callers that report it themselves."""
-    uv = np.asarray(uvs, dtype=np.float32).reshape(-1, 3, 2)
-    lo, hi = uv.min(axis=1), uv.max(axis=1)
-    return int(np.count_nonzero((hi < 0.0).any(axis=1) | (lo > 1.0).any(axis=1)))
-
-
 # Bytes a texel that texture smoothing's CPU path holds at its peak (smoothing_texture.cpp):
 # drawing, a 64-bit owner key and the island (int32) and value (float32) drawn, 16 bytes (the
 # keys are freed after); dilating, a second island and value, 16; blurring, the island and
@@ -359,12 +349,12 @@ def unit_scale_exponent(v, t) -> int:
 
 
 def run_checked(v, t, values, points, method, o, threads, progress, engine="cpu",
-                prepared=None, timings=None, stacklevel=3):
+                prepared=None, timings=None):
     """smooth()'s work on arguments checked already (by smooth(), or by compute() on its own
     mesh and SDF), with the options `o` as check_smoothing returns them; prepared: from
     prepare_texture_for or prepare_projected_for on this mesh and these options (projected: on
     an OpenCL engine only), or None; timings: a dict the method's stages (seconds) are added
-    to, or None; stacklevel: of its warnings, so that they name the caller's line."""
+    to, or None."""
     if timings is None:
         timings = {}
     if method == "none":
@@ -393,7 +383,7 @@ def run_checked(v, t, values, points, method, o, threads, progress, engine="cpu"
             )
         if exponent:
             scaled = run_checked(np.ldexp(v, exponent), t, np.ldexp(values, exponent), points,
-                                 method, o, threads, progress, engine, None, timings, stacklevel)
+                                 method, o, threads, progress, engine, None, timings)
             return np.ldexp(scaled, -exponent)
     if method == "projected" and prepared is not None:
         return _core.smooth_projected_prepared(
@@ -429,8 +419,7 @@ def run_checked(v, t, values, points, method, o, threads, progress, engine="cpu"
         warn(
             f"{out['faces_outside']} of {len(t)} faces have UVs wholly outside the [0, 1] "
             f"square (UDIM tiles or an offset layout): {reach}; move each tile's UVs into the "
-            "square to include them",
-            stacklevel=stacklevel,
+            "square to include them"
         )
     if out["kept_off_device"]:
         width, height = o["texture_size"]
@@ -438,8 +427,7 @@ def run_checked(v, t, values, points, method, o, threads, progress, engine="cpu"
             f"texture smoothing ran on the CPU threads, not on {engine}: a face's UVs span "
             f"more than 65536 texels at {width} x {height} (a device walks each face in one "
             "work item; wrap-around faces of a spherical layout do this); the values are the "
-            "same, and a smaller texture_size keeps it on the device",
-            stacklevel=stacklevel,
+            "same, and a smaller texture_size keeps it on the device"
         )
     if o["return_image"]:
         return TextureResult(out["values"], out["image"], out["mask"])

@@ -10,30 +10,35 @@ Here what is kept lives in a context variable, which each thread has its own of.
 import contextlib
 import contextvars
 import functools
+import os
+import sys
 import warnings
 
-# The active logs, innermost last: (messages, quiet, frames). quiet: not issued through the
-# warnings module; frames: calls between the warning's caller and the frame its stacklevel
-# counts from (compute()'s wrapper below).
+# The active logs, innermost last: (messages, quiet). quiet: not issued through the warnings
+# module.
 _LOGS = contextvars.ContextVar("shape_diameter_warning_logs", default=())
+_PACKAGE = os.path.dirname(os.path.abspath(__file__)) + os.sep
 
 
-def warn(message: str, stacklevel: int = 1) -> None:
+def warn(message: str) -> None:
     """A RuntimeWarning of the package: kept by every active log and, unless one of them is
-    quiet, issued as warnings.warn would (stacklevel counted from the caller of warn)."""
+    quiet, issued naming the line that called into the package (the first frame outside it:
+    a count of frames went wrong where compute() ran inside another's progress callback)."""
     logs = _LOGS.get()
-    for messages, _, _ in logs:
+    for messages, _ in logs:
         messages.append(message)
-    if any(quiet for _, quiet, _ in logs):
+    if any(quiet for _, quiet in logs):
         return
-    frames = sum(extra for _, _, extra in logs)
-    warnings.warn(message, RuntimeWarning, stacklevel=stacklevel + 1 + frames)
+    level, frame = 2, sys._getframe(1)  # 2: warn's caller
+    while frame is not None and os.path.abspath(frame.f_code.co_filename).startswith(_PACKAGE):
+        level, frame = level + 1, frame.f_back
+    warnings.warn(message, RuntimeWarning, stacklevel=level)
 
 
 @contextlib.contextmanager
-def _logging(quiet: bool, frames: int):
+def _logging(quiet: bool):
     messages = []
-    token = _LOGS.set(_LOGS.get() + ((messages, quiet, frames),))
+    token = _LOGS.set(_LOGS.get() + ((messages, quiet),))
     try:
         yield messages
     finally:
@@ -48,7 +53,7 @@ def collect_warnings():
     >>> with shape_diameter.collect_warnings() as caught:
     ...     result = shape_diameter.compute(vertices, triangles)
     """
-    return _logging(quiet=True, frames=0)
+    return _logging(quiet=True)
 
 
 def recorded(function):
@@ -57,7 +62,7 @@ def recorded(function):
 
     @functools.wraps(function)
     def call(*args, **kwargs):
-        with _logging(quiet=False, frames=1) as messages:
+        with _logging(quiet=False) as messages:
             result = function(*args, **kwargs)
         result.warnings = messages
         return result

@@ -25,7 +25,8 @@ Found as_list(const ReversedTwins& t) {
 
 // The contract, read literally: the faces at each set of three distinct positions; where both
 // windings are among them, each face wound against the lowest is left out for it, but only
-// when every face of its part (faces joined by shared vertex indices) lies in such a group.
+// when every face with area of its part (faces joined by shared vertex indices) lies in such a
+// group.
 Found brute_force(const Mesh& mesh) {
   const std::size_t m = mesh.triangles.size();
   auto pos = [&](std::size_t f, int k) { return mesh.vertices[mesh.triangles[f][k]]; };
@@ -72,7 +73,8 @@ Found brute_force(const Mesh& mesh) {
     for (int k = 1; k < 3; ++k) parent[root(mesh.triangles[f][k])] = root(mesh.triangles[f][0]);
   std::vector<char> single(parent.size(), 0);
   for (std::size_t f = 0; f < m; ++f)
-    if (!paired[f]) single[root(mesh.triangles[f][0])] = 1;
+    if (!paired[f] && face_area_normal(mesh, f) != glm::vec3(0.0f))
+      single[root(mesh.triangles[f][0])] = 1;
   Found out;
   for (const auto& pair : pairs)
     if (!single[root(mesh.triangles[std::get<0>(pair)][0])]) out.push_back(pair);

@@ -162,7 +162,8 @@ inline OrientationReport reference_orient_auto(Mesh& mesh) {
   }
   for (std::size_t p = 0; p < parts; ++p) {
     const double diagonal = glm::length(hi[p] - lo[p]);
-    threshold[p] = 1e-6 * diagonal * area[p];
+    const glm::dvec3 far = glm::max(glm::abs(lo[p]), glm::abs(hi[p]));
+    threshold[p] = 1e-6 * std::max(diagonal, std::max(far.x, std::max(far.y, far.z))) * area[p];
   }
   const glm::dvec3 rays[3] = {glm::normalize(glm::dvec3(0.5377, 0.8271, -0.1642)),
                               glm::normalize(glm::dvec3(-0.7311, 0.2893, 0.6179)),

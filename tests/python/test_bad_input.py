@@ -583,12 +583,13 @@ def test_zero_area_faces_reaching_far_vertices_change_nothing_else(points, far):
     # centre (bunny00 with a vertex 1000 units off: 8.8% of faces >5% off; a building at UTM
     # coordinates with one reaching the origin: every value 0). Now such faces' corners take
     # no part in the box: the rest is bit for bit the clean mesh's. Three kinds: a repeated
-    # corner, three corners at one far position, corners on one line through a far point.
+    # corner, three corners at one far position, three distinct corners on one line.
     V, F = shapes.icosphere(1.0, 3)
     n, m = len(V), len(F)
-    stray = np.array([[far, 0.0, 0.0], [far, 0.0, 0.0], [far, 0.0, 0.0], [2 * far, 0.0, 0.0]])
+    stray = np.array([[far, 0.0, 0.0], [far, 0.0, 0.0], [far, 0.0, 0.0], [2 * far, 0.0, 0.0],
+                      [1.5 * far, 0.0, 0.0]])
     V2 = np.vstack([V, stray])
-    F2 = np.vstack([F, [[0, 0, n], [n, n + 1, n + 2], [n, n + 3, n + 2]]])
+    F2 = np.vstack([F, [[0, 0, n], [n, n + 1, n + 2], [n, n + 3, n + 4]]])
     clean = shape_diameter.compute(V, F, points=points)
     result = shape_diameter.compute(V2, F2, points=points)
     assert result.near_cutoff == clean.near_cutoff

@@ -11,7 +11,7 @@ import pytest
 pytest.importorskip("trimesh")
 
 import shape_diameter
-from shape_diameter import cli
+from shape_diameter import cli, cli_jobs
 
 DATA = Path(__file__).resolve().parents[1] / "data"
 
@@ -102,10 +102,23 @@ def test_list_engines_lists_what_engine_takes(capsys):
     names = [line.split()[0] for line in out.splitlines()]
     assert names == [engine["name"] for engine in shape_diameter.engines()]
     assert err.startswith("auto picks")
-    assert cli.main(["--list-engines", "--json"]) == 0
-    out, err = capsys.readouterr()
-    assert [json.loads(line) for line in out.splitlines()] == shape_diameter.engines()
-    assert err == ""
+    for flag in ("--json", "--js"):  # (argparse's abbreviation too)
+        assert cli.main(["--list-engines", flag]) == 0
+        out, err = capsys.readouterr()
+        assert [json.loads(line) for line in out.splitlines()] == shape_diameter.engines()
+        assert err == ""
+
+
+def test_list_engines_into_a_full_disk_says_so_in_one_line(tmp_path):
+    import subprocess
+    import sys
+
+    with open("/dev/full", "w") as full:
+        run = subprocess.run([sys.executable, "-m", "shape_diameter", "--list-engines"],
+                             stdout=full, stderr=subprocess.PIPE, text=True, timeout=120)
+    assert run.returncode == 1
+    assert run.stderr == ("shape-diameter: error: standard output: cannot write (No space "
+                          "left on device)\n")
 
 
 def test_skip_existing_does_not_skip_a_missing_input(tmp_path, capsys):
@@ -163,3 +176,32 @@ def test_recursive_takes_subfolders_and_output_dir_mirrors_them(tmp_path, capsys
     # Run again: the outputs beside the inputs are not taken for meshes.
     status, reports, _ = _run_json(capsys, [nest, "-r", "--skip-existing"])
     assert status == 0 and [r["status"] for r in reports] == ["skipped"] * 3
+
+
+def test_recursive_goes_on_past_a_subfolder_it_cannot_list_or_write(tmp_path, capsys,
+                                                                     monkeypatch):
+    # A review's: one unreadable subfolder dropped the whole tree, blamed on the top folder,
+    # and an output subfolder blocked by a file refused every input.
+    nest = tmp_path / "nest"
+    for sub in ("a", "b", "c"):
+        (nest / sub).mkdir(parents=True)
+        shutil.copy(DATA / "suzanne.obj", nest / sub / "m.obj")
+    real_scandir = cli_jobs.os.scandir
+
+    def scandir(path):
+        if Path(path) == nest / "b":
+            raise PermissionError(13, "Permission denied")
+        return real_scandir(path)
+
+    monkeypatch.setattr(cli_jobs.os, "scandir", scandir)
+    out = tmp_path / "out"
+    out.mkdir()
+    (out / "c").write_text("")  # a file where the subfolder goes
+    status, reports, err = _run_json(capsys, [nest, "-r", "--output-dir", out])
+    assert status == 2
+    assert [(Path(r["input"]).relative_to(nest).as_posix(), r["status"]) for r in reports] == [
+        ("a/m.obj", "ok"), ("b", "error"), ("c/m.obj", "error")]
+    assert reports[1]["error"] == f"{nest / 'b'}: cannot list the folder (Permission denied)"
+    assert reports[2]["error"].startswith(f"{nest / 'c' / 'm.obj'}: cannot make its output "
+                                          f"folder {out / 'c'}")
+    assert (out / "a" / "m.sdf.ply").is_file()

@@ -79,3 +79,22 @@ def test_every_core_means_the_cores_the_process_may_use():
             [os.path.dirname(__file__), *filter(None, [os.environ.get("PYTHONPATH")])])},
     )  # fmt: skip
     assert done.stdout.split()[:3] == ["1", "cpu", "(1"], done.stdout
+
+
+@pytest.mark.skipif(not hasattr(os, "sched_setaffinity"), reason="Linux affinity only")
+def test_a_forked_worker_pinned_by_its_initializer_takes_its_own_cores():
+    # A review's: the count was read once a process, so a Pool worker forked after the
+    # parent's first use and pinned by its initializer still ran a thread per parent core.
+    code = textwrap.dedent("""
+        import multiprocessing, os, shape_diameter as sd
+        sd.engines()  # the parent's first use
+        def pin():
+            os.sched_setaffinity(0, {min(os.sched_getaffinity(0))})
+        def threads(_):
+            return sd.engines()[0]["threads"]
+        with multiprocessing.get_context("fork").Pool(1, initializer=pin) as pool:
+            print(pool.map(threads, [0])[0])
+    """)
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                          timeout=120, check=True)
+    assert done.stdout.split() == ["1"], done

@@ -25,6 +25,26 @@ def test_compute_keeps_its_warnings_and_still_issues_them_naming_the_callers_lin
     assert seen[0].filename == __file__  # the caller's line, not the package's
 
 
+def test_a_warning_names_the_callers_line_from_inside_another_call():
+    # A review's: compute() inside another's progress callback, and smooth() there, named a
+    # line of the package (a count of frames, one per active compute()).
+    V, F = shapes.icosphere(1.0, 2)
+    seen = []
+
+    def progress(fraction):
+        if not seen:
+            with warnings.catch_warnings(record=True) as inner:
+                warnings.simplefilter("always")
+                shape_diameter.compute(*TRIANGLE)
+                shape_diameter.smooth(V, F, np.ones(len(F), dtype=np.float32), "texture",
+                                      uvs=np.full((len(F), 3, 2), 2.0), texture_size=16)
+            seen.extend(inner)
+
+    shape_diameter.compute(V, F, progress=progress)
+    assert len(seen) == 2
+    assert all(w.filename == __file__ for w in seen), [(w.filename, w.lineno) for w in seen]
+
+
 def test_a_mesh_with_nothing_to_say_has_no_warnings():
     with warnings.catch_warnings():
         warnings.simplefilter("error")
