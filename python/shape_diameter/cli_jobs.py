@@ -166,10 +166,11 @@ def _meshes_in(folder: str) -> list:
         if (name.startswith(".") or fnmatch.fnmatch(name, "*.sdf.*")
                 or os.path.splitext(name)[1].lower() not in READ_SUFFIXES):  # fmt: skip
             continue
-        # A link to nothing, or to itself, is kept: it fails as an input of its own (one
-        # vanished, one stopped the whole folder).
+        # Only folders are left out (--recursive walks them). What else bears a mesh's name
+        # fails as an input of its own: a link to nothing or to itself (one vanished, one
+        # stopped the whole folder), a FIFO or a socket (skipped without a word, a trial's).
         try:
-            if not (entry.is_file() or entry.is_symlink() and not entry.is_dir()):
+            if entry.is_dir():
                 continue
         except OSError:
             pass

@@ -2,6 +2,7 @@
 """Options for batches: --output-dir, --skip-existing, and --list-engines."""
 
 import json
+import os
 import shutil
 from pathlib import Path
 
@@ -205,3 +206,14 @@ def test_recursive_goes_on_past_a_subfolder_it_cannot_list_or_write(tmp_path, ca
     assert reports[2]["error"].startswith(f"{nest / 'c' / 'm.obj'}: cannot make its output "
                                           f"folder {out / 'c'}")
     assert (out / "a" / "m.sdf.ply").is_file()
+
+
+def test_a_fifo_with_a_meshs_name_in_a_folder_fails_as_its_own_input(tmp_path, capsys):
+    # A trial's: skipped without a word, while given directly it failed as 'not a file'.
+    (tmp_path / "a.obj").write_bytes((DATA / "suzanne.obj").read_bytes())
+    os.mkfifo(tmp_path / "b.obj")
+    status, reports, _ = _run_json(capsys, [tmp_path])
+    assert status == 2
+    assert [(Path(r["input"]).name, r["status"]) for r in reports] == [("a.obj", "ok"),
+                                                                       ("b.obj", "error")]
+    assert reports[1]["error"].endswith("b.obj: not a file")
