@@ -105,7 +105,8 @@ def engines() -> list:
     listed when an OpenCL driver is installed (none is needed otherwise)."""
     threads = _core.hardware_threads()
     found = [
-        {"name": "cpu", "type": "CPU", "threads": threads, "description": f"{threads} threads"}
+        {"name": "cpu", "type": "CPU", "threads": threads,
+         "description": f"{threads} thread{'s' if threads != 1 else ''}"}
     ]
     for d in _core.opencl_devices():
         entry = dict(d)

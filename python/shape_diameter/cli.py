@@ -182,18 +182,19 @@ def build_parser() -> argparse.ArgumentParser:
         "meshes of a glTF scene are joined). Several INPUTs are computed one after the other "
         "in one process; a file that fails is reported in one line and the others go on. "
         "Writes PLY, OBJ, OFF, GLB or STL, chosen by the output suffix; STL keeps no colour; "
-        "an existing OUTPUT is overwritten. Exit status: 0 done, 2 bad option, input or "
-        "output path, 1 missing dependency, OpenCL device failure (e.g. too little device "
-        "memory), out of memory or failed write; with several inputs, the status of the "
-        "first that failed; on Ctrl-C the command is killed by SIGINT (status 130 in the "
-        "shell).",
+        "an existing OUTPUT is overwritten. Exit status: 0 done, 2 bad option (an --engine "
+        "no device here matches: refused before any input is read), input or output path, 1 "
+        "missing dependency, OpenCL missing for --engine opencl..., OpenCL device failure "
+        "(e.g. too little device memory), out of memory, failed write or a standard output "
+        "that cannot be written; with several inputs, the status of the first that failed; "
+        "on Ctrl-C the command is killed by SIGINT (status 130 in the shell).",
     )
     parser.add_argument(
         "input",
         metavar="INPUT",
         nargs="+",
         help="mesh file to read; several are computed in turn, each written next to itself; "
-        "a folder stands for its mesh files (not those of its subfolders), skipping *.sdf.* "
+        "a folder stands for its mesh files (with -r, its subfolders' too), skipping *.sdf.* "
         "files (this command's outputs)",
     )
     parser.add_argument(
@@ -361,7 +362,8 @@ def build_parser() -> argparse.ArgumentParser:
         "stderr, --json to stdout",
     )
     parser.add_argument("--list-engines", action=_ListEngines,
-                        help="list the engines --engine takes here, and exit")
+                        help="list the engines --engine takes here, one a line (with --json, one JSON "
+                        "object each), and exit")
     parser.add_argument("--version", action="version", version=f"%(prog)s {__version__}")
     return parser
 

@@ -171,9 +171,9 @@ def _read(path, want_uvs: bool = False):
         vertices, triangles = _merge_identical(vertices, triangles)
     not_finite = np.flatnonzero(~np.isfinite(vertices).all(axis=1))
     if len(not_finite):  # numbered from 0, as the file's vertices are read
-        raise ValueError(f"{path}: {len(not_finite)} vertices have a coordinate that is not "
-                         f"finite (NaN or infinite; the first: vertex {not_finite[0]}, counting "
-                         "from 0)")
+        count = "1 vertex has" if len(not_finite) == 1 else f"{len(not_finite)} vertices have"
+        raise ValueError(f"{path}: {count} a coordinate that is not finite (NaN or infinite; "
+                         f"the first: vertex {not_finite[0]}, counting from 0)")
     outside = np.flatnonzero(((triangles < 0) | (triangles >= len(vertices))).any(axis=1))
     if len(outside):
         face = int(source[outside[0]])

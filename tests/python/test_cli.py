@@ -460,7 +460,9 @@ def test_help_documents_exit_statuses_and_overwriting(capsys):
     assert cli.main(["--help"]) == 0
     text = " ".join(capsys.readouterr().out.split())
     assert "an existing OUTPUT is overwritten" in text
-    assert "1 missing dependency, OpenCL device failure" in text
+    assert ("1 missing dependency, OpenCL missing for --engine opencl..., OpenCL device "
+            "failure") in text
+    assert "refused before any input is read" in text
 
 
 def test_compute_warnings_are_one_line(tmp_path, capsys):

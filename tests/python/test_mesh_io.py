@@ -560,7 +560,7 @@ def test_a_bad_coordinate_or_index_is_named(tmp_path, suffix):
 
     bad = vertices.copy()
     bad[2, 1] = np.nan
-    with pytest.raises(ValueError, match=r"1 vertices have a coordinate that is not finite "
+    with pytest.raises(ValueError, match=r"1 vertex has a coordinate that is not finite "
                                          r"\(NaN or infinite; the first: vertex 2, counting"):
         load_mesh(write(bad, faces))
     far = faces.copy()
