@@ -263,12 +263,27 @@ def _not_a_mesh(ob):
     return f"{ob.name} ({ob.type.lower()})"
 
 
-# Modifiers that leave the vertices where they are (normals, UVs, weights, splitting into
-# triangles): a run without Use Modifiers loses nothing of the shape to them.
+# Modifiers that leave the surface where it is (normals, UVs, weights, splitting into
+# triangles or along edges): a run without Use Modifiers loses nothing of the shape to them.
 _SHAPE_KEEPING_MODIFIERS = {
     "WEIGHTED_NORMAL", "NORMAL_EDIT", "UV_PROJECT", "UV_WARP", "VERTEX_WEIGHT_EDIT",
     "VERTEX_WEIGHT_MIX", "VERTEX_WEIGHT_PROXIMITY", "DATA_TRANSFER", "TRIANGULATE",
+    "EDGE_SPLIT",
 }
+# Blender's Shade Auto Smooth adds a geometry-nodes modifier of this node group (4.1 on), which
+# sets sharp edges alone: it was named as changing the shape on every run (a trial's).
+_SHAPE_KEEPING_NODE_GROUPS = ("Smooth by Angle",)
+
+
+def _keeps_shape(modifier) -> bool:
+    if modifier.type in _SHAPE_KEEPING_MODIFIERS:
+        return True
+    group = getattr(modifier, "node_group", None) if modifier.type == "NODES" else None
+    return group is not None and group.name.startswith(_SHAPE_KEEPING_NODE_GROUPS)
+
+
+def _counted(count: int, one: str, many: str) -> str:
+    return f"{count} {one if count == 1 else many}"
 
 
 def _shape_changes(ob):
@@ -276,8 +291,7 @@ def _shape_changes(ob):
     'shape keys', both), or '': a run without Use Modifiers measured a half of a mirrored
     model, or a cube a shape key flattens, without a word (a trial's)."""
     found = []
-    modifiers = [m.name for m in ob.modifiers
-                 if m.show_viewport and m.type not in _SHAPE_KEEPING_MODIFIERS]
+    modifiers = [m.name for m in ob.modifiers if m.show_viewport and not _keeps_shape(m)]
     if modifiers:
         found.append(f"its modifiers ({', '.join(modifiers)})")
     keys = ob.data.shape_keys
@@ -362,9 +376,11 @@ def prepare(depsgraph, objects, options, for_writing=True, active=None):
             try:
                 if not mesh_data.topology(temp).matches(original):
                     raise UserError(
-                        f"The modifiers of {ob.name} change its topology ({len(me.vertices)} "
-                        f"vertices, {len(me.polygons)} faces become {len(temp.vertices)}, "
-                        f"{len(temp.polygons)}): the result could not be written back. Turn off "
+                        f"The modifiers of {ob.name} change its topology "
+                        f"({_counted(len(me.vertices), 'vertex', 'vertices')}, "
+                        f"{_counted(len(me.polygons), 'face', 'faces')} become "
+                        f"{len(temp.vertices)}, {len(temp.polygons)}): the result could not be "
+                        "written back. Turn off "
                         "Use Modifiers, or apply or disable the modifiers that add or remove "
                         "geometry"
                     )
@@ -405,11 +421,26 @@ def prepare(depsgraph, objects, options, for_writing=True, active=None):
     notice = _texture_work_notice(list(tasks.values()), options)
     if notice:
         notices.append(notice)
-    for task in tasks.values():
+    # Users of a computed mesh that were not selected show its values too, measured with the
+    # computing object's transform (a trial's: computing a scaled copy rescaled the original's
+    # values without a word).
+    unselected = {}
+    if for_writing:
+        chosen = {ob.name for ob in objects}
+        for ob in bpy.data.objects:
+            if ob.type == "MESH" and ob.name not in chosen and ob.data.session_uid in tasks:
+                unselected.setdefault(ob.data.session_uid, []).append(ob.name)
+    for uid, task in tasks.items():
         if task.shared_by:
             task.warnings.append(
                 f"{task.object_name} shares its mesh with {', '.join(task.shared_by)}: "
                 f"computed once, from {task.object_name}"
+            )
+        if uid in unselected:
+            task.warnings.append(
+                f"{task.object_name}'s mesh is also used by {', '.join(unselected[uid])}, not "
+                f"computed: they show these values too, measured with {task.object_name}'s "
+                "transform"
             )
     return list(tasks.values()), notices
 
@@ -576,7 +607,8 @@ def compute(tasks, options, progress=None, cancelled=None):
                 task.values[loose] = NOT_MEASURED
                 task.normalized[loose] = NOT_MEASURED
                 task.warnings.append(
-                    f"{task.object_name}: {int(loose.sum())} vertices in no face (loose "
+                    f"{task.object_name}: "
+                    f"{_counted(int(loose.sum()), 'vertex', 'vertices')} in no face (loose "
                     "vertices, wire edges) have no thickness: their values are 0 and their "
                     "colour transparent black"
                 )

@@ -248,6 +248,7 @@ def check_smoothing(
             )
         if face_count is not None:
             o["uvs"] = _check_uvs(uvs, face_count, vertex_count, triangles)
+            _check_uvs_cover_an_area(o["uvs"])
     if method != "texture" and uvs is not None and face_count is not None:
         # Read by 'texture' only, but checked whenever given: a wrong argument should not pass
         # unnoticed until the method changes.
@@ -496,6 +497,17 @@ def _check_uvs(uvs, m, n, triangles=None):
     if not np.isfinite(corners).all():
         raise ValueError("uvs must be finite: some are NaN or infinite")
     return corners
+
+
+def _check_uvs_cover_an_area(corners):
+    """Texture smoothing blurs over the UV layout: one that covers no area (never unwrapped:
+    every corner at one point, or on one line) draws every face into the same texels, and
+    every value came out as one (a trial's, in Blender, without a word)."""
+    e1, e2 = corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0]
+    if not np.any(e1[:, 0] * e2[:, 1] - e1[:, 1] * e2[:, 0]):
+        raise ValueError("the UVs cover no area (every face's UVs lie on a point or a line: "
+                         "never unwrapped?): texture smoothing and bakes need a UV layout; "
+                         "unwrap the mesh first")
 
 
 def _check_engine(engine):

@@ -297,6 +297,10 @@ def test_modifiers_and_shape_keys_left_out_are_named_in_a_warning():
     half = import_obj("suzanne.obj")
     half.modifiers.new("Mirror", "MIRROR")
     half.modifiers.new("Normals", "WEIGHTED_NORMAL")  # keeps the shape: not named
+    half.modifiers.new("Split", "EDGE_SPLIT")  # the same (a trial's false warning)
+    # Shade Auto Smooth's modifier (4.1 on): geometry nodes of a 'Smooth by Angle' group.
+    smooth = half.modifiers.new("Smooth by Angle", "NODES")
+    smooth.node_group = bpy.data.node_groups.new("Smooth by Angle", "GeometryNodeTree")
     keyed = uv_sphere(segments=16, rings=8)
     keyed.shape_key_add(name="Basis")
     keyed.shape_key_add(name="Flat").value = 0.0
@@ -515,3 +519,19 @@ def test_a_double_sided_mesh_measures_the_same_on_both_sides():
     assert len(result.values) == 2 * n
     np.testing.assert_allclose(result.values[:n], single, rtol=1e-6)
     np.testing.assert_allclose(result.values[n:], single, rtol=1e-6)
+
+
+def test_users_of_the_mesh_not_computed_are_named():
+    # A trial's: computing a scaled linked duplicate rescaled the original's values (they
+    # share the mesh, and so its attribute) without a word.
+    api = addon_module("api")
+    original = uv_sphere(segments=16, rings=8)
+    copy = original.copy()
+    bpy.context.scene.collection.objects.link(copy)
+    copy.scale = (3.0, 3.0, 3.0)
+    result = api.compute_objects([copy], rays=4)[0]
+    assert [w for w in result.warnings if "also used by" in w] == [
+        f"{copy.name}'s mesh is also used by {original.name}, not computed: they show these "
+        f"values too, measured with {copy.name}'s transform"]
+    assert not any("also used by" in w
+                   for w in api.compute_objects([copy, original], rays=4)[0].warnings)

@@ -732,3 +732,16 @@ def test_kring_on_vertices_leaves_out_the_values_of_vertices_no_face_uses():
                                   "kring", points="vertices")
     np.testing.assert_array_equal(stray[: len(v)], alone)
     np.testing.assert_array_equal(stray[len(v):], alone)  # they take their merged vertex's
+
+
+def test_texture_smoothing_refuses_uvs_that_cover_no_area():
+    # A trial's (in Blender, a mesh never unwrapped): every face drew into the same texels and
+    # every value came out as one, without a word.
+    v, t = _icosphere(2)
+    values = np.linspace(0.1, 1.0, len(t)).astype(np.float32)
+    for uvs in (np.zeros((len(t), 3, 2)), np.stack([np.linspace(0, 1, 3 * len(t))] * 2,
+                                                    axis=1).reshape(-1, 3, 2)):
+        with pytest.raises(ValueError, match=r"^the UVs cover no area .*unwrap the mesh first"):
+            smooth(v, t, values, "texture", uvs=uvs, texture_size=16)
+        with pytest.raises(ValueError, match=r"^the UVs cover no area"):
+            shape_diameter.compute(v, t, smoothing="texture", uvs=uvs)
