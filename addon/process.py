@@ -541,7 +541,13 @@ def _corner_uvs(ob, me, options, flipped):
         name = me.uv_layers.active.name
     else:
         raise UserError(f"{ob.name} has no UV map, needed by {what}")
-    return mesh_data.corner_uvs(me, name, flipped)
+    uvs = mesh_data.corner_uvs(me, name, flipped)
+    # Checked before any work, naming the map: the core's own check came after the cast, as
+    # an unnamed 'ValueError: uvs must be finite' (a trial's).
+    if not np.isfinite(uvs).all():
+        raise UserError(f"{ob.name}'s UV map {name!r} has coordinates that are not finite (NaN "
+                        f"or infinite), needed by {what}: fix or unwrap it again")
+    return uvs
 
 
 def polygon_means(triangle_values, mesh):
@@ -646,6 +652,15 @@ def compute(tasks, options, progress=None, cancelled=None):
         if loose is not None and task.colors is not None:
             task.colors[loose] = 0.0  # transparent black: a colour the map never gives
         task.engine = result.engine
+        if result.flipped_faces:  # measured right, but its normals still point in
+            # Polygons, as Blender counts faces (the core counts triangles).
+            flipped = len(np.unique(mesh.triangle_polygons[result.reversed_faces]))
+            faces = _counted(flipped, "face points", "faces point")
+            task.warnings.append(
+                f"{task.object_name}: {faces} inward (inside out) and "
+                f"{'was' if flipped == 1 else 'were'} measured turned outward; the mesh is "
+                "unchanged (Mesh > Normals > Recalculate Outside turns it in Blender)"
+            )
         task.timings["total"] = time.perf_counter() - computing
         done += share
     if progress is not None:

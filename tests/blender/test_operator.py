@@ -90,6 +90,11 @@ def test_an_inside_out_mesh_is_measured_outward_unless_told_otherwise():
     ob.data.loops.foreach_get("vertex_index", corners)
     assert run() == {"FINISHED"}  # orientation="auto"
     np.testing.assert_allclose(attribute_array(ob.data, "sdf"), outward, rtol=1e-5)
+    # Said, since the artist's normals still point in (a trial's: fixed without a word).
+    said = addon_module("api").compute_object(ob, rays=4).warnings
+    assert said == [f"{ob.name}: {len(ob.data.polygons)} faces point inward (inside out) and were "
+                    "measured turned outward; the mesh is unchanged (Mesh > Normals > "
+                    "Recalculate Outside turns it in Blender)"]
     # Every ray left through the skin: zeros, and it says so once (the core's warning, kept
     # for the object, not also printed: warnings are errors here).
     result = addon_module("api").compute_object(ob, orientation="as_is")
@@ -535,3 +540,18 @@ def test_users_of_the_mesh_not_computed_are_named():
         f"values too, measured with {copy.name}'s transform"]
     assert not any("also used by" in w
                    for w in api.compute_objects([copy, original], rays=4)[0].warnings)
+
+
+def test_uvs_that_are_not_finite_are_refused_before_any_work():
+    # A trial's: a NaN UV failed the bake after the cast, as an unnamed 'ValueError'.
+    api = addon_module("api")
+    bpy.ops.mesh.primitive_cube_add()
+    cube = bpy.context.active_object
+    uv = np.zeros(len(cube.data.loops) * 2, dtype=np.float32)
+    cube.data.uv_layers.active.data.foreach_get("uv", uv)
+    uv[0] = np.nan
+    cube.data.uv_layers.active.data.foreach_set("uv", uv)
+    with pytest.raises(api.UserError, match=r"^Cube's UV map 'UVMap' has coordinates that are "
+                                            r"not finite .*needed by the bake"):
+        api.compute_object(cube, bake_image=True, texture_size=64,
+                           progress=lambda f: pytest.fail("it computed first"))
