@@ -17,6 +17,11 @@ TRIANGLE = (np.array([[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]]), np.ar
 NO_RAY = "no ray of any point found the other side"
 
 
+def uvs_outside_the_square(faces):
+    """Each face's UVs a small triangle at (2, 2): wholly outside [0, 1], with area."""
+    return np.tile(np.array([[2.0, 2.0], [2.1, 2.0], [2.0, 2.1]]), (faces, 1, 1))
+
+
 def test_compute_keeps_its_warnings_and_still_issues_them_naming_the_callers_line():
     with pytest.warns(RuntimeWarning, match=NO_RAY) as seen:
         result = shape_diameter.compute(*TRIANGLE)
@@ -37,7 +42,7 @@ def test_a_warning_names_the_callers_line_from_inside_another_call():
                 warnings.simplefilter("always")
                 shape_diameter.compute(*TRIANGLE)
                 shape_diameter.smooth(V, F, np.ones(len(F), dtype=np.float32), "texture",
-                                      uvs=np.full((len(F), 3, 2), 2.0), texture_size=16)
+                                      uvs=uvs_outside_the_square(len(F)), texture_size=16)
             seen.extend(inner)
 
     shape_diameter.compute(V, F, progress=progress)
@@ -67,7 +72,7 @@ def test_collect_warnings_keeps_them_from_the_warnings_module():
 def test_collect_warnings_takes_smooths_warnings_too():
     # smooth() with every face's UVs wholly outside the square.
     V, F = shapes.icosphere(1.0, 2)
-    uvs = np.full((len(F), 3, 2), 2.0)
+    uvs = uvs_outside_the_square(len(F))
     with shape_diameter.collect_warnings() as caught:
         shape_diameter.smooth(V, F, np.ones(len(F), dtype=np.float32), "texture", uvs=uvs,
                               texture_size=16)
