@@ -380,9 +380,8 @@ def prepare(depsgraph, objects, options, for_writing=True, active=None):
                         f"({_counted(len(me.vertices), 'vertex', 'vertices')}, "
                         f"{_counted(len(me.polygons), 'face', 'faces')} become "
                         f"{len(temp.vertices)}, {len(temp.polygons)}): the result could not be "
-                        "written back. Turn off "
-                        "Use Modifiers, or apply or disable the modifiers that add or remove "
-                        "geometry"
+                        "written back. Turn off Use Modifiers, or apply or disable the "
+                        "modifiers that add or remove geometry"
                     )
                 triangles = mesh_data.triangulation(temp, matrix)
                 uvs = _corner_uvs(ob, temp, options, triangles.flipped)

@@ -26,14 +26,14 @@ struct Mesh {
 // coordinate that is not finite, a bounding box wider than 1e30 on an axis, or a vertex more
 // than 1e30 from its centre. The box (center, max_extent) is of the vertices the triangles with
 // area use (every triangle's where none has area): vertices no such triangle uses are allowed
-// and take no part. Checks and copies on `threads` (0 = every
-// core); the result, and which problem an error names (the first), do not depend on it.
+// and take no part. Checks and copies on `threads` (0 = every core); the result, and which
+// problem an error names (the first), do not depend on it.
 Mesh make_mesh(const double* vertices, std::size_t vertex_count, const std::int64_t* triangles,
                std::size_t triangle_count, unsigned threads = 0);
 
 // The largest side of the box make_mesh takes (the vertices the triangles with area use; 0
-// for no triangle), for what runs on the caller's arrays outside compute() (projected smoothing's
-// unit scaling). Throws std::invalid_argument for an index out of range.
+// for no triangle), for what runs on the caller's arrays outside compute() (projected
+// smoothing's unit scaling). Throws std::invalid_argument for an index out of range.
 double used_width(const double* vertices, std::size_t vertex_count,
                   const std::int64_t* triangles, std::size_t triangle_count,
                   unsigned threads = 0);

@@ -28,7 +28,8 @@ struct ReversedTwins {
 // Every face whose three corner positions (as the engines see them: the mesh's float
 // positions, -0 equal to +0) are those of the lowest-index face there, wound the other way,
 // and that face; only in doubled parts: sets of faces joined by shared vertices whose every
-// face with area has such a twin (the back of a double-sided mesh, on vertices of its own or shared).
+// face with area has such a twin (the back of a double-sided mesh, on vertices of its own or
+// shared).
 // Two solids meeting at a wall are no such part: each wall face keeps measuring its own
 // solid. A face with two corners at one position has no twin; faces at the same positions
 // wound the same way are left alone (they measure alike). Expected linear time: a

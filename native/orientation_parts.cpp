@@ -38,9 +38,9 @@ std::uint64_t position_hash(glm::vec3 p) {
 }  // namespace
 
 // A lock-free open-addressing table: equal positions probe the same slots, and the first to
-// claim an empty one stands for them. A slot holds the hash's high half beside the vertex, so that a
-// probe past another position rarely has to load that vertex (a cache miss on a mesh whose
-// vertex order is scattered).
+// claim an empty one stands for them. A slot holds the hash's high half beside the vertex, so
+// that a probe past another position rarely has to load that vertex (a cache miss on a mesh
+// whose vertex order is scattered).
 UninitializedVector<std::uint32_t> weld_exact(const Mesh& mesh, unsigned threads) {
   const std::size_t nv = mesh.vertices.size();
   std::size_t size = 16;

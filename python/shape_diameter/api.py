@@ -3,7 +3,6 @@
 
 from __future__ import annotations
 
-import functools
 import os
 import time
 from dataclasses import dataclass, field
@@ -138,27 +137,23 @@ def _array(name, value, shape, rows):
                          f"{rows}") from error
 
 
-_UNWRITABLE_CACHES_WARNED_OF = set()
+_PROGRAM_CACHES_CHECKED = set()
 
 
 def _unwritable_program_cache():
-    """The OpenCL program cache's folder when it cannot be made or written and was not warned
-    of yet, else None: the core then compiles in every process without a word (a trial's,
-    about 9 s a run on PoCL)."""
+    """The OpenCL program cache's folder the first time this process finds it cannot be made
+    or written, else None: the core then compiles in every process without a word (a trial's,
+    about 9 s a run on PoCL). Each folder is checked once a process, so said once (a batch
+    said it for every input)."""
     folder = _core.opencl_cache_directory()
-    if not folder or folder in _UNWRITABLE_CACHES_WARNED_OF or _writable_folder(folder):
+    if not folder or folder in _PROGRAM_CACHES_CHECKED:
         return None
-    return folder
-
-
-@functools.lru_cache(maxsize=None)
-def _writable_folder(folder) -> bool:
-    """Whether `folder` can be made (if missing) and written; checked once a process."""
+    _PROGRAM_CACHES_CHECKED.add(folder)
     try:
         os.makedirs(folder, exist_ok=True)
     except OSError:
-        return False
-    return os.access(folder, os.W_OK)
+        return folder
+    return None if os.access(folder, os.W_OK) else folder
 
 
 def _check_mesh(vertices, triangles, threads=0):
@@ -349,7 +344,6 @@ def compute(
         warn(f"the OpenCL program cache {folder} cannot be written: each process compiles the "
              "kernels again (seconds each, more on PoCL); set SDF_CACHE_DIR to a writable "
              "folder")
-        _UNWRITABLE_CACHES_WARNED_OF.add(folder)  # once a process: a batch said it per input
     choosing = time.perf_counter() - clock  # 'auto' lists the devices (drivers load once)
 
     def attempt(v, t, smoothing_resolved, find_twins, progress):

@@ -362,8 +362,8 @@ def build_parser() -> argparse.ArgumentParser:
         "stderr, --json to stdout",
     )
     parser.add_argument("--list-engines", action=_ListEngines,
-                        help="list the engines --engine takes here, one a line (with --json, one JSON "
-                        "object each), and exit")
+                        help="list the engines --engine takes here, one a line (with --json, "
+                        "one JSON object each), and exit")
     parser.add_argument("--version", action="version", version=f"%(prog)s {__version__}")
     return parser
 

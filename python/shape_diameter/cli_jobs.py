@@ -65,7 +65,7 @@ def plan(args, write_suffixes) -> list:
     cannot be written, an output that is an input, two inputs writing one file."""
     sources, problems = [], {}
     below = {}  # a mesh --recursive found: its subfolder, under the folder given
-    recursive = getattr(args, "recursive", False)
+    recursive = args.recursive
     for source in args.input:
         if os.path.isdir(source):
             try:

@@ -174,11 +174,11 @@ def _read(path, want_uvs: bool = False):
         count = "1 vertex has" if len(not_finite) == 1 else f"{len(not_finite)} vertices have"
         raise ValueError(f"{path}: {count} a coordinate that is not finite (NaN or infinite; "
                          f"the first: vertex {not_finite[0]}, counting from 0)")
-    outside = np.flatnonzero(((triangles < 0) | (triangles >= len(vertices))).any(axis=1))
+    beyond = (triangles < 0) | (triangles >= len(vertices))
+    outside = np.flatnonzero(beyond.any(axis=1))
     if len(outside):
-        face = int(source[outside[0]])
-        index = int(triangles[outside[0]][(triangles[outside[0]] < 0)
-                                          | (triangles[outside[0]] >= len(vertices))][0])
+        first = outside[0]
+        face, index = int(source[first]), int(triangles[first][beyond[first]][0])
         raise ValueError(f"{path}: face {face} (counting from 0) refers to vertex {index}, but "
                          f"the file has {len(vertices)} vertices (0 to {len(vertices) - 1})")
     return vertices, triangles, source, uvs

@@ -39,7 +39,8 @@ def part_warnings(vertices, triangles, result, threads=0) -> list:
 
 
 class _Parts:
-    """The mesh's parts and, per part, its faces and its points (faces or vertices) measured."""
+    """The mesh's parts and, per part, its faces' count and its points (faces or vertices)
+    measured."""
 
     def __init__(self, vertices, triangles, result, threads):
         self.result, self.triangles = result, np.asarray(triangles)
@@ -53,7 +54,8 @@ class _Parts:
         self.vertices = vertices
         self.measured = (result.valid_rays > 0) & (self.point_part >= 0)
         self.counts = self.per_part(self.measured)
-        self.solid = np.bincount(self.face_part, minlength=len(self.extents)) >= SOLID_FACES
+        self.faces = np.bincount(self.face_part, minlength=len(self.extents))
+        self.solid = self.faces >= SOLID_FACES
         # The whole mesh's largest side.
         self.width = result.near_cutoff / _core.NEAR_CUTOFF_SHARE
 
@@ -93,9 +95,9 @@ class _Parts:
         silent &= with_area > 0
         if not silent.any():
             return None
-        faces = int(np.bincount(self.face_part, minlength=len(self.extents))[silent].sum())
         return (
-            f"{int(silent.sum())} of the mesh's {len(self.extents)} parts ({faces} faces) kept "
+            f"{int(silent.sum())} of the mesh's {len(self.extents)} parts "
+            f"({int(self.faces[silent].sum())} faces) kept "
             "no ray: their values are not measured but filled from the other parts (their "
             "median; valid_rays is 0 there). Such a part is open, inside out, or thinner than "
             f"the near-hit cutoff ({self.result.near_cutoff:.3g} units: 2e-5 of the whole "
