@@ -1,5 +1,5 @@
 # SPDX-License-Identifier: GPL-3.0-or-later
-"""Slivers lying across the axes, cut into pieces for the BVH (native/bvh_split.h), against
+"""Slivers lying across the axes, cut into pieces for the BVH (native/accel/bvh_split.h), against
 the same build without cutting (SDF_BVH_SPLIT=0), in one run, alternating: CAD-like fans and
 needles, and real meshes, whose few slivers must cost nothing.
 

@@ -136,7 +136,7 @@ def _mesh_lengths_near(V, F, origins, directions, guesses, neighbours=8, chunk=4
         q = np.cross(s, b)
         v = np.einsum("rck,rck->rc", d, q) / det
         t = np.einsum("rck,rck->rc", c, q) / det
-        # Triangles grown by the engine's own SDF_BARYCENTRIC_SLACK (kernels/sdf_intersect.h),
+        # Triangles grown by the engine's own SDF_BARYCENTRIC_SLACK (kernels/ray/sdf_intersect.h),
         # so a ray through a shared edge or vertex belongs to every triangle there. This does
         # not make the reference less exact: the mesh is closed and convex, and the exit from
         # a convex solid is the nearest of the planes of the faces the ray leaves through

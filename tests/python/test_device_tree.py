@@ -1,5 +1,5 @@
 # SPDX-License-Identifier: GPL-3.0-or-later
-"""The BVH and the faces' points made on the device (kernels/sdf_lbvh_kernels.cl): the same
+"""The BVH and the faces' points made on the device (kernels/cl/sdf_lbvh_kernels.cl): the same
 values as the CPU engine's, bit for bit, on every device and cast kernel, for meshes that
 stress the build (zero-area faces, faces that share one Morton cell, one triangle, faces to
 reverse). GPUs make this tree by default (engine 'auto'/'opencl', points 'faces'); the
