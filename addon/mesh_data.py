@@ -114,8 +114,8 @@ def corner_uvs(me, name, flipped=False):
 
 def new_image(name, rgba):
     """A packed float RGBA image holding `rgba` (height, width, 4), Blender's row order, kept
-    by a fake user (with no user Blender drops it when the file is saved: a trial's bake was
-    gone after a save and reload) and tagged Non-Color (it holds values, not colours)."""
+    by a fake user (with no user Blender drops it when the file is saved, and a bake
+    was gone after a save and reload) and tagged Non-Color (it holds values, not colours)."""
     height, width = rgba.shape[:2]
     image = bpy.data.images.new(name, width, height, alpha=True, float_buffer=True)
     try:

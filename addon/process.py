@@ -236,7 +236,7 @@ def _mode_problem(ob):
 def _attribute_problem(ob, options):
     for name, data_type, domain in options.outputs():
         # Blender keeps vertex group names apart from attributes and refuses an attribute
-        # of a group's name (found by a trial: it failed only after the computation).
+        # of a group's name: checked here, since it failed only after the computation.
         if ob.vertex_groups.get(name) is not None:
             return (
                 f"{ob.name}: a vertex group is named {name!r}; rename it, or choose another "
@@ -255,7 +255,7 @@ def _attribute_problem(ob, options):
 
 def _not_a_mesh(ob):
     """How a run names an object it cannot measure, with what would make it a mesh where
-    Blender has a way (a trial's collection instance read just 'Inst (empty)')."""
+    Blender has a way (a collection instance read just 'Inst (empty)')."""
     if ob.type == "EMPTY" and ob.instance_type == "COLLECTION":
         return f"{ob.name} (a collection instance: Make Instances Real first)"
     if ob.type in ("CURVE", "SURFACE", "FONT", "META"):
@@ -271,7 +271,7 @@ _SHAPE_KEEPING_MODIFIERS = {
     "EDGE_SPLIT",
 }
 # Blender's Shade Auto Smooth adds a geometry-nodes modifier of this node group (4.1 on), which
-# sets sharp edges alone: it was named as changing the shape on every run (a trial's).
+# sets sharp edges alone: it must not be named as changing the shape on every run.
 _SHAPE_KEEPING_NODE_GROUPS = ("Smooth by Angle",)
 
 
@@ -289,7 +289,7 @@ def _counted(count: int, one: str, many: str) -> str:
 def _shape_changes(ob):
     """What changes `ob`'s shape in the viewport beyond its base mesh ('modifiers (Mirror)',
     'shape keys', both), or '': a run without Use Modifiers measured a half of a mirrored
-    model, or a cube a shape key flattens, without a word (a trial's)."""
+    model, or a cube a shape key flattens, without a word."""
     found = []
     modifiers = [m.name for m in ob.modifiers if m.show_viewport and not _keeps_shape(m)]
     if modifiers:
@@ -326,8 +326,8 @@ def prepare(depsgraph, objects, options, for_writing=True, active=None):
         raise UserError(f"Not a mesh: {', '.join(others)}")
     if others:
         notices.append(f"Skipped what is not a mesh: {', '.join(others)}")
-    # A mesh without faces (a wire rig, a point helper) has no thickness: skipped as what is
-    # not a mesh is, unless nothing else is left (a trial's: one stopped the whole run).
+    # A mesh without faces (a wire rig, a single-vertex placeholder) has no thickness: skipped as
+    # what is not a mesh is, unless nothing else is left (one such mesh stopped the whole run).
     faceless = [ob for ob in meshes if len(ob.data.polygons) == 0]
     if len(faceless) == len(meshes):
         raise UserError(f"{faceless[0].name} has no faces"
@@ -421,8 +421,8 @@ def prepare(depsgraph, objects, options, for_writing=True, active=None):
     if notice:
         notices.append(notice)
     # Users of a computed mesh that were not selected show its values too, measured with the
-    # computing object's transform (a trial's: computing a scaled copy rescaled the original's
-    # values without a word).
+    # computing object's transform (computing a scaled copy rescaled the original's values
+    # without a word).
     unselected = {}
     if for_writing:
         chosen = {ob.name for ob in objects}
@@ -542,7 +542,7 @@ def _corner_uvs(ob, me, options, flipped):
         raise UserError(f"{ob.name} has no UV map, needed by {what}")
     uvs = mesh_data.corner_uvs(me, name, flipped)
     # Checked before any work, naming the map: the core's own check came after the cast, as
-    # an unnamed 'ValueError: uvs must be finite' (a trial's).
+    # an unnamed 'ValueError: uvs must be finite'.
     if not np.isfinite(uvs).all():
         raise UserError(f"{ob.name}'s UV map {name!r} has coordinates that are not finite (NaN "
                         f"or infinite), needed by {what}: fix or unwrap it again")
@@ -735,7 +735,7 @@ def write(bpy_data, tasks, options):
             if options.color_name:
                 me.color_attributes.active_color = me.color_attributes[options.color_name]
                 # The render colour too, where it was ours or none: replacing our attribute
-                # of the other domain left bpy 4.5 rendering no colour (a trial's).
+                # of the other domain left bpy 4.5 rendering no colour.
                 if default_before in ("", options.color_name):
                     me.color_attributes.default_color_name = options.color_name
             mesh_data.record_outputs(me, options.outputs())

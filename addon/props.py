@@ -314,7 +314,7 @@ def stored_engine_property(store, with_default, description):
 def _skip_save(prop):
     """The same property definition with SKIP_SAVE: an operator then starts from the defaults
     every time instead of the previous call's values (a script's bpy.ops call that left out
-    orientation='flip' still flipped, found by a trial). The panel passes every option."""
+    orientation='flip' still flipped). The panel passes every option."""
     keywords = dict(prop.keywords)
     keywords["options"] = set(keywords.get("options", set())) | {"SKIP_SAVE"}
     return prop.function(**keywords)

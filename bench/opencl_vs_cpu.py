@@ -2,8 +2,8 @@
 """OpenCL cast kernels against the CPU engine on the same machine, in one run, interleaved
 round by round so that a shared machine's noise hits every contender alike: cast rays/s (the
 best of the rounds) and each kernel's ratio to the CPU engine, with a bitwise check of the
-values (fibonacci sampling). For issue 6's target "OpenCL on PoCL: at least half our CPU
-engine", and for choosing each device's default kernel (opencl_engine.cpp, cast_kernel_for),
+values (fibonacci sampling). For the target "OpenCL on PoCL: at least half our CPU
+engine" (docs/performance.md), and for choosing each device's default kernel (opencl_engine.cpp, cast_kernel_for),
 e.g. on a GPU: opencl armadillo-x16,bunny00-x16 bvh_per_point,bvh4_per_point,bvh8_per_point,
 bvh_per_ray. Usage: python3 bench/opencl_vs_cpu.py [ENGINE [MESH,MESH [KERNEL,KERNEL [ROUNDS]]]]"""
 import os

@@ -1,7 +1,7 @@
 # SPDX-License-Identifier: GPL-3.0-or-later
 """Smoothing benchmark (CPU): the paper's Table 3 (k-ring, k = 1..8), Table 4 (texture
 2048x2048, radius 2..64), projected points, the growth with the face count, and each method's
-time against the ray-casting time of the same engine on the same mesh (issue 4's target: at
+time against the ray-casting time of the same engine on the same mesh (the target: at
 1M faces, at most 10% of casting). Prints the tables and writes them into bench/RESULTS.md
 under "## Smoothing (CPU)".
 
@@ -209,7 +209,7 @@ def main():
               "Each method with its default options (k-ring: k from the face count; projected: "
               "1 iteration; texture: 1024 x 1024, radius 8) over compute()'s cast time on the "
               "same mesh (timings['cast'], 30 rays, CPU engine, both at full thread count). "
-              "Target (issue 4): at most 10% "
+              "Target: at most 10% "
               "at 1M faces; CGAL's post-processing takes 74% of its casting time there.", "",
               "| mesh | faces | cast s | k-ring s (k) | % | projected s | % | texture s | % |",
               "|---|---:|---:|---:|---:|---:|---:|---:|---:|"]  # fmt: skip

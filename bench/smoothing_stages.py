@@ -12,7 +12,7 @@ with UVs). The field smoothed is the mesh's SDF (compute() on the same engine, 3
 One process: prints, per mesh, one JSON line: smooth()'s wall time (best of --repeat), the
 stages of the fastest call into shape_diameter._core (its timings), and compute(smoothing=
 method)'s cast and smoothing times (best of --repeat each) with smoothing as a percentage of
-the cast (issue 4's target: at most 10%). Inside compute() the texture method's UV islands
+the cast (the target: at most 10%). Inside compute() the texture method's UV islands
 are found while a device casts ('beside cast'). --compare runs this script under each
 PYTHONPATH in turn ("" for the installed package), alternating old and new --rounds times,
 and prints the best of each with the ratio: the machine may be shared, so only a comparison

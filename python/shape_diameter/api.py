@@ -122,7 +122,7 @@ def _resolve_engine(engine: str) -> str:
         return engine
     if any(d["type"] == "GPU" for d in _core.opencl_devices()):
         return "opencl"
-    if _core.opencl_gpu_lost_to_fork():  # a fork-started worker: it hung (a trial's Pool)
+    if _core.opencl_gpu_lost_to_fork():  # a fork-started worker: its OpenCL calls hang
         warn(f"engine='auto' runs on the CPU: {_core.opencl_unavailable_reason()}")
     return "cpu"
 
@@ -142,8 +142,8 @@ _PROGRAM_CACHES_CHECKED = set()
 
 def _unwritable_program_cache():
     """The OpenCL program cache's folder the first time this process finds it cannot be made
-    or written, else None: the core then compiles in every process without a word (a trial's,
-    about 9 s a run on PoCL). Each folder is checked once a process, so said once (a batch
+    or written, else None: the core then compiles in every process without a word (about 9 s a
+    run on PoCL). Each folder is checked once a process, so said once (a batch
     said it for every input)."""
     folder = _core.opencl_cache_directory()
     if not folder or folder in _PROGRAM_CACHES_CHECKED:

@@ -47,14 +47,14 @@ EXIT_STDOUT_CLOSED = 141  # 128 + SIGPIPE: what `... | head` leaves a command th
 
 class _StdoutClosed(Exception):
     """Standard output's reader went away (`shape-diameter ... --json | head -1`): the run
-    stops quietly, as programs killed by SIGPIPE do (a trial saw a traceback, or every later
-    input reported as failed though its files were written)."""
+    stops quietly, as programs killed by SIGPIPE do, instead of a traceback, or every later input
+    reported as failed though its files were written."""
 
 
 class _StdoutFailed(Exception):
     """Writing to standard output failed otherwise (a full disk behind `> file`): the run
-    stops with one line saying so (a trial saw a traceback with --json, and without it the
-    input being computed named as what failed, though its files were written)."""
+    stops with one line saying so, instead of a traceback with --json, or without it the
+    input being computed named as what failed, though its files were written."""
 
 
 def _say(text: str) -> None:
@@ -97,7 +97,7 @@ def _in_option_spelling(message: str) -> str:
 class _ListEngines(argparse.Action):
     """--list-engines: what --engine takes on this machine, one line each (with --json, each
     engines() entry as a JSON object), then exit; the note on 'auto' goes to stderr, so that
-    stdout holds the engines alone (a trial's `| awk '{print $1}'` listed 'auto' too). It
+    stdout holds the engines alone (`| awk '{print $1}'` must not list 'auto' too). It
     runs as it is parsed (no INPUT needed): --json is looked for in the parser's arguments."""
 
     def __init__(self, option_strings, dest, **kwargs):
@@ -407,7 +407,7 @@ def _quiet_stdout() -> None:
 def _open_closed_streams() -> None:
     """A program started with standard output or error closed (`2>&-`, a daemon's wrapper) has
     None for them in Python: its messages then go nowhere instead of the run failing on its
-    first (a trial's: exit status 1, no output written, no word)."""
+    first (exit status 1, no output written, no word)."""
     for name in ("stdout", "stderr"):
         if getattr(sys, name) is None:
             setattr(sys, name, open(os.devnull, "w"))  # noqa: SIM115 (the process's own)
@@ -452,7 +452,7 @@ class _Interrupts:
     def take_over(self) -> bool:
         """Install the handler (held, not armed); False where signals cannot be taken. SIGTERM
         and SIGHUP (`timeout`, batch schedulers, a closed terminal) stop the run as Ctrl-C
-        does, outputs cleaned up: they left temporary files behind (a trial's)."""
+        does, outputs cleaned up: otherwise they leave temporary files behind."""
         try:
             signal.signal(signal.SIGINT, self._handle)
             for name in ("SIGTERM", "SIGHUP"):
@@ -676,7 +676,7 @@ def _warn(job, warned: list, message: str) -> None:
 
 
 # Texture smoothing estimated past this on the CPU threads is announced before it starts (a
-# 8192^2 run at a radius of 8192 texels went on for an hour without a word, a trial's).
+# 8192^2 run at a radius of 8192 texels went on for an hour without a word).
 LONG_TEXTURE_SECONDS = 10.0
 
 
@@ -739,7 +739,7 @@ def _check_combinations(args) -> None:
 def _refuse_unusable_engine(engine: str) -> None:
     """The engine, before any input is read: a mistyped name is a bad option (status 2) and
     OpenCL missing on this machine is the machine's (status 1), said once, not as a failure of
-    every input (a trial's batch reported each asset as broken, status 2)."""
+    every input (a batch reported each asset as broken, status 2)."""
     try:
         _check_engine(engine)
     except ValueError as exc:
@@ -766,7 +766,7 @@ def _smoothing_options(args) -> dict:
 
 
 def _report(args, job, vertices, triangles, result, io_seconds, total_seconds) -> dict:
-    """An input's --json object (documented in the README's command line section); the
+    """An input's --json object (documented in docs/cli.md); the
     caller adds its warnings."""
     point_count = len(result.raw)
     timings = {stage: float(seconds) for stage, seconds in result.timings.items()}

@@ -123,7 +123,7 @@ def plan(args, write_suffixes) -> list:
             if args.values or (values and os.path.exists(source)):
                 _check_writable_path(values, None)
             _check_distinct(source, output, values)
-        except CommandError as exc:  # this input's failure: the others go on (a trial's)
+        except CommandError as exc:  # this input's failure: the others go on
             jobs.append(Job(source, problem=str(exc)))
             continue
         # Outputs are written whole or not at all, the mesh and its values together: files
@@ -168,7 +168,7 @@ def _meshes_in(folder: str) -> list:
             continue
         # Only folders are left out (--recursive walks them). What else bears a mesh's name
         # fails as an input of its own: a link to nothing or to itself (one vanished, one
-        # stopped the whole folder), a FIFO or a socket (skipped without a word, a trial's).
+        # stopped the whole folder), a FIFO or a socket (not skipped without a word).
         try:
             if entry.is_dir():
                 continue
@@ -181,7 +181,7 @@ def _meshes_in(folder: str) -> list:
 def _check_no_collisions(jobs) -> None:
     """Before any work: a second input writing a file that an earlier one writes (a.obj and
     a.ply both make a.sdf.ply) fails on its own, the others go on (one such pair in a folder
-    of thousands stopped the whole batch, a trial's); an input given twice, or one that
+    of thousands stopped the whole batch); an input given twice, or one that
     another input's run would overwrite, refuses the run."""
     written = {}  # real path of an earlier input's output -> that input
     for job in jobs:

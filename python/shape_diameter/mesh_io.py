@@ -550,7 +550,7 @@ def _warn_if_float32_moves(path: str, vertices: np.ndarray) -> None:
     if not moved <= PRECISION_WARNING * size:  # also inf: beyond float32's range
         if size > 0 and moved < 0.1 * size:
             share = f"{moved / size:.2g} of the mesh's size"
-        elif size > 0 and moved < size:  # (a trial read 13% as 'as much as the mesh is wide')
+        elif size > 0 and moved < size:  # (13% is not 'as much as the mesh is wide')
             share = f"{moved / size:.0%} of the mesh's size: its shape is lost"
         else:  # e.g. a unit cube at 1e8: every corner lands on one float32
             share = "as much as the mesh is wide: its shape is lost"

@@ -2,8 +2,7 @@
 """compute()'s warnings about single parts of a mesh (faces joined through shared vertex
 positions: the core's orientation parts) whose values are not what they seem, where the whole
 mesh's figures hide them: a 1 mm plate beside a ball 60 m away read 1.5x high, and a 1 mm cube
-beside a 100 m slab, keeping no ray, took the slab's median, 14,000x its size (trials'
-findings). The add-on reports the same words (it collects compute()'s warnings)."""
+beside a 100 m slab, keeping no ray, took the slab's median, 14,000x its size. The add-on reports the same words (it collects compute()'s warnings)."""
 
 from __future__ import annotations
 

@@ -208,7 +208,7 @@ def check_smoothing(
     known = OPTIONS[method]
     unknown = sorted(set(options) - set(known))
     if unknown:
-        # ("allowed: none" read as if 'none' were an option's name, found by a trial)
+        # (not "allowed: none", which reads as if 'none' were an option's name)
         allowed = f"allowed: {', '.join(known)}" if known else "it takes no options"
         raise ValueError(
             f"unknown option{'s' if len(unknown) > 1 else ''} for smoothing {method!r}: "
@@ -502,7 +502,7 @@ def _check_uvs(uvs, m, n, triangles=None):
 def _check_uvs_cover_an_area(corners):
     """Texture smoothing blurs over the UV layout: one that covers no area (never unwrapped:
     every corner at one point, or on one line) draws every face into the same texels, and
-    every value came out as one (a trial's, in Blender, without a word)."""
+    every value came out as one (in Blender too), without a word."""
     e1, e2 = corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0]
     if not np.any(e1[:, 0] * e2[:, 1] - e1[:, 1] * e2[:, 0]):
         raise ValueError("the UVs cover no area (every face's UVs lie on a point or a line: "
@@ -533,7 +533,7 @@ def _real(name, value, lo, hi):
     if isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating)):
         raise ValueError(f"{name} must be a number in [{lo}, {hi}], got {value!r}")
     if not (lo <= float(value) <= hi) or math.isnan(float(value)) or math.isinf(float(value)):
-        # (no "finite number in [0.0, inf]", which contradicts itself: found by a trial)
+        # (no "finite number in [0.0, inf]", which contradicts itself)
         bound = f"in [{lo}, {hi}]" if math.isfinite(hi) else f">= {lo}"
         raise ValueError(f"{name} must be a finite number {bound}, got {value!r}")
     return float(value)

@@ -171,7 +171,7 @@ CASES = [
 
 
 def test_meshes_without_faces_are_skipped_beside_others():
-    # A wire rig or a point helper in the selection stopped the whole run (a trial's); it is
+    # A wire rig or a single-vertex placeholder in the selection stopped the whole run; it is
     # skipped with a warning, as what is not a mesh is, and left as it was.
     api = addon_module("api")
     good, _ = suzanne_and_sphere()

@@ -58,7 +58,7 @@ def test_uv_sphere_vertices_match_the_analytic_sphere():
 
 
 def test_switching_points_replaces_the_earlier_runs_attributes():
-    # A trial's: Faces then Vertices failed on the first run's own FACE attributes, which
+    # Faces then Vertices failed on the first run's own FACE attributes, which
     # had to be removed by hand. The add-on records what it wrote and replaces those.
     ob = uv_sphere(radius=0.5, segments=16, rings=8)
     me = ob.data
@@ -90,7 +90,7 @@ def test_an_inside_out_mesh_is_measured_outward_unless_told_otherwise():
     ob.data.loops.foreach_get("vertex_index", corners)
     assert run() == {"FINISHED"}  # orientation="auto"
     np.testing.assert_allclose(attribute_array(ob.data, "sdf"), outward, rtol=1e-5)
-    # Said, since the artist's normals still point in (a trial's: fixed without a word).
+    # Said, since the artist's normals still point in (orientation turned them without a word).
     said = addon_module("api").compute_object(ob, rays=4).warnings
     assert said == [f"{ob.name}: {len(ob.data.polygons)} faces point inward (inside out) and were "
                     "measured turned outward; the mesh is unchanged (Mesh > Normals > "
@@ -137,7 +137,7 @@ def test_the_operator_runs_on_the_best_opencl_device_or_a_chosen_one():
     devices = [e["name"] for e in shape_diameter.engines() if e["name"].startswith("opencl:")]
     assert devices, "no OpenCL device here: install pocl-opencl-icd"
     ob = uv_sphere(radius=1.0, segments=32, rings=16)
-    # Fibonacci sampling: every OpenCL device computes the CPU engine's bits (README).
+    # Fibonacci sampling: every OpenCL device computes the CPU engine's bits (docs/python.md).
     expected = reference_face_values(ob, rays=16, engine="cpu")
     for engine in ("opencl", devices[-1]):
         assert run(engine=engine, rays=16) == {"FINISHED"}
@@ -278,7 +278,7 @@ def test_use_modifiers_computes_on_the_deformed_mesh():
 
 
 def test_use_modifiers_refuses_an_object_the_view_layer_does_not_evaluate():
-    # A trial's: in an excluded collection its base mesh was computed without a word, even
+    # In an excluded collection its base mesh was computed without a word, even
     # under a Subdivision Surface modifier that the topology check refuses.
     api = addon_module("api")
     ob = import_obj("suzanne.obj")
@@ -296,13 +296,13 @@ def test_use_modifiers_refuses_an_object_the_view_layer_does_not_evaluate():
 
 
 def test_modifiers_and_shape_keys_left_out_are_named_in_a_warning():
-    # A trial's: a mirror-modelled half and a cube flattened by a shape key were measured as
+    # A mirror-modelled half and a cube flattened by a shape key were measured as
     # their base meshes with no word that the viewport shows something else.
     api = addon_module("api")
     half = import_obj("suzanne.obj")
     half.modifiers.new("Mirror", "MIRROR")
     half.modifiers.new("Normals", "WEIGHTED_NORMAL")  # keeps the shape: not named
-    half.modifiers.new("Split", "EDGE_SPLIT")  # the same (a trial's false warning)
+    half.modifiers.new("Split", "EDGE_SPLIT")  # the same (it was named, falsely)
     # Shade Auto Smooth's modifier (4.1 on): geometry nodes of a 'Smooth by Angle' group.
     smooth = half.modifiers.new("Smooth by Angle", "NODES")
     smooth.node_group = bpy.data.node_groups.new("Smooth by Angle", "GeometryNodeTree")
@@ -420,7 +420,7 @@ def test_what_is_not_a_mesh_is_named_with_how_to_make_it_one():
 
 def test_a_shared_mesh_is_computed_from_the_active_object():
     # A linked duplicate at 10 times the scale, made active: the operator computed the mesh
-    # from whichever object came first in the selection (a trial's), not the one looked at.
+    # from whichever object came first in the selection, not the one looked at.
     api = addon_module("api")
     suzanne = import_obj("suzanne.obj")
     big = bpy.data.objects.new("big", suzanne.data)
@@ -463,7 +463,7 @@ def test_a_vertex_group_of_the_results_name_is_refused_first():
 
 def test_the_operator_starts_from_its_defaults_at_every_call():
     # Called with undo (as the UI does), the operator once reused the previous call's options
-    # for those a call left out (a trial's orientation='flip' stuck: every value 0).
+    # for those a call left out (orientation='flip' stuck: every value 0).
     bpy.ops.mesh.primitive_uv_sphere_add()
     ob = bpy.context.active_object
     done = bpy.ops.object.shape_diameter("EXEC_DEFAULT", True, attribute_name="first", rays=4)
@@ -505,8 +505,8 @@ def test_an_open_sheet_gives_zeros_and_a_warning():
 
 
 def test_a_double_sided_mesh_measures_the_same_on_both_sides():
-    # Shift+D and Flip in Edit Mode: every face again, reversed, on vertices of its own. A
-    # trial found the copies' values 0.08-2.7x the thickness, and a bake overwritten by them.
+    # Shift+D and Flip in Edit Mode: every face again, reversed, on vertices of its own. The
+    # copies' values came out 0.08-2.7x the thickness, and a bake was overwritten by them.
     import bmesh
 
     api = addon_module("api")
@@ -527,7 +527,7 @@ def test_a_double_sided_mesh_measures_the_same_on_both_sides():
 
 
 def test_users_of_the_mesh_not_computed_are_named():
-    # A trial's: computing a scaled linked duplicate rescaled the original's values (they
+    # Computing a scaled linked duplicate rescaled the original's values (they
     # share the mesh, and so its attribute) without a word.
     api = addon_module("api")
     original = uv_sphere(segments=16, rings=8)
@@ -543,7 +543,7 @@ def test_users_of_the_mesh_not_computed_are_named():
 
 
 def test_uvs_that_are_not_finite_are_refused_before_any_work():
-    # A trial's: a NaN UV failed the bake after the cast, as an unnamed 'ValueError'.
+    # A NaN UV failed the bake after the cast, as an unnamed 'ValueError'.
     api = addon_module("api")
     bpy.ops.mesh.primitive_cube_add()
     cube = bpy.context.active_object

@@ -127,7 +127,7 @@ def test_bake_replaces_the_image_and_keeps_its_users():
 
 
 def test_a_baked_image_survives_saving_the_file(tmp_path):
-    # A trial's: the new image had no user, and a save and reload dropped it.
+    # The new image had no user, and a save and reload dropped it.
     ob = import_obj("spot.obj")
     assert run(rays=8, bake_image=True, texture_size=32) == {"FINISHED"}
     image = bpy.data.images["spot_sdf"]
@@ -202,7 +202,7 @@ BAD_TEXTURE_OPTIONS = [
     ({"texture_size": True}, r"texture_size must be an integer in \[16, 16384\], got True"),
     ({"texture_radius": -1.0}, r"texture_radius must be a number in \[0, 1024\].*got -1.0"),
     ({"texture_radius": float("nan")}, r"texture_radius must be a number in \[0, 1024\]"),
-    # bake_margin failed after the cast (-1, 100000), or passed as 2.5 and '4' (a trial's).
+    # bake_margin failed after the cast (-1, 100000), or passed as 2.5 and '4'.
     ({"bake_margin": -1}, r"bake_margin must be an integer in \[0, 16384\] texels, got -1"),
     ({"bake_margin": 16385}, r"bake_margin must be an integer in \[0, 16384\].*got 16385"),
     ({"bake_margin": 2.5}, r"bake_margin must be an integer in \[0, 16384\].*got 2.5"),

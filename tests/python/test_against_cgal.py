@@ -16,7 +16,7 @@ nan) and where our engine kept at least one ray:
   estimator of the same quantity: Pearson r >= 0.93 and median relative
   difference <= 8 %.
 
-CGAL runs once per (mesh, rays) per session (module-scoped cache); its
+CGAL runs once per (mesh, rays) per test run (module-scoped cache); its
 sdf_values wall time is recorded as the user property ``cgal_seconds``.
 """
 
@@ -157,7 +157,7 @@ def _pearson(a: np.ndarray, b: np.ndarray) -> float:
 
 
 class _Cache:
-    """Meshes, their OFF copies and CGAL results, computed once per session."""
+    """Meshes, their OFF copies and CGAL results, computed once per test run."""
 
     def __init__(self, tmpdir: Path):
         self.tmpdir = tmpdir

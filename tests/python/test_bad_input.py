@@ -113,7 +113,7 @@ def test_ragged_vertices_are_refused(sphere):
 
 
 def test_polygons_are_refused_with_advice():
-    # A trial's: quads mixed with triangles got numpy's words, naming no argument.
+    # Quads mixed with triangles got numpy's words, naming no argument.
     V = np.eye(5, 3)
     with pytest.raises(ValueError, match=r"^triangles must have shape \(m, 3\), but its rows "
                                          r"differ in length \(of polygons: triangulate"):
@@ -402,7 +402,7 @@ def test_stage_functions_refuse_bad_input():
     with pytest.raises(ValueError, match=r"cone_angle must be a number in"):
         shape_diameter.reduce_lengths([1.0], [0.1], cone_angle=0.0)
     assert np.isnan(shape_diameter.reduce_lengths([], []))
-    # A NaN length gave NaN, a negative one a meaningless mean (a new-user trial).
+    # A NaN length gave NaN, a negative one a meaningless mean.
     for lengths in ([1.0, np.nan], [-1.0, 2.0], [1.0, np.inf]):
         with pytest.raises(ValueError, match=r"lengths must be finite and >= 0"):
             shape_diameter.reduce_lengths(lengths, [0.1, 0.2])
@@ -579,7 +579,7 @@ def test_zero_area_and_duplicated_triangles():
 @pytest.mark.parametrize("points", ["faces", "vertices"])
 @pytest.mark.parametrize("far", [1e3, 1e8])
 def test_zero_area_faces_reaching_far_vertices_change_nothing_else(points, far):
-    # A trial's: one face (0, 0, k) to a stray vertex far away set the near-hit cutoff and the
+    # One face (0, 0, k) to a stray vertex far away set the near-hit cutoff and the
     # centre (bunny00 with a vertex 1000 units off: 8.8% of faces >5% off; a building at UTM
     # coordinates with one reaching the origin: every value 0). Now such faces' corners take
     # no part in the box: the rest is bit for bit the clean mesh's. Three kinds: a repeated
@@ -676,7 +676,7 @@ def test_components_keep_their_own_scale():
 
 @pytest.mark.parametrize("points", ["faces", "vertices"])
 def test_a_thin_part_in_a_large_scene_reads_high_and_is_warned_of(points):
-    # A trial's: hits nearer than 2e-5 of the whole mesh's size are ignored, so a 1 mm plate
+    # Hits nearer than 2e-5 of the whole mesh's size are ignored, so a 1 mm plate
     # beside a ball tens of metres away lost its shortest rays and read high, without a word.
     plate_v, plate_f = shapes.box(1.0, 1.0, 0.001, 8)
     ball_v, ball_f = shapes.icosphere(0.25, 2)
@@ -703,7 +703,7 @@ def test_a_thin_part_in_a_large_scene_reads_high_and_is_warned_of(points):
 
 @pytest.mark.parametrize("points", ["faces", "vertices"])
 def test_a_part_that_keeps_no_ray_is_warned_of(points):
-    # A trial's: a 1 mm cube beside a 100 m slab keeps no ray (every hit within the 2 mm
+    # A 1 mm cube beside a 100 m slab keeps no ray (every hit within the 2 mm
     # cutoff) and took the slab's median, 14,000x its size, without a word; so did an
     # inside-out ball left as it was, and an open sheet beside a solid.
     slab_v, slab_f = shapes.box(100.0, 100.0, 10.0, 2)
@@ -905,7 +905,7 @@ class _Signalled(Exception):
 @pytest.mark.parametrize("call", ["compute", "smooth"])
 def test_a_signal_stops_native_work_without_a_progress_callback(call):
     # Ctrl-C during compute() with no progress callback waited for the whole computation
-    # (22 s at 128 rays on a large mesh in a new-user trial): Python's signal handlers run
+    # (22 s at 128 rays on a large mesh): Python's signal handlers run
     # only between bytecodes. The core now runs them whenever it would report progress.
     # SIGUSR1 with a handler that raises stands in for SIGINT's KeyboardInterrupt.
     V, F = shapes.icosphere(1.0, 6)  # 81920 faces

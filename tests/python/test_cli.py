@@ -615,7 +615,7 @@ def test_ctrl_c_stops_a_long_run_when_stderr_is_not_a_terminal(tmp_path):
 
 def test_values_into_a_pipe_or_a_device_write_into_it(tmp_path):
     # --values /dev/null (or a FIFO) was replaced by a plain file: run as root, /dev/null of
-    # the whole machine (a trial's, with /dev/full).
+    # the whole machine (and so /dev/full).
     import threading
 
     fifo = tmp_path / "values.npy"
@@ -636,7 +636,7 @@ def test_values_into_a_pipe_or_a_device_write_into_it(tmp_path):
 
 
 def test_one_input_whose_output_cannot_be_written_fails_alone(tmp_path, capsys):
-    # An output path that is a folder stopped the whole batch, with no JSON (a trial's).
+    # An output path that is a folder stopped the whole batch, with no JSON.
     for name in ("a", "b"):
         (tmp_path / f"{name}.obj").write_bytes((DATA / "suzanne.obj").read_bytes())
     (tmp_path / "a.sdf.ply").mkdir()
@@ -661,7 +661,7 @@ def _shell(command, tmp_path):
 
 
 def test_a_closed_stderr_loses_only_the_messages(tmp_path):
-    # A trial's: with standard error closed (2>&-, a daemon's wrapper) the run failed on its
+    # With standard error closed (2>&-, a daemon's wrapper) the run failed on its
     # first message, writing nothing, with exit status 1 and no word.
     shutil.copy(DATA / "suzanne.obj", tmp_path / "a.obj")
     done = _shell(f"eval $SD a.obj --rays {RAYS} 2>&-; echo status $?", tmp_path)
@@ -670,7 +670,7 @@ def test_a_closed_stderr_loses_only_the_messages(tmp_path):
 
 
 def test_values_into_dev_stdout_on_a_pipe(tmp_path):
-    # A trial's: /dev/stdout on a pipe links to /proc/self/fd/1, 'pipe:[N]': 'cannot write
+    # /dev/stdout on a pipe links to /proc/self/fd/1, 'pipe:[N]': 'cannot write
     # (No such file or directory)'.
     shutil.copy(DATA / "suzanne.obj", tmp_path / "a.obj")
     done = _shell(f"eval $SD a.obj -o b.ply -q --rays {RAYS} --values /dev/stdout | cat > v.npy; "
@@ -682,7 +682,7 @@ def test_values_into_dev_stdout_on_a_pipe(tmp_path):
 
 
 def test_a_stdout_that_cannot_be_written_says_so_in_one_line(tmp_path):
-    # A trial's: --json into /dev/full gave a traceback; without --json the input was named as
+    # --json into /dev/full gave a traceback; without --json the input was named as
     # what failed, though its outputs were written.
     shutil.copy(DATA / "suzanne.obj", tmp_path / "a.obj")
     for options in ("--json -q", ""):
@@ -694,7 +694,7 @@ def test_a_stdout_that_cannot_be_written_says_so_in_one_line(tmp_path):
 
 
 def test_an_engine_that_cannot_run_is_refused_before_any_input(tmp_path, capsys):
-    # A trial's: a mistyped device, or a node without OpenCL, failed every input in turn, each
+    # A mistyped device, or a node without OpenCL, failed every input in turn, each
     # reported as a broken asset (status 2) after being read.
     for name in ("a", "b"):
         shutil.copy(DATA / "suzanne.obj", tmp_path / f"{name}.obj")

@@ -86,7 +86,7 @@ def test_clashing_outputs_are_refused_before_any_work(tmp_path, capsys, monkeypa
 
 def test_a_second_input_writing_an_earlier_ones_output_fails_alone(tmp_path, capsys):
     # a.obj and a.ply both make a.sdf.ply: it refused the whole run (one such pair in a
-    # folder of thousands, a trial's); now a.ply fails and the others are computed.
+    # folder of thousands); now a.ply fails and the others are computed.
     _copy(tmp_path, "suzanne.obj:a.obj", "cow.obj:b.obj")
     trimesh.load(DATA / "cow.obj").export(tmp_path / "a.ply")
     assert cli.main([str(tmp_path), "--rays", RAYS, "--json", "-q"]) == 2

@@ -96,7 +96,7 @@ def test_skip_existing_says_so_without_json(tmp_path, capsys):
 
 
 def test_list_engines_lists_what_engine_takes(capsys):
-    # Standard output holds the engines alone, one a line (a trial's awk read the note on
+    # Standard output holds the engines alone, one a line (an awk script read the note on
     # 'auto' as an engine); with --json, engines()' entries.
     assert cli.main(["--list-engines"]) == 0
     out, err = capsys.readouterr()
@@ -153,7 +153,7 @@ def test_a_link_to_itself_in_a_folder_fails_alone(tmp_path, capsys, two_meshes):
 
 
 def test_recursive_takes_subfolders_and_output_dir_mirrors_them(tmp_path, capsys):
-    # A trial's asset tree: nest/a/model.obj and nest/b/model.obj. Without --recursive the
+    # An asset tree: nest/a/model.obj and nest/b/model.obj. Without --recursive the
     # folder held "no mesh files"; given as files with --output-dir, the second collided.
     nest = tmp_path / "nest"
     for sub in ("a", "b", "b/deeper", ".hidden"):
@@ -209,7 +209,7 @@ def test_recursive_goes_on_past_a_subfolder_it_cannot_list_or_write(tmp_path, ca
 
 
 def test_a_fifo_with_a_meshs_name_in_a_folder_fails_as_its_own_input(tmp_path, capsys):
-    # A trial's: skipped without a word, while given directly it failed as 'not a file'.
+    # Skipped without a word, while given directly it failed as 'not a file'.
     (tmp_path / "a.obj").write_bytes((DATA / "suzanne.obj").read_bytes())
     os.mkfifo(tmp_path / "b.obj")
     status, reports, _ = _run_json(capsys, [tmp_path])

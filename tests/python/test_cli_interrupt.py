@@ -124,7 +124,7 @@ def test_a_ctrl_c_that_a_library_swallows_still_stops_the_run(tmp_path):
 @pytest.mark.parametrize("signum", [signal.SIGTERM, signal.SIGHUP])
 def test_sigterm_and_sighup_stop_the_run_as_ctrl_c_does(tmp_path, signum):
     # `timeout`, batch schedulers and a closed terminal send these: they left hidden
-    # temporary files behind (a trial's), and said nothing.
+    # temporary files behind, and said nothing.
     output = tmp_path / "out.ply"
     run = subprocess.Popen([SCRIPT, DATA / "spot.obj", "-o", output, *LONG],
                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)

@@ -1,7 +1,6 @@
 # SPDX-License-Identifier: GPL-3.0-or-later
 """The command line's words: options that would do nothing are refused, broken files say
-what is wrong with them, and the library's warnings come in option spelling (a trial's
-findings)."""
+what is wrong with them, and the library's warnings come in option spelling."""
 
 import struct
 from pathlib import Path

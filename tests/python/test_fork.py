@@ -1,6 +1,6 @@
 # SPDX-License-Identifier: GPL-3.0-or-later
 """Worker processes forked after the parent used OpenCL (multiprocessing's default start
-method on Linux): OpenCL calls there hung for ever (a trial's Pool). Now such a process lists
+method on Linux): OpenCL calls there hung for ever (a Pool's workers). Now such a process lists
 no OpenCL device, 'auto' runs on the CPU (with a warning where the parent had a GPU) and an
 explicit OpenCL engine is refused, saying why."""
 
@@ -67,7 +67,7 @@ def test_a_forked_worker_runs_on_the_cpu_and_refuses_opencl_instead_of_hanging(t
 
 @pytest.mark.skipif(not hasattr(os, "sched_setaffinity"), reason="Linux affinity only")
 def test_every_core_means_the_cores_the_process_may_use():
-    # A trial's: a farm slot pinned to one core (taskset, a cpuset) ran a thread per core of
+    # A farm slot pinned to one core (taskset, a cpuset) ran a thread per core of
     # the machine. threads=0 now takes the process's affinity.
     code = ("import shape_diameter as sd, shapes; "
             "print(sd.engines()[0]['threads'], "

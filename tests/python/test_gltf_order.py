@@ -102,7 +102,7 @@ def test_a_gltf_node_tree_that_cannot_be_followed_is_a_clear_error(tmp_path):
         load_mesh(path)
 
 
-# What trimesh reads wrongly without a word (a game-asset trial's, each computed as 'ok'):
+# What trimesh reads wrongly without a word (game assets, each computed as 'ok'):
 # refused, saying what.
 UNREAD = {
     "draco": (lambda h: h.update(extensionsRequired=["KHR_draco_mesh_compression"]),

@@ -92,7 +92,7 @@ def _rotation(seed: int) -> np.ndarray:
 # --------------------------------------------------------------------------- scaling
 
 
-# Down to coordinates around 1e-6 and up to 1e6 (issue 7: extreme scales), bit for bit.
+# Down to coordinates around 1e-6 and up to 1e6 (extreme scales), bit for bit.
 @pytest.mark.parametrize("scale", [2.0**-20, 2.0**-10, 8.0, 2.0**10, 2.0**20])
 def test_power_of_two_scaling_scales_raw_exactly(fandisk, baseline, scale):
     V, F = fandisk

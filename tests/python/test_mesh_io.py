@@ -468,8 +468,8 @@ def test_ply_obj_and_off_give_the_coordinates_back_exactly(tmp_path, case, suffi
 @pytest.mark.parametrize("suffix", [".glb", ".stl"])
 @pytest.mark.parametrize("case", ["utm", "1e8", "1e6"])
 def test_glb_and_stl_warn_when_32_bit_floats_move_the_vertices(tmp_path, case, suffix):
-    # 1e6: a sphere 0.25 wide, whose vertices move by up to an eighth of it (a trial's read
-    # 'as much as the mesh is wide').
+    # 1e6: a sphere 0.25 wide, whose vertices move by up to an eighth of it (it read 'as
+    # much as the mesh is wide').
     vertices, triangles = _sphere(*FAR_AND_SMALL.get(case, (0.125, (1e6, 0.0, 0.0))))
     path = tmp_path / f"out{suffix}"
     with pytest.warns(RuntimeWarning) as caught:
@@ -479,7 +479,7 @@ def test_glb_and_stl_warn_when_32_bit_floats_move_the_vertices(tmp_path, case, s
     assert message.startswith(f"{path}: {suffix[1:].upper()} holds 32-bit float coordinates")
     assert "write .ply, .off or .obj to keep them exactly" in message
     # A unit sphere at 1e8 collapses onto a few float32 values: said so, with the share as a
-    # percentage ("1 of the mesh's size", a trial found unclear); at UTM northings it moves a
+    # percentage (not "1 of the mesh's size", which is unclear); at UTM northings it moves a
     # little.
     if case in ("1e8", "1e6"):  # half and an eighth of the mesh's width
         share = {"1e8": "50%", "1e6": "1[0-9]%"}[case]
@@ -529,7 +529,7 @@ def test_save_colored_refuses_bad_arguments(tmp_path):
 
 
 def test_load_mesh_takes_bytes_and_path_objects():
-    # A trial's: b'a.obj' (os.walk over bytes, for names that are not UTF-8) was read as
+    # b'a.obj' (os.walk over bytes, for names that are not UTF-8) was read as
     # "cannot read 'b'.obj'' files".
     expected = shape_diameter.load_mesh(str(DATA / "suzanne.obj"))
     for path in (os.fsencode(DATA / "suzanne.obj"), DATA / "suzanne.obj"):
@@ -539,7 +539,7 @@ def test_load_mesh_takes_bytes_and_path_objects():
 
 @pytest.mark.parametrize("suffix", [".off", ".ply"])
 def test_a_bad_coordinate_or_index_is_named(tmp_path, suffix):
-    # A trial's: "vertex coordinates are not all finite" and "a face refers to a vertex that
+    # "vertex coordinates are not all finite" and "a face refers to a vertex that
     # does not exist", naming neither.
     vertices = np.array([[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]])
     faces = np.array([[0, 2, 1], [0, 1, 3], [1, 2, 3], [0, 3, 2]])

@@ -246,7 +246,7 @@ def test_program_cache_skips_the_compiler_and_rebuilds_a_corrupt_entry(tmp_path)
 
 
 def test_a_program_cache_that_cannot_be_written_is_warned_of(tmp_path):
-    # A trial's: every run compiled again (about 9 s on PoCL) without a word. Said once a
+    # Every run compiled again (about 9 s on PoCL) without a word. Said once a
     # process (a batch said it for every input).
     (tmp_path / "file").write_text("")
     code = (

@@ -54,7 +54,7 @@ def test_scattered_reversed_faces_are_put_back():
 
 
 def test_reversed_faces_are_put_back_across_unwelded_seams():
-    # A trial's: faces meet at positions, not only at shared vertices. A triangle soup (each
+    # Faces meet at positions, not only at shared vertices. A triangle soup (each
     # face on vertices of its own, as an STL or trimesh's process=False gives) and a box whose
     # sides each have their own vertices (a CAD export), some faces reversed, were left so.
     vertices, triangles = icosphere(1.0, 3)
@@ -159,7 +159,7 @@ def test_a_flat_open_sheet_is_not_flipped_on_rounding():
 
 
 def test_a_long_thin_part_inside_out_is_turned():
-    # A trial's: its volume was weighed against 1e-6 x its diagonal cubed, so a cylinder
+    # Its volume was weighed against 1e-6 x its diagonal cubed, so a cylinder
     # 2000 times longer than its radius read as flat and stayed inside out (every value 0).
     vertices, triangles = cylinder(0.005, 10.0, 32, 16)
     outward = sd.compute(vertices, triangles)

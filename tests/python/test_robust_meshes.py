@@ -1,5 +1,5 @@
 # SPDX-License-Identifier: GPL-3.0-or-later
-"""Meshes as people have them (issue 7): non-manifold edges and vertices, self-intersections,
+"""Meshes as people have them: non-manifold edges and vertices, self-intersections,
 unwelded patches and holes give finite values everywhere, with valid rays on the faces that
 can see the other side."""
 
@@ -101,7 +101,7 @@ def test_rays_along_an_axis_survive_far_from_the_origin(monkeypatch, path):
 ], ids=["cpu", "opencl", "opencl-device-tree", "octree"])
 def test_any_accepted_scale_gives_the_same_values(monkeypatch, path):
     # The triangle test's products reach a length cubed: a sphere 1e14 units wide (or 1e-15)
-    # once lost every ray, values all 0 (found by a new-user trial). Scaled inside compute()
+    # once lost every ray, values all 0. Scaled inside compute()
     # by a power of two to unit size, and back, the values are those of the unit sphere
     # scaled, to the bit: float arithmetic commutes with powers of two.
     for name, value in path.get("env", {}).items():
@@ -176,7 +176,7 @@ def test_a_double_sided_mesh_gets_the_single_sided_values(split, points):
 
 @pytest.mark.parametrize("points", ["faces", "vertices"])
 def test_a_zero_area_face_does_not_undo_a_double_sided_part(points):
-    # A trial's: one stray zero-area face in a double-sided part (it has no twin) made the
+    # One stray zero-area face in a double-sided part (it has no twin) made the
     # whole part be cast with both sides, values up to 19% off (vertices: 0.0002-1.16x).
     v, t = load_mesh(DATA / "spot.obj")
     single = sd.compute(v, t, points=points)

@@ -735,7 +735,7 @@ def test_kring_on_vertices_leaves_out_the_values_of_vertices_no_face_uses():
 
 
 def test_texture_smoothing_refuses_uvs_that_cover_no_area():
-    # A trial's (in Blender, a mesh never unwrapped): every face drew into the same texels and
+    # In Blender, a mesh never unwrapped: every face drew into the same texels and
     # every value came out as one, without a word.
     v, t = _icosphere(2)
     values = np.linspace(0.1, 1.0, len(t)).astype(np.float32)

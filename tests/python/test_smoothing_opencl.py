@@ -1,5 +1,5 @@
 # SPDX-License-Identifier: GPL-3.0-or-later
-"""The OpenCL versions of projected-points and texture-space smoothing (issue 4): the same
+"""The OpenCL versions of projected-points and texture-space smoothing: the same
 kernel code as the CPU versions (kernels/sdf_smooth_*.h), so they agree within 1e-4 relative
 on real meshes; a constant field stays constant; compute() smooths on the engine that cast;
 bad engine names fail clearly. On PoCL here; on a GPU machine, the GPU (listed first)."""
