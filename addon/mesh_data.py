@@ -157,8 +157,11 @@ def is_written_output(me, attribute):
 def record_outputs(me, outputs):
     """Adds [(name, data_type, domain)] to the record; entries whose attribute is gone or
     changed are dropped."""
-    record = {name: kind for name, kind in written_outputs(me).items()
-              if (a := me.attributes.get(name)) is not None and (a.data_type, a.domain) == kind}
+    record = {
+        name: kind
+        for name, kind in written_outputs(me).items()
+        if (a := me.attributes.get(name)) is not None and (a.data_type, a.domain) == kind
+    }
     record.update({name: (data_type, domain) for name, data_type, domain in outputs})
     me[OUTPUTS_PROPERTY] = json.dumps({name: list(kind) for name, kind in record.items()})
 

@@ -31,10 +31,12 @@ def engine_choices(with_default):
     'opencl:all'."""
     choices = []  # (key, (identifier, label, description))
     if with_default:
-        choices.append(("DEFAULT", ("DEFAULT", "Default",
-                                    "The engine chosen in the add-on's preferences")))
-    choices.append(("auto", ("auto", "Automatic",
-                             "The best OpenCL GPU if there is one, else the CPU")))
+        choices.append(
+            ("DEFAULT", ("DEFAULT", "Default", "The engine chosen in the add-on's preferences"))
+        )
+    choices.append(
+        ("auto", ("auto", "Automatic", "The best OpenCL GPU if there is one, else the CPU"))
+    )
     engines = core.engines()
     devices = [e for e in engines if str(e["name"]).startswith("opencl:")]
     has_opencl = bool(devices)
@@ -57,14 +59,16 @@ def engine_choices(with_default):
         else:  # an engine a later core adds
             choices.append((name, (name, name, description)))
         if name == "cpu" and has_opencl:
-            choices.append(("opencl", ("opencl", "Best OpenCL Device", (
-                "The fastest OpenCL device here, a GPU before a CPU device; engine='opencl'"))))
+            best = "The fastest OpenCL device here, a GPU before a CPU device; engine='opencl'"
+            choices.append(("opencl", ("opencl", "Best OpenCL Device", best)))
             if sharing >= 2:  # 'opencl:all' would use more than one device
                 label = "All GPUs" if gpus else "All OpenCL Devices"
                 # Its key is no "opencl:<label>": a device named "all" keeps its own.
-                choices.append(("OPENCL_ALL", ("opencl:all", label, (
+                shared = (
                     f"{label} at once, sharing the points (the same values as one device); "
-                    "engine='opencl:all'"))))
+                    "engine='opencl:all'"
+                )
+                choices.append(("OPENCL_ALL", ("opencl:all", label, shared)))
     items = [item for _, item in choices]
     items = _engine_items.setdefault((with_default, tuple(items)), items)
     return [(key, item) for (key, _), item in zip(choices, items)]

@@ -6,7 +6,6 @@ import bmesh
 import bpy
 import numpy as np
 import pytest
-from mathutils import Matrix
 import shape_diameter
 from helpers import (
     addon_module,
@@ -20,6 +19,7 @@ from helpers import (
     suzanne_with_ngons,
     world_triangles,
 )
+from mathutils import Matrix
 
 
 def uv_sphere(radius=1.0, segments=64, rings=32):
@@ -70,7 +70,9 @@ def test_switching_points_replaces_the_earlier_runs_attributes():
     ]:
         assert run(points=points, rays=8, color_name="sdf_color") == {"FINISHED"}
         assert (me.attributes["sdf"].domain, me.attributes["sdf_color"].domain) == (
-            domain, color_domain)
+            domain,
+            color_domain,
+        )
         assert len(attribute_array(me, "sdf")) == count
         assert me.color_attributes.active_color_name == "sdf_color"
         # And the render colour: bpy 4.5 lost it when the other domain's was replaced.
@@ -92,9 +94,11 @@ def test_an_inside_out_mesh_is_measured_outward_unless_told_otherwise():
     np.testing.assert_allclose(attribute_array(ob.data, "sdf"), outward, rtol=1e-5)
     # Said, since the artist's normals still point in (orientation turned them without a word).
     said = addon_module("api").compute_object(ob, rays=4).warnings
-    assert said == [f"{ob.name}: {len(ob.data.polygons)} faces point inward (inside out) and were "
-                    "measured turned outward; the mesh is unchanged (Mesh > Normals > "
-                    "Recalculate Outside turns it in Blender)"]
+    assert said == [
+        f"{ob.name}: {len(ob.data.polygons)} faces point inward (inside out) and were "
+        "measured turned outward; the mesh is unchanged (Mesh > Normals > "
+        "Recalculate Outside turns it in Blender)"
+    ]
     # Every ray left through the skin: zeros, and it says so once (the core's warning, kept
     # for the object, not also printed: warnings are errors here).
     result = addon_module("api").compute_object(ob, orientation="as_is")
@@ -219,8 +223,9 @@ def test_loose_vertices_are_left_unmeasured():
     np.testing.assert_allclose(values[measured], ref.values[measured], rtol=1e-6)
     np.testing.assert_allclose(normalized[measured], ref.normalized[measured], atol=1e-6)
     # Per face, loose vertices have no value at all: nothing to say.
-    assert not api.compute_object(ob, attribute_name="per_face", normalized_name="",
-                                  color_name="").warnings
+    assert not api.compute_object(
+        ob, attribute_name="per_face", normalized_name="", color_name=""
+    ).warnings
 
 
 def test_undo_restores_the_mesh():
@@ -313,7 +318,8 @@ def test_modifiers_and_shape_keys_left_out_are_named_in_a_warning():
     results = api.compute_objects([half, keyed, plain], rays=4)
     assert [w for w in results[0].warnings if "left out" in w] == [
         "suzanne: its modifiers (Mirror) change its shape in the viewport and are left out "
-        "(Use Modifiers is off): the values are those of its base mesh"]
+        "(Use Modifiers is off): the values are those of its base mesh"
+    ]
     assert not any("left out" in w for r in results[1:] for w in r.warnings)  # key at 0
     keyed.data.shape_keys.key_blocks["Flat"].value = 0.5
     result = api.compute_object(keyed, rays=4)
@@ -331,8 +337,9 @@ def test_a_thin_part_far_from_the_rest_is_warned_of():
     bmesh.ops.create_cube(bm, size=1.0)
     bmesh.ops.subdivide_edges(bm, edges=bm.edges[:], cuts=7, use_grid_fill=True)
     bmesh.ops.scale(bm, vec=(1.0, 1.0, 0.001), verts=bm.verts[:])
-    bmesh.ops.create_icosphere(bm, subdivisions=2, radius=0.25,
-                               matrix=Matrix.Translation((60.0, 0.0, 0.0)))
+    bmesh.ops.create_icosphere(
+        bm, subdivisions=2, radius=0.25, matrix=Matrix.Translation((60.0, 0.0, 0.0))
+    )
     bm.to_mesh(me)
     bm.free()
     ob = bpy.data.objects.new("scene", me)
@@ -414,8 +421,10 @@ def test_what_is_not_a_mesh_is_named_with_how_to_make_it_one():
     curve = bpy.data.objects.new("Path", bpy.data.curves.new("Path", "CURVE"))
     with pytest.raises(api.UserError) as caught:
         api.compute_objects([instance, curve])
-    assert str(caught.value) == ("Not a mesh: Inst (a collection instance: Make Instances Real "
-                                 "first), Path (curve: convert it to a mesh first)")
+    assert str(caught.value) == (
+        "Not a mesh: Inst (a collection instance: Make Instances Real "
+        "first), Path (curve: convert it to a mesh first)"
+    )
 
 
 def test_a_shared_mesh_is_computed_from_the_active_object():
@@ -471,7 +480,8 @@ def test_the_operator_starts_from_its_defaults_at_every_call():
     assert bpy.ops.object.shape_diameter("EXEC_DEFAULT", True) == {"FINISHED"}
     assert "sdf" in ob.data.attributes  # the default name, not the previous call's
     np.testing.assert_allclose(  # and the default 30 rays, not 4
-        attribute_array(ob.data, "sdf"), reference_face_values(ob), rtol=1e-5)
+        attribute_array(ob.data, "sdf"), reference_face_values(ob), rtol=1e-5
+    )
 
 
 def test_the_api_reports_progress_and_stops_when_asked():
@@ -537,9 +547,11 @@ def test_users_of_the_mesh_not_computed_are_named():
     result = api.compute_objects([copy], rays=4)[0]
     assert [w for w in result.warnings if "also used by" in w] == [
         f"{copy.name}'s mesh is also used by {original.name}, not computed: they show these "
-        f"values too, measured with {copy.name}'s transform"]
-    assert not any("also used by" in w
-                   for w in api.compute_objects([copy, original], rays=4)[0].warnings)
+        f"values too, measured with {copy.name}'s transform"
+    ]
+    assert not any(
+        "also used by" in w for w in api.compute_objects([copy, original], rays=4)[0].warnings
+    )
 
 
 def test_uvs_that_are_not_finite_are_refused_before_any_work():
@@ -551,7 +563,14 @@ def test_uvs_that_are_not_finite_are_refused_before_any_work():
     cube.data.uv_layers.active.data.foreach_get("uv", uv)
     uv[0] = np.nan
     cube.data.uv_layers.active.data.foreach_set("uv", uv)
-    with pytest.raises(api.UserError, match=r"^Cube's UV map 'UVMap' has coordinates that are "
-                                            r"not finite .*needed by the bake"):
-        api.compute_object(cube, bake_image=True, texture_size=64,
-                           progress=lambda f: pytest.fail("it computed first"))
+    with pytest.raises(
+        api.UserError,
+        match=r"^Cube's UV map 'UVMap' has coordinates that are "
+        r"not finite .*needed by the bake",
+    ):
+        api.compute_object(
+            cube,
+            bake_image=True,
+            texture_size=64,
+            progress=lambda f: pytest.fail("it computed first"),
+        )

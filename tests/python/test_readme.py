@@ -45,8 +45,9 @@ def test_every_result_field_is_documented():
         assert re.search(rf"\b[rR]esult\.{field.name}\b", PYTHON), field.name
 
 
-@pytest.mark.parametrize(("name", "low", "high"), [("octree_depth", 0, 16),
-                                                   ("octree_leaf_size", 1, 2**31 - 1)])
+@pytest.mark.parametrize(
+    ("name", "low", "high"), [("octree_depth", 0, 16), ("octree_leaf_size", 1, 2**31 - 1)]
+)
 def test_octree_ranges_are_the_ones_checked(name, low, high):
     vertices, triangles = icosphere(1.0, 1)
     for value in (low, high):  # accepted
