@@ -48,7 +48,7 @@ bool finite_vertex(const double* p) {
 // std::invalid_argument naming the first index out of range. The indices are checked and the
 // vertices they use marked in one pass. A vertex no such triangle uses takes no part in the
 // box: one far away would otherwise set the near-hit threshold and the unit scaling, and so
-// every value (found by new-user trials: one unused vertex 10 mesh widths away changed values
+// every value (one unused vertex 10 mesh widths away changed values
 // by up to 28%, 1e5 widths away zeroed them; a zero-area face reaching a vertex at the origin
 // of a georeferenced building zeroed every value). A face has area where its cross product,
 // in double, is not zero: exactly zero where corners coincide, zero or a rounding's worth

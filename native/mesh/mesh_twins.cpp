@@ -86,7 +86,7 @@ void keep_doubled_parts(const Mesh& mesh, const UninitializedVector<std::uint8_t
     }
   });
   // A part is doubled until one of its faces with area has no twin (one without area casts
-  // nothing and is never hit: a trial's double-sided sphere with one zero-area face among its
+  // nothing and is never hit: a double-sided sphere with one zero-area face among its
   // faces was cast with both sides, values up to 19% off).
   std::unique_ptr<std::atomic<std::uint8_t>[]> single(
       new std::atomic<std::uint8_t>[mesh.vertices.size()]());

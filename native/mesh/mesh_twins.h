@@ -2,7 +2,7 @@
 // Double-sided meshes: faces present twice at the same three corner positions, once in each
 // winding (game assets, "double-sided" exports, geometry duplicated and flipped). A ray that
 // reaches such a wall meets two coincident faces, one facing it and one not, and which one it
-// keeps is chance: values come out degraded (a new-user trial measured up to 12.7x off), and
+// keeps is chance: values come out degraded (measured: up to 12.7x off), and
 // the normals of shared vertices cancel. compute() finds such faces and stops (sdf.h); the
 // caller casts the mesh without them and gives each its twin's values (api.py).
 #pragma once

@@ -40,7 +40,7 @@
 namespace sdf {
 
 struct TextureOptions {
-  int width = 1024;  // texels (issue 4: 1024 by default)
+  int width = 1024;  // texels
   int height = 1024;
   // Blur reach in texels; < 0: 2 * max(width, height) / 256 (paper 4.4: "we set the radius to
   // 2 for a 256x256 texture and multiply as necessary"), 8 at 1024. 0: no blur.

@@ -30,7 +30,7 @@ OrientationReport orient_auto(const Mesh& mesh, unsigned threads, bool fast_path
   const std::size_t n = mesh.triangles.size();
   std::vector<char> flip;
   // Faces meet where their corners' positions do, whether or not they share the vertices: the
-  // windings agree across unwelded seams (a trial's cube with each side on vertices of its
+  // windings agree across unwelded seams (a cube with each side on vertices of its
   // own, one side reversed, kept it so: values 0.48-5.2x), and the parts below join there.
   UninitializedVector<std::uint32_t> same_place = weld_exact(mesh, threads);
   const bool welds = any_shared_place(same_place, threads);

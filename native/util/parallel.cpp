@@ -131,7 +131,7 @@ const bool fork_handler_set = [] {
 #endif
 
 // The CPUs this process may run on: its affinity (taskset, a container's or a farm slot's
-// cpuset), which hardware_concurrency ignores (a trial's: a slot pinned to 1 of 2 cores ran 2
+// cpuset), which hardware_concurrency ignores (a slot pinned to 1 of 2 cores ran 2
 // threads; pinned to 4 of 64, it would run 64). Read at a process's first use (below).
 unsigned available_cores() {
 #if defined(__linux__)

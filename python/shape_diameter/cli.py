@@ -32,11 +32,10 @@ import warnings
 
 import numpy as np
 
-from . import __version__
-from . import _core
+from . import __version__, _core
 from .api import MAX_RAYS, _check_engine, compute, engines
-from .colormap import colormap
 from .cli_jobs import DEFAULT_SUFFIX, EXIT_ENVIRONMENT, EXIT_USAGE, CommandError, plan
+from .colormap import colormap
 from .output_files import written_whole
 from .smoothing import DEVICE_ERRORS, texture_cost
 
@@ -47,14 +46,14 @@ EXIT_STDOUT_CLOSED = 141  # 128 + SIGPIPE: what `... | head` leaves a command th
 
 class _StdoutClosed(Exception):
     """Standard output's reader went away (`shape-diameter ... --json | head -1`): the run
-    stops quietly, as programs killed by SIGPIPE do (a trial saw a traceback, or every later
-    input reported as failed though its files were written)."""
+    stops quietly, as programs killed by SIGPIPE do, instead of a traceback, or every later input
+    reported as failed though its files were written."""
 
 
 class _StdoutFailed(Exception):
     """Writing to standard output failed otherwise (a full disk behind `> file`): the run
-    stops with one line saying so (a trial saw a traceback with --json, and without it the
-    input being computed named as what failed, though its files were written)."""
+    stops with one line saying so, instead of a traceback with --json, or without it the
+    input being computed named as what failed, though its files were written."""
 
 
 def _say(text: str) -> None:
@@ -97,7 +96,7 @@ def _in_option_spelling(message: str) -> str:
 class _ListEngines(argparse.Action):
     """--list-engines: what --engine takes on this machine, one line each (with --json, each
     engines() entry as a JSON object), then exit; the note on 'auto' goes to stderr, so that
-    stdout holds the engines alone (a trial's `| awk '{print $1}'` listed 'auto' too). It
+    stdout holds the engines alone (`| awk '{print $1}'` must not list 'auto' too). It
     runs as it is parsed (no INPUT needed): --json is looked for in the parser's arguments."""
 
     def __init__(self, option_strings, dest, **kwargs):
@@ -107,17 +106,26 @@ class _ListEngines(argparse.Action):
         found = engines()
         width = max(len(engine["name"]) for engine in found)
         # (argparse takes unambiguous abbreviations: --js is --json)
-        as_json = any(len(a) > 2 and "--json".startswith(a)
-                      for a in getattr(parser, "arguments", ()))
+        as_json = any(
+            len(a) > 2 and "--json".startswith(a) for a in getattr(parser, "arguments", ())
+        )
         try:
             for engine in found:
-                _say(json.dumps(engine) if as_json else
-                     f"{engine['name']:<{width}}  {engine['type']}  {engine['description']}")
+                _say(
+                    json.dumps(engine)
+                    if as_json
+                    else f"{engine['name']:<{width}}  {engine['type']}  {engine['description']}"
+                )
             if not as_json:
-                print("auto picks the best OpenCL GPU, else cpu; opencl the best OpenCL device"
-                      + ("; opencl:all shares the work between the devices"
-                         if sum(e["name"].startswith("opencl:") for e in found) > 1 else ""),
-                      file=sys.stderr)
+                print(
+                    "auto picks the best OpenCL GPU, else cpu; opencl the best OpenCL device"
+                    + (
+                        "; opencl:all shares the work between the devices"
+                        if sum(e["name"].startswith("opencl:") for e in found) > 1
+                        else ""
+                    ),
+                    file=sys.stderr,
+                )
         except _StdoutClosed:
             _quiet_stdout()
             parser.exit(EXIT_STDOUT_CLOSED)
@@ -361,9 +369,12 @@ def build_parser() -> argparse.ArgumentParser:
         help="no progress bar and no line per input done; warnings and errors still go to "
         "stderr, --json to stdout",
     )
-    parser.add_argument("--list-engines", action=_ListEngines,
-                        help="list the engines --engine takes here, one a line (with --json, "
-                        "one JSON object each), and exit")
+    parser.add_argument(
+        "--list-engines",
+        action=_ListEngines,
+        help="list the engines --engine takes here, one a line (with --json, "
+        "one JSON object each), and exit",
+    )
     parser.add_argument("--version", action="version", version=f"%(prog)s {__version__}")
     return parser
 
@@ -391,8 +402,11 @@ def main(argv=None, *, interrupts=None) -> int:
         return EXIT_STDOUT_CLOSED
     except _StdoutFailed as exc:
         _quiet_stdout()
-        return _fail(f"standard output: cannot write ({exc}); the outputs of the inputs "
-                     "reported before were written", EXIT_ENVIRONMENT)
+        return _fail(
+            f"standard output: cannot write ({exc}); the outputs of the inputs "
+            "reported before were written",
+            EXIT_ENVIRONMENT,
+        )
     finally:
         if interrupts is not None:
             interrupts.disarm()
@@ -407,7 +421,7 @@ def _quiet_stdout() -> None:
 def _open_closed_streams() -> None:
     """A program started with standard output or error closed (`2>&-`, a daemon's wrapper) has
     None for them in Python: its messages then go nowhere instead of the run failing on its
-    first (a trial's: exit status 1, no output written, no word)."""
+    first (exit status 1, no output written, no word)."""
     for name in ("stdout", "stderr"):
         if getattr(sys, name) is None:
             setattr(sys, name, open(os.devnull, "w"))  # noqa: SIM115 (the process's own)
@@ -452,7 +466,7 @@ class _Interrupts:
     def take_over(self) -> bool:
         """Install the handler (held, not armed); False where signals cannot be taken. SIGTERM
         and SIGHUP (`timeout`, batch schedulers, a closed terminal) stop the run as Ctrl-C
-        does, outputs cleaned up: they left temporary files behind (a trial's)."""
+        does, outputs cleaned up: otherwise they leave temporary files behind."""
         try:
             signal.signal(signal.SIGINT, self._handle)
             for name in ("SIGTERM", "SIGHUP"):
@@ -618,8 +632,9 @@ def _compute_one(args, job, mesh_io, smoothing_options, several, warned, interru
 
     def save_mesh():
         with _warnings_to(job, warned):  # GLB and STL: float32 coordinates
-            mesh_io.save_colored(job.output, vertices, triangles, colormap(result.normalized),
-                                 args.points)
+            mesh_io.save_colored(
+                job.output, vertices, triangles, colormap(result.normalized), args.points
+            )
 
     if job.values:
         # The values are written first and take their place after the mesh: a failure in
@@ -676,7 +691,7 @@ def _warn(job, warned: list, message: str) -> None:
 
 
 # Texture smoothing estimated past this on the CPU threads is announced before it starts (a
-# 8192^2 run at a radius of 8192 texels went on for an hour without a word, a trial's).
+# 8192^2 run at a radius of 8192 texels went on for an hour without a word).
 LONG_TEXTURE_SECONDS = 10.0
 
 
@@ -690,9 +705,11 @@ def _long_texture_work(args, smoothing_options, uvs):
     seconds = cost.cpu_seconds(threads)
     if seconds <= LONG_TEXTURE_SECONDS:
         return None
-    return (f"texture smoothing at {size} x {size} texels: about {seconds:.0f} s on {threads} "
-            f"CPU threads and {cost.bytes / 2**20:.0f} MiB (an estimate); a smaller --radius or "
-            "--texture-size costs less")
+    return (
+        f"texture smoothing at {size} x {size} texels: about {seconds:.0f} s on {threads} "
+        f"CPU threads and {cost.bytes / 2**20:.0f} MiB (an estimate); a smaller --radius or "
+        "--texture-size costs less"
+    )
 
 
 def _texture_on_gpus(engine: str) -> bool:
@@ -715,8 +732,14 @@ def _skipped(args, job) -> dict:
     """--skip-existing: an input whose outputs exist; its --json object."""
     if not args.quiet and not args.json:
         _say(f"{job.source}: skipped, {job.output} exists")
-    return {"input": job.source, "status": "skipped", "error": None, "exit_status": 0,
-            "warnings": [], "outputs": {"mesh": job.output, "values": job.values}}
+    return {
+        "input": job.source,
+        "status": "skipped",
+        "error": None,
+        "exit_status": 0,
+        "warnings": [],
+        "outputs": {"mesh": job.output, "values": job.values},
+    }
 
 
 def _check_combinations(args) -> None:
@@ -730,8 +753,10 @@ def _check_combinations(args) -> None:
     if args.output and args.output_dir is not None:
         raise CommandError("-o/--output names the output itself: leave out --output-dir")
     if args.values and args.save_values:
-        raise CommandError("--values and --save-values both say where values go: give one "
-                           "(--values for one INPUT, --save-values for several)")
+        raise CommandError(
+            "--values and --save-values both say where values go: give one "
+            "(--values for one INPUT, --save-values for several)"
+        )
     args.seed = 0 if args.seed is None else args.seed
     args.bvh_quality = args.bvh_quality or "auto"
 
@@ -739,7 +764,7 @@ def _check_combinations(args) -> None:
 def _refuse_unusable_engine(engine: str) -> None:
     """The engine, before any input is read: a mistyped name is a bad option (status 2) and
     OpenCL missing on this machine is the machine's (status 1), said once, not as a failure of
-    every input (a trial's batch reported each asset as broken, status 2)."""
+    every input (a batch reported each asset as broken, status 2)."""
     try:
         _check_engine(engine)
     except ValueError as exc:
@@ -766,7 +791,7 @@ def _smoothing_options(args) -> dict:
 
 
 def _report(args, job, vertices, triangles, result, io_seconds, total_seconds) -> dict:
-    """An input's --json object (documented in the README's command line section); the
+    """An input's --json object (documented in docs/cli.md); the
     caller adds its warnings."""
     point_count = len(result.raw)
     timings = {stage: float(seconds) for stage, seconds in result.timings.items()}
