@@ -658,9 +658,15 @@ def _compute_one(args, job, mesh_io, smoothing_options, several, warned, interru
     if not args.quiet and not args.json:
         _say(
             f"{job.source}: {report['point_count']} {args.points}, {args.rays} rays, "
-            f"{report['total_seconds']:.2f} s on {result.engine} -> {job.output}"
+            f"{_smoothing_words(args.smooth)}, {report['total_seconds']:.2f} s on "
+            f"{result.engine} -> {job.output}"
         )
     return report
+
+
+def _smoothing_words(method: str) -> str:
+    """Which smoothing ran, for the line each input ends with."""
+    return "no smoothing" if method == "none" else f"{method} smoothing"
 
 
 def _naming_a_file(job, message: str) -> str:

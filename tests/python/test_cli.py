@@ -123,6 +123,14 @@ def test_default_output_is_next_to_the_input(tmp_path, capsys):
     assert load_mesh(tmp_path / "cow.sdf.ply")[1].shape == (5804, 3)
     out = capsys.readouterr().out
     assert out.count("\n") == 1 and "cow.sdf.ply" in out
+    assert ", no smoothing, " in out
+
+
+def test_the_line_of_an_input_says_which_smoothing_ran(tmp_path, capsys):
+    source = tmp_path / "cow.obj"
+    shutil.copy(DATA / "cow.obj", source)
+    assert cli.main([str(source), "--rays", "4", "--smooth", "kring"]) == 0
+    assert ", kring smoothing, " in capsys.readouterr().out
 
 
 def test_a_mesh_at_utm_coordinates_keeps_its_geometry(tmp_path, capsys):

@@ -293,3 +293,12 @@ def test_load_mesh_without_trimesh_says_what_to_install():
                           text=True, timeout=60)  # fmt: skip
     assert done.returncode == 0, done.stderr
     assert "pip install 'shape_diameter[cli]'" in done.stdout
+
+
+def test_a_folder_run_that_finds_no_mesh_makes_no_output_folder(tmp_path, capsys):
+    empty = tmp_path / "empty"
+    empty.mkdir()
+    out = tmp_path / "out"
+    assert cli.main([str(empty), "--output-dir", str(out), "--rays", RAYS, "-q"]) == 2
+    assert f"{empty}: no mesh files in the folder" in capsys.readouterr().err
+    assert not out.exists()
