@@ -11,7 +11,7 @@ import pytest
 
 trimesh = pytest.importorskip("trimesh")
 
-from shape_diameter import cli
+from shape_diameter import batch_job, cli
 
 DATA = Path(__file__).resolve().parents[1] / "data"
 SPOT = str(DATA / "spot.obj")
@@ -184,14 +184,14 @@ def test_a_failed_write_names_the_file_that_failed_once(tmp_path):
 
 def test_long_texture_work_is_announced(tmp_path, capsys, monkeypatch):
     # An 8192^2 run at a radius of 8192 texels went on for an hour without a word.
-    monkeypatch.setattr(cli, "LONG_TEXTURE_SECONDS", 0.0)
+    monkeypatch.setattr(batch_job, "LONG_TEXTURE_SECONDS", 0.0)
     assert cli.main([SPOT, "-o", str(tmp_path / "o.ply"), "--rays", "4", "--engine", "cpu",
                      "--smooth", "texture", "--texture-size", "64", "--threads", "2",
                      "-q"]) == 0
     err = capsys.readouterr().err
     assert "warning: " in err and "texture smoothing at 64 x 64 texels: about 0 s on 2 CPU " \
         "threads and 0 MiB (an estimate)" in err, err
-    monkeypatch.setattr(cli, "LONG_TEXTURE_SECONDS", 10.0)  # the real threshold: quiet
+    monkeypatch.setattr(batch_job, "LONG_TEXTURE_SECONDS", 10.0)  # the real threshold: quiet
     assert cli.main([SPOT, "-o", str(tmp_path / "o.ply"), "--rays", "4", "--engine", "cpu",
                      "--smooth", "texture", "--texture-size", "64", "-q"]) == 0
     assert "texture smoothing at" not in capsys.readouterr().err

@@ -1,0 +1,174 @@
+# SPDX-License-Identifier: GPL-3.0-or-later
+"""Meshes on a Dask cluster against the command line, in one run.
+
+1. Meshes per second over one folder: the in-process command line (`shape-diameter DIR -r
+   --output-dir OUT`, one process, start-up included) against shape_diameter.distributed on a
+   LocalCluster of 1 and of 2 worker processes (cluster start-up timed apart).
+2. Per-mesh overhead for meshes of 50k faces and more, one worker (tasks run one after the
+   other, so the wall time not spent inside the tasks is the scheduling's): scheduling,
+   reading and writing against compute()'s own time.
+3. compute()'s peak memory per face, each mesh in a process of its own.
+
+    .venv/bin/python bench/distributed.py [--rays 30] [--copies 4] [--gpu]
+
+--gpu adds LocalClusters whose workers declare GPU=1, the tasks holding it (engine 'auto').
+"""
+
+from __future__ import annotations
+
+import argparse
+import resource
+import shutil
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from meshes import DATA, read_off, subdivide, write_off  # noqa: E402
+
+from shape_diameter.distributed import compute_files, local_client  # noqa: E402
+
+SMALL = ("cow.obj", "spot.obj", "teapot.obj", "fandisk.obj", "ChineseDragon-10kv.off")
+
+
+def _moved(vertices, rng):
+    """The mesh under a random rotation and stretch (its own values, same cost)."""
+    rotation, _ = np.linalg.qr(rng.normal(size=(3, 3)))
+    return vertices @ (rotation @ np.diag(rng.uniform(0.5, 2.0, 3)))
+
+
+def small_folder(root: Path, copies: int) -> Path:
+    import shape_diameter as sd
+
+    folder, rng = root / "small", np.random.default_rng(1)
+    folder.mkdir()
+    for name in SMALL:
+        vertices, triangles = sd.load_mesh(DATA / name)
+        for copy in range(copies):
+            write_off(folder / f"{Path(name).stem}{copy}.off", _moved(vertices, rng), triangles)
+    return folder
+
+
+def large_folder(root: Path) -> Path:
+    folder, rng = root / "large", np.random.default_rng(2)
+    folder.mkdir()
+    for name, times in (("armadillo", 0), ("bunny00", 0), ("ChineseDragon-10kv", 2),
+                        ("armadillo", 1), ("bunny00", 1)):
+        vertices, triangles = read_off(DATA / f"{name}.off")
+        for _ in range(times):
+            vertices, triangles = subdivide(vertices, triangles)
+        write_off(folder / f"{name}-x{4 ** times}.off", _moved(vertices, rng), triangles)
+    return folder
+
+
+def command_line(folder: Path, out: Path, rays: int) -> float:
+    start = time.perf_counter()
+    subprocess.run([sys.executable, "-m", "shape_diameter", str(folder), "-r", "--output-dir",
+                    str(out), "-q", "--rays", str(rays), "--engine", "cpu"], check=True)
+    return time.perf_counter() - start
+
+
+def on_cluster(folder: Path, out: Path, workers: int, rays: int, gpu: bool):
+    """(cluster start-up seconds, run seconds, rows)."""
+    start = time.perf_counter()
+    with local_client(workers, gpu) as client:
+        client.submit(sum, [1]).result()  # every worker up, and the scheduler answering
+        ready = time.perf_counter()
+        rows = compute_files([folder], out, client=client, rays=rays, gpu=gpu)
+        done = time.perf_counter()
+    failed = [row["error"] for row in rows if row["status"] != "ok"]
+    assert not failed, failed
+    return ready - start, done - ready, rows
+
+
+def throughput(root: Path, copies: int, rays: int, gpu: bool) -> None:
+    folder = small_folder(root, copies)
+    count = len(list(folder.iterdir()))
+    print(f"\n## Meshes per second: {count} meshes of 5.8k-20k faces, {rays} rays\n")
+    print("| run | start-up s | run s | meshes/s | vs command line |")
+    print("|---|---|---|---|---|")
+    wall = command_line(folder, root / "cli", rays)
+    print(f"| command line, one process (start-up inside) | - | {wall:.2f} | "
+          f"{count / wall:.2f} | 1.00x |")
+    runs = [(1, False), (2, False)] + ([(1, True), (2, True)] if gpu else [])
+    for workers, holds_gpu in runs:
+        out = root / f"cluster-{workers}-{holds_gpu}"
+        startup, seconds, _ = on_cluster(folder, out, workers, rays, holds_gpu)
+        label = f"LocalCluster, {workers} worker{'s' * (workers > 1)}" + (
+            ", GPU=1 each, tasks hold it" if holds_gpu else "")
+        print(f"| {label} | {startup:.2f} | {seconds:.2f} | {count / seconds:.2f} | "
+              f"{wall / seconds:.2f}x |")
+
+
+def overhead(root: Path, rays: int) -> None:
+    folder = large_folder(root)
+    _, wall, rows = on_cluster(folder, root / "large-out", 1, rays, False)
+    print(f"\n## Per-mesh overhead, 1 worker, {rays} rays (compute = compute()'s own time)\n")
+    print("| mesh | faces | compute s | read s | write s | read+write / compute |")
+    print("|---|---|---|---|---|---|")
+    compute = read = write = inside = 0.0
+    for row in rows:
+        c, r, w = row["seconds"]["total"], row["io_seconds"]["load"], row["io_seconds"]["write"]
+        compute, read, write, inside = compute + c, read + r, write + w, inside + row[
+            "total_seconds"]
+        print(f"| {Path(row['input']).name} | {row['faces']} | {c:.3f} | {r:.3f} | {w:.3f} | "
+              f"{(r + w) / c:.1%} |")
+    scheduling = wall - inside  # the run's time outside the tasks: submitting, results back
+    print(f"\nAll {len(rows)}: compute {compute:.2f} s, read {read:.2f} s, write {write:.2f} s, "
+          f"scheduling {scheduling:.2f} s ({scheduling / len(rows) * 1e3:.0f} ms a mesh). "
+          f"Overhead over compute: scheduling {scheduling / compute:.1%}, reading and writing "
+          f"{(read + write) / compute:.1%} (the command line reads and writes the same), "
+          f"together {(scheduling + read + write) / compute:.1%}.")
+
+
+MEMORY_CHILD = """
+import resource, sys, numpy as np, shape_diameter as sd
+z = np.load(sys.argv[1]); vertices, triangles = z["vertices"], z["triangles"]
+def rss_kib():
+    with open("/proc/self/statm") as f:
+        return int(f.read().split()[1]) * resource.getpagesize() // 1024
+before = rss_kib()
+sd.compute(vertices, triangles, rays=int(sys.argv[2]), engine="cpu")
+print(len(triangles), resource.getrusage(resource.RUSAGE_SELF).ru_maxrss - before)
+"""
+
+
+def memory(root: Path, rays: int) -> None:
+    print(f"\n## compute()'s peak memory per face (CPU engine, {rays} rays, a process each)\n")
+    print("| mesh | faces | peak above the loaded mesh, MiB | bytes/face |")
+    print("|---|---|---|---|")
+    for name, times in (("armadillo", 0), ("bunny00", 0), ("armadillo", 1), ("armadillo", 2)):
+        vertices, triangles = read_off(DATA / f"{name}.off")
+        for _ in range(times):
+            vertices, triangles = subdivide(vertices, triangles)
+        path = root / f"{name}-{times}.npz"
+        np.savez(path, vertices=vertices, triangles=triangles)
+        done = subprocess.run([sys.executable, "-c", MEMORY_CHILD, str(path), str(rays)],
+                              capture_output=True, text=True, check=True)
+        faces, kib = map(int, done.stdout.split())
+        print(f"| {name}-x{4 ** times} | {faces} | {kib / 1024:.0f} | {kib * 1024 / faces:.0f} |")
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--rays", type=int, default=30)
+    parser.add_argument("--copies", type=int, default=4, help="copies of each small mesh")
+    parser.add_argument("--gpu", action="store_true", help="also with GPU=1 workers")
+    args = parser.parse_args()
+    root = Path(tempfile.mkdtemp(prefix="sdf-distributed-"))
+    try:
+        throughput(root, args.copies, args.rays, args.gpu)
+        overhead(root, args.rays)
+        memory(root, args.rays)
+    finally:
+        shutil.rmtree(root, ignore_errors=True)
+    print(f"\n(this process: {resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024:.0f} "
+          "MiB at its peak)")
+
+
+if __name__ == "__main__":
+    main()
