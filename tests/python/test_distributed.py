@@ -10,6 +10,7 @@ import os
 import signal
 import subprocess
 import sys
+import time
 from pathlib import Path
 
 import numpy as np
@@ -152,9 +153,7 @@ def test_gpu_tasks_hold_the_gpu_resource_of_the_worker_declaring_one(folder, cli
                                "--no-dashboard"],
                               stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)  # fmt: skip
     try:
-        client.wait_for_workers(3, timeout=120)
-        (gpu_worker,) = [address for address, info in client.scheduler_info()["workers"].items()
-                         if info["resources"].get("GPU")]
+        gpu_worker = _worker_declaring_a_gpu(client)
         meshes = _some_meshes(folder)
         rows = compute_files(meshes, tmp_path / "out", client=client, rays=RAYS, gpu=True,
                              engine=OPENCL[0])
@@ -164,6 +163,35 @@ def test_gpu_tasks_hold_the_gpu_resource_of_the_worker_declaring_one(folder, cli
     finally:
         worker.terminate()
         worker.wait(timeout=60)
+
+
+def _worker_declaring_a_gpu(client, timeout=120.0) -> str:
+    deadline = time.monotonic() + timeout
+    while time.monotonic() < deadline:
+        workers = client.scheduler_info()["workers"].items()
+        found = [address for address, info in workers if info["resources"].get("GPU")]
+        if found:
+            return found[0]
+        time.sleep(0.2)
+    raise AssertionError(f"no worker declared a GPU in {timeout} s")
+
+
+def test_a_retry_removes_the_temporary_files_of_a_try_killed_while_writing(folder, client,
+                                                                           tmp_path):
+    # A worker killed outright (SIGKILL: the OOM killer, a preemption) cannot remove the
+    # temporary file it was writing; the task's next try, wherever it runs, does.
+    mesh = _some_meshes(folder)[0]
+    out = tmp_path / "out"
+    out.mkdir()
+    name = Path(mesh).stem + ".sdf.ply"
+    left = [out / f".{name}.0123abcd.part", out / f".{Path(name).stem}.npy.4567cdef.part"]
+    for path in left:
+        path.write_bytes(b"half a file")
+        os.utime(path, (time.time() - 60, time.time() - 60))
+    (row,) = compute_files([mesh], out, client=client, rays=RAYS, save_values=True)
+    assert row["status"] == "ok"
+    assert sorted(path.name for path in out.iterdir()) == sorted([name, Path(name).stem +
+                                                                  ".npy"])
 
 
 def test_the_command_line_sends_a_folder_to_a_scheduler(folder, reference, client, tmp_path):
