@@ -11,7 +11,9 @@ read), points ("faces" or "vertices"), point_count, rays, cone, sampling, seed, 
 smooth, engine, flipped_faces and twin_faces (Result's), seconds (compute()'s stages:
 Result.timings), Mrays_per_s (points cast * rays / seconds["cast"] / 1e6), io_seconds (load,
 write), total_seconds (the whole input) and outputs (mesh, values: paths or null); an input
-that failed has status, error, exit_status, warnings, input and outputs only.
+that failed has status, error, exit_status, warnings, input and outputs only. With
+``--scheduler`` (inputs computed by Dask workers: shape_diameter.distributed) each object
+also has worker, the address of the worker that computed it (or null).
 
 The console script enters through ``_shape_diameter_entry`` and console_main(), which take
 Ctrl-C over (see console_main); main() called from Python leaves signals alone.
