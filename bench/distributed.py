@@ -111,9 +111,10 @@ def throughput(root: Path, copies: int, rays: int, gpu: bool) -> None:
     runs = [(1, False), (2, False)] + ([(1, True), (2, True)] if gpu else [])
     for workers, holds_gpu in runs:
         out = root / f"cluster-{workers}-{holds_gpu}"
-        startup, seconds, _ = on_cluster(folder, out, workers, rays, holds_gpu)
+        startup, seconds, rows = on_cluster(folder, out, workers, rays, holds_gpu)
         label = f"LocalCluster, {workers} worker{'s' * (workers > 1)}" + (
-            ", GPU=1 each, tasks hold it" if holds_gpu else "")
+            ", GPU=1 each, tasks hold it" if holds_gpu else "") + " (" + ", ".join(
+            sorted({row["engine"] for row in rows})) + ")"
         print(f"| {label} | {startup:.2f} | {seconds:.2f} | {count / seconds:.2f} | "
               f"{inputs / seconds:.2f}x |")
 
