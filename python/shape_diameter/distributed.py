@@ -64,12 +64,13 @@ def compute_files(inputs, output_dir, *, client=None, workers: int = 2, gpu: boo
     declare one; without it, ``engine="auto"`` runs the CPU engine. save_values: each mesh's
     values next to its output as .npy (cow.sdf.npy). skip_existing: an input whose outputs
     exist is not computed again (a rerun after a crash or a preemption finishes the rest).
-    on_result: called on this process with each row as it arrives.
+    on_result(job, row): called on this process as each row arrives (job.source: the input).
 
     Returns one row per input, in the inputs' order: the command line's --json object
     (status "ok", "error" or "skipped", error, exit_status, warnings, input, outputs
     and, when computed: faces, vertices, engine, seconds (compute()'s stages),
-    io_seconds, total_seconds, ...) with the worker's address (null when not computed).
+    io_seconds, total_seconds, ...) with the worker's address (None when not computed);
+    faces, seconds and engine are None in a row that computed nothing.
     An input that fails is a row with its error; the others go on. Raises ValueError for
     options compute() does not take, or inputs that cannot all be written (an input given
     twice, or one that another's output would overwrite).
@@ -79,12 +80,13 @@ def compute_files(inputs, output_dir, *, client=None, workers: int = 2, gpu: boo
         jobs = plan_jobs(inputs, output_dir, recursive, save_values, skip_existing)
     except CommandError as exc:
         raise ValueError(str(exc)) from None
-    if client is not None:
-        return run_jobs(client, jobs, options, gpu=gpu, skip_existing=skip_existing,
+    with contextlib.ExitStack() as stack:
+        if client is None:
+            client = stack.enter_context(local_client(workers, gpu))
+        rows = run_jobs(client, jobs, options, gpu=gpu, skip_existing=skip_existing,
                         on_result=on_result)
-    with local_client(workers, gpu) as own:
-        return run_jobs(own, jobs, options, gpu=gpu, skip_existing=skip_existing,
-                        on_result=on_result)
+    # Every row answers faces, seconds and engine (None where nothing was computed).
+    return [{"faces": None, "seconds": None, "engine": None, **row} for row in rows]
 
 
 def task_options(given: dict, gpu: bool) -> dict:

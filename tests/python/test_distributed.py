@@ -91,6 +91,7 @@ def test_a_folder_on_two_workers_gives_the_command_lines_files(folder, reference
     by_input = {Path(row["input"]).relative_to(folder).as_posix(): row for row in rows}
     broken = by_input.pop(BROKEN)
     assert (broken["status"], broken["exit_status"]) == ("error", 2)
+    assert (broken["faces"], broken["seconds"], broken["engine"]) == (None, None, None)
     assert broken["error"].startswith(str(folder / BROKEN))
     assert {row["status"] for row in by_input.values()} == {"ok"}
     assert all(row["engine"].startswith("cpu") for row in by_input.values())
