@@ -15,7 +15,7 @@ import pytest
 trimesh = pytest.importorskip("trimesh")
 
 import shape_diameter
-from shape_diameter import cli, mesh_io
+from shape_diameter import batch_job, cli, mesh_io
 
 DATA = Path(__file__).resolve().parents[1] / "data"
 RAYS = "4"
@@ -75,7 +75,7 @@ def test_clashing_outputs_are_refused_before_any_work(tmp_path, capsys, monkeypa
     (tmp_path / "folder").mkdir()
     _copy(tmp_path / "folder", "suzanne.obj:only.obj")
     before = {p: p.read_bytes() for p in tmp_path.rglob("*") if p.is_file()}
-    monkeypatch.setattr(cli, "compute", _no_compute)
+    monkeypatch.setattr(batch_job, "compute", _no_compute)
     monkeypatch.chdir(tmp_path)
     assert cli.main(argv) == 2
     captured = capsys.readouterr()
