@@ -109,6 +109,7 @@ std::size_t rays_differing(const std::vector<float>& o1, const std::vector<float
 // the origin moved tmin along the ray, so tmin is added back. `tolerance`: see the caller.
 struct HitAgreement {
   std::size_t rays = 0, same = 0, same_distance = 0, both_miss = 0;
+  std::size_t ours_only = 0, theirs_only = 0;  // rays that one side hits and the other misses
   double worst_same = 0.0;  // the largest distance difference on the same triangle
 };
 
@@ -121,6 +122,8 @@ HitAgreement compare_hits(const std::vector<float>& our_t, const std::vector<int
     const bool our_miss = our_t[i] == INFINITY, their_miss = their_t[i] >= 1e30f;
     if (our_miss || their_miss) {
       h.both_miss += our_miss && their_miss;
+      h.ours_only += their_miss && !our_miss;
+      h.theirs_only += our_miss && !their_miss;
       continue;
     }
     const double diff = std::fabs(double(our_t[i]) - (double(their_t[i]) + tmin));
@@ -244,11 +247,13 @@ void print_tables(const std::vector<MeshResult>& results) {
   std::printf("\nChecks: rays our kernel makes that differ in any bit from the host's (the rays "
               "given to tinybvh); same hit: equal triangle and distances within the tolerance; "
               "the largest distance difference on the same triangle.\n\n"
-              "| mesh | rays differing | tolerance | largest difference | our tree s (device) | "
-              "tinybvh build s (host) |\n|---|---:|---:|---:|---:|---:|\n");
+              "| mesh | rays differing | tolerance | largest difference | hit by ours only | "
+              "by tinybvh only | our tree s (device) | tinybvh build s (host) |\n"
+              "|---|---:|---:|---:|---:|---:|---:|---:|\n");
   for (const MeshResult& r : results)
-    std::printf("| %s | %zu | %.3g | %.3g | %.3f | %.3f |\n", r.name.c_str(), r.rays_differing,
-                r.tolerance, r.hits.worst_same, r.tree_s, r.tinybvh_build_s);
+    std::printf("| %s | %zu | %.3g | %.3g | %zu | %zu | %.3f | %.3f |\n", r.name.c_str(),
+                r.rays_differing, r.tolerance, r.hits.worst_same, r.hits.ours_only,
+                r.hits.theirs_only, r.tree_s, r.tinybvh_build_s);
 }
 
 }  // namespace
