@@ -14,8 +14,8 @@ namespace bench {
 // device's own clock (CL_PROFILING_COMMAND_START to END) and not from the host's.
 inline cl_command_queue profiling_queue(const sdf::cl::Device& device, cl_context context) {
   cl_int err = CL_SUCCESS;
-  cl_command_queue queue = sdf::cl::api()->clCreateCommandQueue(
-      context, device.id, CL_QUEUE_PROFILING_ENABLE, &err);
+  cl_command_queue queue =
+      sdf::cl::api()->clCreateCommandQueue(context, device.id, CL_QUEUE_PROFILING_ENABLE, &err);
   sdf::cl::check(err, "clCreateCommandQueue (profiling)");
   return queue;
 }
@@ -25,9 +25,9 @@ inline double event_ms(cl_event event) {
   const sdf::cl::Api& cl = *sdf::cl::api();
   sdf::cl::check(cl.clWaitForEvents(1, &event), "clWaitForEvents");
   cl_ulong start = 0, end = 0;
-  sdf::cl::check(cl.clGetEventProfilingInfo(event, CL_PROFILING_COMMAND_START, sizeof start,
-                                            &start, nullptr),
-                 "clGetEventProfilingInfo");
+  sdf::cl::check(
+      cl.clGetEventProfilingInfo(event, CL_PROFILING_COMMAND_START, sizeof start, &start, nullptr),
+      "clGetEventProfilingInfo");
   sdf::cl::check(
       cl.clGetEventProfilingInfo(event, CL_PROFILING_COMMAND_END, sizeof end, &end, nullptr),
       "clGetEventProfilingInfo");
@@ -48,8 +48,8 @@ inline cl_program program_from_source(const sdf::cl::Device& device, cl_context 
     std::size_t size = 0;
     cl.clGetProgramBuildInfo(program, device.id, CL_PROGRAM_BUILD_LOG, 0, nullptr, &size);
     std::string log(size, '\0');
-    if (size) cl.clGetProgramBuildInfo(program, device.id, CL_PROGRAM_BUILD_LOG, size, log.data(),
-                                       nullptr);
+    if (size)
+      cl.clGetProgramBuildInfo(program, device.id, CL_PROGRAM_BUILD_LOG, size, log.data(), nullptr);
     cl.clReleaseProgram(program);
     throw sdf::cl::Error("clBuildProgram (" + options + ") failed:\n" + log, err);
   }

@@ -84,8 +84,8 @@ std::vector<CastVariant> make_variants(const std::string& options, const std::st
   // Ties: the first triangle found at the nearest distance wins, and a subtree whose box
   // starts exactly there is no longer visited for a lower id.
   CastVariant ties{"no tie rule", options, "", ""};
-  ties.source = replaced(source, "t > hit->t || (t == hit->t && id >= hit->id)", "t >= hit->t",
-                         ties.missing);
+  ties.source =
+      replaced(source, "t > hit->t || (t == hit->t && id >= hit->id)", "t >= hit->t", ties.missing);
   ties.source = replaced(ties.source, "if (sdf_as_float(stack[sp].y) <= hit.t) break;",
                          "if (sdf_as_float(stack[sp].y) < hit.t) break;", ties.missing);
   v.push_back(ties);
@@ -94,8 +94,8 @@ std::vector<CastVariant> make_variants(const std::string& options, const std::st
   std::string ignored;
   all.source = replaced(contract.source, "#define SDF_BARYCENTRIC_SLACK 1e-5f",
                         "#define SDF_BARYCENTRIC_SLACK 0.0f", ignored);
-  all.source = replaced(all.source, "t > hit->t || (t == hit->t && id >= hit->id)",
-                        "t >= hit->t", ignored);
+  all.source =
+      replaced(all.source, "t > hit->t || (t == hit->t && id >= hit->id)", "t >= hit->t", ignored);
   all.source = replaced(all.source, "if (sdf_as_float(stack[sp].y) <= hit.t) break;",
                         "if (sdf_as_float(stack[sp].y) < hit.t) break;", ignored);
   v.push_back(all);
@@ -142,8 +142,8 @@ OurCast::OurCast(const sdf::cl::Device& device, sdf::cl::DeviceState& s, cl_comm
     table[4 * i + 3] = cone.local_angle[i];
   }
   m.local_rays = std::make_unique<Buffer>(s, table.size() * sizeof(float), table.data());
-  m.raw = std::make_unique<Buffer>(s, std::max<std::size_t>(with_area_, 1) * sizeof(float),
-                                   nullptr);
+  m.raw =
+      std::make_unique<Buffer>(s, std::max<std::size_t>(with_area_, 1) * sizeof(float), nullptr);
   m.valid = std::make_unique<Buffer>(s, std::max<std::size_t>(with_area_, 1) * 4, nullptr);
   m.params.rays = cone.rays;
   m.params.sampling = static_cast<int>(cone.sampling);
@@ -164,8 +164,8 @@ OurCast::OurCast(const sdf::cl::Device& device, sdf::cl::DeviceState& s, cl_comm
       program = sdf::cl::program_for(device, s, options);  // the product's own
     } else if (variant.missing.empty()) {
       try {
-        program = sdf::cl::build_program(device, s.context, variant.options,
-                                         variant.source.c_str());
+        program =
+            sdf::cl::build_program(device, s.context, variant.options, variant.source.c_str());
         m.owned_programs.push_back(program);
       } catch (const sdf::cl::Error& e) {
         variant.missing = std::string("does not build: ") + e.what();
@@ -174,8 +174,8 @@ OurCast::OurCast(const sdf::cl::Device& device, sdf::cl::DeviceState& s, cl_comm
     m.kernels.push_back(program ? std::make_unique<Kernel>(program, "sdf_cast_bvh_per_ray_faces")
                                 : nullptr);
   }
-  m.hits_program = sdf::cl::build_program(device, s.context, options,
-                                          (source + kRayHitsKernel).c_str());
+  m.hits_program =
+      sdf::cl::build_program(device, s.context, options, (source + kRayHitsKernel).c_str());
 }
 
 OurCast::~OurCast() = default;
@@ -186,9 +186,8 @@ double OurCast::cast_ms(std::size_t v, std::vector<float>* raw) {
   // The product's launch (opencl_engine.cpp): points_per_group points of `rays` items each,
   // about 128 items a group, fewer when registers limit the group size.
   const std::size_t rays = static_cast<std::size_t>(m.params.rays);
-  const std::size_t points_per_group =
-      std::min(std::max<std::size_t>(1, (128 + rays / 2) / rays),
-               kernel.max_group(m.device->id) / rays);
+  const std::size_t points_per_group = std::min(std::max<std::size_t>(1, (128 + rays / 2) / rays),
+                                                kernel.max_group(m.device->id) / rays);
   cl_uint a = 0;
   for (cl_mem mem : {m.tree.nodes->get(), m.tree.triangles->get(), m.tree.vertices->get(),
                      m.tree.faces->get(), m.tree.order->get(), m.local_rays->get()})
@@ -201,15 +200,15 @@ double OurCast::cast_ms(std::size_t v, std::vector<float>* raw) {
   const std::size_t group = points_per_group * rays;
   const std::size_t global = (with_area_ + points_per_group - 1) / points_per_group * group;
   cl_event event = nullptr;
-  sdf::cl::check(sdf::cl::api()->clEnqueueNDRangeKernel(m.queue, kernel.get(), 1, nullptr,
-                                                         &global, &group, 0, nullptr, &event),
+  sdf::cl::check(sdf::cl::api()->clEnqueueNDRangeKernel(m.queue, kernel.get(), 1, nullptr, &global,
+                                                        &group, 0, nullptr, &event),
                  "clEnqueueNDRangeKernel (cast)");
   const double ms = event_ms(event);
   if (raw) {
     raw->resize(with_area_);
     sdf::cl::check(sdf::cl::api()->clEnqueueReadBuffer(m.queue, m.raw->get(), CL_TRUE, 0,
-                                                        with_area_ * sizeof(float), raw->data(),
-                                                        0, nullptr, nullptr),
+                                                       with_area_ * sizeof(float), raw->data(), 0,
+                                                       nullptr, nullptr),
                    "clEnqueueReadBuffer (raw)");
   }
   return ms;
@@ -230,17 +229,17 @@ void OurCast::ray_hits(std::vector<float>& origins, std::vector<float>& directio
   kernel.arg(a++, rays_out.get());
   kernel.arg(a++, hits_out.get());
   const std::size_t global = (count + 63) / 64 * 64;
-  sdf::cl::check(sdf::cl::api()->clEnqueueNDRangeKernel(m.queue, kernel.get(), 1, nullptr,
-                                                         &global, nullptr, 0, nullptr, nullptr),
+  sdf::cl::check(sdf::cl::api()->clEnqueueNDRangeKernel(m.queue, kernel.get(), 1, nullptr, &global,
+                                                        nullptr, 0, nullptr, nullptr),
                  "clEnqueueNDRangeKernel (ray hits)");
   std::vector<float> rays(8 * count), hits(2 * count);
   sdf::cl::check(sdf::cl::api()->clEnqueueReadBuffer(m.queue, rays_out.get(), CL_TRUE, 0,
-                                                      rays.size() * sizeof(float), rays.data(),
-                                                      0, nullptr, nullptr),
+                                                     rays.size() * sizeof(float), rays.data(), 0,
+                                                     nullptr, nullptr),
                  "clEnqueueReadBuffer (rays)");
   sdf::cl::check(sdf::cl::api()->clEnqueueReadBuffer(m.queue, hits_out.get(), CL_TRUE, 0,
-                                                      hits.size() * sizeof(float), hits.data(),
-                                                      0, nullptr, nullptr),
+                                                     hits.size() * sizeof(float), hits.data(), 0,
+                                                     nullptr, nullptr),
                  "clEnqueueReadBuffer (hits)");
   origins.resize(3 * count);
   directions.resize(3 * count);

@@ -45,8 +45,8 @@ class OurCast {
   // Every ray as the cast kernel makes it (origin and direction, 3 floats each, point-major in
   // cast order) and its nearest hit of either facing (t: INFINITY for none; the triangle id),
   // by the product's traversal on the product's tree.
-  void ray_hits(std::vector<float>& origins, std::vector<float>& directions,
-                std::vector<float>& t, std::vector<int>& id);
+  void ray_hits(std::vector<float>& origins, std::vector<float>& directions, std::vector<float>& t,
+                std::vector<int>& id);
 
   double tree_seconds = 0.0;  // the device tree's build, as build_device_tree times it
 

@@ -60,7 +60,8 @@ TinybvhCast::TinybvhCast(const sdf::cl::Device& device, sdf::cl::DeviceState& s,
   const std::size_t tris = triangles.size() / 9;
   m.corners.resize(3 * tris);
   for (std::size_t i = 0; i < 3 * tris; ++i)
-    m.corners[i] = tinybvh::bvhvec4(triangles[3 * i], triangles[3 * i + 1], triangles[3 * i + 2], 0);
+    m.corners[i] =
+        tinybvh::bvhvec4(triangles[3 * i], triangles[3 * i + 1], triangles[3 * i + 2], 0);
   const auto start = std::chrono::steady_clock::now();
   m.bvh.Build(m.corners.data(), static_cast<std::uint32_t>(tris));
   build_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
@@ -105,10 +106,10 @@ TinybvhCast::~TinybvhCast() = default;
 double TinybvhCast::cast_ms() {
   Impl& m = *impl_;
   cl_event event = nullptr;
-  sdf::cl::check(sdf::cl::api()->clEnqueueNDRangeKernel(m.queue, m.kernel->get(), 1, nullptr,
-                                                         &m.global, m.local ? &m.local : nullptr,
-                                                         0, nullptr, &event),
-                 "clEnqueueNDRangeKernel (tinybvh)");
+  sdf::cl::check(
+      sdf::cl::api()->clEnqueueNDRangeKernel(m.queue, m.kernel->get(), 1, nullptr, &m.global,
+                                             m.local ? &m.local : nullptr, 0, nullptr, &event),
+      "clEnqueueNDRangeKernel (tinybvh)");
   return event_ms(event);
 }
 
@@ -116,8 +117,8 @@ void TinybvhCast::hits(std::vector<float>& t, std::vector<int>& id) {
   Impl& m = *impl_;
   std::vector<RayRecord> records(m.count);
   sdf::cl::check(sdf::cl::api()->clEnqueueReadBuffer(m.queue, m.rays->get(), CL_TRUE, 0,
-                                                      m.count * sizeof(RayRecord), records.data(),
-                                                      0, nullptr, nullptr),
+                                                     m.count * sizeof(RayRecord), records.data(), 0,
+                                                     nullptr, nullptr),
                  "clEnqueueReadBuffer (tinybvh hits)");
   t.resize(m.count);
   id.resize(m.count);

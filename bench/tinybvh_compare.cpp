@@ -40,11 +40,16 @@ Args parse_args(int argc, char** argv) {
       if (i + 1 >= argc) throw std::invalid_argument(arg + " needs a value");
       return argv[++i];
     };
-    if (arg == "--tinybvh") a.tinybvh = value();
-    else if (arg == "--device") a.engine = value();
-    else if (arg == "--rays") a.rays = std::stoi(value());
-    else if (arg == "--rounds") a.rounds = std::stoi(value());
-    else a.meshes.push_back(arg);
+    if (arg == "--tinybvh")
+      a.tinybvh = value();
+    else if (arg == "--device")
+      a.engine = value();
+    else if (arg == "--rays")
+      a.rays = std::stoi(value());
+    else if (arg == "--rounds")
+      a.rounds = std::stoi(value());
+    else
+      a.meshes.push_back(arg);
   }
   if (a.tinybvh.empty() || a.meshes.empty() || a.rays < 1 || a.rounds < 1)
     throw std::invalid_argument(
@@ -152,8 +157,8 @@ struct MeshResult {
   std::vector<VariantResult> variants;
 };
 
-MeshResult run_mesh(const sdf::cl::Device& device, sdf::cl::DeviceState& s,
-                    cl_command_queue queue, const Args& args, const std::string& spec) {
+MeshResult run_mesh(const sdf::cl::Device& device, sdf::cl::DeviceState& s, cl_command_queue queue,
+                    const Args& args, const std::string& spec) {
   MeshResult res;
   const sdf::Mesh mesh = load_mesh(spec, res.name);
   res.faces = mesh.triangles.size();
@@ -177,7 +182,8 @@ MeshResult run_mesh(const sdf::cl::Device& device, sdf::cl::DeviceState& s,
   std::vector<float> corners(9 * mesh.triangles.size());
   for (std::size_t f = 0; f < mesh.triangles.size(); ++f)
     for (int c = 0; c < 3; ++c)
-      for (int k = 0; k < 3; ++k) corners[9 * f + 3 * c + k] = mesh.vertices[mesh.triangles[f][c]][k];
+      for (int k = 0; k < 3; ++k)
+        corners[9 * f + 3 * c + k] = mesh.vertices[mesh.triangles[f][c]][k];
   std::fprintf(stderr, "%s: building tinybvh's BVH_GPU and compiling its kernel\n",
                res.name.c_str());
   bench::TinybvhCast theirs(device, s, queue, args.tinybvh, corners, moved, directions);
@@ -221,19 +227,21 @@ double percent(std::size_t part, std::size_t whole) {
 }
 
 void print_tables(const std::vector<MeshResult>& results) {
-  std::printf("\n| mesh | faces | rays | ours ms | tinybvh ms | ours / tinybvh | "
-              "Grays/s ours | Grays/s tinybvh | same hit | same distance | both miss |\n"
-              "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n");
+  std::printf(
+      "\n| mesh | faces | rays | ours ms | tinybvh ms | ours / tinybvh | "
+      "Grays/s ours | Grays/s tinybvh | same hit | same distance | both miss |\n"
+      "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n");
   for (const MeshResult& r : results)
-    std::printf("| %s | %zu | %zu | %.2f | %.2f | %.3f | %.3f | %.3f | %.4f%% | %.4f%% | "
-                "%.4f%% |\n",
-                r.name.c_str(), r.faces, r.rays, r.ours_ms, r.tinybvh_ms, r.ours_ms / r.tinybvh_ms,
-                r.rays / r.ours_ms * 1e-6, r.rays / r.tinybvh_ms * 1e-6,
-                percent(r.hits.same, r.hits.rays), percent(r.hits.same_distance, r.hits.rays),
-                percent(r.hits.both_miss, r.hits.rays));
-  std::printf("\nOur kernel with one promise relaxed at a time (values: faces whose value "
-              "changes in any bit against the default's):\n\n"
-              "| mesh | variant | ms | / default | values changed |\n|---|---|---:|---:|---:|\n");
+    std::printf(
+        "| %s | %zu | %zu | %.2f | %.2f | %.3f | %.3f | %.3f | %.4f%% | %.4f%% | "
+        "%.4f%% |\n",
+        r.name.c_str(), r.faces, r.rays, r.ours_ms, r.tinybvh_ms, r.ours_ms / r.tinybvh_ms,
+        r.rays / r.ours_ms * 1e-6, r.rays / r.tinybvh_ms * 1e-6, percent(r.hits.same, r.hits.rays),
+        percent(r.hits.same_distance, r.hits.rays), percent(r.hits.both_miss, r.hits.rays));
+  std::printf(
+      "\nOur kernel with one promise relaxed at a time (values: faces whose value "
+      "changes in any bit against the default's):\n\n"
+      "| mesh | variant | ms | / default | values changed |\n|---|---|---:|---:|---:|\n");
   for (const MeshResult& r : results)
     for (const VariantResult& v : r.variants) {
       if (!v.missing.empty()) {
@@ -244,12 +252,13 @@ void print_tables(const std::vector<MeshResult>& results) {
       std::printf("| %s | %s | %.2f | %.3f | %.4f%% |\n", r.name.c_str(), v.name.c_str(), v.ms,
                   v.ms / r.ours_ms, percent(v.changed, r.faces));
     }
-  std::printf("\nChecks: rays our kernel makes that differ in any bit from the host's (the rays "
-              "given to tinybvh); same hit: equal triangle and distances within the tolerance; "
-              "the largest distance difference on the same triangle.\n\n"
-              "| mesh | rays differing | tolerance | largest difference | hit by ours only | "
-              "by tinybvh only | our tree s (device) | tinybvh build s (host) |\n"
-              "|---|---:|---:|---:|---:|---:|---:|---:|\n");
+  std::printf(
+      "\nChecks: rays our kernel makes that differ in any bit from the host's (the rays "
+      "given to tinybvh); same hit: equal triangle and distances within the tolerance; "
+      "the largest distance difference on the same triangle.\n\n"
+      "| mesh | rays differing | tolerance | largest difference | hit by ours only | "
+      "by tinybvh only | our tree s (device) | tinybvh build s (host) |\n"
+      "|---|---:|---:|---:|---:|---:|---:|---:|\n");
   for (const MeshResult& r : results)
     std::printf("| %s | %zu | %.3g | %.3g | %zu | %zu | %.3f | %.3f |\n", r.name.c_str(),
                 r.rays_differing, r.tolerance, r.hits.worst_same, r.hits.ours_only,
@@ -264,10 +273,11 @@ int main(int argc, char** argv) {
     const sdf::cl::Device& device = *sdf::cl::select_devices(args.engine).front();
     sdf::cl::DeviceState& s = sdf::cl::state_of(device);
     cl_command_queue queue = bench::profiling_queue(device, s.context);
-    std::printf("device: %s (%s, driver %s); %d rays a face, 120-degree cone, Fibonacci; best "
-                "of %d rounds\n",
-                device.name.c_str(), device.platform_name.c_str(), device.driver_version.c_str(),
-                args.rays, args.rounds);
+    std::printf(
+        "device: %s (%s, driver %s); %d rays a face, 120-degree cone, Fibonacci; best "
+        "of %d rounds\n",
+        device.name.c_str(), device.platform_name.c_str(), device.driver_version.c_str(), args.rays,
+        args.rounds);
     std::vector<MeshResult> results;
     for (const std::string& spec : args.meshes) {
       results.push_back(run_mesh(device, s, queue, args, spec));
