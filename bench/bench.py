@@ -20,8 +20,8 @@ from pathlib import Path
 
 import numpy as np
 import shape_diameter as sd
-from shape_diameter import _testing
 from meshes import CACHE, ROOT, benchmark_meshes, off_path
+from shape_diameter import _testing
 
 BUILD = ROOT / "build" / "cpp"
 

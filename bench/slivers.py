@@ -1,7 +1,7 @@
 # SPDX-License-Identifier: GPL-3.0-or-later
 """Slivers lying across the axes, cut into pieces for the BVH (native/accel/bvh_split.h), against
-the same build without cutting (the no_sliver_cutting test override), in one run, alternating: CAD-like fans and
-needles, and real meshes, whose few slivers must cost nothing.
+the same build without cutting (the no_sliver_cutting test override), in one run, alternating:
+CAD-like fans and needles, and real meshes, whose few slivers must cost nothing.
 
     .venv/bin/python bench/slivers.py [--rounds 3] [--engine cpu] [--bvh-quality auto]
 
