@@ -413,6 +413,8 @@ PYBIND11_MODULE(_core, m) {
   m.attr("NEAR_CUTOFF_SHARE") = sdf::kNearCutoffShare;
   bind_smoothing(m);
   // For the test-only module shape_diameter._testing alone (test_bridge.h).
-  static sdf::TestBridge bridge{&sdf::test_overrides(), &core_program_stats};
+  static sdf::TestBridge bridge{
+      [](const sdf::TestOverrides& overrides) { sdf::test_overrides() = overrides; },
+      &core_program_stats};
   m.attr("_test_bridge") = py::capsule(&bridge, sdf::kTestBridgeName);
 }

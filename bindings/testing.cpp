@@ -127,7 +127,7 @@ py::dict as_dict(const sdf::TestOverrides& o) {
 
 // Both copies of the core get the same values (test_bridge.h says why there are two).
 void apply(const sdf::TestOverrides& o) {
-  *core_bridge().overrides = o;
+  core_bridge().set_overrides(o);
   sdf::test_overrides() = o;
 }
 
@@ -156,11 +156,13 @@ void bind_overrides(py::module_& m) {
       .def(py::init<py::kwargs>())
       .def("__enter__", [](ScopedOverrides& s) { s.enter(); })
       .def("__exit__", [](ScopedOverrides& s, const py::args&) { s.exit(); });
-  m.def("set_overrides",
-        [](const py::kwargs& fields) { apply(with_fields(sdf::test_overrides(), fields)); },
-        "Sets the fields until changed again (a child process that keeps them to its end).");
-  m.def("current_overrides", [] { return as_dict(sdf::test_overrides()); },
-        "Every override with its value now.");
+  m.def(
+      "set_overrides",
+      [](const py::kwargs& fields) { apply(with_fields(sdf::test_overrides(), fields)); },
+      "Sets the fields until changed again (a child process that keeps them to its end).");
+  m.def(
+      "current_overrides", [] { return as_dict(sdf::test_overrides()); },
+      "Every override with its value now.");
 }
 
 // ---- The test-only functions ----
@@ -214,15 +216,29 @@ py::dict bvh_stats(const Doubles& vertices, const Int64s& triangles, unsigned th
 // probe kernel writes them.
 std::vector<std::uint32_t> host_layout() {
   using namespace sdf::kern;
-  return {sizeof(SdfBvhNode),      offsetof(SdfBvhNode, first),     offsetof(SdfBvhNode, hi_x),
-          offsetof(SdfBvhNode, count), sizeof(SdfTriangle),         offsetof(SdfTriangle, id),
-          offsetof(SdfTriangle, e1_x), offsetof(SdfTriangle, e2_x), sizeof(SdfOctreeRoot),
-          offsetof(SdfOctreeRoot, size), sizeof(SdfCastParams),    offsetof(SdfCastParams, tmin),
-          offsetof(SdfCastParams, count), sizeof(SdfPointNode),  offsetof(SdfPointNode, half_side),
-          offsetof(SdfPointNode, count), offsetof(SdfPointNode, first_child),
-          offsetof(SdfPointNode, child_count), sizeof(SdfBvh8Node),
-          offsetof(SdfBvh8Node, hi_x), offsetof(SdfBvh8Node, child),
-          offsetof(SdfBvh8Node, count), sizeof(SdfTrianglePacket4),
+  return {sizeof(SdfBvhNode),
+          offsetof(SdfBvhNode, first),
+          offsetof(SdfBvhNode, hi_x),
+          offsetof(SdfBvhNode, count),
+          sizeof(SdfTriangle),
+          offsetof(SdfTriangle, id),
+          offsetof(SdfTriangle, e1_x),
+          offsetof(SdfTriangle, e2_x),
+          sizeof(SdfOctreeRoot),
+          offsetof(SdfOctreeRoot, size),
+          sizeof(SdfCastParams),
+          offsetof(SdfCastParams, tmin),
+          offsetof(SdfCastParams, count),
+          sizeof(SdfPointNode),
+          offsetof(SdfPointNode, half_side),
+          offsetof(SdfPointNode, count),
+          offsetof(SdfPointNode, first_child),
+          offsetof(SdfPointNode, child_count),
+          sizeof(SdfBvh8Node),
+          offsetof(SdfBvh8Node, hi_x),
+          offsetof(SdfBvh8Node, child),
+          offsetof(SdfBvh8Node, count),
+          sizeof(SdfTrianglePacket4),
           offsetof(SdfTrianglePacket4, id)};
 }
 
@@ -258,37 +274,48 @@ py::array_t<std::int32_t> uv_islands(const Doubles& vertices, const Int64s& tria
 
 void bind_opencl(py::module_& m) {
 #ifdef SDF_HAVE_OPENCL
-  m.def("opencl_layout", [](int index) {
-    py::gil_scoped_release release;
-    return sdf::cl::probe_layout(index);
-  }, "What the layout probe kernel writes on device `index` (host_layout's order).");
-  m.def("opencl_tree_keys", [](const Doubles& vertices, const Int64s& triangles, int index) {
-    const sdf::Mesh mesh = to_mesh(vertices, triangles);
-    sdf::cl::TreeKeys keys;
-    {
-      py::gil_scoped_release release;
-      keys = sdf::cl::device_tree_keys(index, mesh);
-    }
-    return py::make_tuple(
-        py::array_t<std::uint32_t>(keys.order.size(), keys.order.data()),
-        py::array_t<std::uint32_t>(keys.codes.size(), keys.codes.data()), keys.with_area,
-        keys.margin);
-  }, "The device-built tree's keys (order, codes, faces with area, margin) as device `index` "
-     "makes them.");
-  m.def("opencl_build_source", [](int index, const std::string& source) {
-    py::gil_scoped_release release;
-    sdf::cl::build_source_for_test(index, source);
-  }, "Builds an OpenCL source on device `index`; raises RuntimeError with the build log.");
+  m.def(
+      "opencl_layout",
+      [](int index) {
+        py::gil_scoped_release release;
+        return sdf::cl::probe_layout(index);
+      },
+      "What the layout probe kernel writes on device `index` (host_layout's order).");
+  m.def(
+      "opencl_tree_keys",
+      [](const Doubles& vertices, const Int64s& triangles, int index) {
+        const sdf::Mesh mesh = to_mesh(vertices, triangles);
+        sdf::cl::TreeKeys keys;
+        {
+          py::gil_scoped_release release;
+          keys = sdf::cl::device_tree_keys(index, mesh);
+        }
+        return py::make_tuple(py::array_t<std::uint32_t>(keys.order.size(), keys.order.data()),
+                              py::array_t<std::uint32_t>(keys.codes.size(), keys.codes.data()),
+                              keys.with_area, keys.margin);
+      },
+      "The device-built tree's keys (order, codes, faces with area, margin) as device `index` "
+      "makes them.");
+  m.def(
+      "opencl_build_source",
+      [](int index, const std::string& source) {
+        py::gil_scoped_release release;
+        sdf::cl::build_source_for_test(index, source);
+      },
+      "Builds an OpenCL source on device `index`; raises RuntimeError with the build log.");
 #endif
-  m.def("opencl_program_stats", [] {
-    std::uint64_t compiled = 0, from_cache = 0;
-    core_bridge().program_stats(&compiled, &from_cache);
-    py::dict d;
-    d["compiled"] = compiled;
-    d["from_cache"] = from_cache;
-    return d;
-  }, "Programs the package's OpenCL engine built from source and loaded from the cache so far "
-     "in this process.");
+  m.def(
+      "opencl_program_stats",
+      [] {
+        std::uint64_t compiled = 0, from_cache = 0;
+        core_bridge().program_stats(&compiled, &from_cache);
+        py::dict d;
+        d["compiled"] = compiled;
+        d["from_cache"] = from_cache;
+        return d;
+      },
+      "Programs the package's OpenCL engine built from source and loaded from the cache so far "
+      "in this process.");
 }
 
 }  // namespace
@@ -298,8 +325,7 @@ PYBIND11_MODULE(_testing, m) {
   bind_overrides(m);
   m.def("octree_stats", &octree_stats, py::arg("vertices"), py::arg("triangles"),
         py::arg("max_depth") = 10, py::arg("leaf_size") = 8);
-  m.def("bvh_stats", &bvh_stats, py::arg("vertices"), py::arg("triangles"),
-        py::arg("threads") = 0);
+  m.def("bvh_stats", &bvh_stats, py::arg("vertices"), py::arg("triangles"), py::arg("threads") = 0);
   m.def("host_layout", &host_layout);
   m.def("weld_vertices", &weld_vertices, py::arg("vertices"), py::arg("triangles"),
         py::arg("tolerance"));
