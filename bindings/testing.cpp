@@ -87,27 +87,37 @@ const char* name_of(Choice choice, const Names<Choice>& names) {
   return "?";
 }
 
-// `base` with the fields named in `fields` changed. Unknown names are a TypeError, bad values
-// a ValueError, before anything is set.
+// Sets field `name` of `o` to `value`; throws py::type_error for an unknown name.
+void set_field(sdf::TestOverrides& o, const std::string& name, const py::handle& value) {
+  if (name == "cpu_without_avx2") {
+    o.cpu_without_avx2 = value.cast<bool>();
+  } else if (name == "no_sliver_cutting") {
+    o.no_sliver_cutting = value.cast<bool>();
+  } else if (name == "opencl_kernel") {
+    o.opencl_kernel = parse(name.c_str(), value.cast<std::string>(), kKernels);
+  } else if (name == "opencl_tree") {
+    o.opencl_tree = parse(name.c_str(), value.cast<std::string>(), kTrees);
+  } else if (name == "opencl_extra_options") {
+    o.opencl_extra_options = value.cast<std::string>();
+  } else if (name == "opencl_staging_chunk") {
+    o.opencl_staging_chunk = value.cast<std::size_t>();
+  } else if (name == "opencl_lose_device_after") {
+    o.opencl_lose_device_after = value.cast<long>();
+  } else {
+    throw py::type_error("no test override named '" + name + "' (docs/testing.md lists them)");
+  }
+}
+
+// `o` with the fields named in `fields` changed. Unknown names and values of the wrong type
+// are a TypeError, names of no choice a ValueError, before anything is set.
 sdf::TestOverrides with_fields(sdf::TestOverrides o, const py::kwargs& fields) {
   for (const auto& [key, value] : fields) {
     const std::string name = py::str(key);
-    if (name == "cpu_without_avx2") {
-      o.cpu_without_avx2 = value.cast<bool>();
-    } else if (name == "no_sliver_cutting") {
-      o.no_sliver_cutting = value.cast<bool>();
-    } else if (name == "opencl_kernel") {
-      o.opencl_kernel = parse(name.c_str(), value.cast<std::string>(), kKernels);
-    } else if (name == "opencl_tree") {
-      o.opencl_tree = parse(name.c_str(), value.cast<std::string>(), kTrees);
-    } else if (name == "opencl_extra_options") {
-      o.opencl_extra_options = value.cast<std::string>();
-    } else if (name == "opencl_staging_chunk") {
-      o.opencl_staging_chunk = value.cast<std::size_t>();
-    } else if (name == "opencl_lose_device_after") {
-      o.opencl_lose_device_after = value.cast<long>();
-    } else {
-      throw py::type_error("no test override named '" + name + "' (docs/testing.md lists them)");
+    try {
+      set_field(o, name, value);
+    } catch (const py::cast_error&) {
+      throw py::type_error(name + "=" + std::string(py::repr(value)) +
+                           ": a value of the wrong type (docs/testing.md lists the values)");
     }
   }
   return o;

@@ -41,6 +41,8 @@ def test_unknown_names_and_bad_values_are_refused_before_anything_is_set():
         _testing.overrides(opencl_wide=True)
     with pytest.raises(ValueError, match="opencl_tree='gpu': use engine, host, device"):
         _testing.set_overrides(cpu_without_avx2=True, opencl_tree="gpu")
+    with pytest.raises(TypeError, match="opencl_staging_chunk='64k': a value of the wrong type"):
+        _testing.set_overrides(opencl_kernel="bvh_per_ray", opencl_staging_chunk="64k")
     assert _testing.current_overrides() == DEFAULTS
 
 
