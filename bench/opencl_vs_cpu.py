@@ -5,7 +5,7 @@ best of the rounds) and each kernel's ratio to the CPU engine, with a bitwise ch
 values (fibonacci sampling). For the target "OpenCL on PoCL: at least half our CPU
 engine" (docs/performance.md), and for choosing each device's default kernel
 (opencl_engine.cpp, cast_kernel_for), e.g. on a GPU: opencl armadillo-x16,bunny00-x16
-bvh_per_point,bvh4_per_point,bvh8_per_point,bvh_per_ray.
+bvh_per_point,bvh8_per_point,bvh_per_ray.
 Usage: python3 bench/opencl_vs_cpu.py [ENGINE [MESH,MESH [KERNEL,KERNEL [ROUNDS]]]]"""
 
 import os
@@ -22,7 +22,7 @@ if any(a in ("-h", "--help") for a in sys.argv[1:]):
     sys.exit(print(__doc__))
 engine = sys.argv[1] if len(sys.argv) > 1 else "opencl:0"
 names = sys.argv[2] if len(sys.argv) > 2 else "armadillo,bunny00,armadillo-x4,armadillo-x16"
-kernels = (sys.argv[3] if len(sys.argv) > 3 else "bvh4_per_point,bvh8_per_point").split(",")
+kernels = (sys.argv[3] if len(sys.argv) > 3 else "bvh_per_point,bvh8_per_point").split(",")
 rounds = int(sys.argv[4]) if len(sys.argv) > 4 else 2
 RAYS = 30
 

@@ -63,7 +63,6 @@ using Names = std::vector<std::pair<const char*, Choice>>;
 
 const Names<sdf::KernelChoice> kKernels = {{"engine", sdf::KernelChoice::Engine},
                                            {"bvh_per_point", sdf::KernelChoice::BvhPerPoint},
-                                           {"bvh4_per_point", sdf::KernelChoice::Bvh4PerPoint},
                                            {"bvh8_per_point", sdf::KernelChoice::Bvh8PerPoint},
                                            {"bvh_per_ray", sdf::KernelChoice::BvhPerRay}};
 const Names<sdf::TreeChoice> kTrees = {{"engine", sdf::TreeChoice::Engine},

@@ -14,7 +14,6 @@
  * CPU engine. Results are written in launch order (raw[first + i]), so each launch reads back
  * one contiguous range. */
 #include "traverse/sdf_bvh_traverse.h"
-#include "traverse/sdf_bvh4_traverse.h"
 #include "traverse/sdf_bvh8_traverse.h"
 #include "ray/sdf_face_point.h"
 #include "traverse/sdf_octree.h"
@@ -219,12 +218,6 @@ __kernel void sdf_cast_bvh(__global const float4* restrict nodes,
                            __global const float4* restrict tris, SDF_POINT_ARGS) {
   SDF_CAST_BODY(SDF_START_FROM_ARRAYS,
                 sdf_bvh_closest_hit_units(nodes, tris, 0, origin, d, params.tmin, own))
-}
-
-__kernel void sdf_cast_bvh4(__global const SdfBvh4Node* restrict nodes,
-                            __global const SdfTriangle* restrict tris, SDF_POINT_ARGS) {
-  SDF_CAST_BODY(SDF_START_FROM_ARRAYS,
-                sdf_bvh4_closest_hit(nodes, tris, origin, d, params.tmin, own))
 }
 
 /* One work item per point on the 8-wide BVH (CPU devices): SDF_CAST_BODY with the point's

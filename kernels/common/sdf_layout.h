@@ -18,19 +18,8 @@ typedef struct SdfBvhNode {
   sdf_int32 count;
 } SdfBvhNode;
 
-/* A 4-wide BVH node, 128 bytes: the four child boxes as structure of arrays (one float4 load
- * per plane), then per child an index. child[i] >= 0: an inner node; child[i] < 0: a leaf of
- * count[i] triangles starting at ~child[i]. Unused slots hold an empty box (lo = +inf,
- * hi = -inf) that no ray enters. The same bytes as the CPU engine's Bvh4Node (native/accel/bvh4.h). */
-typedef struct SdfBvh4Node {
-  float lo_x[4], lo_y[4], lo_z[4];
-  float hi_x[4], hi_y[4], hi_z[4];
-  sdf_int32 child[4];
-  sdf_int32 count[4];
-} SdfBvh4Node;
-
-/* An 8-wide BVH node, 256 bytes, for OpenCL on CPUs (sdf_bvh8_traverse.h): the 4-wide node's
- * layout with eight slots (one float8 load per plane). child[i] < 0: a leaf of count[i]
+/* An 8-wide BVH node, 256 bytes, for OpenCL on CPUs (sdf_bvh8_traverse.h): the CPU engine's
+ * 4-wide node layout with eight slots (one float8 load per plane). child[i] < 0: a leaf of count[i]
  * triangle packets starting at ~child[i]. The same bytes as the CPU engine's Bvh8Node
  * (native/accel/bvh8.h). */
 typedef struct SdfBvh8Node {
@@ -86,7 +75,6 @@ typedef struct SdfCastParams {
 #define SDF_SAMPLING_CGAL 2
 
 SDF_STATIC_ASSERT(sizeof(SdfBvhNode) == 32, "SdfBvhNode is 32 bytes in every build");
-SDF_STATIC_ASSERT(sizeof(SdfBvh4Node) == 128, "SdfBvh4Node is 128 bytes in every build");
 SDF_STATIC_ASSERT(sizeof(SdfBvh8Node) == 256, "SdfBvh8Node is 256 bytes in every build");
 SDF_STATIC_ASSERT(sizeof(SdfTrianglePacket4) == 160, "SdfTrianglePacket4 is 160 bytes");
 SDF_STATIC_ASSERT(sizeof(SdfTriangle) == 48, "SdfTriangle is 48 bytes in every build");

@@ -23,12 +23,6 @@ struct alignas(16) Bvh4Node {
   std::int32_t count[4];
 };
 static_assert(sizeof(Bvh4Node) == 128, "Bvh4Node is two cache lines");
-// The OpenCL engine uploads these nodes as the kernels' SdfBvh4Node: the same bytes.
-static_assert(sizeof(Bvh4Node) == sizeof(kern::SdfBvh4Node) &&
-                  offsetof(Bvh4Node, hi_x) == offsetof(kern::SdfBvh4Node, hi_x) &&
-                  offsetof(Bvh4Node, child) == offsetof(kern::SdfBvh4Node, child) &&
-                  offsetof(Bvh4Node, count) == offsetof(kern::SdfBvh4Node, count),
-              "Bvh4Node and SdfBvh4Node share one layout");
 
 struct Bvh4 {
   std::vector<Bvh4Node> nodes;  // nodes[0] is the root (a lone leaf root becomes one slot)

@@ -126,8 +126,8 @@ class Collapser {
 
 bool bvh8_supported() {
 #if SDF_HAVE_BVH8
-  // Tests act out a CPU without AVX2, to run the 4-wide fallback (and PoCL's 4-wide kernel)
-  // end to end on the machines they have.
+  // Tests act out a CPU without AVX2, to run the 4-wide fallback end to end on the machines
+  // they have.
   if (test_overrides().cpu_without_avx2) return false;
   return __builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma");
 #else

@@ -13,7 +13,6 @@
 #include <string>
 #include <thread>
 
-#include "traverse/sdf_bvh4_traverse.h"
 #include "device_state.h"
 #include "device_tree.h"
 #include "launch_sizes.h"
@@ -107,25 +106,25 @@ KeptTrees::KeptTrees() : slots_(std::make_unique<Slots>()) {}
 KeptTrees::~KeptTrees() = default;
 
 // Which cast kernel a device runs for accel='bvh'. GPUs: the binary BVH, one work item per
-// ray (13-15% faster than one per point on an H100; the 4-wide BVH was 8-10% slower there).
+// ray (13-15% faster than one per point on an H100; a 4-wide BVH was 8-10% slower there).
 // CPU devices (PoCL): the CPU engine's 8-wide BVH, one work item per point, with float8 box
-// tests, float4 triangle packets and two rays taking turns (sdf_bvh8_traverse.h): 2.2-2.4x
-// the rays/s of the 4-wide BVH kernel, which was itself about 20% faster than the binary BVH
-// (bench/opencl_vs_cpu.py, interleaved runs, PoCL 3.1 on a 2-core AVX-512 EPYC, 52k-1.2M
-// faces: 0.83-0.93 of the CPU engine's rays/s, the 4-wide kernel 0.38-0.40). Measured on
-// AVX2 CPUs only, so CPUs without AVX2 (and non-x86 ones) keep the 4-wide kernel. A test
-// override (util/test_overrides.h) forces any kernel, so tests run every kernel on whatever
-// device they have and benchmarks compare them.
+// tests, float4 triangle packets and two rays taking turns (sdf_bvh8_traverse.h): 0.83-0.93
+// of the CPU engine's rays/s where a 4-wide BVH kernel reached 0.38-0.40 and the binary one
+// per point 0.24-0.30 (bench/opencl_vs_cpu.py, interleaved runs, PoCL 3.1 on a 2-core
+// AVX-512 EPYC, 52k-1.2M faces). The 4-wide kernel went for that: the 8-wide one is plain
+// OpenCL C, which PoCL compiles for any CPU (SSE or NEON as well as AVX2), and a CPU-only
+// machine casts with the CPU engine unless asked for OpenCL. A test override
+// (util/test_overrides.h) forces any kernel, so tests run every kernel on whatever device they
+// have and benchmarks compare them.
 CastKernel cast_kernel_for(const Device& device) {
   switch (test_overrides().opencl_kernel) {
     case KernelChoice::BvhPerPoint: return CastKernel::BvhPerPoint;
-    case KernelChoice::Bvh4PerPoint: return CastKernel::Bvh4PerPoint;
     case KernelChoice::Bvh8PerPoint: return CastKernel::Bvh8PerPoint;
     case KernelChoice::BvhPerRay: return CastKernel::BvhPerRay;
     case KernelChoice::Engine: break;
   }
   if (device.gpu) return CastKernel::BvhPerRay;
-  return bvh8_supported() ? CastKernel::Bvh8PerPoint : CastKernel::Bvh4PerPoint;
+  return CastKernel::Bvh8PerPoint;
 }
 
 BvhWidths wanted_bvhs(const std::vector<const Device*>& devices) {
@@ -134,10 +133,6 @@ BvhWidths wanted_bvhs(const std::vector<const Device*>& devices) {
     switch (cast_kernel_for(*d)) {
       case CastKernel::Bvh8PerPoint:
         wanted.eight = true;
-        break;
-      case CastKernel::Bvh4PerPoint:
-        wanted.four = true;
-        wanted.binary = true;  // its triangles, and the fallback for trees too deep
         break;
       default:
         wanted.binary = true;
@@ -315,19 +310,12 @@ void run_device(const Device& device, std::size_t slot, SharedScene& shared_scen
     // The 8-wide tree needs no depth check: its stack holds the deepest tree the builder
     // makes (sdf_bvh8_traverse.h).
     const bool wide8 = choice == CastKernel::Bvh8PerPoint && scene.bvh8;
-    const bool wide = !wide8 && choice == CastKernel::Bvh4PerPoint && scene.bvh4 &&
-                      scene.bvh4->depth <= SDF_BVH4_MAX_DEPTH;
     std::vector<const void*> data;
     if (wide8) {
       sizes.push_back(bytes_of(scene.bvh8->nodes));
       sizes.push_back(bytes_of(scene.bvh8->packets));
       data = {scene.bvh8->nodes.data(), scene.bvh8->packets.data()};
       kernel = std::make_unique<Kernel>(program, "sdf_cast_bvh8");
-    } else if (wide) {
-      sizes.push_back(bytes_of(scene.bvh4->nodes));
-      sizes.push_back(bytes_of(scene.bvh->triangles));
-      data = {scene.bvh4->nodes.data(), scene.bvh->triangles.data()};
-      kernel = std::make_unique<Kernel>(program, "sdf_cast_bvh4");
     } else if (scene.bvh) {
       sizes.push_back(bytes_of(scene.bvh->nodes));
       sizes.push_back(bytes_of(scene.bvh->triangles));
@@ -348,7 +336,7 @@ void run_device(const Device& device, std::size_t slot, SharedScene& shared_scen
       accel[i] = owned[5 + i]->get();
     }
     result.timings.upload += seconds_since(upload_start);
-    if (!scene.bvh && !scene.bvh4 && !scene.bvh8) accel_root = &scene.octree->root;
+    if (!scene.bvh && !scene.bvh8) accel_root = &scene.octree->root;
   }
   // The results, made last: a device tree's build no longer holds its scratch by now.
   Buffer raw(s, n * sizeof(float), nullptr);

@@ -23,25 +23,22 @@
 
 namespace sdf::cl {
 
-// Either the octree or a BVH is set. bvh4, when set, is bvh collapsed to four children per
-// node and is cast instead of it (trees too deep for its stack fall back to bvh); bvh8 is the
-// 8-wide collapse, with its own triangles (bvh may then be null: no device casts it).
+// Either the octree or a BVH is set. bvh8 is the 8-wide collapse of the binary tree, with its
+// own triangles (bvh may then be null: no device casts it).
 struct Scene {
   const Bvh* bvh = nullptr;
-  const Bvh4* bvh4 = nullptr;
   const Bvh8* bvh8 = nullptr;
   const Octree* octree = nullptr;
 };
 
-// The kernels that cast a BVH: the binary, 4-wide or 8-wide tree, one work item per point or
-// per ray. The octree has one kernel.
-enum class CastKernel { BvhPerPoint, Bvh4PerPoint, Bvh8PerPoint, BvhPerRay };
+// The kernels that cast a BVH: the binary or 8-wide tree, one work item per point or per ray.
+// The octree has one kernel.
+enum class CastKernel { BvhPerPoint, Bvh8PerPoint, BvhPerRay };
 
 // The kernel `device` runs (see opencl_engine.cpp for the measurements behind the choice).
 CastKernel cast_kernel_for(const Device& device);
 
-// Which trees `devices` cast, for the caller to build (Scene::bvh, bvh4, bvh8). The 4-wide
-// tree reads the binary tree's triangles, so `binary` is also set when `four` is.
+// Which trees `devices` cast, for the caller to build (Scene::bvh, bvh8).
 BvhWidths wanted_bvhs(const std::vector<const Device*>& devices);
 
 // The scene, from where the caller makes it: cast_opencl calls it once, from a device thread

@@ -215,7 +215,6 @@ cl::SceneSource scene_source(const Options& options, const Plan& plan,
     cl::Scene scene;
     if (options.accel == Accel::Bvh) {
       scene.bvh = plan.widths.binary ? &built.bvh : nullptr;
-      scene.bvh4 = plan.widths.four ? &built.wide4 : nullptr;
       scene.bvh8 = plan.widths.eight ? &built.wide8 : nullptr;
     } else {
       scene.octree = &built.tree;

@@ -20,7 +20,6 @@ namespace sdf {
 enum class KernelChoice {
   Engine,        // the engine's own choice per device (the default)
   BvhPerPoint,   // binary BVH, one work item per point
-  Bvh4PerPoint,  // 4-wide BVH, one work item per point
   Bvh8PerPoint,  // 8-wide BVH, one work item per point
   BvhPerRay,     // binary BVH, one work item per ray
 };
@@ -33,8 +32,8 @@ enum class TreeChoice {
 };
 
 struct TestOverrides {
-  // bvh8_supported() answers false: the CPU engine casts the 4-wide SSE tree and CPU OpenCL
-  // devices the 4-wide kernel, as on a CPU without AVX2. Read on every call.
+  // bvh8_supported() answers false: the CPU engine casts the 4-wide SSE tree, as on a CPU
+  // without AVX2. Read on every call.
   bool cpu_without_avx2 = false;
   // The BVH builder cuts no long thin triangles into pieces (accel/bvh_split.cpp), for the
   // benchmark comparing builds with and without. Read at each build.
