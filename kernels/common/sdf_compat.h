@@ -59,7 +59,11 @@ typedef float sdf_wide;
 #include <cstddef>
 #include <cstring>
 
+// Also defined for every target by CMake (sdf_core's public definitions): a file that includes
+// GLM before this header must see the same vector types, or the two disagree on glm::vec3.
+#ifndef GLM_FORCE_XYZW_ONLY
 #define GLM_FORCE_XYZW_ONLY
+#endif
 #include <glm/glm.hpp>
 
 #define SDF_KERNEL_BEGIN \
