@@ -18,4 +18,5 @@ bash scripts/test_blender.sh
 
 echo "test: pytest"
 export SDF_CGAL_REFERENCE="$PWD/build/cpp/tests/reference/cgal_sdf"
+export SDF_CGAL_SEGMENT="$PWD/build/cpp/tests/reference/cgal_segment"
 .venv/bin/python -m pytest -q "$@"
