@@ -100,8 +100,9 @@ def compute_objects(objects, *, depsgraph=None, write=True, progress=None, **opt
         if progress(fraction) is False:
             stopped.append(True)
 
-    process.compute(tasks, opts, progress=report if progress else None,
-                    cancelled=lambda: bool(stopped))
+    process.compute(
+        tasks, opts, progress=report if progress else None, cancelled=lambda: bool(stopped)
+    )
     if stopped:  # a False from the last callback, after which nothing checked
         raise Cancelled()
     if write:

@@ -122,8 +122,19 @@ def default_radius(size):
     return load().smoothing.default_radius(int(size))
 
 
-def bake(vertices, triangles, values, points, uvs, size, radius, margin, progress=None,
-         engine="auto", threads=0):
+def bake(
+    vertices,
+    triangles,
+    values,
+    points,
+    uvs,
+    size,
+    radius,
+    margin,
+    progress=None,
+    engine="auto",
+    threads=0,
+):
     """The field rasterised through per-corner uvs (m, 3, 2) into a (size, size, 4) float32
     RGBA image in Blender's pixel order (row 0 at v = 0): the value in R, G and B, alpha 1
     where a face (or the margin around an island) covers the texel, else 0. `radius` is the

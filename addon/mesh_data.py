@@ -114,8 +114,8 @@ def corner_uvs(me, name, flipped=False):
 
 def new_image(name, rgba):
     """A packed float RGBA image holding `rgba` (height, width, 4), Blender's row order, kept
-    by a fake user (with no user Blender drops it when the file is saved: a trial's bake was
-    gone after a save and reload) and tagged Non-Color (it holds values, not colours)."""
+    by a fake user (with no user Blender drops it when the file is saved, and a bake
+    was gone after a save and reload) and tagged Non-Color (it holds values, not colours)."""
     height, width = rgba.shape[:2]
     image = bpy.data.images.new(name, width, height, alpha=True, float_buffer=True)
     try:
@@ -157,8 +157,11 @@ def is_written_output(me, attribute):
 def record_outputs(me, outputs):
     """Adds [(name, data_type, domain)] to the record; entries whose attribute is gone or
     changed are dropped."""
-    record = {name: kind for name, kind in written_outputs(me).items()
-              if (a := me.attributes.get(name)) is not None and (a.data_type, a.domain) == kind}
+    record = {
+        name: kind
+        for name, kind in written_outputs(me).items()
+        if (a := me.attributes.get(name)) is not None and (a.data_type, a.domain) == kind
+    }
     record.update({name: (data_type, domain) for name, data_type, domain in outputs})
     me[OUTPUTS_PROPERTY] = json.dumps({name: list(kind) for name, kind in record.items()})
 

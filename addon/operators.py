@@ -76,7 +76,9 @@ class OBJECT_OT_shape_diameter(bpy.types.Operator):
     def _prepare(self, context):
         options = self._options(context)
         tasks, warnings = process.prepare(
-            context.evaluated_depsgraph_get(), context.selected_objects, options,
+            context.evaluated_depsgraph_get(),
+            context.selected_objects,
+            options,
             active=context.active_object,
         )
         for warning in warnings:

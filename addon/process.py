@@ -163,7 +163,9 @@ class Options:
         margin = self.bake_margin
         integer = isinstance(margin, (int, np.integer)) and not isinstance(margin, bool)
         if not integer or not lo <= margin <= hi:
-            raise UserError(f"bake_margin must be an integer in [{lo}, {hi}] texels, got {margin!r}")
+            raise UserError(
+                f"bake_margin must be an integer in [{lo}, {hi}] texels, got {margin!r}"
+            )
 
     def check(self):
         if self.points not in ("faces", "vertices"):
@@ -236,15 +238,18 @@ def _mode_problem(ob):
 def _attribute_problem(ob, options):
     for name, data_type, domain in options.outputs():
         # Blender keeps vertex group names apart from attributes and refuses an attribute
-        # of a group's name (found by a trial: it failed only after the computation).
+        # of a group's name: checked here, since it failed only after the computation.
         if ob.vertex_groups.get(name) is not None:
             return (
                 f"{ob.name}: a vertex group is named {name!r}; rename it, or choose another "
                 "name for the result"
             )
         existing = ob.data.attributes.get(name)
-        if (existing is not None and (existing.data_type, existing.domain) != (data_type, domain)
-                and not mesh_data.is_written_output(ob.data, existing)):
+        if (
+            existing is not None
+            and (existing.data_type, existing.domain) != (data_type, domain)
+            and not mesh_data.is_written_output(ob.data, existing)
+        ):
             return (
                 f"{ob.name}: attribute {name!r} exists as {existing.data_type} on "
                 f"{existing.domain}; the result is {data_type} on {domain}: rename or remove "
@@ -255,7 +260,7 @@ def _attribute_problem(ob, options):
 
 def _not_a_mesh(ob):
     """How a run names an object it cannot measure, with what would make it a mesh where
-    Blender has a way (a trial's collection instance read just 'Inst (empty)')."""
+    Blender has a way (a collection instance read just 'Inst (empty)')."""
     if ob.type == "EMPTY" and ob.instance_type == "COLLECTION":
         return f"{ob.name} (a collection instance: Make Instances Real first)"
     if ob.type in ("CURVE", "SURFACE", "FONT", "META"):
@@ -266,12 +271,19 @@ def _not_a_mesh(ob):
 # Modifiers that leave the surface where it is (normals, UVs, weights, splitting into
 # triangles or along edges): a run without Use Modifiers loses nothing of the shape to them.
 _SHAPE_KEEPING_MODIFIERS = {
-    "WEIGHTED_NORMAL", "NORMAL_EDIT", "UV_PROJECT", "UV_WARP", "VERTEX_WEIGHT_EDIT",
-    "VERTEX_WEIGHT_MIX", "VERTEX_WEIGHT_PROXIMITY", "DATA_TRANSFER", "TRIANGULATE",
+    "WEIGHTED_NORMAL",
+    "NORMAL_EDIT",
+    "UV_PROJECT",
+    "UV_WARP",
+    "VERTEX_WEIGHT_EDIT",
+    "VERTEX_WEIGHT_MIX",
+    "VERTEX_WEIGHT_PROXIMITY",
+    "DATA_TRANSFER",
+    "TRIANGULATE",
     "EDGE_SPLIT",
 }
 # Blender's Shade Auto Smooth adds a geometry-nodes modifier of this node group (4.1 on), which
-# sets sharp edges alone: it was named as changing the shape on every run (a trial's).
+# sets sharp edges alone: it must not be named as changing the shape on every run.
 _SHAPE_KEEPING_NODE_GROUPS = ("Smooth by Angle",)
 
 
@@ -289,16 +301,20 @@ def _counted(count: int, one: str, many: str) -> str:
 def _shape_changes(ob):
     """What changes `ob`'s shape in the viewport beyond its base mesh ('modifiers (Mirror)',
     'shape keys', both), or '': a run without Use Modifiers measured a half of a mirrored
-    model, or a cube a shape key flattens, without a word (a trial's)."""
+    model, or a cube a shape key flattens, without a word."""
     found = []
     modifiers = [m.name for m in ob.modifiers if m.show_viewport and not _keeps_shape(m)]
     if modifiers:
         found.append(f"its modifiers ({', '.join(modifiers)})")
     keys = ob.data.shape_keys
-    if keys is not None and len(keys.key_blocks) > 1 and (
-        not keys.use_relative
-        or (ob.show_only_shape_key and ob.active_shape_key_index > 0)
-        or any(k.value != 0.0 and not k.mute for k in keys.key_blocks[1:])
+    if (
+        keys is not None
+        and len(keys.key_blocks) > 1
+        and (
+            not keys.use_relative
+            or (ob.show_only_shape_key and ob.active_shape_key_index > 0)
+            or any(k.value != 0.0 and not k.mute for k in keys.key_blocks[1:])
+        )
     ):
         found.append("its shape keys")
     return " and ".join(found)
@@ -326,13 +342,18 @@ def prepare(depsgraph, objects, options, for_writing=True, active=None):
         raise UserError(f"Not a mesh: {', '.join(others)}")
     if others:
         notices.append(f"Skipped what is not a mesh: {', '.join(others)}")
-    # A mesh without faces (a wire rig, a point helper) has no thickness: skipped as what is
-    # not a mesh is, unless nothing else is left (a trial's: one stopped the whole run).
+    # A mesh without faces (a wire rig, a single-vertex placeholder) has no thickness: skipped as
+    # what is not a mesh is, unless nothing else is left (one such mesh stopped the whole run).
     faceless = [ob for ob in meshes if len(ob.data.polygons) == 0]
     if len(faceless) == len(meshes):
-        raise UserError(f"{faceless[0].name} has no faces"
-                        + (f" (nor have {', '.join(ob.name for ob in faceless[1:])})"
-                           if len(faceless) > 1 else ""))
+        raise UserError(
+            f"{faceless[0].name} has no faces"
+            + (
+                f" (nor have {', '.join(ob.name for ob in faceless[1:])})"
+                if len(faceless) > 1
+                else ""
+            )
+        )
     if faceless:
         notices.append(f"Skipped meshes without faces: {', '.join(ob.name for ob in faceless)}")
         meshes = [ob for ob in meshes if len(ob.data.polygons) > 0]
@@ -421,8 +442,8 @@ def prepare(depsgraph, objects, options, for_writing=True, active=None):
     if notice:
         notices.append(notice)
     # Users of a computed mesh that were not selected show its values too, measured with the
-    # computing object's transform (a trial's: computing a scaled copy rescaled the original's
-    # values without a word).
+    # computing object's transform (computing a scaled copy rescaled the original's values
+    # without a word).
     unselected = {}
     if for_writing:
         chosen = {ob.name for ob in objects}
@@ -505,12 +526,17 @@ def _texture_work_notice(tasks, options):
     seconds, peak, threads = texture_work(tasks, options)
     size = options.texture_size
     parts = (["texture smoothing"] if options.smoothing == "texture" else []) + (
-        ["the bake"] if options.bake_image else [])
-    what = (f"{' and '.join(parts)} of {len(tasks)} object{'s' if len(tasks) != 1 else ''} at "
-            f"{size} x {size} texels")
+        ["the bake"] if options.bake_image else []
+    )
+    what = (
+        f"{' and '.join(parts)} of {len(tasks)} object{'s' if len(tasks) != 1 else ''} at "
+        f"{size} x {size} texels"
+    )
     if options.smoothing == "texture" and options.texture_radius:
-        what += (f" with a blur radius of {options.texture_radius:g} texels (default "
-                 f"{core.default_radius(size):g})")
+        what += (
+            f" with a blur radius of {options.texture_radius:g} texels (default "
+            f"{core.default_radius(size):g})"
+        )
     memory = physical_memory()
     if memory and peak > REFUSE_MEMORY * memory:
         raise UserError(
@@ -542,10 +568,12 @@ def _corner_uvs(ob, me, options, flipped):
         raise UserError(f"{ob.name} has no UV map, needed by {what}")
     uvs = mesh_data.corner_uvs(me, name, flipped)
     # Checked before any work, naming the map: the core's own check came after the cast, as
-    # an unnamed 'ValueError: uvs must be finite' (a trial's).
+    # an unnamed 'ValueError: uvs must be finite'.
     if not np.isfinite(uvs).all():
-        raise UserError(f"{ob.name}'s UV map {name!r} has coordinates that are not finite (NaN "
-                        f"or infinite), needed by {what}: fix or unwrap it again")
+        raise UserError(
+            f"{ob.name}'s UV map {name!r} has coordinates that are not finite (NaN "
+            f"or infinite), needed by {what}: fix or unwrap it again"
+        )
     return uvs
 
 
@@ -591,8 +619,9 @@ def compute(tasks, options, progress=None, cancelled=None):
         # anywhere, ...) are the object's, each said once: kept, not also printed.
         try:
             with core.collect_warnings() as caught:
-                result = core.compute(mesh.vertices, mesh.triangles, compute_options, step,
-                                      task.corner_uvs)
+                result = core.compute(
+                    mesh.vertices, mesh.triangles, compute_options, step, task.corner_uvs
+                )
         except ValueError as ex:  # the core refused this mesh: say which object it was
             raise UserError(f"{task.object_name}: {ex}") from ex
         task.warnings.extend(f"{task.object_name}: {message}" for message in caught)
@@ -717,7 +746,8 @@ def write(bpy_data, tasks, options):
             for name, data_type, domain in options.outputs():
                 attribute = me.attributes.get(name)
                 if attribute is not None and (attribute.data_type, attribute.domain) != (
-                    data_type, domain
+                    data_type,
+                    domain,
                 ):  # an earlier run's, on the other domain (_attribute_problem checked)
                     undo.append(_recreator(me, attribute))
                     me.attributes.remove(attribute)
@@ -735,7 +765,7 @@ def write(bpy_data, tasks, options):
             if options.color_name:
                 me.color_attributes.active_color = me.color_attributes[options.color_name]
                 # The render colour too, where it was ours or none: replacing our attribute
-                # of the other domain left bpy 4.5 rendering no colour (a trial's).
+                # of the other domain left bpy 4.5 rendering no colour.
                 if default_before in ("", options.color_name):
                     me.color_attributes.default_color_name = options.color_name
             mesh_data.record_outputs(me, options.outputs())
@@ -765,6 +795,7 @@ def _remover(me, name):
     def take_back():
         me.attributes.remove(me.attributes[name])
         me.update()
+
     return take_back
 
 
@@ -774,6 +805,7 @@ def _rewriter(me, attribute):
     def take_back():
         mesh_data.write_attribute(me.attributes[name], before)
         me.update()
+
     return take_back
 
 
@@ -785,6 +817,7 @@ def _recreator(me, attribute):
     def take_back():
         mesh_data.write_attribute(me.attributes.new(name, data_type, domain), before)
         me.update()
+
     return take_back
 
 
@@ -794,6 +827,7 @@ def _colors_restorer(me):
 
     def take_back():
         colors.active_color_name, colors.default_color_name = before
+
     return take_back
 
 
@@ -805,6 +839,7 @@ def _record_restorer(me):
             me.pop(mesh_data.OUTPUTS_PROPERTY, None)
         else:
             me[mesh_data.OUTPUTS_PROPERTY] = before
+
     return take_back
 
 

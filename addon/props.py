@@ -31,10 +31,12 @@ def engine_choices(with_default):
     'opencl:all'."""
     choices = []  # (key, (identifier, label, description))
     if with_default:
-        choices.append(("DEFAULT", ("DEFAULT", "Default",
-                                    "The engine chosen in the add-on's preferences")))
-    choices.append(("auto", ("auto", "Automatic",
-                             "The best OpenCL GPU if there is one, else the CPU")))
+        choices.append(
+            ("DEFAULT", ("DEFAULT", "Default", "The engine chosen in the add-on's preferences"))
+        )
+    choices.append(
+        ("auto", ("auto", "Automatic", "The best OpenCL GPU if there is one, else the CPU"))
+    )
     engines = core.engines()
     devices = [e for e in engines if str(e["name"]).startswith("opencl:")]
     has_opencl = bool(devices)
@@ -57,14 +59,16 @@ def engine_choices(with_default):
         else:  # an engine a later core adds
             choices.append((name, (name, name, description)))
         if name == "cpu" and has_opencl:
-            choices.append(("opencl", ("opencl", "Best OpenCL Device", (
-                "The fastest OpenCL device here, a GPU before a CPU device; engine='opencl'"))))
+            best = "The fastest OpenCL device here, a GPU before a CPU device; engine='opencl'"
+            choices.append(("opencl", ("opencl", "Best OpenCL Device", best)))
             if sharing >= 2:  # 'opencl:all' would use more than one device
                 label = "All GPUs" if gpus else "All OpenCL Devices"
                 # Its key is no "opencl:<label>": a device named "all" keeps its own.
-                choices.append(("OPENCL_ALL", ("opencl:all", label, (
+                shared = (
                     f"{label} at once, sharing the points (the same values as one device); "
-                    "engine='opencl:all'"))))
+                    "engine='opencl:all'"
+                )
+                choices.append(("OPENCL_ALL", ("opencl:all", label, shared)))
     items = [item for _, item in choices]
     items = _engine_items.setdefault((with_default, tuple(items)), items)
     return [(key, item) for (key, _), item in zip(choices, items)]
@@ -314,7 +318,7 @@ def stored_engine_property(store, with_default, description):
 def _skip_save(prop):
     """The same property definition with SKIP_SAVE: an operator then starts from the defaults
     every time instead of the previous call's values (a script's bpy.ops call that left out
-    orientation='flip' still flipped, found by a trial). The panel passes every option."""
+    orientation='flip' still flipped). The panel passes every option."""
     keywords = dict(prop.keywords)
     keywords["options"] = set(keywords.get("options", set())) | {"SKIP_SAVE"}
     return prop.function(**keywords)

@@ -16,11 +16,11 @@
 #include <string>
 #include <vector>
 
-#include "bvh.h"
-#include "bvh4.h"
-#include "bvh8.h"
-#include "bvh_margin.h"
-#include "cpu_engine.h"
+#include "accel/bvh.h"
+#include "accel/bvh4.h"
+#include "accel/bvh8.h"
+#include "accel/bvh_margin.h"
+#include "cast/cpu_engine.h"
 #include "embree_caster.h"
 
 namespace {

@@ -21,13 +21,24 @@ import numpy as np
 sys.path.insert(0, os.path.dirname(__file__))
 from meshes import benchmark_meshes  # noqa: E402
 
-STAGES = ("prepare", "build", "build wait", "orientation (beside cast)",
-          "cast (discarded)", "build (device)", "upload", "cast",
-          "download")
+STAGES = (
+    "prepare",
+    "build",
+    "build wait",
+    "orientation (beside cast)",
+    "cast (discarded)",
+    "build (device)",
+    "upload",
+    "cast",
+    "download",
+)
 # (label, orientation, reverse every third face first): the last makes 'auto' reverse faces,
 # which on the device-tree path costs a second cast.
-SETTINGS = (("auto", "auto", False), ("as_is", "as_is", False),
-            ("auto, 1/3 reversed", "auto", True))
+SETTINGS = (
+    ("auto", "auto", False),
+    ("as_is", "as_is", False),
+    ("auto, 1/3 reversed", "auto", True),
+)
 
 
 def timed(v, f, setting, args, orientation):
@@ -47,16 +58,24 @@ def main():
     parser.add_argument("--rays", type=int, default=30)
     parser.add_argument("--repeat", type=int, default=5)
     parser.add_argument("--rounds", type=int, default=2)
-    parser.add_argument("--all-stages", action="store_true",
-                        help="after each row, every stage and step of the device tree's run")
-    parser.add_argument("--vary", default="SDF_OPENCL_TREE=host,device",
-                        help="the environment variable and its two values to compare")
+    parser.add_argument(
+        "--all-stages",
+        action="store_true",
+        help="after each row, every stage and step of the device tree's run",
+    )
+    parser.add_argument(
+        "--vary",
+        default="SDF_OPENCL_TREE=host,device",
+        help="the environment variable and its two values to compare",
+    )
     args = parser.parse_args()
     args.name, values = args.vary.split("=", 1)
     first, second = values.split(",")
     wanted = args.meshes.split(",")
-    print(f"| mesh | faces | orientation | {first} ms | {second} ms | {first}/{second} | "
-          f"{first} stages | {second} stages |")
+    print(
+        f"| mesh | faces | orientation | {first} ms | {second} ms | {first}/{second} | "
+        f"{first} stages | {second} stages |"
+    )
     print("|---|---:|---|---:|---:|---:|---|---|")
     for name, v, f in benchmark_meshes():
         if name not in wanted:
@@ -79,13 +98,18 @@ def main():
             def stages(r):
                 return " ".join(f"{k} {r.timings[k] * 1e3:.1f}" for k in STAGES if k in r.timings)
 
-            print(f"| {name} | {len(f):,} | {label} | {host[0]:.1f} | {device[0]:.1f} | "
-                  f"{host[0] / device[0]:.2f} | {stages(host[1])} | {stages(device[1])} |",
-                  flush=True)
+            print(
+                f"| {name} | {len(f):,} | {label} | {host[0]:.1f} | {device[0]:.1f} | "
+                f"{host[0] / device[0]:.2f} | {stages(host[1])} | {stages(device[1])} |",
+                flush=True,
+            )
             if args.all_stages:
-                print("    " + " ".join(f"{k} {x * 1e3:.1f}" for k, x in device[1].timings.items())
-                      + f" | device memory {device[1].device_memory / len(f):.0f} B/face ({first}: "
-                      f"{host[1].device_memory / len(f):.0f})")
+                print(
+                    "    "
+                    + " ".join(f"{k} {x * 1e3:.1f}" for k, x in device[1].timings.items())
+                    + f" | device memory {device[1].device_memory / len(f):.0f} B/face ({first}: "
+                    f"{host[1].device_memory / len(f):.0f})"
+                )
     os.environ.pop("SDF_OPENCL_TREE", None)
     os.environ.pop(args.name, None)
 

@@ -17,10 +17,10 @@
 #include <thread>
 #include <vector>
 
-#include "../kernels/sdf_reduce.h"
-#include "mesh.h"
-#include "rays.h"
-#include "sampling.h"
+#include "ray/sdf_reduce.h"
+#include "mesh/mesh.h"
+#include "prepare/rays.h"
+#include "prepare/sampling.h"
 
 namespace bench {
 

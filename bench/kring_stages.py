@@ -77,7 +77,9 @@ def keep_best(best, row):
     for stage, ms in row["stages_ms"].items():
         best["stages_ms"][stage] = min(best["stages_ms"].get(stage, float("inf")), ms)
     if best["values"] != row["values"]:
-        raise SystemExit(f"{row['mesh']}: one build gave different values from one call to the next")
+        raise SystemExit(
+            f"{row['mesh']}: one build gave different values from one call to the next"
+        )
     return best
 
 
@@ -97,7 +99,8 @@ def print_comparison(old, new):
 
 def compare(args):
     best = alternate_builds.best_rows(
-        __file__, args, lambda row: (row["mesh"], row["threads"], row["k"]), keep_best)
+        __file__, args, lambda row: (row["mesh"], row["threads"], row["k"]), keep_best
+    )
     print(f"{args.points}; each time the best of {args.rounds} rounds x {args.repeat} calls")
     for name in args.meshes:
         for threads in args.threads:
@@ -106,8 +109,9 @@ def compare(args):
 
 
 def main():
-    parser = argparse.ArgumentParser(description=__doc__,
-                                     formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser = argparse.ArgumentParser(
+        description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter
+    )
     parser.add_argument("meshes", nargs="+")
     parser.add_argument("--threads", type=int, nargs="+", default=[1, 2])
     parser.add_argument("--k", type=int, nargs="+", default=[-1, 1])

@@ -48,8 +48,14 @@ def subdivide(vertices, triangles):
 
 
 # The names benchmark_meshes() gives, smallest first.
-NAMES = ("ChineseDragon-10kv", "armadillo", "bunny00", "armadillo-x4", "armadillo-x16",
-         "bunny00-x16")
+NAMES = (
+    "ChineseDragon-10kv",
+    "armadillo",
+    "bunny00",
+    "armadillo-x4",
+    "armadillo-x16",
+    "bunny00-x16",
+)
 
 
 def benchmark_meshes(largest=True):

@@ -8,7 +8,6 @@ import sys
 import time
 
 import numpy as np
-
 import shape_diameter as sd
 
 
@@ -26,9 +25,18 @@ def main():
     wall, result = best
     np.save(out, result.raw)
     peak_kib = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
-    print(json.dumps({"engine": result.engine, "timings": result.timings, "wall": wall,
-                      "peak_mib": peak_kib / 1024.0, "device_mib": result.device_memory / 2**20,
-                      "faces": int(len(triangles))}))
+    print(
+        json.dumps(
+            {
+                "engine": result.engine,
+                "timings": result.timings,
+                "wall": wall,
+                "peak_mib": peak_kib / 1024.0,
+                "device_mib": result.device_memory / 2**20,
+                "faces": int(len(triangles)),
+            }
+        )
+    )
 
 
 if __name__ == "__main__":

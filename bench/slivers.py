@@ -1,5 +1,5 @@
 # SPDX-License-Identifier: GPL-3.0-or-later
-"""Slivers lying across the axes, cut into pieces for the BVH (native/bvh_split.h), against
+"""Slivers lying across the axes, cut into pieces for the BVH (native/accel/bvh_split.h), against
 the same build without cutting (SDF_BVH_SPLIT=0), in one run, alternating: CAD-like fans and
 needles, and real meshes, whose few slivers must cost nothing.
 
@@ -16,7 +16,6 @@ import os
 import sys
 
 import numpy as np
-
 import shape_diameter as sd
 from shape_diameter import _core
 
@@ -32,19 +31,37 @@ def cylinder(sections):
     k = np.arange(sections)
     nxt = (k + 1) % sections
     bottom, top = 2 * sections, 2 * sections + 1
-    faces = np.concatenate([
-        np.stack([k, nxt, sections + nxt], 1), np.stack([k, sections + nxt, sections + k], 1),
-        np.stack([np.full(sections, bottom), nxt, k], 1),
-        np.stack([np.full(sections, top), sections + k, sections + nxt], 1)])
+    faces = np.concatenate(
+        [
+            np.stack([k, nxt, sections + nxt], 1),
+            np.stack([k, sections + nxt, sections + k], 1),
+            np.stack([np.full(sections, bottom), nxt, k], 1),
+            np.stack([np.full(sections, top), sections + k, sections + nxt], 1),
+        ]
+    )
     return vertices, faces
 
 
 def needles(count, seed=0):
     """A box crossed by `count` long, thin triangles through its centre region."""
     rng = np.random.default_rng(seed)
-    box = np.array([[x, y, z] for x in (-.5, .5) for y in (-.5, .5) for z in (-.5, .5)])
-    box_faces = np.array([[0, 1, 3], [0, 3, 2], [4, 6, 7], [4, 7, 5], [0, 4, 5], [0, 5, 1],
-                          [2, 3, 7], [2, 7, 6], [0, 2, 6], [0, 6, 4], [1, 5, 7], [1, 7, 3]])
+    box = np.array([[x, y, z] for x in (-0.5, 0.5) for y in (-0.5, 0.5) for z in (-0.5, 0.5)])
+    box_faces = np.array(
+        [
+            [0, 1, 3],
+            [0, 3, 2],
+            [4, 6, 7],
+            [4, 7, 5],
+            [0, 4, 5],
+            [0, 5, 1],
+            [2, 3, 7],
+            [2, 7, 6],
+            [0, 2, 6],
+            [0, 6, 4],
+            [1, 5, 7],
+            [1, 7, 3],
+        ]
+    )
     a = rng.uniform(-0.5, 0.5, (count, 3))
     vertices = np.vstack([box, a, -a, -a + 1e-4])
     k = 8 + np.arange(count)
@@ -53,8 +70,9 @@ def needles(count, seed=0):
 
 def cast_ms(vertices, faces, args, cut):
     os.environ["SDF_BVH_SPLIT"] = "1" if cut else "0"
-    result = sd.compute(vertices, faces, engine=args.engine, bvh_quality=args.bvh_quality,
-                        orientation="as_is")
+    result = sd.compute(
+        vertices, faces, engine=args.engine, bvh_quality=args.bvh_quality, orientation="as_is"
+    )
     return result.timings["cast"] * 1e3, result.raw
 
 
@@ -66,10 +84,14 @@ def main():
     args = parser.parse_args()
     cases = [(f"cylinder, {s} sections", *cylinder(s)) for s in (500, 2000, 8000)]
     cases += [(f"needles, {n}", *needles(n)) for n in (2000, 8000)]
-    cases += [(name, *read_off(DATA / f"{name}.off"))
-              for name in ("ChineseDragon-10kv", "armadillo", "bunny00")]
-    print(f"engine {args.engine}, bvh_quality {args.bvh_quality}, best of {args.rounds} "
-          "alternating rounds\n")
+    cases += [
+        (name, *read_off(DATA / f"{name}.off"))
+        for name in ("ChineseDragon-10kv", "armadillo", "bunny00")
+    ]
+    print(
+        f"engine {args.engine}, bvh_quality {args.bvh_quality}, best of {args.rounds} "
+        "alternating rounds\n"
+    )
     print("| mesh | faces | BVH refs | cast ms uncut | cast ms cut | uncut/cut | values equal |")
     print("|---|---:|---:|---:|---:|---:|---|")
     for name, vertices, faces in cases:
@@ -82,8 +104,10 @@ def main():
                 ms, values[cut] = cast_ms(vertices, faces, args, cut)
                 times[cut].append(ms)
         uncut, cut = min(times[False]), min(times[True])
-        print(f"| {name} | {len(faces):,} | {refs:,} | {uncut:.1f} | {cut:.1f} | "
-              f"{uncut / cut:.2f} | {np.array_equal(values[False], values[True])} |")
+        print(
+            f"| {name} | {len(faces):,} | {refs:,} | {uncut:.1f} | {cut:.1f} | "
+            f"{uncut / cut:.2f} | {np.array_equal(values[False], values[True])} |"
+        )
 
 
 if __name__ == "__main__":

@@ -1,7 +1,7 @@
 # SPDX-License-Identifier: GPL-3.0-or-later
 """Smoothing benchmark (CPU): the paper's Table 3 (k-ring, k = 1..8), Table 4 (texture
 2048x2048, radius 2..64), projected points, the growth with the face count, and each method's
-time against the ray-casting time of the same engine on the same mesh (issue 4's target: at
+time against the ray-casting time of the same engine on the same mesh (the target: at
 1M faces, at most 10% of casting). Prints the tables and writes them into bench/RESULTS.md
 under "## Smoothing (CPU)".
 
@@ -28,11 +28,11 @@ import time
 from pathlib import Path
 
 import numpy as np
-
 import shape_diameter as sd
-from shape_diameter.mesh_io import load_mesh_with_uvs
-from bench import machine_line, write_section
 from meshes import CACHE, DATA, ROOT, read_off, subdivide
+from shape_diameter.mesh_io import load_mesh_with_uvs
+
+from bench import machine_line, write_section
 
 KRING_K = range(1, 9)
 TEXTURE_RADII = (2, 4, 8, 16, 32, 64)
@@ -160,11 +160,16 @@ def main():
     # Table 4.
     texture_meshes = [spot64] + big[1:]
     header = " | ".join(f"{m.name} ({len(m.t) / 1e3:,.0f}k faces)" for m in texture_meshes)
-    lines += ["### Texture space, 2048 x 2048 (paper's Table 4)", "",
-              "Seconds per call: rasterise, 2-texel margin, island-masked separable Gaussian, "
-              "read back per face. Paper (Dragon 500k, CPU): 6.32 s at radius 2 to 15.8 s at "
-              "64; its OpenCL: 0.08 to 0.16 s.", "",
-              f"| radius (texels) | {header} |", "|---:|" + "---:|" * len(texture_meshes)]  # fmt: skip
+    lines += [
+        "### Texture space, 2048 x 2048 (paper's Table 4)",
+        "",
+        "Seconds per call: rasterise, 2-texel margin, island-masked separable Gaussian, "
+        "read back per face. Paper (Dragon 500k, CPU): 6.32 s at radius 2 to 15.8 s at "
+        "64; its OpenCL: 0.08 to 0.16 s.",
+        "",
+        f"| radius (texels) | {header} |",
+        "|---:|" + "---:|" * len(texture_meshes),
+    ]
     for radius in TEXTURE_RADII:
         cells = [f"{m.smooth('texture', repeat, threads, texture_size=2048, radius=radius)[0]:.3f}"
                  for m in texture_meshes]  # fmt: skip
@@ -209,7 +214,7 @@ def main():
               "Each method with its default options (k-ring: k from the face count; projected: "
               "1 iteration; texture: 1024 x 1024, radius 8) over compute()'s cast time on the "
               "same mesh (timings['cast'], 30 rays, CPU engine, both at full thread count). "
-              "Target (issue 4): at most 10% "
+              "Target: at most 10% "
               "at 1M faces; CGAL's post-processing takes 74% of its casting time there.", "",
               "| mesh | faces | cast s | k-ring s (k) | % | projected s | % | texture s | % |",
               "|---|---:|---:|---:|---:|---:|---:|---:|---:|"]  # fmt: skip
@@ -264,11 +269,17 @@ def opencl_main(args, repeat, threads):
                                    radius=radius)[0]  # fmt: skip
                 cells.append(f"{seconds:.3f}")
         lines.append(f"| {radius} | " + " | ".join(cells) + " |")
-    lines += ["", "### Projected points, CPU and OpenCL", "",
-              "Seconds per call, 1 iteration (on OpenCL the points, the octree and the gather "
-              "all run on the device; the points' frames are made on the host). Paper: 0.58 s "
-              "(GPU) to 3.39 s (CPU) at 500k faces.", "",
-              "| mesh | faces | CPU | OpenCL | OpenCL, 2 iterations |", "|---|---:|---:|---:|---:|"]
+    lines += [
+        "",
+        "### Projected points, CPU and OpenCL",
+        "",
+        "Seconds per call, 1 iteration (on OpenCL the points, the octree and the gather "
+        "all run on the device; the points' frames are made on the host). Paper: 0.58 s "
+        "(GPU) to 3.39 s (CPU) at 500k faces.",
+        "",
+        "| mesh | faces | CPU | OpenCL | OpenCL, 2 iterations |",
+        "|---|---:|---:|---:|---:|",
+    ]
     for m in meshes:
         cpu = m.smooth("projected", repeat, threads)[0]
         opencl = m.smooth("projected", repeat, threads, engine=engine)[0]

@@ -12,7 +12,7 @@ with UVs). The field smoothed is the mesh's SDF (compute() on the same engine, 3
 One process: prints, per mesh, one JSON line: smooth()'s wall time (best of --repeat), the
 stages of the fastest call into shape_diameter._core (its timings), and compute(smoothing=
 method)'s cast and smoothing times (best of --repeat each) with smoothing as a percentage of
-the cast (issue 4's target: at most 10%). Inside compute() the texture method's UV islands
+the cast (the target: at most 10%). Inside compute() the texture method's UV islands
 are found while a device casts ('beside cast'). --compare runs this script under each
 PYTHONPATH in turn ("" for the installed package), alternating old and new --rounds times,
 and prints the best of each with the ratio: the machine may be shared, so only a comparison
@@ -67,8 +67,22 @@ def measure(args):
         def core():
             if args.method == "texture":
                 return _core.smooth_texture(
-                    v, t, field, args.points, uvs.astype(np.float32), args.size, args.size,
-                    radius, False, 0.1, 2, 1e-6, False, args.threads, None, args.engine,
+                    v,
+                    t,
+                    field,
+                    args.points,
+                    uvs.astype(np.float32),
+                    args.size,
+                    args.size,
+                    radius,
+                    False,
+                    0.1,
+                    2,
+                    1e-6,
+                    False,
+                    args.threads,
+                    None,
+                    args.engine,
                 )["timings"]
             timings = {}
             arguments = (v, t, field, args.points, 1, 8, 0.002, 1.0, "mean", args.threads, None,
@@ -80,8 +94,16 @@ def measure(args):
             return timings
 
         def inside_compute():
-            return sd.compute(v, t, engine=args.engine, points=args.points, threads=args.threads,
-                              smoothing=args.method, uvs=uvs, smoothing_options=options).timings  # fmt: skip
+            return sd.compute(
+                v,
+                t,
+                engine=args.engine,
+                points=args.points,
+                threads=args.threads,
+                smoothing=args.method,
+                uvs=uvs,
+                smoothing_options=options,
+            ).timings
 
         public()  # warm: an OpenCL device compiles or loads its program on the first call
         wall, _ = best_of(args.repeat, public)
@@ -90,30 +112,50 @@ def measure(args):
         cast = min(r["cast"] for r in runs)
         fastest = min(runs, key=lambda r: r["smooth"])
         smooth = fastest["smooth"]
-        steps = {k[len("smooth: "):]: x * 1e3 for k, x in fastest.items() if k.startswith("smooth: ")}
+        steps = {
+            k[len("smooth: ") :]: x * 1e3 for k, x in fastest.items() if k.startswith("smooth: ")
+        }
         beside = min(r.get("beside cast", 0.0) for r in runs)
-        print(json.dumps({"mesh": name, "faces": len(t), "method": args.method,
-                          "smooth_ms": wall * 1e3, "core_ms": core_s * 1e3,
-                          "stages_ms": {k: s * 1e3 for k, s in stages.items()},
-                          "compute_cast_ms": cast * 1e3, "compute_smooth_ms": smooth * 1e3,
-                          "compute_beside_cast_ms": beside * 1e3,
-                          "compute_smooth_steps_ms": steps,
-                          "smooth_percent_of_cast": 100.0 * smooth / cast}), flush=True)  # fmt: skip
+        print(
+            json.dumps(
+                {
+                    "mesh": name,
+                    "faces": len(t),
+                    "method": args.method,
+                    "smooth_ms": wall * 1e3,
+                    "core_ms": core_s * 1e3,
+                    "stages_ms": {k: s * 1e3 for k, s in stages.items()},
+                    "compute_cast_ms": cast * 1e3,
+                    "compute_smooth_ms": smooth * 1e3,
+                    "compute_beside_cast_ms": beside * 1e3,
+                    "compute_smooth_steps_ms": steps,
+                    "smooth_percent_of_cast": 100.0 * smooth / cast,
+                }
+            ),
+            flush=True,
+        )
 
 
 def compare(args):
     best = alternate_builds.best_rows(
-        __file__, args, lambda row: (row["mesh"],),
-        lambda best, row: row if row["smooth_ms"] < best["smooth_ms"] else best)
+        __file__,
+        args,
+        lambda row: (row["mesh"],),
+        lambda best, row: row if row["smooth_ms"] < best["smooth_ms"] else best,
+    )
     print(f"{args.method}, engine {args.engine}, threads {args.threads}, {args.points}; best of "
           f"{args.rounds} rounds x {args.repeat} (ms)")  # fmt: skip
     for name in args.meshes:
         old, new = best[(name, "old")], best[(name, "new")]
-        print(f"{name} ({old['faces']:,} faces): smooth() old {old['smooth_ms']:.1f}, new "
-              f"{new['smooth_ms']:.1f}, old/new {old['smooth_ms'] / new['smooth_ms']:.2f}")  # fmt: skip
+        print(
+            f"{name} ({old['faces']:,} faces): smooth() old {old['smooth_ms']:.1f}, new "
+            f"{new['smooth_ms']:.1f}, old/new {old['smooth_ms'] / new['smooth_ms']:.2f}"
+        )
         for label, row in (("old", old), ("new", new)):
             stages = " | ".join(f"{k} {x:.1f}" for k, x in row["stages_ms"].items())
-            steps = " | ".join(f"{k} {x:.2f}" for k, x in row.get("compute_smooth_steps_ms", {}).items())
+            steps = " | ".join(
+                f"{k} {x:.2f}" for k, x in row.get("compute_smooth_steps_ms", {}).items()
+            )
             print(f"  {label}: _core {row['core_ms']:.1f}" + (f": {stages}" if stages else "") +
                   f"; in compute(): smooth {row['compute_smooth_ms']:.1f} = "
                   f"{row['smooth_percent_of_cast']:.1f}% of the cast" +
@@ -121,8 +163,9 @@ def compare(args):
 
 
 def main():
-    parser = argparse.ArgumentParser(description=__doc__,
-                                     formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser = argparse.ArgumentParser(
+        description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter
+    )
     parser.add_argument("meshes", nargs="+")
     parser.add_argument("--method", default="texture", choices=("texture", "projected"))
     parser.add_argument("--engine", default="cpu")

@@ -35,14 +35,26 @@ def measure(args):
             best, wall = None, None
             for _ in range(args.repeat):
                 t0 = time.perf_counter()
-                r = sd.compute(v, f, rays=args.rays, engine=args.engine,
-                               orientation=orientation, bvh_quality=quality)
+                r = sd.compute(
+                    v,
+                    f,
+                    rays=args.rays,
+                    engine=args.engine,
+                    orientation=orientation,
+                    bvh_quality=quality,
+                )
                 took = (time.perf_counter() - t0) * 1e3
                 if best is None or took < wall:
                     best, wall = r, took
-            row = {"mesh": name, "faces": len(f), "engine": args.engine,
-                   "orientation": orientation, "bvh_quality": quality, "wall_ms": wall,
-                   "stages_ms": {k: x * 1e3 for k, x in best.timings.items()}}
+            row = {
+                "mesh": name,
+                "faces": len(f),
+                "engine": args.engine,
+                "orientation": orientation,
+                "bvh_quality": quality,
+                "wall_ms": wall,
+                "stages_ms": {k: x * 1e3 for k, x in best.timings.items()},
+            }
             if args.json:
                 print(json.dumps(row), flush=True)
             else:
@@ -51,18 +63,25 @@ def measure(args):
 
 def describe(row):
     stages = " ".join(f"{k} {x:.1f}" for k, x in row["stages_ms"].items())
-    return (f"{row['mesh']} ({row['faces']:,} faces) {row['engine']} "
-            f"orientation={row['orientation']} bvh_quality={row['bvh_quality']}: "
-            f"wall {row['wall_ms']:.0f} ms | {stages}")
+    return (
+        f"{row['mesh']} ({row['faces']:,} faces) {row['engine']} "
+        f"orientation={row['orientation']} bvh_quality={row['bvh_quality']}: "
+        f"wall {row['wall_ms']:.0f} ms | {stages}"
+    )
 
 
 def compare(args):
     sys.argv.append("--json")  # what each build's run is given: rows to merge
     best = alternate_builds.best_rows(
-        __file__, args, lambda row: (row["mesh"], row["orientation"], row["bvh_quality"]),
-        lambda best, row: row if row["wall_ms"] < best["wall_ms"] else best)
-    print(f"engine {args.engine}, {args.rays} rays; best of {args.rounds} rounds x "
-          f"{args.repeat} calls (ms)")
+        __file__,
+        args,
+        lambda row: (row["mesh"], row["orientation"], row["bvh_quality"]),
+        lambda best, row: row if row["wall_ms"] < best["wall_ms"] else best,
+    )
+    print(
+        f"engine {args.engine}, {args.rays} rays; best of {args.rounds} rounds x "
+        f"{args.repeat} calls (ms)"
+    )
     keys = sorted({k[:-1] for k in best}, key=lambda k: (k[0], SETTINGS.index(k[1:])))
     for key in keys:
         old, new = best[key + ("old",)], best[key + ("new",)]
@@ -72,12 +91,17 @@ def compare(args):
 
 
 def main():
-    parser = argparse.ArgumentParser(description=__doc__,
-                                     formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser = argparse.ArgumentParser(
+        description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter
+    )
     parser.add_argument("engine", nargs="?", default="opencl")
-    parser.add_argument("meshes", nargs="?", default="armadillo-x16,bunny00-x16",
-                        type=lambda s: s.split(","),
-                        help=f"comma-separated, of: {', '.join(NAMES)}")
+    parser.add_argument(
+        "meshes",
+        nargs="?",
+        default="armadillo-x16,bunny00-x16",
+        type=lambda s: s.split(","),
+        help=f"comma-separated, of: {', '.join(NAMES)}",
+    )
     parser.add_argument("--rays", type=int, default=30)
     parser.add_argument("--repeat", type=int, default=3)
     parser.add_argument("--json", action="store_true", help="one JSON line per row")
@@ -88,10 +112,14 @@ def main():
         parser.error(f"unknown mesh {', '.join(unknown)}; the meshes: {', '.join(NAMES)}")
     import shape_diameter as sd
 
-    if args.engine != "auto" and args.engine not in [e["name"] for e in sd.engines()] and \
-            not args.engine.startswith("opencl"):
-        parser.error(f"unknown engine {args.engine!r}; here: "
-                     f"{', '.join(e['name'] for e in sd.engines())}")
+    if (
+        args.engine != "auto"
+        and args.engine not in [e["name"] for e in sd.engines()]
+        and not args.engine.startswith("opencl")
+    ):
+        parser.error(
+            f"unknown engine {args.engine!r}; here: {', '.join(e['name'] for e in sd.engines())}"
+        )
     return compare(args) if args.compare else measure(args)
 
 

@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # SPDX-License-Identifier: GPL-3.0-or-later
-# No input crashes the program (issue 7): the C++ tests under AddressSanitizer and
+# No input crashes the program: the C++ tests under AddressSanitizer and
 # UndefinedBehaviorSanitizer (build/asan), then the fuzzers, each for FUZZ_SECONDS (default 60):
 # the libFuzzer target of the compute entry point (build/fuzz) and the atheris target of the
 # mesh reading path (against the package installed in .venv: run scripts/setup.sh first, as

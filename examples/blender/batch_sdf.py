@@ -46,7 +46,7 @@ def arguments():
 
 
 def extension_api():
-    """The extension's scripting API, enabling the extension if the session has not (with
+    """The extension's scripting API, enabling the extension if Blender has not (with
     --factory-startup, or in the bpy module from PyPI, preferences are not loaded)."""
     if EXTENSION not in bpy.context.preferences.addons:
         import addon_utils  # Blender's own module: importable once bpy is

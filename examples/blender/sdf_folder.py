@@ -1,5 +1,5 @@
 # SPDX-License-Identifier: GPL-3.0-or-later
-# The README's headless example, run as it is by tests/blender/test_examples.py:
+# The headless example of docs/blender.md, run as it is by tests/blender/test_examples.py:
 #   blender -b template.blend --python-exit-code 1 --python sdf_folder.py -- MESHES OUT
 # Every .obj in MESHES, imported into template.blend, gets the Shape Diameter; the results are
 # saved as OUT/<name>.blend (attributes sdf, sdf_normalized, sdf_color) and OUT/<name>.sdf.npz.

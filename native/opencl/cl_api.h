@@ -53,8 +53,8 @@ struct Api {
 const Api* api(std::string* why = nullptr);
 
 // True in a process forked from one that had loaded OpenCL: the driver's threads did not come
-// along while its locks and handles did, and any call can hang for ever (a trial's fork-started
-// Pool workers did). Such a process lists no device and releases nothing.
+// along while its locks and handles did, and any call can hang for ever (fork-started Pool
+// workers did). Such a process lists no device and releases nothing.
 bool forked_after_load();
 
 // What a forked process is told instead of its parent's devices.

@@ -18,7 +18,7 @@
 namespace sdf::cl {
 
 // A context, a queue and the programs built so far for one device, kept for the life of the
-// process: a second compute() in the same session neither recompiles nor reloads.
+// process: a second compute() in the same process neither recompiles nor reloads.
 struct DeviceState {
   cl_context context = nullptr;
   cl_command_queue queue = nullptr;

@@ -7,9 +7,9 @@
 #include <string>
 #include <vector>
 
-#include "../../kernels/sdf_layout.h"
-#include "../bvh_margin.h"
-#include "../stopwatch.h"
+#include "common/sdf_layout.h"
+#include "accel/bvh_margin.h"
+#include "util/stopwatch.h"
 
 namespace sdf::cl {
 

@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
-// A BVH made on the device (kernels/sdf_lbvh_kernels.cl) from the mesh alone, in place of a
+// A BVH made on the device (kernels/cl/sdf_lbvh_kernels.cl) from the mesh alone, in place of a
 // tree and points made on the host: the faces' Morton codes, their sort
-// (kernels/sdf_sort_kernels.cl), Karras's tree over them and its boxes. The tree has the host
+// (kernels/cl/sdf_sort_kernels.cl), Karras's tree over them and its boxes. The tree has the host
 // tree's layout and boxes grown by the same margin, so the cast kernels read it unchanged and
 // return the same values; the faces' points are made from the mesh by the cast itself.
 #pragma once
@@ -11,8 +11,8 @@
 #include <memory>
 #include <string>
 
-#include "../mesh.h"
-#include "../uninitialized_vector.h"
+#include "mesh/mesh.h"
+#include "util/uninitialized_vector.h"
 #include "device_state.h"
 
 namespace sdf::cl {

@@ -14,7 +14,7 @@
 #include <string>
 #include <thread>
 
-#include "../../kernels/sdf_bvh4_traverse.h"
+#include "traverse/sdf_bvh4_traverse.h"
 #include "device_state.h"
 #include "device_tree.h"
 #include "launch_sizes.h"

@@ -11,14 +11,14 @@
 #include <utility>
 #include <vector>
 
-#include "../bvh.h"
-#include "../bvh4.h"
-#include "../bvh8.h"
-#include "../mesh.h"
-#include "../octree.h"
-#include "../parallel.h"
-#include "../rays.h"
-#include "../sampling.h"
+#include "accel/bvh.h"
+#include "accel/bvh4.h"
+#include "accel/bvh8.h"
+#include "mesh/mesh.h"
+#include "accel/octree.h"
+#include "util/parallel.h"
+#include "prepare/rays.h"
+#include "prepare/sampling.h"
 #include "devices.h"
 
 namespace sdf::cl {

@@ -8,8 +8,8 @@
 #include <utility>
 #include <vector>
 
-#include "../parallel.h"
-#include "../uninitialized_vector.h"
+#include "util/parallel.h"
+#include "util/uninitialized_vector.h"
 #include "device_state.h"
 #include "smoothing_launch.h"
 

@@ -1,6 +1,6 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
 // Projected-points smoothing (paper 4.4) on an OpenCL device, every stage there: the points
-// moved inward, the octree built level by level (kernels/sdf_point_octree_kernels.cl), the
+// moved inward, the octree built level by level (kernels/cl/sdf_point_octree_kernels.cl), the
 // gather. The host uploads the points' frames (origin, inward axis) once, reads a few KiB
 // back per level and makes that level's nodes by the host builder's rules
 // (smoothing_projected.h), so the tree is the CPU version's node for node and the values are
@@ -10,10 +10,10 @@
 #include <cstddef>
 #include <memory>
 
-#include "../mesh.h"
-#include "../sampling.h"
-#include "../smoothing_projected.h"
-#include "../stopwatch.h"
+#include "mesh/mesh.h"
+#include "prepare/sampling.h"
+#include "post/smoothing_projected.h"
+#include "util/stopwatch.h"
 #include "devices.h"
 
 namespace sdf::cl {

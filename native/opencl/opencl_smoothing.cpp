@@ -9,7 +9,7 @@
 #include <string>
 #include <vector>
 
-#include "../stopwatch.h"
+#include "util/stopwatch.h"
 #include "device_state.h"
 #include "smoothing_launch.h"
 

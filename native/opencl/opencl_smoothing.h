@@ -2,7 +2,7 @@
 // The OpenCL version of texture-space smoothing (paper 4.4; projected points:
 // opencl_projected.h): the UV islands (and for vertex values the corners grouped by merged
 // vertex) are found on the host; drawing, dilation, both blur passes and reading the values
-// back run on the device. The device code is kernels/sdf_smooth_texture.h, which the CPU
+// back run on the device. The device code is kernels/smooth/sdf_smooth_texture.h, which the CPU
 // version runs as C++, so the results agree with the CPU's to float rounding (exp); on a
 // device without double precision texture smoothing runs on the CPU threads, since drawing
 // needs double.
@@ -10,7 +10,7 @@
 
 #include <vector>
 
-#include "../smoothing_texture.h"
+#include "post/smoothing_texture.h"
 #include "devices.h"
 
 namespace sdf::cl {

@@ -4,7 +4,7 @@
 #include <algorithm>
 #include <cstring>
 
-#include "../parallel.h"
+#include "util/parallel.h"
 
 namespace sdf::cl {
 

@@ -2,7 +2,7 @@
 // Transfers to and from a GPU through page-locked ("pinned") host memory. A GPU's DMA engine reads
 // pinned memory directly; from ordinary (pageable) memory the driver first copies through
 // a small buffer of its own, on the calling thread. Measured on an H100 with NVIDIA's OpenCL,
-// 128 MB (bench/RESULTS.md): pageable 16.5-18.7 ms (8 GB/s); into pinned memory on 16 threads
+// 128 MB: pageable 16.5-18.7 ms (8 GB/s); into pinned memory on 16 threads
 // 2.7-3.4 ms, then its DMA 2.6 ms (50 GB/s). Pinning is slow (80 ms for 128 MB), so a
 // device keeps two chunks for the life of the process and an upload goes through them in
 // turn: the host threads fill one while the other's DMA runs. Downloads the other way round:

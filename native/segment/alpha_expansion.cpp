@@ -5,7 +5,7 @@
 #include <cstdint>
 #include <limits>
 
-#include "parallel.h"
+#include "util/parallel.h"
 #include "segment/max_flow.h"
 
 namespace sdf::segment {

@@ -4,7 +4,7 @@
 #include <algorithm>
 #include <cmath>
 
-#include "parallel.h"
+#include "util/parallel.h"
 
 namespace sdf::segment {
 namespace {

@@ -3,7 +3,7 @@
 
 #include <algorithm>
 
-#include "parallel.h"
+#include "util/parallel.h"
 
 namespace sdf::segment {
 namespace {

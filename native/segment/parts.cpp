@@ -6,7 +6,7 @@
 #include <numeric>
 #include <tuple>
 
-#include "parallel.h"
+#include "util/parallel.h"
 
 namespace sdf::segment {
 namespace {

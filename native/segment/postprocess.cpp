@@ -6,7 +6,7 @@
 #include <limits>
 #include <vector>
 
-#include "parallel.h"
+#include "util/parallel.h"
 
 namespace sdf::segment {
 

@@ -13,7 +13,7 @@
 #include "segment/parts.h"
 #include "segment/segments.h"
 #include "segment/soft_clustering.h"
-#include "stopwatch.h"
+#include "util/stopwatch.h"
 
 namespace sdf::segment {
 

@@ -6,7 +6,7 @@
 #include <cstdint>
 #include <limits>
 
-#include "parallel.h"
+#include "util/parallel.h"
 #include "segment/cgal_random.h"
 
 namespace sdf::segment {

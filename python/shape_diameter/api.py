@@ -45,8 +45,9 @@ class Result:
     """Seconds per stage: devices (finding OpenCL devices; the first run of a process loads
     the drivers), twins (the search for faces with a reversed twin: twin_faces; 'twins
     (beside cast)' where a GPU makes the tree; where some were found, 'twins (first run)',
-    the run that found them until it stopped, and 'twins: values given'), prepare (orientation, points, their Morton order, and with
-    threads=0 the copy of the mesh the build reads; its steps follow as 'prepare: ...'),
+    the run that found them until it stopped, and 'twins: values given'), prepare
+    (orientation, points, their Morton order, and with threads=0 the copy of the mesh the
+    build reads; its steps follow as 'prepare: ...'),
     build, build wait, cast (cast and reduce, fused), fill, normalize, total; on OpenCL also
     setup, upload and download; with smoothing, smooth (its steps follow as 'smooth: ...'),
     and for 'texture' 'beside cast' (the mesh and UVs made ready, their UV islands, and on
@@ -56,11 +57,11 @@ class Result:
     'prepare' (and on OpenCL beside the points' upload): 'build' is its own time, 'build
     wait' what it added to the wall time. Where a GPU makes the tree (bvh_quality 'fast' or
     'auto' on GPUs, points 'faces'): 'build (device)' (the faces' sort and the tree; the
-    cast makes the faces' points) instead of 'build' and 'build wait', and 'auto' orientation runs beside the cast
-    as 'orientation (beside cast)' with its steps ('orientation: edges', ...); where it
-    reversed faces, 'cast (discarded)' (the cast of the mesh as wound, until it stopped: the
-    orientation's time is within it) and 'orientation: reverse faces' come before the stages
-    of the cast that counts."""
+    cast makes the faces' points) instead of 'build' and 'build wait', and 'auto'
+    orientation runs beside the cast as 'orientation (beside cast)' with its steps
+    ('orientation: edges', ...); where it reversed faces, 'cast (discarded)' (the cast of the
+    mesh as wound, until it stopped: the orientation's time is within it) and 'orientation:
+    reverse faces' come before the stages of the cast that counts."""
     engine: str = "cpu"
     """What ran, e.g. 'cpu (2 threads, bvh)' or 'opencl:0 <device name> (bvh)'; after an
     'auto' fallback, with ' [fell back: <why>]'."""
@@ -101,12 +102,16 @@ def engines() -> list:
     'type' ('CPU' or 'GPU') and 'description'; OpenCL devices add 'device', 'platform',
     'driver', 'memory' (bytes), 'compute_units' and 'double' (double precision: texture
     smoothing runs on a device only with it), among others ('threads' on "cpu"; 'index',
-    'vendor', 'version', 'max_allocation', 'clock_mhz' on devices). "cpu" is always there; OpenCL devices are
-    listed when an OpenCL driver is installed (none is needed otherwise)."""
+    'vendor', 'version', 'max_allocation', 'clock_mhz' on devices). "cpu" is always there;
+    OpenCL devices are listed when an OpenCL driver is installed (none is needed otherwise)."""
     threads = _core.hardware_threads()
     found = [
-        {"name": "cpu", "type": "CPU", "threads": threads,
-         "description": f"{threads} thread{'s' if threads != 1 else ''}"}
+        {
+            "name": "cpu",
+            "type": "CPU",
+            "threads": threads,
+            "description": f"{threads} thread{'s' if threads != 1 else ''}",
+        }
     ]
     for d in _core.opencl_devices():
         entry = dict(d)
@@ -123,7 +128,7 @@ def _resolve_engine(engine: str) -> str:
         return engine
     if any(d["type"] == "GPU" for d in _core.opencl_devices()):
         return "opencl"
-    if _core.opencl_gpu_lost_to_fork():  # a fork-started worker: it hung (a trial's Pool)
+    if _core.opencl_gpu_lost_to_fork():  # a fork-started worker: its OpenCL calls hang
         warn(f"engine='auto' runs on the CPU: {_core.opencl_unavailable_reason()}")
     return "cpu"
 
@@ -134,8 +139,9 @@ def _array(name, value, shape, rows):
     try:
         return np.asarray(value)
     except ValueError as error:
-        raise ValueError(f"{name} must have shape {shape}, but its rows differ in length"
-                         f"{rows}") from error
+        raise ValueError(
+            f"{name} must have shape {shape}, but its rows differ in length{rows}"
+        ) from error
 
 
 _PROGRAM_CACHES_CHECKED = set()
@@ -143,8 +149,8 @@ _PROGRAM_CACHES_CHECKED = set()
 
 def _unwritable_program_cache():
     """The OpenCL program cache's folder the first time this process finds it cannot be made
-    or written, else None: the core then compiles in every process without a word (a trial's,
-    about 9 s a run on PoCL). Each folder is checked once a process, so said once (a batch
+    or written, else None: the core then compiles in every process without a word (about 9 s a
+    run on PoCL). Each folder is checked once a process, so said once (a batch
     said it for every input)."""
     folder = _core.opencl_cache_directory()
     if not folder or folder in _PROGRAM_CACHES_CHECKED:
@@ -336,8 +342,9 @@ def compute(
     _check_choice("bvh_quality", bvh_quality, BVH_QUALITIES)
     _check_integer("octree_depth", octree_depth, 0, 16)
     _check_integer("octree_leaf_size", octree_leaf_size, 1, 2**31 - 1)
-    smoothing_resolved = check_smoothing(smoothing, smoothing_options, uvs=uvs,
-                                         face_count=len(t), vertex_count=len(v), triangles=t)
+    smoothing_resolved = check_smoothing(
+        smoothing, smoothing_options, uvs=uvs, face_count=len(t), vertex_count=len(v), triangles=t
+    )
     if smoothing_options and smoothing_options.get("return_image"):
         raise ValueError("return_image is an option of shape_diameter.smooth(), not compute()")
     if smoothing == "bilateral":
@@ -345,9 +352,11 @@ def compute(
     clock = time.perf_counter()
     chosen = _resolve_engine(engine)
     if chosen.startswith("opencl") and (folder := _unwritable_program_cache()):
-        warn(f"the OpenCL program cache {folder} cannot be written: each process compiles the "
-             "kernels again (seconds each, more on PoCL); set SDF_CACHE_DIR to a writable "
-             "folder")
+        warn(
+            f"the OpenCL program cache {folder} cannot be written: each process compiles the "
+            "kernels again (seconds each, more on PoCL); set SDF_CACHE_DIR to a writable "
+            "folder"
+        )
     choosing = time.perf_counter() - clock  # 'auto' lists the devices (drivers load once)
 
     def attempt(v, t, smoothing_resolved, find_twins, progress):
@@ -372,22 +381,41 @@ def compute(
             def prepare(cast_points):
                 try:
                     if smoothing == "texture":
-                        prepared.append(prepare_texture_for(v, t, points, smoothing_resolved,
-                                                            int(threads), engine_name))
+                        prepared.append(
+                            prepare_texture_for(
+                                v, t, points, smoothing_resolved, int(threads), engine_name
+                            )
+                        )
                     else:
-                        prepared.append(prepare_projected_for(cast_points, int(threads),
-                                                              engine_name))
+                        prepared.append(
+                            prepare_projected_for(cast_points, int(threads), engine_name)
+                        )
                 except Exception as error:  # raised after the cast: not a device failure
                     prepare_failure.append(error)
 
             beside = None
-            if smoothing == "texture" or (smoothing == "projected" and engine_name != "cpu"
-                                          and not far_from_unit_size):
+            if smoothing == "texture" or (
+                smoothing == "projected" and engine_name != "cpu" and not far_from_unit_size
+            ):
                 beside = prepare  # (projected far from unit size runs scaled: smoothing.py)
             return _core.compute(
-                v, t, int(rays), float(cone_angle), sampling, int(seed), points, int(threads),
-                cast_progress, engine_name, accel, int(octree_depth), int(octree_leaf_size),
-                orientation, bvh_quality, beside, find_twins,
+                v,
+                t,
+                int(rays),
+                float(cone_angle),
+                sampling,
+                int(seed),
+                points,
+                int(threads),
+                cast_progress,
+                engine_name,
+                accel,
+                int(octree_depth),
+                int(octree_leaf_size),
+                orientation,
+                bvh_quality,
+                beside,
+                find_twins,
             )
 
         out, failure = run_with_fallback(run, chosen, engine)
@@ -424,16 +452,27 @@ def compute(
                 # smoothing does not depend on the winding, and its UVs follow the caller's
                 # corners.
                 smooth_t = t
-                if (smoothing in ("projected", "kring") and ready is None
-                        and out["reversed"] is not None):
+                if (
+                    smoothing in ("projected", "kring")
+                    and ready is None
+                    and out["reversed"] is not None
+                ):
                     smooth_t = t.copy()
                     smooth_t[out["reversed"]] = smooth_t[out["reversed"]][:, [0, 2, 1]]
                 # compute()'s own checked mesh, options and SDF (raw: finite, >= 0): no second
                 # round of checks.
                 return run_checked(
-                    v, smooth_t, raw, points, smoothing, smoothing_resolved, int(threads),
+                    v,
+                    smooth_t,
+                    raw,
+                    points,
+                    smoothing,
+                    smoothing_resolved,
+                    int(threads),
                     None if progress is None else lambda f: progress(0.9 + 0.1 * f),
-                    engine_name, ready, stages
+                    engine_name,
+                    ready,
+                    stages,
                 )
 
             values, failure = run_with_fallback(run_smoothing, smooth_engine, engine)
@@ -476,8 +515,9 @@ def compute(
                 result.timings[name] = first_timings[name]
         result.timings["twins: values given"] = time.perf_counter() - clock
     if result.valid_rays.any():  # (none anywhere has its own warning)
-        _warn_if_few_rays_kept(result.valid_rays, int(rays), orientation,
-                               t if points == "vertices" else None)
+        _warn_if_few_rays_kept(
+            result.valid_rays, int(rays), orientation, t if points == "vertices" else None
+        )
         for message in part_warnings(v, t, result, int(threads)):
             warn(message)
     clock = time.perf_counter()
@@ -504,7 +544,7 @@ def few_rays_kept(valid_rays, rays, orientation) -> Optional[str]:
         return None
     hint = {
         "as_is": " (orientation='as_is' trusts the winding; 'auto' turns an inside-out part "
-                 "outward)",
+        "outward)",
         "flip": " (orientation='flip' reversed every face)",
     }.get(orientation, "")
     return (
@@ -591,7 +631,6 @@ class _Monotone:
         self.progress(self.high)
 
 
-
 def cone_rays(
     normal, rays=30, cone_angle=120.0, sampling="fibonacci", seed=0, point_index=0, tangent=None
 ):
@@ -629,9 +668,7 @@ def reduce_lengths(lengths, angles, sampling="fibonacci", rays=None, cone_angle=
         raise ValueError("lengths must be finite and >= 0 (kept rays' distances to their hits)")
     if not (np.isfinite(angles).all() and (angles >= 0).all()):
         raise ValueError("angles must be finite and >= 0 (radians from the cone's axis)")
-    return float(
-        _core.reduce_lengths(lengths, angles, sampling, int(rays or 0), float(cone_angle))
-    )
+    return float(_core.reduce_lengths(lengths, angles, sampling, int(rays or 0), float(cone_angle)))
 
 
 def sample_points(vertices, triangles, points="faces"):

@@ -88,8 +88,11 @@ def plan(args, write_suffixes) -> list:
                 found, problems[source] = [], f"{source}: cannot list the folder ({exc.strerror})"
             sources += found
             if not found:
-                where = ("in the folder or its subfolders" if recursive else
-                         "in the folder (--recursive searches its subfolders)")
+                where = (
+                    "in the folder or its subfolders"
+                    if recursive
+                    else "in the folder (--recursive searches its subfolders)"
+                )
                 problems.setdefault(source, f"{source}: no mesh files {where} (looked for "
                                             f"{', '.join(READ_SUFFIXES)}; skipped *.sdf.*, the "
                                             "outputs of this command)")  # fmt: skip
@@ -98,8 +101,7 @@ def plan(args, write_suffixes) -> list:
             sources.append(source)
     several = len(sources) > 1 or len(problems) > 0 or any(map(os.path.isdir, args.input))
     # ("there are 1 inputs" was said of a folder holding one mesh)
-    what = (f"there are {len(sources)} inputs" if len(sources) > 1
-            else "the input is a folder")
+    what = f"there are {len(sources)} inputs" if len(sources) > 1 else "the input is a folder"
     if several and args.output:
         raise CommandError(
             f"-o/--output names one file, but {what}: leave it out to write each next to its "
@@ -110,8 +112,8 @@ def plan(args, write_suffixes) -> list:
             f"--values names one file, but {what}: use --save-values to write each input's "
             "values next to its output (INPUT.sdf.npy)"
         )
-    if args.output_dir is not None:
-        _make_folder(args.output_dir)
+    if args.output_dir is not None and any(source not in problems for source in sources):
+        _make_folder(args.output_dir)  # (not for a run that found no mesh anywhere)
     jobs = []
     for source in sources:
         if source in problems:
@@ -123,8 +125,13 @@ def plan(args, write_suffixes) -> list:
             try:
                 os.makedirs(folder, exist_ok=True)
             except OSError as exc:  # this input's failure: the others go on
-                jobs.append(Job(source, problem=f"{source}: cannot make its output folder "
-                                                f"{folder} ({exc.strerror})"))
+                jobs.append(
+                    Job(
+                        source,
+                        problem=f"{source}: cannot make its output folder "
+                        f"{folder} ({exc.strerror})",
+                    )
+                )
                 continue
         output = args.output or default_output(source, args.output_dir, subfolder)
         values = args.values or (default_values(output) if args.save_values else None)
@@ -138,15 +145,19 @@ def plan(args, write_suffixes) -> list:
             if segments is not None:
                 _check_writable_path(segments, None)
                 _check_distinct(source, output, segments)
-        except CommandError as exc:  # this input's failure: the others go on (a trial's)
+        except CommandError as exc:  # this input's failure: the others go on
             jobs.append(Job(source, problem=str(exc)))
             continue
         # Outputs are written whole or not at all, the mesh and its values together: files
         # that exist are a finished run's (or a user's: --skip-existing trusts them).
         # A missing input is not done: it fails as it would without the option (a mistyped
         # name beside an old output was "skipped", status 0).
-        done = args.skip_existing and os.path.exists(source) and all(
-            os.path.exists(path) for path in (output, values, segments) if path is not None)
+        done = (
+            args.skip_existing
+            and os.path.exists(source)
+            and all(os.path.exists(path) for path in (output, values, segments)
+                    if path is not None)
+        )
         jobs.append(Job(source, output, values, done=done, segments=segments))
     _check_no_collisions([job for job in jobs if job.problem is None])
     return jobs
@@ -183,7 +194,7 @@ def _meshes_in(folder: str) -> list:
             continue
         # Only folders are left out (--recursive walks them). What else bears a mesh's name
         # fails as an input of its own: a link to nothing or to itself (one vanished, one
-        # stopped the whole folder), a FIFO or a socket (skipped without a word, a trial's).
+        # stopped the whole folder), a FIFO or a socket (not skipped without a word).
         try:
             if entry.is_dir():
                 continue
@@ -196,7 +207,7 @@ def _meshes_in(folder: str) -> list:
 def _check_no_collisions(jobs) -> None:
     """Before any work: a second input writing a file that an earlier one writes (a.obj and
     a.ply both make a.sdf.ply) fails on its own, the others go on (one such pair in a folder
-    of thousands stopped the whole batch, a trial's); an input given twice, or one that
+    of thousands stopped the whole batch); an input given twice, or one that
     another input's run would overwrite, refuses the run."""
     written = {}  # real path of an earlier input's output -> that input
     for job in jobs:
@@ -207,8 +218,10 @@ def _check_no_collisions(jobs) -> None:
             if key in written:
                 if _same_file(written[key], job.source):
                     raise CommandError(f"{job.source}: is given twice")
-                job.problem = (f"{job.source}: would write {path}, which {written[key]} writes: "
-                               "give them separate runs, or rename one")
+                job.problem = (
+                    f"{job.source}: would write {path}, which {written[key]} writes: "
+                    "give them separate runs, or rename one"
+                )
                 break
         if job.problem is not None:
             continue

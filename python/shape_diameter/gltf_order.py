@@ -43,8 +43,11 @@ def _ordered(header: dict, scene: trimesh.Scene) -> list:
         if frame in geometry_nodes:
             ordered.append(frame)
         else:  # a mesh of several primitives: trimesh gives each a child frame, in order
-            ordered.extend(child for child in children.get(frame, ())
-                           if child in geometry_nodes and child not in node_frames)
+            ordered.extend(
+                child
+                for child in children.get(frame, ())
+                if child in geometry_nodes and child not in node_frames
+            )
     placed = set(ordered)
     return ordered + [node for node in scene.graph.nodes_geometry if node not in placed]
 
@@ -56,7 +59,7 @@ def json_header(path: str) -> dict:
         length, kind = struct.unpack_from("<II", data, 12)
         if kind != _JSON_CHUNK:
             raise ValueError("the GLB's first chunk is not its JSON")
-        data = data[20:20 + length]
+        data = data[20 : 20 + length]
     return json.loads(data)
 
 

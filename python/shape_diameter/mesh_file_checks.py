@@ -66,8 +66,9 @@ def check_suffix(path: str) -> str:
         seems = None
     hint = f"it looks like {_ARTICLE.get(seems, 'a')} {seems} file; " if seems else ""
     if not suffix:
-        raise ValueError(f"no file extension to tell the mesh format by ({hint}supported: "
-                         f"{supported})")
+        raise ValueError(
+            f"no file extension to tell the mesh format by ({hint}supported: {supported})"
+        )
     raise ValueError(f"cannot read '{suffix}' files ({hint}supported: {supported})")
 
 
@@ -111,8 +112,10 @@ def _check_kind(suffix: str, head: bytes, size: int) -> None:
     elif suffix == ".glb" and seems != "GLB":
         raise _not_valid(suffix, "no 'glTF' header", head, size)
     elif suffix == ".glb" and len(head) >= 12 and size < int.from_bytes(head[8:12], "little"):
-        raise ValueError(f"truncated: its header declares {int.from_bytes(head[8:12], 'little')} "
-                         f"bytes, the file has {size}")
+        raise ValueError(
+            f"truncated: its header declares {int.from_bytes(head[8:12], 'little')} "
+            f"bytes, the file has {size}"
+        )
     elif suffix == ".gltf" and seems != "glTF":
         raise _not_valid(suffix, "not JSON text", head, size)
 
@@ -242,7 +245,7 @@ def _check_ply_lists(data: bytes, start: int, elements, types, big_endian: bool)
             if len(rows) < count * stride:
                 return  # short, or mixed: trimesh's length check says so
             table = np.frombuffer(rows, dtype=np.uint8).reshape(count, stride)
-            for column, size, length in lists:
+            for column, size, _ in lists:
                 lengths = table[:, column : column + size]
                 first = np.frombuffer(data[offset + column : offset + column + size],
                                       dtype=np.uint8)  # fmt: skip
@@ -294,8 +297,9 @@ def _check_stl(data: bytes) -> None:
             # (A DOS end-of-file byte or NULs after it are padding, which trimesh reads past.)
             last_line = data.rstrip(b" \t\r\n\x00\x1a").rsplit(b"\n", 1)[-1].strip()
             if not last_line.lower().startswith(b"endsolid"):
-                raise ValueError("truncated: ASCII STL text ends with an 'endsolid' line, "
-                                 "this file does not")
+                raise ValueError(
+                    "truncated: ASCII STL text ends with an 'endsolid' line, this file does not"
+                )
             return
         raise _not_valid(".stl", "text that does not start with 'solid'", data)
     if len(data) < 84:

@@ -141,9 +141,11 @@ def _read(path, want_uvs: bool = False):
     except Exception as exc:  # a parser fed a broken file fails in many ways
         reason = str(exc) or type(exc).__name__
         if reason == "PLY is unexpected length!":  # trimesh's words; they do not say why
-            reason = ("its size is not what its header declares: it is truncated, or mixes "
-                      "faces of different corner counts, which trimesh cannot read in binary "
-                      "PLY")
+            reason = (
+                "its size is not what its header declares: it is truncated, or mixes "
+                "faces of different corner counts, which trimesh cannot read in binary "
+                "PLY"
+            )
         raise ValueError(f"{path}: cannot read mesh ({reason})") from exc
 
     if suffix != ".off":
@@ -152,14 +154,18 @@ def _read(path, want_uvs: bool = False):
             if in_place is not None:
                 vertices, triangles, source, uvs = in_place
             else:
-                nodes = (mesh_nodes_in_file_order(header, scene) if header is not None
-                         else scene.graph.nodes_geometry)
+                nodes = (
+                    mesh_nodes_in_file_order(header, scene)
+                    if header is not None
+                    else scene.graph.nodes_geometry
+                )
                 vertices, triangles, other_kinds = _flatten(scene, nodes)
                 if suffix != ".obj":  # (a PLY only where trimesh kept no elements: never seen)
                     source = np.arange(len(triangles), dtype=np.int64)
                 elif len(source) != len(triangles):
-                    raise ValueError(f"{len(source) - len(triangles)} of its faces were lost "
-                                     "in reading")
+                    raise ValueError(
+                        f"{len(source) - len(triangles)} of its faces were lost in reading"
+                    )
         except ValueError as exc:
             raise ValueError(f"{path}: cannot read mesh ({exc})") from exc
     if len(triangles) == 0:
@@ -172,15 +178,19 @@ def _read(path, want_uvs: bool = False):
     not_finite = np.flatnonzero(~np.isfinite(vertices).all(axis=1))
     if len(not_finite):  # numbered from 0, as the file's vertices are read
         count = "1 vertex has" if len(not_finite) == 1 else f"{len(not_finite)} vertices have"
-        raise ValueError(f"{path}: {count} a coordinate that is not finite (NaN or infinite; "
-                         f"the first: vertex {not_finite[0]}, counting from 0)")
+        raise ValueError(
+            f"{path}: {count} a coordinate that is not finite (NaN or infinite; "
+            f"the first: vertex {not_finite[0]}, counting from 0)"
+        )
     beyond = (triangles < 0) | (triangles >= len(vertices))
     outside = np.flatnonzero(beyond.any(axis=1))
     if len(outside):
         first = outside[0]
         face, index = int(source[first]), int(triangles[first][beyond[first]][0])
-        raise ValueError(f"{path}: face {face} (counting from 0) refers to vertex {index}, but "
-                         f"the file has {len(vertices)} vertices (0 to {len(vertices) - 1})")
+        raise ValueError(
+            f"{path}: face {face} (counting from 0) refers to vertex {index}, but "
+            f"the file has {len(vertices)} vertices (0 to {len(vertices) - 1})"
+        )
     return vertices, triangles, source, uvs
 
 
@@ -261,8 +271,11 @@ def _ply_in_place(scene, want_uvs: bool):
         texcoords = face_data.get("texcoord")
     elif isinstance(face_data, np.ndarray) and face_data.dtype.names:
         names = face_data.dtype.names
-        name = names[0] if len(names) == 1 else next(
-            (n for n in ("vertex_indices", "vertex_index") if n in names), None)
+        name = (
+            names[0]
+            if len(names) == 1
+            else next((n for n in ("vertex_indices", "vertex_index") if n in names), None)
+        )
         if name is not None:
             polygons = face_data[name]["f1"]
         if "texcoord" in names:
@@ -295,8 +308,12 @@ def _ply_corner_uvs(vertex_data, triangles, texcoords, corners):
             return None
     for u, v in _PLY_UV_NAMES:
         try:
-            per_vertex = np.column_stack([np.asarray(vertex_data[u], dtype=np.float64),
-                                          np.asarray(vertex_data[v], dtype=np.float64)])
+            per_vertex = np.column_stack(
+                [
+                    np.asarray(vertex_data[u], dtype=np.float64),
+                    np.asarray(vertex_data[v], dtype=np.float64),
+                ]
+            )
         except (KeyError, ValueError, IndexError):
             continue
         return per_vertex[triangles].astype(np.float32)
@@ -402,13 +419,17 @@ def _plain_obj(path: str):
             if 0 in refs:
                 raise ValueError(f"face {line.strip()[:60]!r} uses index 0 (OBJ counts from 1)")
             if len(refs) < 3:  # trimesh drops it: a file cut inside its last face read "ok"
-                raise ValueError(f"face {line.strip()[:60]!r} has {len(refs)} corner"
-                                 f"{'s' if len(refs) != 1 else ''}, fewer than a face's 3 (is "
-                                 "the file cut short?)")
+                raise ValueError(
+                    f"face {line.strip()[:60]!r} has {len(refs)} corner"
+                    f"{'s' if len(refs) != 1 else ''}, fewer than a face's 3 (is "
+                    "the file cut short?)"
+                )
             refs = [index if index > 0 else vertex_count + 1 + index for index in refs]
             if refs and min(refs) < 1:  # trimesh would count on from the end of the list
-                raise ValueError(f"face {line.strip()[:60]!r} counts back past the first "
-                                 "vertex (a negative index counts back from its line)")
+                raise ValueError(
+                    f"face {line.strip()[:60]!r} counts back past the first "
+                    "vertex (a negative index counts back from its line)"
+                )
             if refs and max(refs) > highest[0]:
                 highest = (max(refs), line.strip()[:60])
             for k in range(1, len(refs) - 1):
@@ -418,8 +439,10 @@ def _plain_obj(path: str):
         elif fields[0] == "l":
             has_lines = True
     if highest[0] > vertex_count:
-        raise ValueError(f"face {highest[1]!r} uses vertex {highest[0]}, but the file has "
-                         f"{vertex_count} vertices")
+        raise ValueError(
+            f"face {highest[1]!r} uses vertex {highest[0]}, but the file has "
+            f"{vertex_count} vertices"
+        )
     text = ("\n".join(out) + "\n").encode("ascii")
     return text, np.array(source, dtype=np.int64), has_lines
 
@@ -550,7 +573,7 @@ def _warn_if_float32_moves(path: str, vertices: np.ndarray) -> None:
     if not moved <= PRECISION_WARNING * size:  # also inf: beyond float32's range
         if size > 0 and moved < 0.1 * size:
             share = f"{moved / size:.2g} of the mesh's size"
-        elif size > 0 and moved < size:  # (a trial read 13% as 'as much as the mesh is wide')
+        elif size > 0 and moved < size:  # (13% is not 'as much as the mesh is wide')
             share = f"{moved / size:.0%} of the mesh's size: its shape is lost"
         else:  # e.g. a unit cube at 1e8: every corner lands on one float32
             share = "as much as the mesh is wide: its shape is lost"

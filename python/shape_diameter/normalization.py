@@ -32,8 +32,10 @@ def normalize_values(values, method: str = "linear", threads: int = 0) -> np.nda
 def check_threads(threads) -> int:
     """A thread count as an int (0 = every core); ValueError for anything else, including
     counts the native core's unsigned argument cannot take."""
-    if isinstance(threads, bool) or not isinstance(threads, (int, np.integer)) or not (
-        0 <= threads <= MAX_THREADS
+    if (
+        isinstance(threads, bool)
+        or not isinstance(threads, (int, np.integer))
+        or not (0 <= threads <= MAX_THREADS)
     ):
         raise ValueError(f"threads must be an integer in [0, {MAX_THREADS}], got {threads!r}")
     return int(threads)

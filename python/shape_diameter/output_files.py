@@ -41,9 +41,9 @@ def written_whole(path):
         mode = stat.S_IFREG  # not there (yet): made whole below
     if not stat.S_ISREG(mode) and not stat.S_ISDIR(mode):
         # A device or a pipe (--values /dev/null, a FIFO): written into, never replaced. Run
-        # as root, a replace made /dev/null a plain file for the whole machine (a trial's,
-        # with /dev/full). Opened by its own name: /dev/stdout on a pipe is a link to
-        # /proc/self/fd/1, whose target, 'pipe:[N]', names no file (a trial's).
+        # as root, a replace made /dev/null a plain file for the whole machine (and so
+        # /dev/full). Opened by its own name: /dev/stdout on a pipe is a link to
+        # /proc/self/fd/1, whose target, 'pipe:[N]', names no file.
         try:
             yield path
         except WriteError:  # another file's, written inside this one's (mesh and values)

@@ -2,8 +2,8 @@
 """compute()'s warnings about single parts of a mesh (faces joined through shared vertex
 positions: the core's orientation parts) whose values are not what they seem, where the whole
 mesh's figures hide them: a 1 mm plate beside a ball 60 m away read 1.5x high, and a 1 mm cube
-beside a 100 m slab, keeping no ray, took the slab's median, 14,000x its size (trials'
-findings). The add-on reports the same words (it collects compute()'s warnings)."""
+beside a 100 m slab, keeping no ray, took the slab's median, 14,000x its size.
+The add-on reports the same words (it collects compute()'s warnings)."""
 
 from __future__ import annotations
 
@@ -64,8 +64,12 @@ class _Parts:
 
     def near_the_cutoff(self, bound):
         near = self.per_part(self.measured & (self.result.raw < bound))
-        reached = (self.solid & (self.counts > 0) & (near >= 0.5 * self.counts)
-                   & (self.extents < SMALL_PART * self.width))
+        reached = (
+            self.solid
+            & (self.counts > 0)
+            & (near >= 0.5 * self.counts)
+            & (self.extents < SMALL_PART * self.width)
+        )
         if not reached.any():
             return None
         r = self.result
@@ -88,10 +92,12 @@ class _Parts:
         # Only their faces' areas (a pass over every face cost 50-170 ms at 327k faces).
         faces = np.flatnonzero(silent[self.face_part])
         corners = np.asarray(self.vertices, dtype=np.float64)[self.triangles[faces]]
-        area = np.linalg.norm(np.cross(corners[:, 1] - corners[:, 0],
-                                       corners[:, 2] - corners[:, 0]), axis=1)
-        with_area = np.bincount(self.face_part[faces], weights=(area > 0),
-                                minlength=len(self.extents))
+        area = np.linalg.norm(
+            np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0]), axis=1
+        )
+        with_area = np.bincount(
+            self.face_part[faces], weights=(area > 0), minlength=len(self.extents)
+        )
         silent &= with_area > 0
         if not silent.any():
             return None

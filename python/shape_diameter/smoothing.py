@@ -40,6 +40,7 @@ def run_with_fallback(run, chosen, engine):
             raise
         return run("cpu"), error
 
+
 # Every option of every method with its default. None means "chosen from the input" (k-ring:
 # k from the face count; texture: radius from the texture size), see smooth().
 OPTIONS = {
@@ -196,9 +197,7 @@ def smooth(
         chosen, engine,
     )  # fmt: skip
     if failure is not None:
-        warn(
-            f"smoothing on {chosen} failed ({str(failure).splitlines()[0]}); ran on the CPU"
-        )
+        warn(f"smoothing on {chosen} failed ({str(failure).splitlines()[0]}); ran on the CPU")
     return out
 
 
@@ -225,7 +224,7 @@ def check_smoothing(
     known = OPTIONS[method]
     unknown = sorted(set(options) - set(known))
     if unknown:
-        # ("allowed: none" read as if 'none' were an option's name, found by a trial)
+        # (not "allowed: none", which reads as if 'none' were an option's name)
         allowed = f"allowed: {', '.join(known)}" if known else "it takes no options"
         raise ValueError(
             f"unknown option{'s' if len(unknown) > 1 else ''} for smoothing {method!r}: "
@@ -282,7 +281,14 @@ def prepare_texture_for(v, t, points, o, threads, engine="cpu"):
     v, t and the options `o` as check_smoothing returns them (with 'uvs')."""
     width, height = o["texture_size"]
     return _core.prepare_texture(
-        v, t, o["uvs"], width, height, _weld_argument(o), points == "vertices", threads,
+        v,
+        t,
+        o["uvs"],
+        width,
+        height,
+        _weld_argument(o),
+        points == "vertices",
+        threads,
         engine,
     )
 
@@ -329,8 +335,9 @@ class TextureCost(NamedTuple):
 
     def cpu_seconds(self, threads: int) -> float:
         """Estimated seconds on `threads` CPU threads (a GPU blurs far faster)."""
-        return (self.blur_reads * SECONDS_PER_BLUR_READ
-                + self.texels * SECONDS_PER_TEXEL) / max(1, threads)
+        return (self.blur_reads * SECONDS_PER_BLUR_READ + self.texels * SECONDS_PER_TEXEL) / max(
+            1, threads
+        )
 
 
 def texture_cost(texture_size=1024, radius=None, uvs=None) -> TextureCost:
@@ -369,8 +376,9 @@ def unit_scale_exponent(v, t) -> int:
     return _core.unit_scale_exponent(mesh_width(v, t))
 
 
-def run_checked(v, t, values, points, method, o, threads, progress, engine="cpu",
-                prepared=None, timings=None):
+def run_checked(
+    v, t, values, points, method, o, threads, progress, engine="cpu", prepared=None, timings=None
+):
     """smooth()'s work on arguments checked already (by smooth(), or by compute() on its own
     mesh and SDF), with the options `o` as check_smoothing returns them; prepared: from
     prepare_texture_for or prepare_projected_for on this mesh and these options (projected: on
@@ -389,12 +397,16 @@ def run_checked(v, t, values, points, method, o, threads, progress, engine="cpu"
         return out.astype(np.float32)
     if method == "kring":
         out = _core.smooth_kring(
-            v, t, values, points,
+            v,
+            t,
+            values,
+            points,
             -1 if o["k"] is None else o["k"],
             0.0 if o["sigma"] is None else o["sigma"],
             0.0 if o["corner_angle"] is None else o["corner_angle"],
             _weld_argument(o),
-            threads, progress,
+            threads,
+            progress,
         )
         timings.update(out["timings"])
         return out["values"]
@@ -410,40 +422,95 @@ def run_checked(v, t, values, points, method, o, threads, progress, engine="cpu"
                 "floats leave room for; scale it down"
             )
         if exponent:
-            scaled = run_checked(np.ldexp(v, exponent), t, np.ldexp(values, exponent), points,
-                                 method, o, threads, progress, engine, None, timings)
+            scaled = run_checked(
+                np.ldexp(v, exponent),
+                t,
+                np.ldexp(values, exponent),
+                points,
+                method,
+                o,
+                threads,
+                progress,
+                engine,
+                None,
+                timings,
+            )
             return np.ldexp(scaled, -exponent)
     if method == "projected" and prepared is not None:
         return _core.smooth_projected_prepared(
-            prepared, values, o["iterations"], o["max_depth"], o["min_points"],
-            o["node_size_ratio"], o["branch_on"], threads, progress, engine, timings,
+            prepared,
+            values,
+            o["iterations"],
+            o["max_depth"],
+            o["min_points"],
+            o["node_size_ratio"],
+            o["branch_on"],
+            threads,
+            progress,
+            engine,
+            timings,
         )
     if method == "projected":
         return _core.smooth_projected(
-            v, t, values, points, o["iterations"], o["max_depth"], o["min_points"],
-            o["node_size_ratio"], o["branch_on"], threads, progress, engine, timings,
+            v,
+            t,
+            values,
+            points,
+            o["iterations"],
+            o["max_depth"],
+            o["min_points"],
+            o["node_size_ratio"],
+            o["branch_on"],
+            threads,
+            progress,
+            engine,
+            timings,
         )
     if prepared is not None:
         out = _core.smooth_texture_prepared(
-            prepared, values, points, o["radius"], o["bilateral"], o["range_sigma"],
-            o["margin"], o["return_image"], threads, progress, engine,
+            prepared,
+            values,
+            points,
+            o["radius"],
+            o["bilateral"],
+            o["range_sigma"],
+            o["margin"],
+            o["return_image"],
+            threads,
+            progress,
+            engine,
         )
     else:
         width, height = o["texture_size"]
         out = _core.smooth_texture(
-            v, t, values, points, o["uvs"], width, height, o["radius"], o["bilateral"],
-            o["range_sigma"], o["margin"],
+            v,
+            t,
+            values,
+            points,
+            o["uvs"],
+            width,
+            height,
+            o["radius"],
+            o["bilateral"],
+            o["range_sigma"],
+            o["margin"],
             _weld_argument(o),
-            o["return_image"], threads, progress, engine,
+            o["return_image"],
+            threads,
+            progress,
+            engine,
         )
     timings.update(out["timings"])
     # A few faces just over the square's edge are common (spot.obj's layout: 0.05% at 1.5M
     # faces) and lose little; most of them outside is a UDIM or offset layout.
     if out["faces_outside"] > 0.01 * len(t):
         # A bake (the add-on's) asks for the image: say that it leaves these faces out.
-        reach = ("the image leaves them out and texture smoothing does not reach them (they "
-                 "keep their values)" if o["return_image"] else
-                 "texture smoothing does not reach them and they keep their values")
+        reach = (
+            "the image leaves them out and texture smoothing does not reach them (they "
+            "keep their values)"
+            if o["return_image"]
+            else "texture smoothing does not reach them and they keep their values"
+        )
         warn(
             f"{out['faces_outside']} of {len(t)} faces have UVs wholly outside the [0, 1] "
             f"square (UDIM tiles or an offset layout): {reach}; move each tile's UVs into the "
@@ -529,12 +596,14 @@ def _check_uvs(uvs, m, n, triangles=None):
 def _check_uvs_cover_an_area(corners):
     """Texture smoothing blurs over the UV layout: one that covers no area (never unwrapped:
     every corner at one point, or on one line) draws every face into the same texels, and
-    every value came out as one (a trial's, in Blender, without a word)."""
+    every value came out as one (in Blender too), without a word."""
     e1, e2 = corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0]
     if not np.any(e1[:, 0] * e2[:, 1] - e1[:, 1] * e2[:, 0]):
-        raise ValueError("the UVs cover no area (every face's UVs lie on a point or a line: "
-                         "never unwrapped?): texture smoothing and bakes need a UV layout; "
-                         "unwrap the mesh first")
+        raise ValueError(
+            "the UVs cover no area (every face's UVs lie on a point or a line: "
+            "never unwrapped?): texture smoothing and bakes need a UV layout; "
+            "unwrap the mesh first"
+        )
 
 
 def _check_engine(engine):
@@ -560,7 +629,7 @@ def _real(name, value, lo, hi):
     if isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating)):
         raise ValueError(f"{name} must be a number in [{lo}, {hi}], got {value!r}")
     if not (lo <= float(value) <= hi) or math.isnan(float(value)) or math.isinf(float(value)):
-        # (no "finite number in [0.0, inf]", which contradicts itself: found by a trial)
+        # (no "finite number in [0.0, inf]", which contradicts itself)
         bound = f"in [{lo}, {hi}]" if math.isfinite(hi) else f">= {lo}"
         raise ValueError(f"{name} must be a finite number {bound}, got {value!r}")
     return float(value)

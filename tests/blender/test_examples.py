@@ -1,5 +1,5 @@
 # SPDX-License-Identifier: GPL-3.0-or-later
-"""The README's headless examples, each in a new Blender process (bpy from PyPI runs a
+"""The headless examples of docs/blender.md, each in a new Blender process (bpy from PyPI runs a
 script as `blender -b --python script.py -- args` would)."""
 
 import shutil

@@ -53,7 +53,7 @@ def test_installed_from_the_zip_into_the_isolated_user_directory():
     with open(os.path.join(os.path.dirname(module.__file__), "blender_manifest.toml"), "rb") as f:
         manifest = tomllib.load(f)
     assert shape_diameter.__version__ == manifest["version"]
-    ext = ".cpython-%d%d-x86_64-linux-gnu.so" % sys.version_info[:2]
+    ext = ".cpython-{}{}-x86_64-linux-gnu.so".format(*sys.version_info[:2])
     assert shape_diameter._core.__file__.endswith(ext)
 
 
@@ -74,7 +74,12 @@ def test_everything_is_registered():
     best = ["opencl"] if len(names) > 1 else []  # any OpenCL device, when there is one
     assert [item[0] for item in props.engine_items(False)] == ["auto", "cpu", *best, *names[1:]]
     assert [item[0] for item in props.engine_items(True)] == [
-        "DEFAULT", "auto", "cpu", *best, *names[1:]]
+        "DEFAULT",
+        "auto",
+        "cpu",
+        *best,
+        *names[1:],
+    ]
     operator = bpy.ops.object.shape_diameter.get_rna_type()
     assert {
         "rays",
@@ -248,10 +253,17 @@ def fake_engines(*devices):
     the drivers' order) lists them."""
     found = [{"name": "cpu", "type": "CPU", "threads": 2, "description": "2 threads"}]
     for index, (device, kind) in enumerate(devices):
-        found.append({
-            "name": f"opencl:{index}", "index": index, "device": device, "type": kind,
-            "platform": "Test", "memory": 8 << 30, "description": f"{device} (Test, 8192 MiB)",
-        })
+        found.append(
+            {
+                "name": f"opencl:{index}",
+                "index": index,
+                "device": device,
+                "type": kind,
+                "platform": "Test",
+                "memory": 8 << 30,
+                "description": f"{device} (Test, 8192 MiB)",
+            }
+        )
     return found
 
 
@@ -259,11 +271,21 @@ def test_the_engine_menu_offers_the_best_opencl_device_and_each_by_name(monkeypa
     # The menu listed devices as 'opencl:0', 'opencl:1' (their indices for labels) and had no
     # 'opencl', the best device, which shape_diameter.compute() takes.
     core, props = addon_module("core"), addon_module("props")
-    monkeypatch.setattr(core, "engines", lambda refresh=False: fake_engines(
-        ("GPU A", "GPU"), ("GPU B", "GPU"), ("GPU B", "GPU")))
+    monkeypatch.setattr(
+        core,
+        "engines",
+        lambda refresh=False: fake_engines(("GPU A", "GPU"), ("GPU B", "GPU"), ("GPU B", "GPU")),
+    )
     items = props.engine_items(False)
-    assert [item[0] for item in items] == ["auto", "cpu", "opencl", "opencl:all", "opencl:0",
-                                           "opencl:1", "opencl:2"]
+    assert [item[0] for item in items] == [
+        "auto",
+        "cpu",
+        "opencl",
+        "opencl:all",
+        "opencl:0",
+        "opencl:1",
+        "opencl:2",
+    ]
     labels = {item[0]: item[1] for item in items}
     # Two devices of one name (two GPUs of a model) are told apart.
     assert [labels[f"opencl:{i}"] for i in range(3)] == ["GPU A", "GPU B", "GPU B #2"]
@@ -284,7 +306,9 @@ def test_the_engine_menu_offers_every_device_at_once_where_that_is_two_or_more(m
 
     assert menu(("GPU A", "GPU"), ("GPU B", "GPU"))["opencl:all"] == "All GPUs"
     assert "opencl:all" not in menu(("GPU A", "GPU"), ("PoCL", "CPU"))  # one GPU: the same
-    assert "opencl:all" not in menu(("PoCL", "CPU"),)
+    assert "opencl:all" not in menu(
+        ("PoCL", "CPU"),
+    )
     assert menu(("PoCL", "CPU"), ("Intel CPU", "CPU"))["opencl:all"] == "All OpenCL Devices"
     # A device named "all" keeps a key of its own: a saved choice of it reads back as it.
     menu(("all", "GPU"), ("GPU B", "GPU"))

@@ -159,8 +159,10 @@ CASES = [
     (attribute_of_another_type, "attribute 'sdf' exists as INT on FACE"),
     (attribute_on_another_domain, "attribute 'sdf_normalized' exists as FLOAT on POINT"),
     (color_of_another_type, "attribute 'sdf_color' exists as FLOAT_COLOR on POINT"),
-    (vertices_over_the_users_attribute,
-     "suzanne: attribute 'sdf' exists as FLOAT on FACE; the result is FLOAT on POINT"),
+    (
+        vertices_over_the_users_attribute,
+        "suzanne: attribute 'sdf' exists as FLOAT on FACE; the result is FLOAT on POINT",
+    ),
     (bad_coordinates, "suzanne has vertices whose coordinates are not finite"),
     (too_wide, "suzanne: the mesh spans 1e\\+31 units on an axis"),  # the core's, named
     (modifiers_change_topology, "The modifiers of suzanne change its topology"),
@@ -171,7 +173,7 @@ CASES = [
 
 
 def test_meshes_without_faces_are_skipped_beside_others():
-    # A wire rig or a point helper in the selection stopped the whole run (a trial's); it is
+    # A wire rig or a single-vertex placeholder in the selection stopped the whole run; it is
     # skipped with a warning, as what is not a mesh is, and left as it was.
     api = addon_module("api")
     good, _ = suzanne_and_sphere()
@@ -247,8 +249,10 @@ def test_a_write_failing_after_replacing_a_domain_is_rolled_back(monkeypatch):
     _fifth_write_fails(monkeypatch)
 
     def state():
-        return {name: {**shot, "attributes": sorted(shot["attributes"]), "active_attribute": 0}
-                for name, shot in snapshot_all().items()}
+        return {
+            name: {**shot, "attributes": sorted(shot["attributes"]), "active_attribute": 0}
+            for name, shot in snapshot_all().items()
+        }
 
     before = state()
     records = {me.name: me.get(mesh_data.OUTPUTS_PROPERTY) for me in bpy.data.meshes}

@@ -6,7 +6,6 @@ import bmesh
 import bpy
 import numpy as np
 import pytest
-from mathutils import Matrix
 import shape_diameter
 from helpers import (
     addon_module,
@@ -20,6 +19,7 @@ from helpers import (
     suzanne_with_ngons,
     world_triangles,
 )
+from mathutils import Matrix
 
 
 def uv_sphere(radius=1.0, segments=64, rings=32):
@@ -58,7 +58,7 @@ def test_uv_sphere_vertices_match_the_analytic_sphere():
 
 
 def test_switching_points_replaces_the_earlier_runs_attributes():
-    # A trial's: Faces then Vertices failed on the first run's own FACE attributes, which
+    # Faces then Vertices failed on the first run's own FACE attributes, which
     # had to be removed by hand. The add-on records what it wrote and replaces those.
     ob = uv_sphere(radius=0.5, segments=16, rings=8)
     me = ob.data
@@ -70,7 +70,9 @@ def test_switching_points_replaces_the_earlier_runs_attributes():
     ]:
         assert run(points=points, rays=8, color_name="sdf_color") == {"FINISHED"}
         assert (me.attributes["sdf"].domain, me.attributes["sdf_color"].domain) == (
-            domain, color_domain)
+            domain,
+            color_domain,
+        )
         assert len(attribute_array(me, "sdf")) == count
         assert me.color_attributes.active_color_name == "sdf_color"
         # And the render colour: bpy 4.5 lost it when the other domain's was replaced.
@@ -90,11 +92,13 @@ def test_an_inside_out_mesh_is_measured_outward_unless_told_otherwise():
     ob.data.loops.foreach_get("vertex_index", corners)
     assert run() == {"FINISHED"}  # orientation="auto"
     np.testing.assert_allclose(attribute_array(ob.data, "sdf"), outward, rtol=1e-5)
-    # Said, since the artist's normals still point in (a trial's: fixed without a word).
+    # Said, since the artist's normals still point in (orientation turned them without a word).
     said = addon_module("api").compute_object(ob, rays=4).warnings
-    assert said == [f"{ob.name}: {len(ob.data.polygons)} faces point inward (inside out) and were "
-                    "measured turned outward; the mesh is unchanged (Mesh > Normals > "
-                    "Recalculate Outside turns it in Blender)"]
+    assert said == [
+        f"{ob.name}: {len(ob.data.polygons)} faces point inward (inside out) and were "
+        "measured turned outward; the mesh is unchanged (Mesh > Normals > "
+        "Recalculate Outside turns it in Blender)"
+    ]
     # Every ray left through the skin: zeros, and it says so once (the core's warning, kept
     # for the object, not also printed: warnings are errors here).
     result = addon_module("api").compute_object(ob, orientation="as_is")
@@ -137,7 +141,7 @@ def test_the_operator_runs_on_the_best_opencl_device_or_a_chosen_one():
     devices = [e["name"] for e in shape_diameter.engines() if e["name"].startswith("opencl:")]
     assert devices, "no OpenCL device here: install pocl-opencl-icd"
     ob = uv_sphere(radius=1.0, segments=32, rings=16)
-    # Fibonacci sampling: every OpenCL device computes the CPU engine's bits (README).
+    # Fibonacci sampling: every OpenCL device computes the CPU engine's bits (docs/python.md).
     expected = reference_face_values(ob, rays=16, engine="cpu")
     for engine in ("opencl", devices[-1]):
         assert run(engine=engine, rays=16) == {"FINISHED"}
@@ -219,8 +223,9 @@ def test_loose_vertices_are_left_unmeasured():
     np.testing.assert_allclose(values[measured], ref.values[measured], rtol=1e-6)
     np.testing.assert_allclose(normalized[measured], ref.normalized[measured], atol=1e-6)
     # Per face, loose vertices have no value at all: nothing to say.
-    assert not api.compute_object(ob, attribute_name="per_face", normalized_name="",
-                                  color_name="").warnings
+    assert not api.compute_object(
+        ob, attribute_name="per_face", normalized_name="", color_name=""
+    ).warnings
 
 
 def test_undo_restores_the_mesh():
@@ -278,7 +283,7 @@ def test_use_modifiers_computes_on_the_deformed_mesh():
 
 
 def test_use_modifiers_refuses_an_object_the_view_layer_does_not_evaluate():
-    # A trial's: in an excluded collection its base mesh was computed without a word, even
+    # In an excluded collection its base mesh was computed without a word, even
     # under a Subdivision Surface modifier that the topology check refuses.
     api = addon_module("api")
     ob = import_obj("suzanne.obj")
@@ -296,13 +301,13 @@ def test_use_modifiers_refuses_an_object_the_view_layer_does_not_evaluate():
 
 
 def test_modifiers_and_shape_keys_left_out_are_named_in_a_warning():
-    # A trial's: a mirror-modelled half and a cube flattened by a shape key were measured as
+    # A mirror-modelled half and a cube flattened by a shape key were measured as
     # their base meshes with no word that the viewport shows something else.
     api = addon_module("api")
     half = import_obj("suzanne.obj")
     half.modifiers.new("Mirror", "MIRROR")
     half.modifiers.new("Normals", "WEIGHTED_NORMAL")  # keeps the shape: not named
-    half.modifiers.new("Split", "EDGE_SPLIT")  # the same (a trial's false warning)
+    half.modifiers.new("Split", "EDGE_SPLIT")  # the same (it was named, falsely)
     # Shade Auto Smooth's modifier (4.1 on): geometry nodes of a 'Smooth by Angle' group.
     smooth = half.modifiers.new("Smooth by Angle", "NODES")
     smooth.node_group = bpy.data.node_groups.new("Smooth by Angle", "GeometryNodeTree")
@@ -313,7 +318,8 @@ def test_modifiers_and_shape_keys_left_out_are_named_in_a_warning():
     results = api.compute_objects([half, keyed, plain], rays=4)
     assert [w for w in results[0].warnings if "left out" in w] == [
         "suzanne: its modifiers (Mirror) change its shape in the viewport and are left out "
-        "(Use Modifiers is off): the values are those of its base mesh"]
+        "(Use Modifiers is off): the values are those of its base mesh"
+    ]
     assert not any("left out" in w for r in results[1:] for w in r.warnings)  # key at 0
     keyed.data.shape_keys.key_blocks["Flat"].value = 0.5
     result = api.compute_object(keyed, rays=4)
@@ -331,8 +337,9 @@ def test_a_thin_part_far_from_the_rest_is_warned_of():
     bmesh.ops.create_cube(bm, size=1.0)
     bmesh.ops.subdivide_edges(bm, edges=bm.edges[:], cuts=7, use_grid_fill=True)
     bmesh.ops.scale(bm, vec=(1.0, 1.0, 0.001), verts=bm.verts[:])
-    bmesh.ops.create_icosphere(bm, subdivisions=2, radius=0.25,
-                               matrix=Matrix.Translation((60.0, 0.0, 0.0)))
+    bmesh.ops.create_icosphere(
+        bm, subdivisions=2, radius=0.25, matrix=Matrix.Translation((60.0, 0.0, 0.0))
+    )
     bm.to_mesh(me)
     bm.free()
     ob = bpy.data.objects.new("scene", me)
@@ -414,13 +421,15 @@ def test_what_is_not_a_mesh_is_named_with_how_to_make_it_one():
     curve = bpy.data.objects.new("Path", bpy.data.curves.new("Path", "CURVE"))
     with pytest.raises(api.UserError) as caught:
         api.compute_objects([instance, curve])
-    assert str(caught.value) == ("Not a mesh: Inst (a collection instance: Make Instances Real "
-                                 "first), Path (curve: convert it to a mesh first)")
+    assert str(caught.value) == (
+        "Not a mesh: Inst (a collection instance: Make Instances Real "
+        "first), Path (curve: convert it to a mesh first)"
+    )
 
 
 def test_a_shared_mesh_is_computed_from_the_active_object():
     # A linked duplicate at 10 times the scale, made active: the operator computed the mesh
-    # from whichever object came first in the selection (a trial's), not the one looked at.
+    # from whichever object came first in the selection, not the one looked at.
     api = addon_module("api")
     suzanne = import_obj("suzanne.obj")
     big = bpy.data.objects.new("big", suzanne.data)
@@ -463,7 +472,7 @@ def test_a_vertex_group_of_the_results_name_is_refused_first():
 
 def test_the_operator_starts_from_its_defaults_at_every_call():
     # Called with undo (as the UI does), the operator once reused the previous call's options
-    # for those a call left out (a trial's orientation='flip' stuck: every value 0).
+    # for those a call left out (orientation='flip' stuck: every value 0).
     bpy.ops.mesh.primitive_uv_sphere_add()
     ob = bpy.context.active_object
     done = bpy.ops.object.shape_diameter("EXEC_DEFAULT", True, attribute_name="first", rays=4)
@@ -471,7 +480,8 @@ def test_the_operator_starts_from_its_defaults_at_every_call():
     assert bpy.ops.object.shape_diameter("EXEC_DEFAULT", True) == {"FINISHED"}
     assert "sdf" in ob.data.attributes  # the default name, not the previous call's
     np.testing.assert_allclose(  # and the default 30 rays, not 4
-        attribute_array(ob.data, "sdf"), reference_face_values(ob), rtol=1e-5)
+        attribute_array(ob.data, "sdf"), reference_face_values(ob), rtol=1e-5
+    )
 
 
 def test_the_api_reports_progress_and_stops_when_asked():
@@ -505,8 +515,8 @@ def test_an_open_sheet_gives_zeros_and_a_warning():
 
 
 def test_a_double_sided_mesh_measures_the_same_on_both_sides():
-    # Shift+D and Flip in Edit Mode: every face again, reversed, on vertices of its own. A
-    # trial found the copies' values 0.08-2.7x the thickness, and a bake overwritten by them.
+    # Shift+D and Flip in Edit Mode: every face again, reversed, on vertices of its own. The
+    # copies' values came out 0.08-2.7x the thickness, and a bake was overwritten by them.
     import bmesh
 
     api = addon_module("api")
@@ -527,7 +537,7 @@ def test_a_double_sided_mesh_measures_the_same_on_both_sides():
 
 
 def test_users_of_the_mesh_not_computed_are_named():
-    # A trial's: computing a scaled linked duplicate rescaled the original's values (they
+    # Computing a scaled linked duplicate rescaled the original's values (they
     # share the mesh, and so its attribute) without a word.
     api = addon_module("api")
     original = uv_sphere(segments=16, rings=8)
@@ -537,13 +547,15 @@ def test_users_of_the_mesh_not_computed_are_named():
     result = api.compute_objects([copy], rays=4)[0]
     assert [w for w in result.warnings if "also used by" in w] == [
         f"{copy.name}'s mesh is also used by {original.name}, not computed: they show these "
-        f"values too, measured with {copy.name}'s transform"]
-    assert not any("also used by" in w
-                   for w in api.compute_objects([copy, original], rays=4)[0].warnings)
+        f"values too, measured with {copy.name}'s transform"
+    ]
+    assert not any(
+        "also used by" in w for w in api.compute_objects([copy, original], rays=4)[0].warnings
+    )
 
 
 def test_uvs_that_are_not_finite_are_refused_before_any_work():
-    # A trial's: a NaN UV failed the bake after the cast, as an unnamed 'ValueError'.
+    # A NaN UV failed the bake after the cast, as an unnamed 'ValueError'.
     api = addon_module("api")
     bpy.ops.mesh.primitive_cube_add()
     cube = bpy.context.active_object
@@ -551,7 +563,14 @@ def test_uvs_that_are_not_finite_are_refused_before_any_work():
     cube.data.uv_layers.active.data.foreach_get("uv", uv)
     uv[0] = np.nan
     cube.data.uv_layers.active.data.foreach_set("uv", uv)
-    with pytest.raises(api.UserError, match=r"^Cube's UV map 'UVMap' has coordinates that are "
-                                            r"not finite .*needed by the bake"):
-        api.compute_object(cube, bake_image=True, texture_size=64,
-                           progress=lambda f: pytest.fail("it computed first"))
+    with pytest.raises(
+        api.UserError,
+        match=r"^Cube's UV map 'UVMap' has coordinates that are "
+        r"not finite .*needed by the bake",
+    ):
+        api.compute_object(
+            cube,
+            bake_image=True,
+            texture_size=64,
+            progress=lambda f: pytest.fail("it computed first"),
+        )

@@ -127,8 +127,8 @@ def test_bake_replaces_the_image_and_keeps_its_users():
 
 
 def test_a_baked_image_survives_saving_the_file(tmp_path):
-    # A trial's: the new image had no user, and a save and reload dropped it.
-    ob = import_obj("spot.obj")
+    # The new image had no user, and a save and reload dropped it.
+    import_obj("spot.obj")
     assert run(rays=8, bake_image=True, texture_size=32) == {"FINISHED"}
     image = bpy.data.images["spot_sdf"]
     assert image.use_fake_user and image.colorspace_settings.name == "Non-Color"
@@ -185,8 +185,7 @@ def test_a_bake_of_uvs_outside_the_square_warns_and_takes_the_object_name():
     uv = np.empty(len(ob.data.loops) * 2, dtype=np.float32)
     ob.data.uv_layers[0].data.foreach_get("uv", uv)
     ob.data.uv_layers[0].data.foreach_set("uv", uv + 1.0)
-    result = api.compute_object(ob, rays=8, bake_image=True, texture_size=32,
-                                image_name="{object}")
+    result = api.compute_object(ob, rays=8, bake_image=True, texture_size=32, image_name="{object}")
     assert result.image == "spot"
     # The core's warning, once, for the object (not also printed: warnings are errors here).
     (bake,) = [w for w in result.warnings if "outside the [0, 1] square" in w]
@@ -202,7 +201,7 @@ BAD_TEXTURE_OPTIONS = [
     ({"texture_size": True}, r"texture_size must be an integer in \[16, 16384\], got True"),
     ({"texture_radius": -1.0}, r"texture_radius must be a number in \[0, 1024\].*got -1.0"),
     ({"texture_radius": float("nan")}, r"texture_radius must be a number in \[0, 1024\]"),
-    # bake_margin failed after the cast (-1, 100000), or passed as 2.5 and '4' (a trial's).
+    # bake_margin failed after the cast (-1, 100000), or passed as 2.5 and '4'.
     ({"bake_margin": -1}, r"bake_margin must be an integer in \[0, 16384\] texels, got -1"),
     ({"bake_margin": 16385}, r"bake_margin must be an integer in \[0, 16384\].*got 16385"),
     ({"bake_margin": 2.5}, r"bake_margin must be an integer in \[0, 16384\].*got 2.5"),
@@ -210,13 +209,19 @@ BAD_TEXTURE_OPTIONS = [
 ]
 
 
-@pytest.mark.parametrize("what", [{"bake_image": True}, {"smoothing": "texture"},
-                                  {"bake_image": True, "write": False}],
-                         ids=["bake", "texture-smoothing", "dry-run"])
-@pytest.mark.parametrize("bad, message", BAD_TEXTURE_OPTIONS,
-                         ids=[repr(next(iter(b.values()))) for b, _ in BAD_TEXTURE_OPTIONS])
-def test_the_api_refuses_texture_options_out_of_range_before_any_work(monkeypatch, what, bad,
-                                                                        message):
+@pytest.mark.parametrize(
+    "what",
+    [{"bake_image": True}, {"smoothing": "texture"}, {"bake_image": True, "write": False}],
+    ids=["bake", "texture-smoothing", "dry-run"],
+)
+@pytest.mark.parametrize(
+    "bad, message",
+    BAD_TEXTURE_OPTIONS,
+    ids=[repr(next(iter(b.values()))) for b, _ in BAD_TEXTURE_OPTIONS],
+)
+def test_the_api_refuses_texture_options_out_of_range_before_any_work(
+    monkeypatch, what, bad, message
+):
     # The operator's Resolution is 16..16384 and its Radius 0..1024; the API took anything:
     # texture_size=8 baked an 8 x 8 image, 0 or 16385 failed in the bake after the whole cast.
     api, core = addon_module("api"), addon_module("core")
@@ -248,14 +253,21 @@ def test_long_texture_work_is_announced_before_it_starts(monkeypatch):
     api = addon_module("api")
     ob = import_obj("spot.obj")
     stop_before_casting(monkeypatch)
-    options = {"smoothing": "texture", "texture_size": 2048, "texture_radius": 1024.0,
-               "bake_image": True, "threads": 1}  # one thread: the same estimate anywhere
+    options = {
+        "smoothing": "texture",
+        "texture_size": 2048,
+        "texture_radius": 1024.0,
+        "bake_image": True,
+        "threads": 1,
+    }  # one thread: the same estimate anywhere
     with pytest.warns(RuntimeWarning) as seen, pytest.raises(RuntimeError, match="cast was"):
         api.compute_object(ob, **options)
     (warning,) = [str(w.message) for w in seen]
-    assert warning.startswith("Long or large texture work ahead: texture smoothing and the "
-                              "bake of 1 object at 2048 x 2048 texels with a blur radius of "
-                              "1024 texels (default 16): about ")
+    assert warning.startswith(
+        "Long or large texture work ahead: texture smoothing and the "
+        "bake of 1 object at 2048 x 2048 texels with a blur radius of "
+        "1024 texels (default 16): about "
+    )
     # Two blurs reading 2 x 2048 texels around each of Spot's about 2.1M island texels, at
     # 4 ns a read on one thread: about 70 s (32.6 s measured on 2 threads).
     seconds = float(warning.split("about ")[1].split(" s on 1 CPU thread ")[0])
@@ -274,14 +286,18 @@ def test_texture_work_that_cannot_fit_in_memory_is_refused(monkeypatch):
     before = snapshot_all()
     images = sorted(bpy.data.images.keys())
     # A 8192^2 bake holds about 56 bytes a texel (3.4 GB measured): 3.5 GiB estimated.
-    message = (r"Too large: the bake of 1 object at 8192 x 8192 texels would need about 3.5 GiB "
-               r"of memory, more than 80% of this machine's 2.0 GiB; lower the resolution$")
+    message = (
+        r"Too large: the bake of 1 object at 8192 x 8192 texels would need about 3.5 GiB "
+        r"of memory, more than 80% of this machine's 2.0 GiB; lower the resolution$"
+    )
     with pytest.raises(api.UserError, match=message):
         api.compute_object(good, bake_image=True, texture_size=8192)
     with pytest.raises(RuntimeError, match=message):  # the operator reports it
         run(bake_image=True, texture_size=8192)
     assert snapshot_all() == before and sorted(bpy.data.images.keys()) == images
     # Large, not too large: a warning (a quarter of the memory and more), then the work.
-    with pytest.warns(RuntimeWarning, match=r"and 896 MiB of memory"), \
-            pytest.raises(RuntimeError, match="cast was"):
+    with (
+        pytest.warns(RuntimeWarning, match=r"and 896 MiB of memory"),
+        pytest.raises(RuntimeError, match="cast was"),
+    ):
         api.compute_object(good, bake_image=True, texture_size=4096)

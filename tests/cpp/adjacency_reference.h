@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
-// The serial adjacency lists that native/mesh_weld.cpp's parallel ones replaced (a counting
+// The serial adjacency lists that native/mesh/mesh_weld.cpp's parallel ones replaced (a counting
 // sort of the corners by vertex; per vertex, its faces' other corners sorted and deduplicated),
 // kept as the reference the parallel ones must match exactly.
 #pragma once
@@ -7,7 +7,7 @@
 #include <algorithm>
 #include <vector>
 
-#include "mesh_weld.h"
+#include "mesh/mesh_weld.h"
 
 namespace sdf::test_reference {
 

@@ -6,10 +6,10 @@
 #include <cstring>
 #include <utility>
 
-#include "../../kernels/sdf_bvh_traverse.h"
-#include "bvh.h"
-#include "bvh_stats.h"
-#include "mesh.h"
+#include "traverse/sdf_bvh_traverse.h"
+#include "accel/bvh.h"
+#include "accel/bvh_stats.h"
+#include "mesh/mesh.h"
 #include "test_meshes.h"
 
 namespace sdf {

@@ -7,11 +7,11 @@
 #include <tuple>
 #include <vector>
 
-#include "../../kernels/sdf_bvh_traverse.h"
-#include "bvh.h"
-#include "bvh_margin.h"
-#include "bvh4_traverse.h"
-#include "bvh8_traverse.h"
+#include "traverse/sdf_bvh_traverse.h"
+#include "accel/bvh.h"
+#include "accel/bvh_margin.h"
+#include "cast/bvh4_traverse.h"
+#include "cast/bvh8_traverse.h"
 #include "test_meshes.h"
 
 namespace sdf {

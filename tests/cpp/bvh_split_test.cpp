@@ -9,9 +9,9 @@
 #include <random>
 #include <vector>
 
-#include "../../kernels/sdf_bvh_traverse.h"
-#include "bvh.h"
-#include "bvh_margin.h"
+#include "traverse/sdf_bvh_traverse.h"
+#include "accel/bvh.h"
+#include "accel/bvh_margin.h"
 #include "smoothing_test_meshes.h"
 #include "test_meshes.h"
 

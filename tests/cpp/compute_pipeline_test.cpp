@@ -10,7 +10,7 @@
 #include <utility>
 #include <vector>
 
-#include "sdf.h"
+#include "pipeline/sdf.h"
 #include "test_meshes.h"
 
 namespace sdf {

@@ -3,7 +3,7 @@
 
 #include <vector>
 
-#include "fill.h"
+#include "post/fill.h"
 #include "test_meshes.h"
 
 namespace sdf {

@@ -10,8 +10,8 @@
 #include <utility>
 #include <vector>
 
-#include "radix_sort.h"
-#include "sampling.h"
+#include "util/radix_sort.h"
+#include "prepare/sampling.h"
 #include "test_meshes.h"
 
 namespace sdf {

@@ -8,7 +8,7 @@
 #include <tuple>
 #include <vector>
 
-#include "mesh_twins.h"
+#include "mesh/mesh_twins.h"
 #include "test_meshes.h"
 
 namespace sdf {

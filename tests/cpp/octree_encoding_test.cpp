@@ -4,8 +4,8 @@
 #include <random>
 #include <stdexcept>
 
-#include "../../kernels/sdf_octree.h"
-#include "octree.h"
+#include "traverse/sdf_octree.h"
+#include "accel/octree.h"
 #include "test_meshes.h"
 
 namespace sdf {

@@ -7,9 +7,9 @@
 
 #include <vector>
 
-#include "orientation_edges.h"
-#include "orientation_parts.h"
-#include "orientation_patches.h"
+#include "prepare/orientation_edges.h"
+#include "prepare/orientation_parts.h"
+#include "prepare/orientation_patches.h"
 #include "orientation_reference.h"
 #include "orientation_test_meshes.h"
 

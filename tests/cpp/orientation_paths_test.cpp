@@ -11,8 +11,8 @@
 #include <random>
 #include <vector>
 
-#include "orientation.h"
-#include "orientation_edges.h"
+#include "prepare/orientation.h"
+#include "prepare/orientation_edges.h"
 #include "orientation_reference.h"
 #include "orientation_test_meshes.h"
 #include "test_meshes.h"

@@ -12,7 +12,7 @@
 #include <utility>
 #include <vector>
 
-#include "orientation.h"
+#include "prepare/orientation.h"
 
 namespace sdf::test {
 

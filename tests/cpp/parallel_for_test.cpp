@@ -14,7 +14,7 @@
 #include <unistd.h>
 #endif
 
-#include "parallel.h"
+#include "util/parallel.h"
 
 namespace sdf {
 namespace {

@@ -10,8 +10,8 @@
 #include <random>
 #include <vector>
 
-#include "concurrent_parity_union_find.h"
-#include "parallel.h"
+#include "util/concurrent_parity_union_find.h"
+#include "util/parallel.h"
 
 namespace sdf {
 namespace {

@@ -1,8 +1,8 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
 // Projected-points smoothing as it was written first: serial, every stage on one thread. Kept
-// as the specification the parallel version (native/smoothing_projected.cpp) and the OpenCL
-// builder must match bit for bit: the same node array, the same smoothed values. Since the
-// sixth session: cells by multiplying with cells / side (as OpenCL computes them), node sums
+// as the specification the parallel version (native/post/smoothing_projected.cpp) and the OpenCL
+// builder must match bit for bit: the same node array, the same smoothed values. Hence cells
+// by multiplying with cells / side (as OpenCL computes them), node sums
 // in fixed point (the same in any order) and nodes breadth first (as a device makes them).
 #pragma once
 
@@ -12,8 +12,8 @@
 #include <limits>
 #include <vector>
 
-#include "morton.h"
-#include "smoothing_projected.h"
+#include "util/morton.h"
+#include "post/smoothing_projected.h"
 
 namespace sdf::test {
 

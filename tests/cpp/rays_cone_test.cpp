@@ -5,7 +5,7 @@
 #include <stdexcept>
 #include <vector>
 
-#include "rays.h"
+#include "prepare/rays.h"
 
 namespace sdf {
 namespace {

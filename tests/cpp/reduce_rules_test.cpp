@@ -3,7 +3,7 @@
 
 #include <vector>
 
-#include "../../kernels/sdf_reduce.h"
+#include "ray/sdf_reduce.h"
 
 namespace sdf {
 namespace {

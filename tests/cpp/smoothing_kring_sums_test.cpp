@@ -4,7 +4,7 @@
 #include <random>
 #include <vector>
 
-#include "smoothing_kring_sums.h"
+#include "post/smoothing_kring_sums.h"
 
 namespace sdf {
 namespace {

@@ -5,8 +5,8 @@
 #include <cmath>
 #include <vector>
 
-#include "mesh_weld.h"
-#include "smoothing_kring.h"
+#include "mesh/mesh_weld.h"
+#include "post/smoothing_kring.h"
 #include "smoothing_test_meshes.h"
 
 namespace sdf {

@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
-// The parallel projected-points smoothing (native/smoothing_projected.cpp) against the serial
+// The parallel projected-points smoothing (native/post/smoothing_projected.cpp) against the serial
 // one it replaced (point_octree_reference.h): the same octree node for node and bit for bit,
 // the same smoothed values, on any thread count. Inputs span several of its 16k-point chunks,
 // keys past 32 bits (depth > 10), both branching rules, coincident points and points with no
@@ -13,7 +13,7 @@
 #include <vector>
 
 #include "point_octree_reference.h"
-#include "smoothing_projected.h"
+#include "post/smoothing_projected.h"
 #include "smoothing_test_meshes.h"
 
 namespace sdf {

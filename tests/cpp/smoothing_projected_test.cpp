@@ -6,7 +6,7 @@
 #include <random>
 #include <vector>
 
-#include "smoothing_projected.h"
+#include "post/smoothing_projected.h"
 #include "smoothing_test_meshes.h"
 
 namespace sdf {

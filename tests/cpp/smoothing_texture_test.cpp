@@ -6,10 +6,10 @@
 #include <random>
 #include <vector>
 
-#include "mesh_weld.h"
-#include "smoothing_texture.h"
+#include "mesh/mesh_weld.h"
+#include "post/smoothing_texture.h"
 #include "smoothing_test_meshes.h"
-#include "uv_islands.h"
+#include "post/uv_islands.h"
 
 namespace sdf {
 namespace {

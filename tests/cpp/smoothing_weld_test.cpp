@@ -7,7 +7,7 @@
 #include <vector>
 
 #include "adjacency_reference.h"
-#include "mesh_weld.h"
+#include "mesh/mesh_weld.h"
 #include "smoothing_test_meshes.h"
 #include "weld_reference.h"
 

@@ -7,7 +7,7 @@
 #include <random>
 #include <vector>
 
-#include "mesh.h"
+#include "mesh/mesh.h"
 
 namespace sdf::test {
 

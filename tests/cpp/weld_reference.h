@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
-// The serial weld that native/mesh_weld.cpp replaced (greedy in index order over a hash grid),
+// The serial weld that native/mesh/mesh_weld.cpp replaced (greedy in index order over a hash grid),
 // kept as the reference its parallel version must match exactly (the hash grid it shares:
 // weld_cells.h).
 #pragma once
@@ -10,8 +10,8 @@
 #include <limits>
 #include <vector>
 
-#include "mesh_weld.h"
-#include "weld_cells.h"
+#include "mesh/mesh_weld.h"
+#include "mesh/weld_cells.h"
 
 namespace sdf::test_reference {
 

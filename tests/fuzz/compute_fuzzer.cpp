@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
 // libFuzzer target for the compute entry point: arbitrary bytes become a vertex array, a
 // triangle index array and options, which go through sdf::make_mesh and sdf::compute on the
-// CPU engine, as the Python module passes them (native/python_module.cpp).
+// CPU engine, as the Python module passes them (bindings/module.cpp).
 //
 // The contract checked, beyond "no crash, no sanitizer report":
 // * the only exceptions are the documented clean refusals: std::invalid_argument (bad mesh or
@@ -45,7 +45,7 @@
 #include <string>
 #include <vector>
 
-#include "sdf.h"
+#include "pipeline/sdf.h"
 
 namespace {
 

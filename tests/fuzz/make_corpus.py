@@ -52,8 +52,13 @@ def meshes():
         ("sphere", np.asarray(sphere.vertices), np.asarray(sphere.faces)),
         ("square", tetra_v[:3].copy(), np.array([[0, 1, 2]])),
     ]
-    for name, faces in (("suzanne.obj", 120), ("spot.obj", 100), ("fandisk.obj", 100),
-                        ("bunny00.off", 80), ("armadillo.off", 80)):
+    for name, faces in (
+        ("suzanne.obj", 120),
+        ("spot.obj", 100),
+        ("fandisk.obj", 100),
+        ("bunny00.off", 80),
+        ("armadillo.off", 80),
+    ):
         v, t = _patch(name, faces)
         out.append((name.split(".")[0], v, t))
     return out
@@ -62,13 +67,15 @@ def meshes():
 # --- compute_fuzzer.cpp inputs ----------------------------------------------------------
 
 
-def compute_input(vertices, triangles, *, rays=30, cone=None, flags=0, more=0, seed=0,
-                  grid=False) -> bytes:
+def compute_input(
+    vertices, triangles, *, rays=30, cone=None, flags=0, more=0, seed=0, grid=False
+) -> bytes:
     """compute_fuzzer.cpp's layout. grid: coordinates on its 1/8 grid (one byte each, the
     mesh scaled into +-14), else exact doubles (nine bytes each)."""
     cone_byte = 174 if cone is None else cone  # about 120 degrees
-    header = struct.pack("<BBBBIbbH", (rays - 1) % 64, cone_byte, flags, more, seed, 0, 0,
-                         len(vertices))
+    header = struct.pack(
+        "<BBBBIbbH", (rays - 1) % 64, cone_byte, flags, more, seed, 0, 0, len(vertices)
+    )
     body = bytearray()
     if grid:
         lo, hi = vertices.min(axis=0), vertices.max(axis=0)
@@ -128,17 +135,27 @@ def mesh_io_corpus():
     for name, v, t in meshes()[:4] + [("suzanne", *_patch("suzanne.obj", 40))]:
         mesh = trimesh.Trimesh(v, t, process=False)
         textured = trimesh.Trimesh(
-            v, t, process=False,
+            v,
+            t,
+            process=False,
             visual=trimesh.visual.TextureVisuals(
                 uv=0.5 + 0.4 * v[:, :2],
                 # A material with no image: glTF keeps UVs only with one, images need Pillow.
-                material=trimesh.visual.material.PBRMaterial(baseColorFactor=[200, 0, 0, 255])))
+                material=trimesh.visual.material.PBRMaterial(baseColorFactor=[200, 0, 0, 255]),
+            ),
+        )
         yield f"{name}.obj", index[".obj"], _obj_text(v, t).encode()
-        yield f"{name}-quads-negative.obj", index[".obj"] | with_uvs, _obj_text(
-            v, t, quads=True, negative=True).encode()
+        yield (
+            f"{name}-quads-negative.obj",
+            index[".obj"] | with_uvs,
+            _obj_text(v, t, quads=True, negative=True).encode(),
+        )
         yield f"{name}-binary.ply", index[".ply"], _export(mesh, "ply")
-        yield f"{name}-ascii.ply", index[".ply"] | with_uvs, _export(textured, "ply",
-                                                                      encoding="ascii")
+        yield (
+            f"{name}-ascii.ply",
+            index[".ply"] | with_uvs,
+            _export(textured, "ply", encoding="ascii"),
+        )
         yield f"{name}.off", index[".off"], _export(mesh, "off")
         yield f"{name}-binary.stl", index[".stl"], _export(mesh, "stl")
         yield f"{name}-ascii.stl", index[".stl"], _export(mesh, "stl_ascii")
@@ -147,15 +164,29 @@ def mesh_io_corpus():
         scene.add_geometry(mesh, transform=np.diag([-1.0, 2.0, 1.0, 1.0]))
         scene.add_geometry(trimesh.PointCloud(v))
         yield f"{name}-scene.glb", index[".glb"], _export(scene, "glb")
-        yield f"{name}.gltf", index[".gltf"] | with_uvs, _export(textured, "gltf",
-                                                                  embed_buffers=True)
-    yield "off-polygons.off", index[".off"], (
-        b"OFF\n4 2 0\n0 0 0\n1 0 0\n1 1 0\n0 1 0\n4 0 1 2 3\n3 0 1 2 255 0 0\n")
-    yield "coff.off", index[".off"], (
-        b"COFF\n3 1 0\n0 0 0 1 2 3 4\n1 0 0 1 2 3 4\n0 1 0 1 2 3 4\n3 0 1 2\n")
-    yield "points.ply", index[".ply"], (
-        b"ply\nformat ascii 1.0\nelement vertex 2\nproperty float x\nproperty float y\n"
-        b"property float z\nend_header\n0 0 0\n1 1 1\n")
+        yield (
+            f"{name}.gltf",
+            index[".gltf"] | with_uvs,
+            _export(textured, "gltf", embed_buffers=True),
+        )
+    yield (
+        "off-polygons.off",
+        index[".off"],
+        (b"OFF\n4 2 0\n0 0 0\n1 0 0\n1 1 0\n0 1 0\n4 0 1 2 3\n3 0 1 2 255 0 0\n"),
+    )
+    yield (
+        "coff.off",
+        index[".off"],
+        (b"COFF\n3 1 0\n0 0 0 1 2 3 4\n1 0 0 1 2 3 4\n0 1 0 1 2 3 4\n3 0 1 2\n"),
+    )
+    yield (
+        "points.ply",
+        index[".ply"],
+        (
+            b"ply\nformat ascii 1.0\nelement vertex 2\nproperty float x\nproperty float y\n"
+            b"property float z\nend_header\n0 0 0\n1 1 1\n"
+        ),
+    )
 
 
 def main(argv):

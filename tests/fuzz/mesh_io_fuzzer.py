@@ -32,21 +32,75 @@ WITH_UVS = 8
 # instrumenting all of trimesh takes 10 s of each run's minute. (atheris takes whole
 # packages to include and exact module names to exclude.)
 NOT_READING = [
-    "boolean", "interfaces", "interfaces.blender", "interfaces.generic", "convex", "collision",
-    "comparison", "creation", "curvature", "decomposition", "graph", "intersections",
-    "permutate", "poses", "proximity", "ray", "ray.ray_triangle", "ray.ray_util",
-    "ray.ray_pyembree", "registration", "remesh", "repair", "path", "path.path",
-    "path.creation", "path.arc", "path.entities", "path.curve", "path.raster", "path.segments",
-    "path.simplify", "path.traversal", "path.util", "path.exchange", "path.exchange.export",
-    "path.exchange.dxf", "path.exchange.svg_io", "path.repair", "path.polygons",
-    "path.exchange.misc", "path.exchange.load", "sample", "exchange.export", "exchange.dae",
-    "exchange.threemf", "exchange.urdf", "exchange.binvox", "exchange.cascade",
-    "exchange.threedxml", "exchange.xaml", "rendering", "primitives", "smoothing", "nsphere",
-    "inertia", "voxel", "voxel.creation", "voxel.base", "voxel.morphology", "voxel.encoding",
-    "voxel.runlength", "voxel.ops", "voxel.transforms"
+    "boolean",
+    "interfaces",
+    "interfaces.blender",
+    "interfaces.generic",
+    "convex",
+    "collision",
+    "comparison",
+    "creation",
+    "curvature",
+    "decomposition",
+    "graph",
+    "intersections",
+    "permutate",
+    "poses",
+    "proximity",
+    "ray",
+    "ray.ray_triangle",
+    "ray.ray_util",
+    "ray.ray_pyembree",
+    "registration",
+    "remesh",
+    "repair",
+    "path",
+    "path.path",
+    "path.creation",
+    "path.arc",
+    "path.entities",
+    "path.curve",
+    "path.raster",
+    "path.segments",
+    "path.simplify",
+    "path.traversal",
+    "path.util",
+    "path.exchange",
+    "path.exchange.export",
+    "path.exchange.dxf",
+    "path.exchange.svg_io",
+    "path.repair",
+    "path.polygons",
+    "path.exchange.misc",
+    "path.exchange.load",
+    "sample",
+    "exchange.export",
+    "exchange.dae",
+    "exchange.threemf",
+    "exchange.urdf",
+    "exchange.binvox",
+    "exchange.cascade",
+    "exchange.threedxml",
+    "exchange.xaml",
+    "rendering",
+    "primitives",
+    "smoothing",
+    "nsphere",
+    "inertia",
+    "voxel",
+    "voxel.creation",
+    "voxel.base",
+    "voxel.morphology",
+    "voxel.encoding",
+    "voxel.runlength",
+    "voxel.ops",
+    "voxel.transforms",
 ]
 EXCLUDE = [f"trimesh.{name}" for name in NOT_READING] + [
-    "shape_diameter.api", "shape_diameter.smoothing", "shape_diameter.normalization"]
+    "shape_diameter.api",
+    "shape_diameter.smoothing",
+    "shape_diameter.normalization",
+]
 
 
 class ContractBroken(AssertionError):
@@ -83,20 +137,34 @@ def check_one(data: bytes) -> None:
     except ValueError:
         return  # the documented refusal
     n, m = len(vertices), len(triangles)
-    if not (isinstance(vertices, np.ndarray) and vertices.dtype == np.float64
-            and vertices.shape == (n, 3)):
-        raise ContractBroken(f"vertices {type(vertices)} {getattr(vertices, 'dtype', None)} "
-                             f"{getattr(vertices, 'shape', None)}")
-    if not (isinstance(triangles, np.ndarray) and triangles.dtype == np.int64
-            and triangles.shape == (m, 3) and m >= 1):
-        raise ContractBroken(f"triangles {getattr(triangles, 'dtype', None)} "
-                             f"{getattr(triangles, 'shape', None)}")
+    if not (
+        isinstance(vertices, np.ndarray)
+        and vertices.dtype == np.float64
+        and vertices.shape == (n, 3)
+    ):
+        raise ContractBroken(
+            f"vertices {type(vertices)} {getattr(vertices, 'dtype', None)} "
+            f"{getattr(vertices, 'shape', None)}"
+        )
+    if not (
+        isinstance(triangles, np.ndarray)
+        and triangles.dtype == np.int64
+        and triangles.shape == (m, 3)
+        and m >= 1
+    ):
+        raise ContractBroken(
+            f"triangles {getattr(triangles, 'dtype', None)} {getattr(triangles, 'shape', None)}"
+        )
     if not np.isfinite(vertices).all():
         raise ContractBroken("a vertex coordinate is not finite")
     if triangles.min() < 0 or triangles.max() >= n:
         raise ContractBroken("a triangle index is outside [0, n)")
-    if uvs is not None and not (isinstance(uvs, np.ndarray) and uvs.dtype == np.float32
-                                and uvs.shape == (m, 3, 2) and np.isfinite(uvs).all()):
+    if uvs is not None and not (
+        isinstance(uvs, np.ndarray)
+        and uvs.dtype == np.float32
+        and uvs.shape == (m, 3, 2)
+        and np.isfinite(uvs).all()
+    ):
         raise ContractBroken(f"uvs {getattr(uvs, 'dtype', None)} {getattr(uvs, 'shape', None)}")
 
 
@@ -154,9 +222,25 @@ def _plain_main(argv) -> int:
             with open(os.path.join(d, name), "rb") as stream:
                 seeds.append(stream.read())
     seeds = [s for s in seeds if s] or [b"\x00"]
-    tokens = [b"nan", b"inf", b"-1", b"0", b"1e308", b"4294967296", b"99999999999", b"\n",
-              b" ", b"/", b"f ", b"v ", b"element vertex ", b"property list uchar int ",
-              b"binary_little_endian", b"\x00\x00\x00\x00", b"\xff\xff\xff\xff"]
+    tokens = [
+        b"nan",
+        b"inf",
+        b"-1",
+        b"0",
+        b"1e308",
+        b"4294967296",
+        b"99999999999",
+        b"\n",
+        b" ",
+        b"/",
+        b"f ",
+        b"v ",
+        b"element vertex ",
+        b"property list uchar int ",
+        b"binary_little_endian",
+        b"\x00\x00\x00\x00",
+        b"\xff\xff\xff\xff",
+    ]
     rng = random.Random(0)
     runs, deadline = 0, time.monotonic() + seconds
     while time.monotonic() < deadline:
@@ -171,13 +255,13 @@ def _plain_main(argv) -> int:
             elif op == 2:
                 data[pos:pos] = rng.choice(tokens)
             elif op == 3 and len(data) > 1:
-                del data[pos:pos + rng.randint(1, 64)]
+                del data[pos : pos + rng.randint(1, 64)]
             elif op == 4:
                 other = rng.choice(seeds)
                 start = rng.randrange(len(other))
-                data[pos:pos] = other[start:start + rng.randint(1, 256)]
+                data[pos:pos] = other[start : start + rng.randint(1, 256)]
             else:
-                del data[rng.randint(1, max(1, len(data))):]
+                del data[rng.randint(1, max(1, len(data))) :]
         runs += 1
         try:
             check_one(bytes(data))
@@ -188,8 +272,10 @@ def _plain_main(argv) -> int:
             traceback.print_exc()
             print(f"mesh_io_fuzzer (plain): finding after {runs} inputs, saved to {path}")
             return 1
-    print(f"mesh_io_fuzzer (plain, random mutation, no coverage guidance): {runs} inputs, "
-          f"{seconds:.0f} s, no finding")
+    print(
+        f"mesh_io_fuzzer (plain, random mutation, no coverage guidance): {runs} inputs, "
+        f"{seconds:.0f} s, no finding"
+    )
     return 0
 
 
@@ -200,8 +286,11 @@ def main(argv) -> int:
         try:
             import atheris  # noqa: F401
         except ImportError:
-            print("mesh_io_fuzzer: atheris is not installed (pip install atheris); "
-                  "running the plain random-mutation fuzzer instead", file=sys.stderr)
+            print(
+                "mesh_io_fuzzer: atheris is not installed (pip install atheris); "
+                "running the plain random-mutation fuzzer instead",
+                file=sys.stderr,
+            )
             plain = True
     if plain:
         return _plain_main(argv)

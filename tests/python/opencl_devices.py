@@ -4,12 +4,14 @@ the tests exercise it (PoCL is the CPU fallback). No device fails the importing 
 CI installs PoCL (scripts/setup.sh), so none there is a failure, not a skip."""
 
 import pytest
-
 import shape_diameter as sd
 from shape_diameter import _core
 
-OPENCL = [e["name"] for e in sorted(sd.engines(), key=lambda e: e["type"] != "GPU")
-          if e["name"].startswith("opencl")]
+OPENCL = [
+    e["name"]
+    for e in sorted(sd.engines(), key=lambda e: e["type"] != "GPU")
+    if e["name"].startswith("opencl")
+]
 
 if not OPENCL:
     pytest.fail(

@@ -10,10 +10,20 @@ def prism():
     triangles, in a mixed order; (vertices, polygons)."""
     angles = 2 * np.pi * np.arange(5) / 5
     ring = np.column_stack([np.cos(angles), np.sin(angles)])
-    vertices = np.vstack([np.column_stack([ring, np.zeros(5)]), np.column_stack([ring, np.ones(5)])])
+    vertices = np.vstack(
+        [np.column_stack([ring, np.zeros(5)]), np.column_stack([ring, np.ones(5)])]
+    )
     sides = [[k, (k + 1) % 5, (k + 1) % 5 + 5, k + 5] for k in range(5)]
-    polygons = [sides[0], [4, 3, 2, 1, 0], sides[1], [sides[2][0], sides[2][1], sides[2][2]],
-                [sides[2][0], sides[2][2], sides[2][3]], [5, 6, 7, 8, 9], sides[3], sides[4]]
+    polygons = [
+        sides[0],
+        [4, 3, 2, 1, 0],
+        sides[1],
+        [sides[2][0], sides[2][1], sides[2][2]],
+        [sides[2][0], sides[2][2], sides[2][3]],
+        [5, 6, 7, 8, 9],
+        sides[3],
+        sides[4],
+    ]
     return vertices, polygons
 
 
@@ -36,18 +46,22 @@ def write_polygons(path, vertices, polygons, uvs=None):
     rows = [" ".join(map(repr, v)) for v in vertices.tolist()]
     if suffix == ".obj":
         lines = [f"v {row}" for row in rows] + ([f"vt {t}" for t in uv] if uvs else [])
-        lines += ["f " + " ".join(f"{i + 1}/{i + 1}" if uvs else str(i + 1) for i in polygon)
-                  for polygon in polygons]
+        lines += [
+            "f " + " ".join(f"{i + 1}/{i + 1}" if uvs else str(i + 1) for i in polygon)
+            for polygon in polygons
+        ]
     elif suffix == ".off":
         lines = ["OFF", f"{len(vertices)} {len(polygons)} 0", *rows]
         lines += [" ".join(map(str, [len(p), *p])) for p in polygons]
     else:
         per_vertex = "property double s\nproperty double t\n" if uvs == "vertex" else ""
         per_corner = "property list uchar float texcoord\n" if uvs == "corner" else ""
-        header = (f"ply\nformat ascii 1.0\nelement vertex {len(vertices)}\nproperty double x\n"
-                  f"property double y\nproperty double z\n{per_vertex}element face "
-                  f"{len(polygons)}\nproperty list uchar int vertex_indices\n{per_corner}"
-                  "end_header")
+        header = (
+            f"ply\nformat ascii 1.0\nelement vertex {len(vertices)}\nproperty double x\n"
+            f"property double y\nproperty double z\n{per_vertex}element face "
+            f"{len(polygons)}\nproperty list uchar int vertex_indices\n{per_corner}"
+            "end_header"
+        )
         lines = [header]
         lines += [f"{row} {t}" if per_vertex else row for row, t in zip(rows, uv)]
         for p in polygons:

@@ -9,7 +9,7 @@ callers must not modify the returned arrays in place (copy first).
 
 from __future__ import annotations
 
-from functools import lru_cache
+from functools import cache
 
 import numpy as np
 
@@ -38,7 +38,7 @@ _ICO_TRIANGLES = np.array(
 )  # fmt: skip
 
 
-@lru_cache(maxsize=None)
+@cache
 def _unit_icosphere(subdivisions: int) -> tuple[np.ndarray, np.ndarray]:
     v = _ICO_VERTICES / np.linalg.norm(_ICO_VERTICES, axis=1, keepdims=True)
     t = _ICO_TRIANGLES.copy()
@@ -128,9 +128,7 @@ def cylinder(
     angle = 2.0 * np.pi * np.arange(segments) / segments
     z = -0.5 * length + length * np.arange(rings + 1) / rings
     ring_xy = np.stack([radius * np.cos(angle), radius * np.sin(angle)], axis=1)
-    side = np.concatenate(
-        [np.column_stack([ring_xy, np.full(segments, zj)]) for zj in z]
-    )
+    side = np.concatenate([np.column_stack([ring_xy, np.full(segments, zj)]) for zj in z])
     bottom_centre = len(side)
     top_centre = bottom_centre + 1
     vertices = np.concatenate([side, [[0.0, 0.0, -0.5 * length], [0.0, 0.0, 0.5 * length]]])

@@ -16,7 +16,7 @@ nan) and where our engine kept at least one ray:
   estimator of the same quantity: Pearson r >= 0.93 and median relative
   difference <= 8 %.
 
-CGAL runs once per (mesh, rays) per session (module-scoped cache); its
+CGAL runs once per (mesh, rays) per test run (module-scoped cache); its
 sdf_values wall time is recorded as the user property ``cgal_seconds``.
 """
 
@@ -31,9 +31,8 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-import trimesh
-
 import shape_diameter
+import trimesh
 
 DATA = Path(__file__).resolve().parents[1] / "data"
 
@@ -67,8 +66,9 @@ def _reference_binary() -> str:
     else:
         return path
     if os.environ.get("CI", "").strip().lower() not in _NOT_CI:
-        pytest.fail(f"{problem} (CI is set, so the CGAL comparison may not be skipped)",
-                    pytrace=False)
+        pytest.fail(
+            f"{problem} (CI is set, so the CGAL comparison may not be skipped)", pytrace=False
+        )
     pytest.skip(problem)
 
 
@@ -116,11 +116,11 @@ def _file_corners(path: Path) -> np.ndarray:
         nv, nf = int(tokens[1]), int(tokens[2])
         pos = 4
         for _ in range(nv):
-            verts.append([float(x) for x in tokens[pos:pos + 3]])
+            verts.append([float(x) for x in tokens[pos : pos + 3]])
             pos += 3
         for _ in range(nf):
             n = int(tokens[pos])
-            idx = [int(x) for x in tokens[pos + 1:pos + 1 + n]]
+            idx = [int(x) for x in tokens[pos + 1 : pos + 1 + n]]
             pos += 1 + n
             faces.extend([idx[0], idx[k], idx[k + 1]] for k in range(1, n - 1))
     return np.asarray(verts, dtype=np.float64)[np.asarray(faces, dtype=np.int64)]
@@ -129,14 +129,21 @@ def _file_corners(path: Path) -> np.ndarray:
 def _load(name: str) -> tuple[np.ndarray, np.ndarray]:
     path = DATA / name
     if path.suffix == ".obj":
-        mesh = trimesh.load(io.BytesIO(_plain_obj(path)), file_type="obj", process=False,
-                            force="mesh", maintain_order=True)
+        mesh = trimesh.load(
+            io.BytesIO(_plain_obj(path)),
+            file_type="obj",
+            process=False,
+            force="mesh",
+            maintain_order=True,
+        )
     else:
         mesh = trimesh.load(path, process=False, force="mesh")
     V = np.asarray(mesh.vertices, dtype=np.float64)
     F = np.asarray(mesh.faces, dtype=np.int64)
     corners = _file_corners(path)
-    assert len(F) == len(corners), f"{name}: trimesh gave {len(F)} faces, the file has {len(corners)}"
+    assert len(F) == len(corners), (
+        f"{name}: trimesh gave {len(F)} faces, the file has {len(corners)}"
+    )
     assert np.array_equal(V[F], corners), f"{name}: trimesh changed the faces or their order"
     return V, F
 
@@ -157,7 +164,7 @@ def _pearson(a: np.ndarray, b: np.ndarray) -> float:
 
 
 class _Cache:
-    """Meshes, their OFF copies and CGAL results, computed once per session."""
+    """Meshes, their OFF copies and CGAL results, computed once per test run."""
 
     def __init__(self, tmpdir: Path):
         self.tmpdir = tmpdir
@@ -182,13 +189,19 @@ class _Cache:
             # --split-nonmanifold: cow.obj has a pinched (non-manifold) vertex whose
             # second fan Surface_mesh refuses; add those faces detached so CGAL casts
             # against the whole surface instead of a mesh with a hole.
-            proc = subprocess.run([binary, str(off), str(rays), str(out), "--split-nonmanifold"],
-                                  capture_output=True, text=True, timeout=1800)
+            proc = subprocess.run(
+                [binary, str(off), str(rays), str(out), "--split-nonmanifold"],
+                capture_output=True,
+                text=True,
+                timeout=1800,
+            )
             assert proc.returncode == 0, f"cgal_sdf failed on {name}:\n{proc.stderr}"
             m = re.search(r"sdf_values took ([0-9.eE+-]+) s", proc.stderr)
             assert m, f"cgal_sdf printed no timing:\n{proc.stderr}"
             values = np.loadtxt(out, dtype=np.float64, ndmin=1)
-            assert values.shape == (len(F),), f"cgal_sdf wrote {values.shape} values for {len(F)} faces"
+            assert values.shape == (len(F),), (
+                f"cgal_sdf wrote {values.shape} values for {len(F)} faces"
+            )
             self.cgal[key] = (values, float(m.group(1)))
         return self.cgal[key]
 
@@ -216,7 +229,8 @@ def _compare(cache: _Cache, name: str, rays_cgal: int, record_property, **comput
     assert mask.sum() >= 0.95 * len(F), (
         f"{name}: only {mask.sum()} of {len(F)} faces have both a CGAL value and a valid ray "
         f"(CGAL -1: {(cgal == -1).sum()}, CGAL nan: {np.isnan(cgal).sum()}, "
-        f"ours without ray: {(valid <= 0).sum()})")
+        f"ours without ray: {(valid <= 0).sum()})"
+    )
     a, b = ours[mask], cgal[mask]
     rel = np.abs(a - b) / b
     stats = {
@@ -231,10 +245,12 @@ def _compare(cache: _Cache, name: str, rays_cgal: int, record_property, **comput
     }
     for key, value in stats.items():
         record_property(key, value)
-    print(f"{name}: {compute_kwargs} vs CGAL {rays_cgal} rays: r={stats['r']:.5f} "
-          f"median|d|/cgal={stats['median_rel']:.4f} p95={stats['p95_rel']:.4f} "
-          f"identical(<=1e-3)={stats['within_1e-3']:.3f} faces={stats['compared']}/{len(F)} "
-          f"CGAL {cgal_seconds:.2f} s, ours {our_seconds:.2f} s ({res.engine})")
+    print(
+        f"{name}: {compute_kwargs} vs CGAL {rays_cgal} rays: r={stats['r']:.5f} "
+        f"median|d|/cgal={stats['median_rel']:.4f} p95={stats['p95_rel']:.4f} "
+        f"identical(<=1e-3)={stats['within_1e-3']:.3f} faces={stats['compared']}/{len(F)} "
+        f"CGAL {cgal_seconds:.2f} s, ours {our_seconds:.2f} s ({res.engine})"
+    )
     return ours, cgal, mask, stats
 
 
@@ -244,17 +260,20 @@ def _worst(name, ours, cgal, mask, n=8) -> str:
     rel = np.abs(ours[idx] - cgal[idx]) / cgal[idx]
     order = idx[np.argsort(rel)[::-1][:n]]
     return f"{name}: worst faces (index, ours, cgal): " + ", ".join(
-        f"({i}, {ours[i]:.6g}, {cgal[i]:.6g})" for i in order)
+        f"({i}, {ours[i]:.6g}, {cgal[i]:.6g})" for i in order
+    )
 
 
 @pytest.mark.parametrize("name", MESHES)
 def test_cgal_rule_reproduces_cgal(cache, name, record_property):
-    ours, cgal, mask, stats = _compare(cache, name, CGAL_RAYS, record_property,
-                                       rays=CGAL_RAYS, sampling="cgal")
+    ours, cgal, mask, stats = _compare(
+        cache, name, CGAL_RAYS, record_property, rays=CGAL_RAYS, sampling="cgal"
+    )
     assert stats["r"] >= MIN_R_CGAL_RULE, (
         f"{name}: sampling='cgal' vs CGAL: r={stats['r']:.5f} < {MIN_R_CGAL_RULE} "
         f"(median rel {stats['median_rel']:.4f}, identical {stats['within_1e-3']:.3f}); "
-        + _worst(name, ours, cgal, mask))
+        + _worst(name, ours, cgal, mask)
+    )
 
 
 @pytest.mark.parametrize("name", MESHES)
@@ -264,10 +283,15 @@ def test_paper_rule_close_to_cgal(cache, name, record_property):
     if stats["r"] < MIN_R_OUR_RULE:
         problems.append(f"r={stats['r']:.4f} < {MIN_R_OUR_RULE}")
     if stats["median_rel"] > MAX_MEDIAN_REL_OUR_RULE:
-        problems.append(f"median relative difference {stats['median_rel']:.4f} "
-                        f"> {MAX_MEDIAN_REL_OUR_RULE}")
-    assert not problems, (f"{name}: default rule, {OUR_RAYS} rays vs CGAL: "
-                          + "; ".join(problems) + "; " + _worst(name, ours, cgal, mask))
+        problems.append(
+            f"median relative difference {stats['median_rel']:.4f} > {MAX_MEDIAN_REL_OUR_RULE}"
+        )
+    assert not problems, (
+        f"{name}: default rule, {OUR_RAYS} rays vs CGAL: "
+        + "; ".join(problems)
+        + "; "
+        + _worst(name, ours, cgal, mask)
+    )
 
 
 @pytest.mark.parametrize("name", MESHES)

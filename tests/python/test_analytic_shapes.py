@@ -35,10 +35,9 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from scipy.spatial import cKDTree
-
 import shape_diameter
 import shapes
+from scipy.spatial import cKDTree
 
 RAYS = 30
 CONE = 120.0
@@ -69,8 +68,8 @@ def _rays(axes: np.ndarray, tangents: np.ndarray, sampling: str, indices: np.nda
 def _reduce(lengths: np.ndarray, angles: np.ndarray, sampling: str) -> np.ndarray:
     return np.array(
         [
-            shape_diameter.reduce_lengths(l, a, sampling, rays=RAYS, cone_angle=CONE)
-            for l, a in zip(lengths, angles)
+            shape_diameter.reduce_lengths(length, a, sampling, rays=RAYS, cone_angle=CONE)
+            for length, a in zip(lengths, angles)
         ]
     )
 
@@ -91,8 +90,9 @@ def _assert_within(actual, expected, tol, what, labels=None):
             f"({rel[w] * 100:.3f} %)"
             for i, w in zip(ids, worst)
         )
-        pytest.fail(f"{what}: {bad.size} of {rel.size} off by more than {tol * 100:g} %; "
-                    f"worst {details}")
+        pytest.fail(
+            f"{what}: {bad.size} of {rel.size} off by more than {tol * 100:g} %; worst {details}"
+        )
 
 
 def _assert_no_lost_rays(valid_rays, labels, what):
@@ -136,7 +136,7 @@ def _mesh_lengths_near(V, F, origins, directions, guesses, neighbours=8, chunk=4
         q = np.cross(s, b)
         v = np.einsum("rck,rck->rc", d, q) / det
         t = np.einsum("rck,rck->rc", c, q) / det
-        # Triangles grown by the engine's own SDF_BARYCENTRIC_SLACK (kernels/sdf_intersect.h),
+        # Triangles grown by the engine's own SDF_BARYCENTRIC_SLACK (kernels/ray/sdf_intersect.h),
         # so a ray through a shared edge or vertex belongs to every triangle there. This does
         # not make the reference less exact: the mesh is closed and convex, and the exit from
         # a convex solid is the nearest of the planes of the faces the ray leaves through
@@ -146,9 +146,7 @@ def _mesh_lengths_near(V, F, origins, directions, guesses, neighbours=8, chunk=4
         # edge hits the same way, and a ray through a vertex cannot slip through float64
         # rounding either.)
         slack = 1e-5
-        inside = (
-            (u >= -slack) & (v >= -slack) & (u + v <= 1 + slack) & (t > 1e-6) & (det < 0)
-        )
+        inside = (u >= -slack) & (v >= -slack) & (u + v <= 1 + slack) & (t > 1e-6) & (det < 0)
         out[sl] = np.where(inside, t, np.inf).min(axis=1)
     assert np.isfinite(out).all(), "a ray found no exit triangle near the ideal hit point"
     return out.reshape(directions.shape[:2])
@@ -249,8 +247,12 @@ def _check_sphere(V, F, points, sampling, radius=1.0):
     to_centre = -origins / np.linalg.norm(origins, axis=1, keepdims=True)
     radial_cos = np.einsum("prk,pk->pr", directions, to_centre)
     _assert_within(ideal, 2 * radius * radial_cos, 1e-3, "ideal length vs 2 r cos(radial angle)")
-    _assert_within(ideal, 2 * radius * np.cos(angles.astype(np.float64)), 1e-2,
-                   "ideal length vs 2 r cos(cone angle)")
+    _assert_within(
+        ideal,
+        2 * radius * np.cos(angles.astype(np.float64)),
+        1e-2,
+        "ideal length vs 2 r cos(cone angle)",
+    )
     # The facets are within 0.06 % of the sphere along every ray.
     per_ray = _relative(on_mesh, ideal)
     assert per_ray.max() < 1e-3
@@ -267,8 +269,13 @@ def _check_sphere(V, F, points, sampling, radius=1.0):
     decided = _filter_margin(on_mesh, sampling) > 5 * 2e-6 * on_mesh.max(axis=1)
     assert decided.mean() > 0.9, f"only {decided.mean():.1%} of points decided"
     check = decided & kept_all
-    _assert_within(result.raw[check], expected_mesh[check], 1e-4,
-                   f"{sampling}/{points}: raw vs exact lengths on the mesh", np.flatnonzero(check))
+    _assert_within(
+        result.raw[check],
+        expected_mesh[check],
+        1e-4,
+        f"{sampling}/{points}: raw vs exact lengths on the mesh",
+        np.flatnonzero(check),
+    )
 
     # (b) Against the ideal sphere, within the product's 0.5 %, wherever the formula is well
     # conditioned: its reduction and the mesh's differ no more than their per-ray lengths do
@@ -276,15 +283,21 @@ def _check_sphere(V, F, points, sampling, radius=1.0):
     conditioned = _relative(expected_mesh, expected_ideal) <= 2 * per_ray.max(axis=1) + 1e-6
     assert conditioned.mean() > 0.9, f"only {conditioned.mean():.1%} of points conditioned"
     check = conditioned & kept_all
-    _assert_within(result.raw[check], expected_ideal[check], REL_TOL,
-                   f"{sampling}/{points}: raw vs ideal-sphere formula", np.flatnonzero(check))
+    _assert_within(
+        result.raw[check],
+        expected_ideal[check],
+        REL_TOL,
+        f"{sampling}/{points}: raw vs ideal-sphere formula",
+        np.flatnonzero(check),
+    )
     # The mean over all points, without exception.
     mean_rel = abs(result.raw.mean(dtype=np.float64) / expected_ideal.mean() - 1)
     assert mean_rel < 1e-3, f"mean off the ideal formula by {mean_rel:.3%}"
 
     # A closed convex mesh: every ray must find its exit.
-    _assert_no_lost_rays(result.valid_rays, np.arange(count),
-                         {"faces": "face", "vertices": "vertex"}[points])
+    _assert_no_lost_rays(
+        result.valid_rays, np.arange(count), {"faces": "face", "vertices": "vertex"}[points]
+    )
 
 
 @pytest.mark.parametrize("sampling", SAMPLINGS)
@@ -309,10 +322,9 @@ def test_slab_faces_match_formula(sampling):
     origins, axes, tangents = shape_diameter.sample_points(V, F)
     origins = origins.astype(np.float64)
     reach = thickness * np.tan(HALF_CONE)
-    inner = (
-        (np.abs(np.abs(axes[:, 2]) - 1.0) < 1e-6)
-        & (np.abs(origins[:, :2]) < size / 2 - reach - 0.5).all(axis=1)
-    )
+    inner = (np.abs(np.abs(axes[:, 2]) - 1.0) < 1e-6) & (
+        np.abs(origins[:, :2]) < size / 2 - reach - 0.5
+    ).all(axis=1)
     chosen = np.flatnonzero(inner)
     assert len(chosen) > 3000  # ~2 x 31 x 31 x 2 faces on top and bottom together
     directions, angles = _rays(axes[chosen], tangents[chosen], sampling, chosen)
@@ -323,13 +335,22 @@ def test_slab_faces_match_formula(sampling):
     hits = o[:, None, :] + lengths[..., None] * directions
     # The selection is right: every ray lands on the opposite face, away from its rim.
     assert (np.abs(hits[..., :2]) < size / 2 - 0.4).all()
-    _assert_within(lengths, thickness / np.cos(angles.astype(np.float64)), 1e-5,
-                   "slab length vs thickness / cos(angle)")
+    _assert_within(
+        lengths,
+        thickness / np.cos(angles.astype(np.float64)),
+        1e-5,
+        "slab length vs thickness / cos(angle)",
+    )
 
     expected = _reduce(lengths, angles, sampling)
     kept_all = result.valid_rays[chosen] == RAYS
-    _assert_within(result.raw[chosen][kept_all], expected[kept_all], REL_TOL,
-                   f"{sampling}: slab raw vs formula", chosen[kept_all])
+    _assert_within(
+        result.raw[chosen][kept_all],
+        expected[kept_all],
+        REL_TOL,
+        f"{sampling}: slab raw vs formula",
+        chosen[kept_all],
+    )
     _assert_no_lost_rays(result.valid_rays[chosen], chosen, "slab face")
 
 
@@ -388,13 +409,22 @@ def test_cylinder_side_faces_match_formula(sampling):
     lengths = _prism_lengths(o, directions, radius, segments)
     hits = o[:, None, :] + lengths[..., None] * directions
     assert (np.abs(hits[..., 2]) < length / 2 - 0.4).all(), "a ray of a chosen face reaches a cap"
-    _assert_within(lengths, _cylinder_lengths(o, directions, radius), 1e-3,
-                   "prism vs circular cylinder lengths")
+    _assert_within(
+        lengths,
+        _cylinder_lengths(o, directions, radius),
+        1e-3,
+        "prism vs circular cylinder lengths",
+    )
 
     expected = _reduce(lengths, angles, sampling)
     kept_all = result.valid_rays[chosen] == RAYS
-    _assert_within(result.raw[chosen][kept_all], expected[kept_all], REL_TOL,
-                   f"{sampling}: cylinder raw vs formula", chosen[kept_all])
+    _assert_within(
+        result.raw[chosen][kept_all],
+        expected[kept_all],
+        REL_TOL,
+        f"{sampling}: cylinder raw vs formula",
+        chosen[kept_all],
+    )
     circle = _reduce(_cylinder_lengths(o, directions, radius), angles, sampling)
     mean_rel = abs(result.raw[chosen].mean(dtype=np.float64) - circle.mean()) / circle.mean()
     assert mean_rel < 1e-3, f"cylinder mean off the circular formula by {mean_rel:.3%}"

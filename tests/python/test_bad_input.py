@@ -14,7 +14,6 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-
 import shape_diameter
 import shapes
 from shape_diameter.api import MAX_RAYS
@@ -107,19 +106,28 @@ def test_triangles_of_a_wrong_dtype(sphere, dtype):
 
 def test_ragged_vertices_are_refused(sphere):
     _, F = sphere
-    with pytest.raises(ValueError, match=r"^vertices must have shape \(n, 3\), but its rows "
-                                         r"differ in length$"):
+    with pytest.raises(
+        ValueError,
+        match=r"^vertices must have shape \(n, 3\), but its rows "
+        r"differ in length$",
+    ):
         shape_diameter.compute([[0.0, 0.0, 0.0], [1.0, 0.0]], F)
 
 
 def test_polygons_are_refused_with_advice():
-    # A trial's: quads mixed with triangles got numpy's words, naming no argument.
+    # Quads mixed with triangles got numpy's words, naming no argument.
     V = np.eye(5, 3)
-    with pytest.raises(ValueError, match=r"^triangles must have shape \(m, 3\), but its rows "
-                                         r"differ in length \(of polygons: triangulate"):
+    with pytest.raises(
+        ValueError,
+        match=r"^triangles must have shape \(m, 3\), but its rows "
+        r"differ in length \(of polygons: triangulate",
+    ):
         shape_diameter.compute(V, [[0, 1, 2, 3], [0, 1, 4]])
-    with pytest.raises(ValueError, match=r"got \(1, 4\): 4-corner polygons: triangulate them "
-                                         r"first \(load_mesh does\)$"):
+    with pytest.raises(
+        ValueError,
+        match=r"got \(1, 4\): 4-corner polygons: triangulate them "
+        r"first \(load_mesh does\)$",
+    ):
         shape_diameter.compute(V, [[0, 1, 2, 3]])
 
 
@@ -162,8 +170,11 @@ def test_non_finite_coordinates(sphere, value, where):
     V, F = sphere
     flat = _POSITIONS[where] % V.size
     vertex = (flat % V.size) // 3
-    with pytest.raises(ValueError, match=rf"vertices must be finite: 1 have NaN or infinite "
-                                         rf"coordinates \(first: vertex {vertex}\)"):
+    with pytest.raises(
+        ValueError,
+        match=rf"vertices must be finite: 1 have NaN or infinite "
+        rf"coordinates \(first: vertex {vertex}\)",
+    ):
         shape_diameter.compute(_with(V, flat, value), F)
 
 
@@ -222,7 +233,10 @@ def test_empty_mesh(V, F, match):
         ({"engine": "opencl:no-such-device"}, r"no OpenCL device matches 'no-such-device'"),
         ({"accel": "kdtree"}, r"accel must be one of \('bvh', 'octree'\), got 'kdtree'"),
         ({"accel": None}, r"accel must be one of .* got None"),
-        ({"bvh_quality": "best"}, r"bvh_quality must be one of \('auto', 'high', 'fast'\), got 'best'"),
+        (
+            {"bvh_quality": "best"},
+            r"bvh_quality must be one of \('auto', 'high', 'fast'\), got 'best'",
+        ),
         ({"accel": "octree", "octree_depth": -1}, _DEPTH + r"\[0, 16\], got -1"),
         ({"accel": "octree", "octree_depth": 17}, _DEPTH + r".* got 17"),
         ({"accel": "octree", "octree_depth": 2.5}, _DEPTH + r".* got 2.5"),
@@ -269,10 +283,17 @@ def test_non_numeric_cone_angle_is_a_value_error_naming_it(sphere, value):
 
 @pytest.mark.parametrize(
     "value",
-    [pytest.param(v, id=i) for v, i in (
-        ("abc", "str"), ("90", "numeric-str"), (None, "None"), (90 + 1j, "complex"),
-        (np.array([90.0, 100.0]), "array"),
-    )] + [pytest.param(True, id="bool")],
+    [
+        pytest.param(v, id=i)
+        for v, i in (
+            ("abc", "str"),
+            ("90", "numeric-str"),
+            (None, "None"),
+            (90 + 1j, "complex"),
+            (np.array([90.0, 100.0]), "array"),
+        )
+    ]
+    + [pytest.param(True, id="bool")],
 )
 def test_reduce_lengths_non_numeric_cone_angle_is_a_value_error_naming_it(value):
     with pytest.raises(ValueError, match=r"cone_angle"):
@@ -283,7 +304,11 @@ def test_octree_too_large_for_its_pointers_is_a_value_error(sphere):
     # Depth 16 with one triangle per leaf splits every cell touching a vertex down to the
     # bottom: more leaves than the paper's 24-bit child pointers can address.
     V, F = sphere
-    with pytest.raises(ValueError, match=r"octree needs more than 2\^24 leaf words.*octree_depth.*octree_leaf_size.*accel='bvh'"):
+    with pytest.raises(
+        ValueError,
+        match=r"octree needs more than 2\^24 leaf words.*octree_depth.*octree_leaf_size.*"
+        r"accel='bvh'",
+    ):
         shape_diameter.compute(V, F, accel="octree", octree_depth=16, octree_leaf_size=1)
     assert (shape_diameter.compute(V, F, accel="octree").valid_rays > 0).all()
 
@@ -360,8 +385,9 @@ def test_tiny_cone_angle_approaches_the_on_axis_thickness(sphere, sphere_thickne
         )
     # The rays themselves: distinct, finite, inside the cone, not all on the axis.
     half = np.radians(0.5e-3)
-    d, a = shape_diameter.cone_rays([0.2, -0.3, 0.9], 30, 1e-3, sampling, 4, point_index=2,
-                                    tangent=[1.0, 0.0, 0.0])
+    d, a = shape_diameter.cone_rays(
+        [0.2, -0.3, 0.9], 30, 1e-3, sampling, 4, point_index=2, tangent=[1.0, 0.0, 0.0]
+    )
     assert np.isfinite(d).all() and np.isfinite(a).all()
     assert np.allclose(np.linalg.norm(d, axis=1), 1.0, atol=1e-6)
     assert (a <= half * (1 + 1e-3)).all() and a.max() > 0.5 * half
@@ -402,7 +428,7 @@ def test_stage_functions_refuse_bad_input():
     with pytest.raises(ValueError, match=r"cone_angle must be a number in"):
         shape_diameter.reduce_lengths([1.0], [0.1], cone_angle=0.0)
     assert np.isnan(shape_diameter.reduce_lengths([], []))
-    # A NaN length gave NaN, a negative one a meaningless mean (a new-user trial).
+    # A NaN length gave NaN, a negative one a meaningless mean.
     for lengths in ([1.0, np.nan], [-1.0, 2.0], [1.0, np.inf]):
         with pytest.raises(ValueError, match=r"lengths must be finite and >= 0"):
             shape_diameter.reduce_lengths(lengths, [0.1, 0.2])
@@ -418,8 +444,9 @@ def test_stage_functions_refuse_bad_input():
     assert [a.shape for a in shape_diameter.sample_points(V, F)] == [(20, 3)] * 3
 
 
-@pytest.mark.parametrize("index", [-1, 2**32, 1.5, "3", None],
-                         ids=["negative", "2**32", "float", "str", "None"])
+@pytest.mark.parametrize(
+    "index", [-1, 2**32, 1.5, "3", None], ids=["negative", "2**32", "float", "str", "None"]
+)
 def test_cone_rays_point_index_out_of_range_is_a_value_error(index):
     # point_index seeds random sampling as a uint32; outside that range the call says so
     # (rather than pybind11's TypeError listing the C++ signature).
@@ -579,15 +606,22 @@ def test_zero_area_and_duplicated_triangles():
 @pytest.mark.parametrize("points", ["faces", "vertices"])
 @pytest.mark.parametrize("far", [1e3, 1e8])
 def test_zero_area_faces_reaching_far_vertices_change_nothing_else(points, far):
-    # A trial's: one face (0, 0, k) to a stray vertex far away set the near-hit cutoff and the
+    # One face (0, 0, k) to a stray vertex far away set the near-hit cutoff and the
     # centre (bunny00 with a vertex 1000 units off: 8.8% of faces >5% off; a building at UTM
     # coordinates with one reaching the origin: every value 0). Now such faces' corners take
     # no part in the box: the rest is bit for bit the clean mesh's. Three kinds: a repeated
     # corner, three corners at one far position, three distinct corners on one line.
     V, F = shapes.icosphere(1.0, 3)
     n, m = len(V), len(F)
-    stray = np.array([[far, 0.0, 0.0], [far, 0.0, 0.0], [far, 0.0, 0.0], [2 * far, 0.0, 0.0],
-                      [1.5 * far, 0.0, 0.0]])
+    stray = np.array(
+        [
+            [far, 0.0, 0.0],
+            [far, 0.0, 0.0],
+            [far, 0.0, 0.0],
+            [2 * far, 0.0, 0.0],
+            [1.5 * far, 0.0, 0.0],
+        ]
+    )
     V2 = np.vstack([V, stray])
     F2 = np.vstack([F, [[0, 0, n], [n, n + 1, n + 2], [n, n + 3, n + 4]]])
     clean = shape_diameter.compute(V, F, points=points)
@@ -629,8 +663,9 @@ def test_open_mesh_fills_faces_whose_rays_all_escape():
     low = np.empty(len(F), dtype=np.int64)
     high = np.empty(len(F), dtype=np.int64)
     for f in range(len(F)):
-        d, _ = shape_diameter.cone_rays(axes[f], 30, 120.0, "fibonacci", 0, point_index=f,
-                                        tangent=tangents[f])
+        d, _ = shape_diameter.cone_rays(
+            axes[f], 30, 120.0, "fibonacci", 0, point_index=f, tangent=tangents[f]
+        )
         d = d.astype(np.float64)
         b = d @ origins[f]
         t = -b + np.sqrt(b * b - (origins[f] @ origins[f] - 1.0))
@@ -676,7 +711,7 @@ def test_components_keep_their_own_scale():
 
 @pytest.mark.parametrize("points", ["faces", "vertices"])
 def test_a_thin_part_in_a_large_scene_reads_high_and_is_warned_of(points):
-    # A trial's: hits nearer than 2e-5 of the whole mesh's size are ignored, so a 1 mm plate
+    # Hits nearer than 2e-5 of the whole mesh's size are ignored, so a 1 mm plate
     # beside a ball tens of metres away lost its shortest rays and read high, without a word.
     plate_v, plate_f = shapes.box(1.0, 1.0, 0.001, 8)
     ball_v, ball_f = shapes.icosphere(0.25, 2)
@@ -703,7 +738,7 @@ def test_a_thin_part_in_a_large_scene_reads_high_and_is_warned_of(points):
 
 @pytest.mark.parametrize("points", ["faces", "vertices"])
 def test_a_part_that_keeps_no_ray_is_warned_of(points):
-    # A trial's: a 1 mm cube beside a 100 m slab keeps no ray (every hit within the 2 mm
+    # A 1 mm cube beside a 100 m slab keeps no ray (every hit within the 2 mm
     # cutoff) and took the slab's median, 14,000x its size, without a word; so did an
     # inside-out ball left as it was, and an open sheet beside a solid.
     slab_v, slab_f = shapes.box(100.0, 100.0, 10.0, 2)
@@ -722,7 +757,8 @@ def test_a_part_that_keeps_no_ray_is_warned_of(points):
             result = shape_diameter.compute(v, f, points=points, orientation=orientation)
         said = [m for m in caught if "kept no ray" in m]
         assert len(said) == 1 and said[0].startswith(
-            f"1 of the mesh's 2 parts ({len(part_f)} faces) kept no ray"), (name, caught)
+            f"1 of the mesh's 2 parts ({len(part_f)} faces) kept no ray"
+        ), (name, caught)
         part = slice(len(slab_f), None) if points == "faces" else slice(len(slab_v), None)
         assert (result.valid_rays[part] == 0).all()
     # Alone (nothing measured anywhere), the whole mesh's own warning says it, not this one.
@@ -797,12 +833,14 @@ def test_a_vertex_beyond_the_float_range_is_refused_by_name(sphere, scale, stray
     # Beyond 1e30 units, or beyond 1e30 widths of a mesh far below unit size, which compute()
     # scales up (a stray vertex of a 1e-25-wide mesh overflowed floats: found by fuzzing).
     V, F = sphere
-    with pytest.raises(ValueError, match=rf"vertex {len(V)}, used by no triangle with area, "
-                                         r"lies too far from the mesh for 32-bit floats"):
+    with pytest.raises(
+        ValueError,
+        match=rf"vertex {len(V)}, used by no triangle with area, "
+        r"lies too far from the mesh for 32-bit floats",
+    ):
         shape_diameter.compute(np.vstack([V * scale, [stray, 0.0, 0.0]]), F, points=points)
     # A little nearer, it takes no part.
-    near = shape_diameter.compute(np.vstack([V * scale, [stray / 1e3, 0.0, 0.0]]), F,
-                                  points=points)
+    near = shape_diameter.compute(np.vstack([V * scale, [stray / 1e3, 0.0, 0.0]]), F, points=points)
     alone = shape_diameter.compute(V * scale, F, points=points)
     assert np.array_equal(near.raw[: len(alone.raw)], alone.raw)
 
@@ -832,7 +870,9 @@ def test_a_real_mesh_wound_inside_out_warns_that_few_rays_were_kept(name, orient
     # Rays that leave through the near wall: 1.5-2.5 of 30 kept, half the faces none. Some
     # still hit (the legs, the ears), so the all-or-nothing warning above never fired.
     V, F = load_mesh(DATA / name)
-    with pytest.warns(RuntimeWarning, match=rf"only \d+\.\d of 30 rays .*inside out.*{orientation}"):
+    with pytest.warns(
+        RuntimeWarning, match=rf"only \d+\.\d of 30 rays .*inside out.*{orientation}"
+    ):
         result = shape_diameter.compute(V, F, orientation=orientation)
     assert result.valid_rays.mean() < 0.25 * 30
 
@@ -905,7 +945,7 @@ class _Signalled(Exception):
 @pytest.mark.parametrize("call", ["compute", "smooth"])
 def test_a_signal_stops_native_work_without_a_progress_callback(call):
     # Ctrl-C during compute() with no progress callback waited for the whole computation
-    # (22 s at 128 rays on a large mesh in a new-user trial): Python's signal handlers run
+    # (22 s at 128 rays on a large mesh): Python's signal handlers run
     # only between bytecodes. The core now runs them whenever it would report progress.
     # SIGUSR1 with a handler that raises stands in for SIGINT's KeyboardInterrupt.
     V, F = shapes.icosphere(1.0, 6)  # 81920 faces
@@ -990,5 +1030,7 @@ def test_mesh_checks_span_the_native_chunks():
     assert _core.mesh_values(V, F) == (3, 40_000, 2, 99_999)
     F[20_000, 0] = -7
     assert _core.mesh_values(V, F)[2] == -7
-    with pytest.raises(ValueError, match=r"3 have NaN or infinite coordinates \(first: vertex 40000\)"):
+    with pytest.raises(
+        ValueError, match=r"3 have NaN or infinite coordinates \(first: vertex 40000\)"
+    ):
         shape_diameter.compute(V, F)

@@ -17,7 +17,7 @@ trimesh = pytest.importorskip("trimesh")
 
 import shape_diameter
 from polygon_files import fanned, prism, write_polygons
-from shape_diameter import cli
+from shape_diameter import batch_job, cli
 from shape_diameter.colormap import colormap
 from shape_diameter.mesh_io import load_mesh
 
@@ -25,8 +25,9 @@ DATA = Path(__file__).resolve().parents[1] / "data"
 RAYS = 12  # enough rays to be a real run, few enough to keep the file fast
 JSON_KEYS = {
     "input", "faces", "vertices", "points", "point_count", "rays", "cone", "sampling",
-    "seed", "normalize", "smooth", "engine", "flipped_faces", "twin_faces", "seconds", "Mrays_per_s",
-    "io_seconds", "total_seconds", "outputs", "status", "error", "exit_status", "warnings",
+    "seed", "normalize", "smooth", "engine", "flipped_faces", "twin_faces", "seconds",
+    "Mrays_per_s", "io_seconds", "total_seconds", "outputs", "status", "error", "exit_status",
+    "warnings",
 }  # fmt: skip
 
 
@@ -122,6 +123,14 @@ def test_default_output_is_next_to_the_input(tmp_path, capsys):
     assert load_mesh(tmp_path / "cow.sdf.ply")[1].shape == (5804, 3)
     out = capsys.readouterr().out
     assert out.count("\n") == 1 and "cow.sdf.ply" in out
+    assert ", no smoothing, " in out
+
+
+def test_the_line_of_an_input_says_which_smoothing_ran(tmp_path, capsys):
+    source = tmp_path / "cow.obj"
+    shutil.copy(DATA / "cow.obj", source)
+    assert cli.main([str(source), "--rays", "4", "--smooth", "kring"]) == 0
+    assert ", kring smoothing, " in capsys.readouterr().out
 
 
 def test_a_mesh_at_utm_coordinates_keeps_its_geometry(tmp_path, capsys):
@@ -292,7 +301,7 @@ def test_a_value_error_from_compute_is_one_line_and_status_2(tmp_path, capsys, m
     def compute_with_bad_cone(*args, **kwargs):
         return real_compute(*args, **{**kwargs, "cone_angle": 500.0})
 
-    monkeypatch.setattr(cli, "compute", compute_with_bad_cone)
+    monkeypatch.setattr(batch_job, "compute", compute_with_bad_cone)
     assert cli.main([str(DATA / "suzanne.obj"), "-o", str(tmp_path / "out.ply")]) == 2
     captured = capsys.readouterr()
     _assert_one_line_error(captured.err, captured.out)
@@ -338,7 +347,7 @@ def test_outputs_never_overwrite_the_input_or_each_other(tmp_path, capsys, monke
     source = tmp_path / "in.obj"
     shutil.copy(DATA / "spot.obj", source)
     (tmp_path / "sub").mkdir()
-    monkeypatch.setattr(cli, "compute", _no_compute)
+    monkeypatch.setattr(batch_job, "compute", _no_compute)
     monkeypatch.chdir(tmp_path)
     if case == "hard link":
         (tmp_path / "link.obj").hardlink_to(source)
@@ -424,7 +433,7 @@ def test_an_opencl_failure_is_one_line_and_status_1(tmp_path, capsys, monkeypatc
         raise _core.OpenCLError("OpenCL clBuildProgram failed: CL_BUILD_PROGRAM_FAILURE on X; "
                                 "build log:\nerror: line 1\nerror: line 2")  # fmt: skip
 
-    monkeypatch.setattr(cli, "compute", failing_compute)
+    monkeypatch.setattr(batch_job, "compute", failing_compute)
     assert cli.main([str(DATA / "suzanne.obj"), "-o", str(tmp_path / "out.ply")]) == 1
     captured = capsys.readouterr()
     _assert_one_line_error(captured.err, captured.out)
@@ -435,7 +444,7 @@ def test_out_of_memory_is_one_line_and_status_1(tmp_path, capsys, monkeypatch):
     def failing_compute(*args, **kwargs):
         raise MemoryError()
 
-    monkeypatch.setattr(cli, "compute", failing_compute)
+    monkeypatch.setattr(batch_job, "compute", failing_compute)
     assert cli.main([str(DATA / "suzanne.obj"), "-o", str(tmp_path / "out.ply")]) == 1
     captured = capsys.readouterr()
     _assert_one_line_error(captured.err, captured.out)
@@ -460,8 +469,9 @@ def test_help_documents_exit_statuses_and_overwriting(capsys):
     assert cli.main(["--help"]) == 0
     text = " ".join(capsys.readouterr().out.split())
     assert "an existing OUTPUT is overwritten" in text
-    assert ("1 missing dependency, OpenCL missing for --engine opencl..., OpenCL device "
-            "failure") in text
+    assert (
+        "1 missing dependency, OpenCL missing for --engine opencl..., OpenCL device failure"
+    ) in text
     assert "refused before any input is read" in text
 
 
@@ -544,7 +554,7 @@ def test_progress_reaches_compute_and_json_stays_clean(tmp_path, capsys, monkeyp
         seen.append(kwargs["progress"])
         return real_compute(*args, **kwargs)
 
-    monkeypatch.setattr(cli, "compute", recording_compute)
+    monkeypatch.setattr(batch_job, "compute", recording_compute)
     monkeypatch.setattr(sys, "stderr", _Terminal())
     argv = [str(DATA / "suzanne.obj"), "-o", str(tmp_path / "out.ply"), "--json"]
     assert cli.main(argv) == 0
@@ -554,8 +564,24 @@ def test_progress_reaches_compute_and_json_stays_clean(tmp_path, capsys, monkeyp
 
 def test_engine_accel_and_orientation_options_reach_compute(tmp_path, capsys):
     out = tmp_path / "horse.ply"
-    code = cli.main([str(DATA / "horse.ply"), "-o", str(out), "--rays", "4", "--engine", "cpu",
-                 "--accel", "octree", "--orientation", "auto", "--threads", "1", "--json"])
+    code = cli.main(
+        [
+            str(DATA / "horse.ply"),
+            "-o",
+            str(out),
+            "--rays",
+            "4",
+            "--engine",
+            "cpu",
+            "--accel",
+            "octree",
+            "--orientation",
+            "auto",
+            "--threads",
+            "1",
+            "--json",
+        ]
+    )
     assert code == 0
     report = json.loads(capsys.readouterr().out)
     assert report["engine"] == "cpu (1 thread, octree)"
@@ -563,9 +589,20 @@ def test_engine_accel_and_orientation_options_reach_compute(tmp_path, capsys):
 
 
 def test_an_unknown_device_is_one_line_and_status_2(tmp_path):
-    done = subprocess.run([sys.executable, "-m", "shape_diameter.cli", str(DATA / "cow.obj"),
-                           "-o", str(tmp_path / "x.ply"), "--engine", "opencl:99"],
-                          capture_output=True, text=True)
+    done = subprocess.run(
+        [
+            sys.executable,
+            "-m",
+            "shape_diameter.cli",
+            str(DATA / "cow.obj"),
+            "-o",
+            str(tmp_path / "x.ply"),
+            "--engine",
+            "opencl:99",
+        ],
+        capture_output=True,
+        text=True,
+    )
     assert done.returncode == 2
     lines = done.stderr.strip().splitlines()
     assert len(lines) == 1 and "no OpenCL device 99" in lines[0], done.stderr
@@ -580,16 +617,24 @@ def test_bvh_quality_reaches_compute_and_keeps_the_values(tmp_path, monkeypatch,
         seen.update(kwargs)
         return shape_diameter.compute(*args, **kwargs)
 
-    monkeypatch.setattr(cli, "compute", recording)
+    monkeypatch.setattr(batch_job, "compute", recording)
     values = tmp_path / "values.npy"
-    argv = [str(DATA / "cow.obj"), "-o", str(tmp_path / "out.ply"), "--values", str(values),
-            "--engine", "cpu", "--bvh-quality", quality]
+    argv = [
+        str(DATA / "cow.obj"),
+        "-o",
+        str(tmp_path / "out.ply"),
+        "--values",
+        str(values),
+        "--engine",
+        "cpu",
+        "--bvh-quality",
+        quality,
+    ]
     assert cli.main(argv) == 0
     assert seen["bvh_quality"] == quality
     vertices, triangles = load_mesh(DATA / "cow.obj")
     expected = shape_diameter.compute(vertices, triangles, engine="cpu")
     np.testing.assert_array_equal(np.load(values), expected.raw)
-
 
 
 def test_ctrl_c_stops_a_long_run_when_stderr_is_not_a_terminal(tmp_path):
@@ -615,7 +660,7 @@ def test_ctrl_c_stops_a_long_run_when_stderr_is_not_a_terminal(tmp_path):
 
 def test_values_into_a_pipe_or_a_device_write_into_it(tmp_path):
     # --values /dev/null (or a FIFO) was replaced by a plain file: run as root, /dev/null of
-    # the whole machine (a trial's, with /dev/full).
+    # the whole machine (and so /dev/full).
     import threading
 
     fifo = tmp_path / "values.npy"
@@ -623,20 +668,46 @@ def test_values_into_a_pipe_or_a_device_write_into_it(tmp_path):
     got = []
     reader = threading.Thread(target=lambda: got.append(fifo.read_bytes()))
     reader.start()
-    assert cli.main([str(DATA / "suzanne.obj"), "-o", str(tmp_path / "a.ply"), "--rays",
-                     str(RAYS), "--values", str(fifo), "-q"]) == 0
+    assert (
+        cli.main(
+            [
+                str(DATA / "suzanne.obj"),
+                "-o",
+                str(tmp_path / "a.ply"),
+                "--rays",
+                str(RAYS),
+                "--values",
+                str(fifo),
+                "-q",
+            ]
+        )
+        == 0
+    )
     reader.join(timeout=60)
     assert stat.S_ISFIFO(os.stat(fifo).st_mode)
     values = np.load(io.BytesIO(got[0]))
     expected = shape_diameter.compute(*load_mesh(DATA / "suzanne.obj"), rays=RAYS).values
     np.testing.assert_array_equal(values, expected)
-    assert cli.main([str(DATA / "suzanne.obj"), "-o", str(tmp_path / "b.ply"), "--rays",
-                     str(RAYS), "--values", os.devnull, "-q"]) == 0
+    assert (
+        cli.main(
+            [
+                str(DATA / "suzanne.obj"),
+                "-o",
+                str(tmp_path / "b.ply"),
+                "--rays",
+                str(RAYS),
+                "--values",
+                os.devnull,
+                "-q",
+            ]
+        )
+        == 0
+    )
     assert stat.S_ISCHR(os.stat(os.devnull).st_mode)
 
 
 def test_one_input_whose_output_cannot_be_written_fails_alone(tmp_path, capsys):
-    # An output path that is a folder stopped the whole batch, with no JSON (a trial's).
+    # An output path that is a folder stopped the whole batch, with no JSON.
     for name in ("a", "b"):
         (tmp_path / f"{name}.obj").write_bytes((DATA / "suzanne.obj").read_bytes())
     (tmp_path / "a.sdf.ply").mkdir()
@@ -656,12 +727,17 @@ def test_output_with_a_folder_of_one_mesh_says_it_is_a_folder(tmp_path, capsys):
 def _shell(command, tmp_path):
     """`command` in bash, with $SD the command as users run it (its console entry)."""
     entry = f"{sys.executable} -c 'import _shape_diameter_entry as e, sys; sys.exit(e.main())'"
-    return subprocess.run(["bash", "-c", f"SD=\"{entry}\"; {command}"], cwd=tmp_path,
-                          capture_output=True, timeout=120, check=False)
+    return subprocess.run(
+        ["bash", "-c", f'SD="{entry}"; {command}'],
+        cwd=tmp_path,
+        capture_output=True,
+        timeout=120,
+        check=False,
+    )
 
 
 def test_a_closed_stderr_loses_only_the_messages(tmp_path):
-    # A trial's: with standard error closed (2>&-, a daemon's wrapper) the run failed on its
+    # With standard error closed (2>&-, a daemon's wrapper) the run failed on its
     # first message, writing nothing, with exit status 1 and no word.
     shutil.copy(DATA / "suzanne.obj", tmp_path / "a.obj")
     done = _shell(f"eval $SD a.obj --rays {RAYS} 2>&-; echo status $?", tmp_path)
@@ -670,11 +746,14 @@ def test_a_closed_stderr_loses_only_the_messages(tmp_path):
 
 
 def test_values_into_dev_stdout_on_a_pipe(tmp_path):
-    # A trial's: /dev/stdout on a pipe links to /proc/self/fd/1, 'pipe:[N]': 'cannot write
+    # /dev/stdout on a pipe links to /proc/self/fd/1, 'pipe:[N]': 'cannot write
     # (No such file or directory)'.
     shutil.copy(DATA / "suzanne.obj", tmp_path / "a.obj")
-    done = _shell(f"eval $SD a.obj -o b.ply -q --rays {RAYS} --values /dev/stdout | cat > v.npy; "
-                  "echo ${PIPESTATUS[0]}", tmp_path)
+    done = _shell(
+        f"eval $SD a.obj -o b.ply -q --rays {RAYS} --values /dev/stdout | cat > v.npy; "
+        "echo ${PIPESTATUS[0]}",
+        tmp_path,
+    )
     assert done.stdout.decode().split() == ["0"], done
     values = np.load(tmp_path / "v.npy")
     expected = shape_diameter.compute(*load_mesh(DATA / "suzanne.obj"), rays=RAYS).values
@@ -682,7 +761,7 @@ def test_values_into_dev_stdout_on_a_pipe(tmp_path):
 
 
 def test_a_stdout_that_cannot_be_written_says_so_in_one_line(tmp_path):
-    # A trial's: --json into /dev/full gave a traceback; without --json the input was named as
+    # --json into /dev/full gave a traceback; without --json the input was named as
     # what failed, though its outputs were written.
     shutil.copy(DATA / "suzanne.obj", tmp_path / "a.obj")
     for options in ("--json -q", ""):
@@ -694,15 +773,17 @@ def test_a_stdout_that_cannot_be_written_says_so_in_one_line(tmp_path):
 
 
 def test_an_engine_that_cannot_run_is_refused_before_any_input(tmp_path, capsys):
-    # A trial's: a mistyped device, or a node without OpenCL, failed every input in turn, each
+    # A mistyped device, or a node without OpenCL, failed every input in turn, each
     # reported as a broken asset (status 2) after being read.
     for name in ("a", "b"):
         shutil.copy(DATA / "suzanne.obj", tmp_path / f"{name}.obj")
     assert cli.main([str(tmp_path), "--engine", "opencl:no-such-device", "--json", "-q"]) == 2
     out, err = capsys.readouterr()
     assert out == "" and err.count("\n") == 1
-    assert err.startswith("shape-diameter: error: --engine opencl:no-such-device: no OpenCL "
-                          "device matches 'no-such-device'")
+    assert err.startswith(
+        "shape-diameter: error: --engine opencl:no-such-device: no OpenCL "
+        "device matches 'no-such-device'"
+    )
     assert not list(tmp_path.glob("*.sdf.*"))
     # No OpenCL on the machine: its problem (status 1), once.
     done = subprocess.run(

@@ -15,7 +15,7 @@ import pytest
 trimesh = pytest.importorskip("trimesh")
 
 import shape_diameter
-from shape_diameter import cli, mesh_io
+from shape_diameter import batch_job, cli, mesh_io
 
 DATA = Path(__file__).resolve().parents[1] / "data"
 RAYS = "4"
@@ -75,7 +75,7 @@ def test_clashing_outputs_are_refused_before_any_work(tmp_path, capsys, monkeypa
     (tmp_path / "folder").mkdir()
     _copy(tmp_path / "folder", "suzanne.obj:only.obj")
     before = {p: p.read_bytes() for p in tmp_path.rglob("*") if p.is_file()}
-    monkeypatch.setattr(cli, "compute", _no_compute)
+    monkeypatch.setattr(batch_job, "compute", _no_compute)
     monkeypatch.chdir(tmp_path)
     assert cli.main(argv) == 2
     captured = capsys.readouterr()
@@ -86,17 +86,21 @@ def test_clashing_outputs_are_refused_before_any_work(tmp_path, capsys, monkeypa
 
 def test_a_second_input_writing_an_earlier_ones_output_fails_alone(tmp_path, capsys):
     # a.obj and a.ply both make a.sdf.ply: it refused the whole run (one such pair in a
-    # folder of thousands, a trial's); now a.ply fails and the others are computed.
+    # folder of thousands); now a.ply fails and the others are computed.
     _copy(tmp_path, "suzanne.obj:a.obj", "cow.obj:b.obj")
     trimesh.load(DATA / "cow.obj").export(tmp_path / "a.ply")
     assert cli.main([str(tmp_path), "--rays", RAYS, "--json", "-q"]) == 2
     captured = capsys.readouterr()
     reports = {Path(r["input"]).name: r for r in map(json.loads, captured.out.splitlines())}
     assert {name: r["status"] for name, r in reports.items()} == {
-        "a.obj": "ok", "a.ply": "error", "b.obj": "ok"}
+        "a.obj": "ok",
+        "a.ply": "error",
+        "b.obj": "ok",
+    }
     assert reports["a.ply"]["error"] == (
         f"{tmp_path / 'a.ply'}: would write {tmp_path / 'a.sdf.ply'}, which "
-        f"{tmp_path / 'a.obj'} writes: give them separate runs, or rename one")
+        f"{tmp_path / 'a.obj'} writes: give them separate runs, or rename one"
+    )
     assert captured.err == f"shape-diameter: error: {reports['a.ply']['error']}\n"
     vertices, _ = mesh_io.load_mesh(tmp_path / "a.sdf.ply")
     np.testing.assert_array_equal(vertices, mesh_io.load_mesh(tmp_path / "a.obj")[0])
@@ -109,9 +113,13 @@ def test_a_link_to_nothing_in_a_folder_fails_as_an_input(tmp_path, capsys):
     assert cli.main([str(tmp_path), "--rays", RAYS, "--json", "-q"]) == 2
     reports = [json.loads(line) for line in capsys.readouterr().out.splitlines()]
     assert [(Path(r["input"]).name, r["status"]) for r in reports] == [
-        ("a.obj", "ok"), ("gone.obj", "error")]
-    assert reports[1]["error"] == (f"{tmp_path / 'gone.obj'}: a link to nothing (it points to "
-                                   f"{tmp_path / 'nowhere' / 'm.obj'})")
+        ("a.obj", "ok"),
+        ("gone.obj", "error"),
+    ]
+    assert reports[1]["error"] == (
+        f"{tmp_path / 'gone.obj'}: a link to nothing (it points to "
+        f"{tmp_path / 'nowhere' / 'm.obj'})"
+    )
 
 
 def test_a_bad_file_among_good_ones_is_reported_and_the_others_go_on(tmp_path, capsys):
@@ -193,7 +201,7 @@ def test_a_folder_stands_for_its_meshes_without_the_commands_outputs(tmp_path, c
     _copy(folder, "suzanne.obj:b.obj", "bunny00.off:a.off", "cow.obj:.hidden.obj",
           "cow.obj:sub/c.obj")  # fmt: skip
     (folder / "notes.txt").write_text("not a mesh\n")
-    for run in range(2):  # the second run meets the first one's outputs and skips them
+    for _ in range(2):  # the second run meets the first one's outputs and skips them
         assert cli.main([str(folder), "--rays", RAYS, "--json"]) == 0
         reports = [json.loads(line) for line in capsys.readouterr().out.splitlines()]
         assert [r["input"] for r in reports] == [str(folder / "a.off"), str(folder / "b.obj")]
@@ -285,3 +293,12 @@ def test_load_mesh_without_trimesh_says_what_to_install():
                           text=True, timeout=60)  # fmt: skip
     assert done.returncode == 0, done.stderr
     assert "pip install 'shape_diameter[cli]'" in done.stdout
+
+
+def test_a_folder_run_that_finds_no_mesh_makes_no_output_folder(tmp_path, capsys):
+    empty = tmp_path / "empty"
+    empty.mkdir()
+    out = tmp_path / "out"
+    assert cli.main([str(empty), "--output-dir", str(out), "--rays", RAYS, "-q"]) == 2
+    assert f"{empty}: no mesh files in the folder" in capsys.readouterr().err
+    assert not out.exists()

@@ -35,8 +35,11 @@ def _interrupt(command, delay, **options):
 
 def _without_the_long_work_notice(err):
     """LONG is announced as long texture work before it starts: that line is expected."""
-    return "".join(line for line in err.splitlines(keepends=True)
-                   if "texture smoothing at 8192 x 8192 texels: about" not in line)
+    return "".join(
+        line
+        for line in err.splitlines(keepends=True)
+        if "texture smoothing at 8192 x 8192 texels: about" not in line
+    )
 
 
 # 0.1-0.2 s: numpy and the native core being imported (a traceback once); 0.25-0.45 s:
@@ -61,8 +64,10 @@ def test_python_dash_m_stops_by_sigint_too(tmp_path):
 def test_ctrl_c_stops_a_shell_loop(tmp_path):
     # for f in ...; do shape-diameter "$f"; done: bash ends the loop only when its command
     # died by SIGINT.
-    loop = (f'for f in 1 2 3; do "{SCRIPT}" "{DATA / "spot.obj"}" -o "{tmp_path}/out$f.ply" '
-            f'{" ".join(LONG)}; echo "after $f: $?"; done; echo "loop done"')
+    loop = (
+        f'for f in 1 2 3; do "{SCRIPT}" "{DATA / "spot.obj"}" -o "{tmp_path}/out$f.ply" '
+        f'{" ".join(LONG)}; echo "after $f: $?"; done; echo "loop done"'
+    )
     status, out, err = _interrupt(["bash", "-c", loop], 1.5, start_new_session=True)
     assert (status, out, err) == (-signal.SIGINT, "", INTERRUPTED)
     assert list(tmp_path.iterdir()) == []
@@ -124,10 +129,14 @@ def test_a_ctrl_c_that_a_library_swallows_still_stops_the_run(tmp_path):
 @pytest.mark.parametrize("signum", [signal.SIGTERM, signal.SIGHUP])
 def test_sigterm_and_sighup_stop_the_run_as_ctrl_c_does(tmp_path, signum):
     # `timeout`, batch schedulers and a closed terminal send these: they left hidden
-    # temporary files behind (a trial's), and said nothing.
+    # temporary files behind, and said nothing.
     output = tmp_path / "out.ply"
-    run = subprocess.Popen([SCRIPT, DATA / "spot.obj", "-o", output, *LONG],
-                           stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    run = subprocess.Popen(
+        [SCRIPT, DATA / "spot.obj", "-o", output, *LONG],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+    )
     time.sleep(1.5)
     run.send_signal(signum)
     out, err = run.communicate(timeout=60)
@@ -141,8 +150,11 @@ def test_a_closed_standard_output_stops_the_run_quietly(tmp_path):
     for name in ("a", "b"):  # the second's line comes after the reader is gone
         (tmp_path / f"{name}.obj").write_bytes((DATA / "spot.obj").read_bytes())
     for extra in (["--json"], []):
-        run = subprocess.Popen([SCRIPT, tmp_path, "--engine", "cpu", "--rays", "512", *extra],
-                               stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+        run = subprocess.Popen(
+            [SCRIPT, tmp_path, "--engine", "cpu", "--rays", "512", *extra],
+            stdout=subprocess.PIPE,
+            stderr=subprocess.PIPE,
+        )
         run.stdout.read(1)
         run.stdout.close()
         err = run.stderr.read().decode()

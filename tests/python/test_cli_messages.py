@@ -1,7 +1,6 @@
 # SPDX-License-Identifier: GPL-3.0-or-later
 """The command line's words: options that would do nothing are refused, broken files say
-what is wrong with them, and the library's warnings come in option spelling (a trial's
-findings)."""
+what is wrong with them, and the library's warnings come in option spelling."""
 
 import struct
 from pathlib import Path
@@ -11,7 +10,7 @@ import pytest
 
 trimesh = pytest.importorskip("trimesh")
 
-from shape_diameter import cli
+from shape_diameter import batch_job, cli
 
 DATA = Path(__file__).resolve().parents[1] / "data"
 SPOT = str(DATA / "spot.obj")
@@ -23,17 +22,23 @@ def _error(capsys, argv):
     captured = capsys.readouterr()
     assert captured.err.count("\n") == 1 and "Traceback" not in captured.err, captured.err
     assert captured.err.startswith("shape-diameter: error: ")
-    return captured.err[len("shape-diameter: error: "):].strip()
+    return captured.err[len("shape-diameter: error: ") :].strip()
 
 
 NO_OP_OPTIONS = {
     "seed without random sampling": (["--seed", "5"], "--seed applies to --sampling random"),
-    "seed with cgal sampling": (["--seed", "5", "--sampling", "cgal"],
-                                "--seed applies to --sampling random"),
-    "bvh quality with the octree": (["--accel", "octree", "--bvh-quality", "high"],
-                                    "--bvh-quality applies to --accel bvh"),
-    "values and save-values": (["--values", "{tmp}/v.npy", "--save-values"],
-                               "--values and --save-values both say where values go"),
+    "seed with cgal sampling": (
+        ["--seed", "5", "--sampling", "cgal"],
+        "--seed applies to --sampling random",
+    ),
+    "bvh quality with the octree": (
+        ["--accel", "octree", "--bvh-quality", "high"],
+        "--bvh-quality applies to --accel bvh",
+    ),
+    "values and save-values": (
+        ["--values", "{tmp}/v.npy", "--save-values"],
+        "--values and --save-values both say where values go",
+    ),
 }
 
 
@@ -47,8 +52,25 @@ def test_an_option_that_would_do_nothing_is_refused(tmp_path, capsys, case):
 
 def test_seed_and_bvh_quality_where_they_apply_are_accepted(tmp_path, capsys):
     out = tmp_path / "out.ply"
-    assert cli.main([SPOT, "-o", str(out), "--rays", "4", "--sampling", "random", "--seed",
-                     "5", "--bvh-quality", "high", "-q"]) == 0
+    assert (
+        cli.main(
+            [
+                SPOT,
+                "-o",
+                str(out),
+                "--rays",
+                "4",
+                "--sampling",
+                "random",
+                "--seed",
+                "5",
+                "--bvh-quality",
+                "high",
+                "-q",
+            ]
+        )
+        == 0
+    )
     assert out.exists()
 
 
@@ -79,7 +101,8 @@ def test_a_truncated_ascii_stl_says_so(tmp_path, capsys):
     # It said "no triangles found": trimesh drops the whole text.
     path = _truncated_ascii_stl(tmp_path)
     assert _error(capsys, [path, "-o", tmp_path / "o.ply"]) == (
-        f"{path}: truncated: ASCII STL text ends with an 'endsolid' line, this file does not")
+        f"{path}: truncated: ASCII STL text ends with an 'endsolid' line, this file does not"
+    )
 
 
 def test_an_ascii_stl_with_padding_after_endsolid_is_read(tmp_path):
@@ -96,25 +119,30 @@ def test_a_truncated_glb_says_so(tmp_path, capsys):
     path, declared = _truncated_glb(tmp_path)
     assert _error(capsys, [path, "-o", tmp_path / "o.ply"]) == (
         f"{path}: truncated: its header declares {declared} bytes, the file has "
-        f"{path.stat().st_size}")
+        f"{path.stat().st_size}"
+    )
 
 
 OBJ_FILES = {
     # It said "a point cloud": the line records were dropped before trimesh saw the file.
-    "lines": ("v 0 0 0\nv 1 0 0\nv 0 1 0\nl 1 2\nl 2 3\n",
-              "no triangles found (it holds lines)"),
+    "lines": ("v 0 0 0\nv 1 0 0\nv 0 1 0\nl 1 2\nl 2 3\n", "no triangles found (it holds lines)"),
     # It gave numpy's "index 4 is out of bounds for axis 0 with size 3".
-    "past the last vertex": ("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\nf 1 2 5\n",
-                             "cannot read mesh (face 'f 1 2 5' uses vertex 5, but the file has "
-                             "3 vertices)"),
+    "past the last vertex": (
+        "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\nf 1 2 5\n",
+        "cannot read mesh (face 'f 1 2 5' uses vertex 5, but the file has 3 vertices)",
+    ),
     # trimesh dropped it: a file cut inside its last face line read "ok".
-    "a face of two corners": ("v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 3 2\nf 1 4",
-                              "cannot read mesh (face 'f 1 4' has 2 corners, fewer than a "
-                              "face's 3 (is the file cut short?))"),
+    "a face of two corners": (
+        "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 3 2\nf 1 4",
+        "cannot read mesh (face 'f 1 4' has 2 corners, fewer than a "
+        "face's 3 (is the file cut short?))",
+    ),
     # trimesh wrapped it around to a vertex from the end, and the run went on.
-    "back past the first vertex": ("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 -7\n",
-                                   "cannot read mesh (face 'f 1 2 -7' counts back past the "
-                                   "first vertex (a negative index counts back from its line))"),
+    "back past the first vertex": (
+        "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 -7\n",
+        "cannot read mesh (face 'f 1 2 -7' counts back past the "
+        "first vertex (a negative index counts back from its line))",
+    ),
 }
 
 
@@ -128,8 +156,9 @@ def test_a_broken_obj_says_what_is_wrong(tmp_path, capsys, case):
 
 def test_relative_obj_indices_within_the_file_still_work(tmp_path):
     path = tmp_path / "relative.obj"
-    path.write_text("v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\n"
-                    "f -4 -2 -3\nf -4 -3 -1\nf -3 -2 -1\nf -4 -1 -2\n")
+    path.write_text(
+        "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf -4 -2 -3\nf -4 -3 -1\nf -3 -2 -1\nf -4 -1 -2\n"
+    )
     from shape_diameter.mesh_io import load_mesh
 
     _, triangles = load_mesh(path)
@@ -146,18 +175,28 @@ def test_warnings_name_options_not_python_arguments(tmp_path, capsys):
     # An inside-out cow trusted as wound keeps few rays: the hint spoke of orientation='as_is'.
     spot = trimesh.load(SPOT, process=False)
     path = _inside_out(tmp_path, spot, "spot.ply")
-    assert cli.main([path, "-o", str(tmp_path / "o.ply"), "--orientation", "as_is",
-                     "--rays", "8", "-q"]) == 0
+    assert (
+        cli.main(
+            [path, "-o", str(tmp_path / "o.ply"), "--orientation", "as_is", "--rays", "8", "-q"]
+        )
+        == 0
+    )
     err = capsys.readouterr().err
     assert "--orientation as_is trusts the winding; --orientation auto turns" in err, err
     assert "orientation='" not in err, err
     # A convex one keeps none: the warning spoke of valid_rays, which the command never shows.
     path = _inside_out(tmp_path, _sphere(), "sphere.ply")
-    assert cli.main([path, "-o", str(tmp_path / "o.ply"), "--orientation", "as_is",
-                     "--rays", "8", "-q"]) == 0
+    assert (
+        cli.main(
+            [path, "-o", str(tmp_path / "o.ply"), "--orientation", "as_is", "--rays", "8", "-q"]
+        )
+        == 0
+    )
     err = capsys.readouterr().err
-    assert err.endswith("no ray of any point found the other side of the mesh (is it open, "
-                        "flat or inside out?); every value is 0\n"), err
+    assert err.endswith(
+        "no ray of any point found the other side of the mesh (is it open, "
+        "flat or inside out?); every value is 0\n"
+    ), err
 
 
 def test_a_failed_write_names_the_file_that_failed_once(tmp_path):
@@ -173,25 +212,70 @@ def test_a_failed_write_names_the_file_that_failed_once(tmp_path):
     def small_files():  # 64 kB: the PLY (about 300 kB) cannot be written
         resource.setrlimit(resource.RLIMIT_FSIZE, (65536, 65536))
 
-    run = subprocess.run([sys.executable, "-m", "shape_diameter", str(mesh), "--save-values",
-                          "--rays", "4", "-q"],
-                         capture_output=True, text=True, preexec_fn=small_files, timeout=120)
+    run = subprocess.run(
+        [sys.executable, "-m", "shape_diameter", str(mesh), "--save-values", "--rays", "4", "-q"],
+        capture_output=True,
+        text=True,
+        preexec_fn=small_files,
+        timeout=120,
+    )
     assert run.returncode == 1
-    assert run.stderr == (f"shape-diameter: error: {tmp_path / 'spot.sdf.ply'}: cannot write "
-                          "(File too large); nothing written\n")
+    assert run.stderr == (
+        f"shape-diameter: error: {tmp_path / 'spot.sdf.ply'}: cannot write "
+        "(File too large); nothing written\n"
+    )
     assert sorted(p.name for p in tmp_path.iterdir()) == ["spot.obj"]
 
 
 def test_long_texture_work_is_announced(tmp_path, capsys, monkeypatch):
     # An 8192^2 run at a radius of 8192 texels went on for an hour without a word.
-    monkeypatch.setattr(cli, "LONG_TEXTURE_SECONDS", 0.0)
-    assert cli.main([SPOT, "-o", str(tmp_path / "o.ply"), "--rays", "4", "--engine", "cpu",
-                     "--smooth", "texture", "--texture-size", "64", "--threads", "2",
-                     "-q"]) == 0
+    monkeypatch.setattr(batch_job, "LONG_TEXTURE_SECONDS", 0.0)
+    assert (
+        cli.main(
+            [
+                SPOT,
+                "-o",
+                str(tmp_path / "o.ply"),
+                "--rays",
+                "4",
+                "--engine",
+                "cpu",
+                "--smooth",
+                "texture",
+                "--texture-size",
+                "64",
+                "--threads",
+                "2",
+                "-q",
+            ]
+        )
+        == 0
+    )
     err = capsys.readouterr().err
-    assert "warning: " in err and "texture smoothing at 64 x 64 texels: about 0 s on 2 CPU " \
-        "threads and 0 MiB (an estimate)" in err, err
-    monkeypatch.setattr(cli, "LONG_TEXTURE_SECONDS", 10.0)  # the real threshold: quiet
-    assert cli.main([SPOT, "-o", str(tmp_path / "o.ply"), "--rays", "4", "--engine", "cpu",
-                     "--smooth", "texture", "--texture-size", "64", "-q"]) == 0
+    assert (
+        "warning: " in err
+        and "texture smoothing at 64 x 64 texels: about 0 s on 2 CPU "
+        "threads and 0 MiB (an estimate)"
+        in err
+    ), err
+    monkeypatch.setattr(batch_job, "LONG_TEXTURE_SECONDS", 10.0)  # the real threshold: quiet
+    assert (
+        cli.main(
+            [
+                SPOT,
+                "-o",
+                str(tmp_path / "o.ply"),
+                "--rays",
+                "4",
+                "--engine",
+                "cpu",
+                "--smooth",
+                "texture",
+                "--texture-size",
+                "64",
+                "-q",
+            ]
+        )
+        == 0
+    )
     assert "texture smoothing at" not in capsys.readouterr().err

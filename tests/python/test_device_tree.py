@@ -1,5 +1,5 @@
 # SPDX-License-Identifier: GPL-3.0-or-later
-"""The BVH and the faces' points made on the device (kernels/sdf_lbvh_kernels.cl): the same
+"""The BVH and the faces' points made on the device (kernels/cl/sdf_lbvh_kernels.cl): the same
 values as the CPU engine's, bit for bit, on every device and cast kernel, for meshes that
 stress the build (zero-area faces, faces that share one Morton cell, one triangle, faces to
 reverse). GPUs make this tree by default (engine 'auto'/'opencl', points 'faces'); the
@@ -9,13 +9,10 @@ import warnings
 
 import numpy as np
 import pytest
-
 import shape_diameter as sd
-from shape_diameter.mesh_io import load_mesh
-
-from shape_diameter import _core
-
 from opencl_devices import OPENCL
+from shape_diameter import _core
+from shape_diameter.mesh_io import load_mesh
 from shapes import box
 from test_opencl import DATA
 
@@ -41,7 +38,7 @@ def clustered_mesh():
     codes: the tree splits them by index), around a box that spreads the code range."""
     rng = np.random.default_rng(3)
     v, f = [], []
-    for k in range(400):
+    for _ in range(400):
         centre = np.array([0.5, 0.5, 0.5]) + 1e-5 * rng.standard_normal(3)
         corners = centre + 0.05 * rng.standard_normal((3, 3))
         f.append([len(v), len(v) + 1, len(v) + 2])
@@ -75,14 +72,20 @@ def reference_keys(v, f):
     scale = np.float32(1023) / np.maximum(all_hi - all_lo, np.float32(1e-30))
     centre = (lo + hi) * np.float32(0.5)
     cell = np.clip((centre - all_lo) * scale, 0, 1023).astype(np.uint32)
-    code = spread_bits_10(cell[:, 0]) | (spread_bits_10(cell[:, 1]) << 1) | (
-        spread_bits_10(cell[:, 2]) << 2)
+    code = (
+        spread_bits_10(cell[:, 0])
+        | (spread_bits_10(cell[:, 1]) << 1)
+        | (spread_bits_10(cell[:, 2]) << 2)
+    )
     code = np.where(area, code, np.uint32(1 << 30))
     order = np.argsort(code, kind="stable").astype(np.uint32)
     edge = np.abs(np.concatenate([e1[area], e2[area]])).max()
     coordinate = np.abs(np.concatenate([all_lo, all_hi])).max()
-    margin = (np.float32(4) * np.float32(1e-5) * edge + np.float32(np.ldexp(coordinate, -20))
-              + np.finfo(np.float32).tiny)
+    margin = (
+        np.float32(4) * np.float32(1e-5) * edge
+        + np.float32(np.ldexp(coordinate, -20))
+        + np.finfo(np.float32).tiny
+    )
     return order, code[order][: area.sum()], int(area.sum()), np.float32(margin)
 
 
@@ -281,4 +284,4 @@ def test_twins_among_faces_to_reverse_are_found_beside_the_second_cast(monkeypat
     assert device.twin_faces == cpu.twin_faces == len(bf)
     assert device.flipped_faces == cpu.flipped_faces > 0
     same_bits(device, cpu)
-    np.testing.assert_array_equal(device.raw[-len(bf):], device.raw[-2 * len(bf):-len(bf)])
+    np.testing.assert_array_equal(device.raw[-len(bf) :], device.raw[-2 * len(bf) : -len(bf)])

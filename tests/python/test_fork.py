@@ -1,6 +1,6 @@
 # SPDX-License-Identifier: GPL-3.0-or-later
 """Worker processes forked after the parent used OpenCL (multiprocessing's default start
-method on Linux): OpenCL calls there hung for ever (a trial's Pool). Now such a process lists
+method on Linux): OpenCL calls there hung for ever (a Pool's workers). Now such a process lists
 no OpenCL device, 'auto' runs on the CPU (with a warning where the parent had a GPU) and an
 explicit OpenCL engine is refused, saying why."""
 
@@ -12,7 +12,6 @@ import textwrap
 from pathlib import Path
 
 import pytest
-
 from opencl_devices import OPENCL
 
 SPOT = Path(__file__).resolve().parents[1] / "data" / "spot.obj"
@@ -46,9 +45,12 @@ SCRIPT = textwrap.dedent("""
 def test_a_forked_worker_runs_on_the_cpu_and_refuses_opencl_instead_of_hanging(tmp_path):
     script = tmp_path / "fork_after_opencl.py"
     script.write_text(SCRIPT)
-    run = subprocess.run([sys.executable, "-W", "ignore::DeprecationWarning", str(script),
-                          str(SPOT), OPENCL[0]],
-                         capture_output=True, text=True, timeout=300)
+    run = subprocess.run(
+        [sys.executable, "-W", "ignore::DeprecationWarning", str(script), str(SPOT), OPENCL[0]],
+        capture_output=True,
+        text=True,
+        timeout=300,
+    )
     assert run.returncode == 0, run.stderr
     report = json.loads(run.stdout.splitlines()[-1])
     (auto, auto_warnings, listed), (device, _, _), (cpu, _, _) = report["done"]
@@ -67,11 +69,13 @@ def test_a_forked_worker_runs_on_the_cpu_and_refuses_opencl_instead_of_hanging(t
 
 @pytest.mark.skipif(not hasattr(os, "sched_setaffinity"), reason="Linux affinity only")
 def test_every_core_means_the_cores_the_process_may_use():
-    # A trial's: a farm slot pinned to one core (taskset, a cpuset) ran a thread per core of
+    # A farm slot pinned to one core (taskset, a cpuset) ran a thread per core of
     # the machine. threads=0 now takes the process's affinity.
-    code = ("import shape_diameter as sd, shapes; "
-            "print(sd.engines()[0]['threads'], "
-            "sd.compute(*shapes.icosphere(1.0, 1), engine='cpu').engine)")
+    code = (
+        "import shape_diameter as sd, shapes; "
+        "print(sd.engines()[0]['threads'], "
+        "sd.compute(*shapes.icosphere(1.0, 1), engine='cpu').engine)"
+    )
     done = subprocess.run(
         [sys.executable, "-c", code], capture_output=True, text=True, timeout=120, check=True,
         preexec_fn=lambda: os.sched_setaffinity(0, {min(os.sched_getaffinity(0))}),
@@ -95,6 +99,7 @@ def test_a_forked_worker_pinned_by_its_initializer_takes_its_own_cores():
         with multiprocessing.get_context("fork").Pool(1, initializer=pin) as pool:
             print(pool.map(threads, [0])[0])
     """)
-    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
-                          timeout=120, check=True)
+    done = subprocess.run(
+        [sys.executable, "-c", code], capture_output=True, text=True, timeout=120, check=True
+    )
     assert done.stdout.split() == ["1"], done

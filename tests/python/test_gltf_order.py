@@ -7,7 +7,6 @@ import struct
 
 import numpy as np
 import pytest
-
 from shape_diameter.mesh_io import load_mesh, load_mesh_with_uvs
 
 
@@ -23,14 +22,21 @@ def _primitive(x, views, accessors, chunks):
         offset = sum(len(chunk) for chunk in chunks)
         chunks.append(array.tobytes())
         views.append({"buffer": 0, "byteOffset": offset, "byteLength": array.nbytes})
-        accessor = {"bufferView": len(views) - 1, "componentType": component,
-                    "count": len(array), "type": kind}
+        accessor = {
+            "bufferView": len(views) - 1,
+            "componentType": component,
+            "count": len(array),
+            "type": kind,
+        }
         if kind == "VEC3":
             accessor.update(min=array.min(0).tolist(), max=array.max(0).tolist())
         accessors.append(accessor)
     # trimesh keeps a primitive's UVs only when it has a material.
-    return {"attributes": {"POSITION": first + 1, "TEXCOORD_0": first + 2},
-            "indices": first, "material": 0}
+    return {
+        "attributes": {"POSITION": first + 1, "TEXCOORD_0": first + 2},
+        "indices": first,
+        "material": 0,
+    }
 
 
 def _scene_file(tmp_path, suffix):
@@ -39,8 +45,7 @@ def _scene_file(tmp_path, suffix):
     group without a mesh, a node whose name is another's index, one named 'world'."""
     views, accessors, chunks = [], [], []
     meshes = [{"primitives": [_primitive(x, views, accessors, chunks)]} for x in range(6)]
-    meshes.append({"primitives": [_primitive(x, views, accessors, chunks)
-                                  for x in (10, 11, 12)]})
+    meshes.append({"primitives": [_primitive(x, views, accessors, chunks) for x in (10, 11, 12)]})
     nodes = [
         {"mesh": 0, "children": [1, 2]},
         {"mesh": 1, "name": "twin"},
@@ -53,21 +58,32 @@ def _scene_file(tmp_path, suffix):
     ]
     data = b"".join(chunks)
     header = {
-        "asset": {"version": "2.0"}, "scene": 0, "scenes": [{"nodes": [0, 3, 4]}],
-        "nodes": nodes, "meshes": meshes, "materials": [{}],
-        "buffers": [{"byteLength": len(data)}], "bufferViews": views, "accessors": accessors,
+        "asset": {"version": "2.0"},
+        "scene": 0,
+        "scenes": [{"nodes": [0, 3, 4]}],
+        "nodes": nodes,
+        "meshes": meshes,
+        "materials": [{}],
+        "buffers": [{"byteLength": len(data)}],
+        "bufferViews": views,
+        "accessors": accessors,
     }
     path = tmp_path / f"scene{suffix}"
     if suffix == ".gltf":
-        header["buffers"][0]["uri"] = ("data:application/octet-stream;base64,"
-                                       + base64.b64encode(data).decode())
+        header["buffers"][0]["uri"] = (
+            "data:application/octet-stream;base64," + base64.b64encode(data).decode()
+        )
         path.write_text(json.dumps(header))
     else:
         text = json.dumps(header).encode()
         text += b" " * (-len(text) % 4)
         data += b"\0" * (-len(data) % 4)
-        body = (struct.pack("<II", len(text), 0x4E4F534A) + text
-                + struct.pack("<II", len(data), 0x004E4942) + data)
+        body = (
+            struct.pack("<II", len(text), 0x4E4F534A)
+            + text
+            + struct.pack("<II", len(data), 0x004E4942)
+            + data
+        )
         path.write_bytes(b"glTF" + struct.pack("<II", 2, 12 + len(body)) + body)
     return path
 
@@ -89,8 +105,9 @@ def test_gltf_triangles_come_in_the_files_node_order(tmp_path, suffix):
 def test_gltf_uvs_follow_their_triangles(tmp_path, suffix):
     vertices, triangles, uvs = load_mesh_with_uvs(_scene_file(tmp_path, suffix))
     assert uvs is not None
-    np.testing.assert_array_equal(uvs[:, :, 0], vertices[triangles][:, :, 0].min(1)[:, None]
-                                  * np.ones((1, 3)))
+    np.testing.assert_array_equal(
+        uvs[:, :, 0], vertices[triangles][:, :, 0].min(1)[:, None] * np.ones((1, 3))
+    )
 
 
 def test_a_gltf_node_tree_that_cannot_be_followed_is_a_clear_error(tmp_path):
@@ -102,19 +119,29 @@ def test_a_gltf_node_tree_that_cannot_be_followed_is_a_clear_error(tmp_path):
         load_mesh(path)
 
 
-# What trimesh reads wrongly without a word (a game-asset trial's, each computed as 'ok'):
+# What trimesh reads wrongly without a word (game assets, each computed as 'ok'):
 # refused, saying what.
 UNREAD = {
-    "draco": (lambda h: h.update(extensionsRequired=["KHR_draco_mesh_compression"]),
-              "requires the glTF extension KHR_draco_mesh_compression"),
-    "quantized positions": (lambda h: h["accessors"][1].update(normalized=True),
-                            "mesh 0 primitive 0's POSITION is stored as normalized integers"),
-    "sparse positions": (lambda h: h["accessors"][1].update(sparse={"count": 1}),
-                         "mesh 0 primitive 0's POSITION is a sparse accessor"),
-    "triangle fan": (lambda h: h["meshes"][2]["primitives"][0].update(mode=6),
-                     "mesh 2 primitive 0 is a triangle fan"),
-    "camera with a mesh": (lambda h: h["nodes"][3].update(camera=0),
-                           "node 3 is a camera holding a mesh"),
+    "draco": (
+        lambda h: h.update(extensionsRequired=["KHR_draco_mesh_compression"]),
+        "requires the glTF extension KHR_draco_mesh_compression",
+    ),
+    "quantized positions": (
+        lambda h: h["accessors"][1].update(normalized=True),
+        "mesh 0 primitive 0's POSITION is stored as normalized integers",
+    ),
+    "sparse positions": (
+        lambda h: h["accessors"][1].update(sparse={"count": 1}),
+        "mesh 0 primitive 0's POSITION is a sparse accessor",
+    ),
+    "triangle fan": (
+        lambda h: h["meshes"][2]["primitives"][0].update(mode=6),
+        "mesh 2 primitive 0 is a triangle fan",
+    ),
+    "camera with a mesh": (
+        lambda h: h["nodes"][3].update(camera=0),
+        "node 3 is a camera holding a mesh",
+    ),
 }
 
 

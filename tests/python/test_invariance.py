@@ -41,9 +41,8 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-import trimesh
-
 import shape_diameter
+import trimesh
 
 DATA = Path(__file__).resolve().parents[1] / "data"
 SAMPLINGS = ["fibonacci", "cgal", "random"]
@@ -92,7 +91,7 @@ def _rotation(seed: int) -> np.ndarray:
 # --------------------------------------------------------------------------- scaling
 
 
-# Down to coordinates around 1e-6 and up to 1e6 (issue 7: extreme scales), bit for bit.
+# Down to coordinates around 1e-6 and up to 1e6 (extreme scales), bit for bit.
 @pytest.mark.parametrize("scale", [2.0**-20, 2.0**-10, 8.0, 2.0**10, 2.0**20])
 def test_power_of_two_scaling_scales_raw_exactly(fandisk, baseline, scale):
     V, F = fandisk
@@ -167,8 +166,10 @@ def _check_rotation(V, F, matrix, sampling, base, points="faces"):
     report = (
         f"{sampling}/{points}: {within:.4%} of {rel.size} within {ROTATION_TOL:g} "
         f"(need {ROTATION_SHARE:.1%}); worst "
-        + ", ".join(f"#{int(w)}: {rel[w]:.3g} (valid_rays {base.valid_rays[w]} -> "
-                    f"{rotated.valid_rays[w]})" for w in worst)
+        + ", ".join(
+            f"#{int(w)}: {rel[w]:.3g} (valid_rays {base.valid_rays[w]} -> {rotated.valid_rays[w]})"
+            for w in worst
+        )
         + f"; {_summary(rel, ROTATION_TOL)}"
     )
     assert within >= ROTATION_SHARE, report
@@ -355,8 +356,9 @@ def test_tangent_sets_the_azimuth(sampling):
         matrix = np.eye(3) + s * k + (1 - c) * k @ k
         assert np.abs(turned - d @ matrix.T).max() < 1e-5, angle
     # A tangent with a component along the axis is projected onto the plane first.
-    tilted, _ = shape_diameter.cone_rays(n, 30, 120.0, sampling, 1, point_index=9,
-                                         tangent=2.0 * t + 0.7 * n)
+    tilted, _ = shape_diameter.cone_rays(
+        n, 30, 120.0, sampling, 1, point_index=9, tangent=2.0 * t + 0.7 * n
+    )
     assert np.abs(tilted - d).max() < 1e-5
 
 
@@ -380,24 +382,26 @@ def test_fallback_frame_without_a_tangent(sampling):
     # zero z, the vertical walls of z-up models, where the former normal-only frame jumped.
     rng = np.random.default_rng(5)
     normals = _unit(rng.normal(size=(300, 3)))
-    equator = _unit([[1.0, 0, 0], [0, 1.0, 0], [0.6, -0.8, 0], [-0.28, 0.96, 0], [0, 0, 1],
-                     [0, 0, -1]])
+    equator = _unit(
+        [[1.0, 0, 0], [0, 1.0, 0], [0.6, -0.8, 0], [-0.28, 0.96, 0], [0, 0, 1], [0, 0, -1]]
+    )
     normals = np.concatenate([normals, equator])
     normals = normals[np.abs(normals @ _G) < 0.99]  # stay > 8 degrees away from +-g
     jumps = []
     for n in normals:
         a, _ = shape_diameter.cone_rays(n, 30, 120.0, sampling, 0, point_index=3)
-        explicit, _ = shape_diameter.cone_rays(n, 30, 120.0, sampling, 0, point_index=3,
-                                               tangent=np.cross(n, _G))
+        explicit, _ = shape_diameter.cone_rays(
+            n, 30, 120.0, sampling, 0, point_index=3, tangent=np.cross(n, _G)
+        )
         assert np.abs(a - explicit).max() < 1e-5, n
         deltas = [[0, 0, 1e-6], [0, 0, -1e-6], [1e-6, 0, 0], [0, -1e-6, 0]]
         for delta in deltas:
-            b, _ = shape_diameter.cone_rays(n + np.array(delta), 30, 120.0, sampling, 0,
-                                            point_index=3)
+            b, _ = shape_diameter.cone_rays(
+                n + np.array(delta), 30, 120.0, sampling, 0, point_index=3
+            )
             jumps.append((float(np.abs(a - b).max()), n.round(3).tolist(), delta))
         if n[2] == 0.0:  # the same normal with z = -0.0 instead of +0.0
-            b, _ = shape_diameter.cone_rays(n * [1, 1, -1], 30, 120.0, sampling, 0,
-                                            point_index=3)
+            b, _ = shape_diameter.cone_rays(n * [1, 1, -1], 30, 120.0, sampling, 0, point_index=3)
             jumps.append((float(np.abs(a - b).max()), n.round(3).tolist(), "z = -0.0"))
     bad = [j for j in jumps if j[0] > 1e-4]
     assert not bad, (

@@ -102,9 +102,11 @@ def test_polygons_are_fanned_in_place_with_their_source_faces(tmp_path, suffix):
 def test_binary_ply_quads_are_fanned_in_place(tmp_path):
     # A binary PLY of quads only (trimesh reads binary lists of one length only).
     vertices, quads = cube_of_quads()
-    header = ("ply\nformat binary_little_endian 1.0\nelement vertex 8\nproperty double x\n"
-              "property double y\nproperty double z\nelement face 6\n"
-              "property list uchar int vertex_indices\nend_header\n")
+    header = (
+        "ply\nformat binary_little_endian 1.0\nelement vertex 8\nproperty double x\n"
+        "property double y\nproperty double z\nelement face 6\n"
+        "property list uchar int vertex_indices\nend_header\n"
+    )
     faces = np.zeros(6, dtype=[("n", "u1"), ("i", "<i4", (4,))])
     faces["n"], faces["i"] = 4, quads
     path = tmp_path / "cube.ply"
@@ -115,9 +117,10 @@ def test_binary_ply_quads_are_fanned_in_place(tmp_path):
     np.testing.assert_array_equal(source, expected_source)
 
 
-@pytest.mark.parametrize(("suffix", "shape", "uvs"), [(".obj", prism, "vt"),
-                                                      (".ply", prism, "vertex"),
-                                                      (".ply", cube_of_quads, "corner")])
+@pytest.mark.parametrize(
+    ("suffix", "shape", "uvs"),
+    [(".obj", prism, "vt"), (".ply", prism, "vertex"), (".ply", cube_of_quads, "corner")],
+)
 def test_corner_uvs_follow_the_fanned_triangles(tmp_path, suffix, shape, uvs):
     # (trimesh reads PLY texcoord lists only where every face has as many corners)
     from shape_diameter.mesh_io import load_mesh_with_uvs
@@ -249,15 +252,20 @@ def test_a_binary_ply_of_mixed_polygons_says_why_it_cannot_be_read(tmp_path, pol
     vertices, faces = prism()
     if polygons == "quads after a pentagon":  # shorter than three pentagons: trimesh sees it
         faces = [faces[1], faces[0], faces[2]]
-    header = ("ply\nformat binary_little_endian 1.0\nelement vertex 10\nproperty double x\n"
-              f"property double y\nproperty double z\nelement face {len(faces)}\n"
-              "property list uchar int vertex_indices\nend_header\n")
+    header = (
+        "ply\nformat binary_little_endian 1.0\nelement vertex 10\nproperty double x\n"
+        f"property double y\nproperty double z\nelement face {len(faces)}\n"
+        "property list uchar int vertex_indices\nend_header\n"
+    )
     rows = b"".join(bytes([len(f)]) + np.array(f, dtype="<i4").tobytes() for f in faces)
     path = tmp_path / "prism.ply"
     path.write_bytes(header.encode() + vertices.astype("<f8").tobytes() + rows)
-    message = ("binary PLY whose faces have different numbers of corners: trimesh cannot read "
-               "that" if polygons == "prism" else "it is truncated, or mixes faces of "
-               "different corner counts, which trimesh cannot read in binary PLY")
+    message = (
+        "binary PLY whose faces have different numbers of corners: trimesh cannot read that"
+        if polygons == "prism"
+        else "it is truncated, or mixes faces of "
+        "different corner counts, which trimesh cannot read in binary PLY"
+    )
     with pytest.raises(ValueError, match=re.escape(f"{path}: ") + ".*" + re.escape(message)):
         load_mesh(path)
 
@@ -346,21 +354,27 @@ def test_a_name_without_a_mesh_suffix_says_which_are_read(tmp_path, name):
     # supported".
     path = tmp_path / name
     shutil.copy(DATA / "horse.ply", path)
-    start = "no file extension to tell the mesh format by" if name == "horse" else (
-        f"cannot read '{path.suffix}' files")
+    start = (
+        "no file extension to tell the mesh format by"
+        if name == "horse"
+        else (f"cannot read '{path.suffix}' files")
+    )
     supported = ".obj, .ply, .off, .stl, .gltf, .glb"
     with pytest.raises(ValueError) as raised:
         load_mesh(path)
-    assert str(raised.value) == (f"{path}: {start} (it looks like a PLY file; supported: "
-                                 f"{supported})")
+    assert str(raised.value) == (
+        f"{path}: {start} (it looks like a PLY file; supported: {supported})"
+    )
 
 
 def test_other_formats_are_not_mistaken_for_obj(tmp_path):
     # OBJ is told by its records, so ordinary OBJ files (comments first, objects, groups,
     # a byte order mark) are still read.
     path = tmp_path / "odd.obj"
-    path.write_bytes(b"\xef\xbb\xbf# made by hand\nmtllib x.mtl\no a\nv 0 0 0\nv 1 0 0\n"
-                     b"v 0 1 0\ng part\nf 1 2 3\n")
+    path.write_bytes(
+        b"\xef\xbb\xbf# made by hand\nmtllib x.mtl\no a\nv 0 0 0\nv 1 0 0\n"
+        b"v 0 1 0\ng part\nf 1 2 3\n"
+    )
     np.testing.assert_array_equal(load_mesh(path)[1], [[0, 1, 2]])
 
 
@@ -468,8 +482,8 @@ def test_ply_obj_and_off_give_the_coordinates_back_exactly(tmp_path, case, suffi
 @pytest.mark.parametrize("suffix", [".glb", ".stl"])
 @pytest.mark.parametrize("case", ["utm", "1e8", "1e6"])
 def test_glb_and_stl_warn_when_32_bit_floats_move_the_vertices(tmp_path, case, suffix):
-    # 1e6: a sphere 0.25 wide, whose vertices move by up to an eighth of it (a trial's read
-    # 'as much as the mesh is wide').
+    # 1e6: a sphere 0.25 wide, whose vertices move by up to an eighth of it (it read 'as
+    # much as the mesh is wide').
     vertices, triangles = _sphere(*FAR_AND_SMALL.get(case, (0.125, (1e6, 0.0, 0.0))))
     path = tmp_path / f"out{suffix}"
     with pytest.warns(RuntimeWarning) as caught:
@@ -479,14 +493,17 @@ def test_glb_and_stl_warn_when_32_bit_floats_move_the_vertices(tmp_path, case, s
     assert message.startswith(f"{path}: {suffix[1:].upper()} holds 32-bit float coordinates")
     assert "write .ply, .off or .obj to keep them exactly" in message
     # A unit sphere at 1e8 collapses onto a few float32 values: said so, with the share as a
-    # percentage ("1 of the mesh's size", a trial found unclear); at UTM northings it moves a
+    # percentage (not "1 of the mesh's size", which is unclear); at UTM northings it moves a
     # little.
     if case in ("1e8", "1e6"):  # half and an eighth of the mesh's width
         share = {"1e8": "50%", "1e6": "1[0-9]%"}[case]
         assert re.search(rf"\({share} of the mesh's size: its shape is lost\)", message), message
     else:
-        assert re.search(r"vertices move by up to [0-9.e-]+ units \([0-9.e-]+ of the mesh's "
-                         r"size\)", message), message
+        assert re.search(
+            r"vertices move by up to [0-9.e-]+ units \([0-9.e-]+ of the mesh's "
+            r"size\)",
+            message,
+        ), message
     # What the file holds is the float32 rounding of the mesh, as the warning says.
     loaded_vertices, loaded_triangles = load_mesh(path)
     expected = vertices.astype(np.float32).astype(np.float64)[triangles]
@@ -529,7 +546,7 @@ def test_save_colored_refuses_bad_arguments(tmp_path):
 
 
 def test_load_mesh_takes_bytes_and_path_objects():
-    # A trial's: b'a.obj' (os.walk over bytes, for names that are not UTF-8) was read as
+    # b'a.obj' (os.walk over bytes, for names that are not UTF-8) was read as
     # "cannot read 'b'.obj'' files".
     expected = shape_diameter.load_mesh(str(DATA / "suzanne.obj"))
     for path in (os.fsencode(DATA / "suzanne.obj"), DATA / "suzanne.obj"):
@@ -539,7 +556,7 @@ def test_load_mesh_takes_bytes_and_path_objects():
 
 @pytest.mark.parametrize("suffix", [".off", ".ply"])
 def test_a_bad_coordinate_or_index_is_named(tmp_path, suffix):
-    # A trial's: "vertex coordinates are not all finite" and "a face refers to a vertex that
+    # "vertex coordinates are not all finite" and "a face refers to a vertex that
     # does not exist", naming neither.
     vertices = np.array([[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]])
     faces = np.array([[0, 2, 1], [0, 1, 3], [1, 2, 3], [0, 3, 2]])
@@ -547,24 +564,42 @@ def test_a_bad_coordinate_or_index_is_named(tmp_path, suffix):
     def write(v, f):
         path = tmp_path / f"m{suffix}"
         if suffix == ".off":
-            lines = ["OFF", f"{len(v)} {len(f)} 0", *(" ".join(f"{x:.17g}" for x in p) for p in v),
-                     *(f"3 {a} {b} {c}" for a, b, c in f)]
+            lines = [
+                "OFF",
+                f"{len(v)} {len(f)} 0",
+                *(" ".join(f"{x:.17g}" for x in p) for p in v),
+                *(f"3 {a} {b} {c}" for a, b, c in f),
+            ]
         else:
-            lines = ["ply", "format ascii 1.0", f"element vertex {len(v)}",
-                     "property float x", "property float y", "property float z",
-                     f"element face {len(f)}", "property list uchar int vertex_indices",
-                     "end_header", *(" ".join(f"{x:.17g}" for x in p) for p in v),
-                     *(f"3 {a} {b} {c}" for a, b, c in f)]
+            lines = [
+                "ply",
+                "format ascii 1.0",
+                f"element vertex {len(v)}",
+                "property float x",
+                "property float y",
+                "property float z",
+                f"element face {len(f)}",
+                "property list uchar int vertex_indices",
+                "end_header",
+                *(" ".join(f"{x:.17g}" for x in p) for p in v),
+                *(f"3 {a} {b} {c}" for a, b, c in f),
+            ]
         path.write_text("\n".join(lines) + "\n")
         return path
 
     bad = vertices.copy()
     bad[2, 1] = np.nan
-    with pytest.raises(ValueError, match=r"1 vertex has a coordinate that is not finite "
-                                         r"\(NaN or infinite; the first: vertex 2, counting"):
+    with pytest.raises(
+        ValueError,
+        match=r"1 vertex has a coordinate that is not finite "
+        r"\(NaN or infinite; the first: vertex 2, counting",
+    ):
         load_mesh(write(bad, faces))
     far = faces.copy()
     far[2, 1] = 9
-    with pytest.raises(ValueError, match=r"face 2 \(counting from 0\) refers to vertex 9, but "
-                                         r"the file has 4 vertices \(0 to 3\)"):
+    with pytest.raises(
+        ValueError,
+        match=r"face 2 \(counting from 0\) refers to vertex 9, but "
+        r"the file has 4 vertices \(0 to 3\)",
+    ):
         load_mesh(write(vertices, far))

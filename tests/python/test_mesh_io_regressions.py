@@ -67,18 +67,30 @@ def _gltf(position_type: str, components: int) -> str:
     indices = np.array([0, 1, 2], dtype=np.uint32).tobytes()
     positions = np.arange(3 * components, dtype=np.float32).tobytes()
     data = indices + positions
-    return json.dumps({
-        "asset": {"version": "2.0"}, "scene": 0, "scenes": [{"nodes": [0]}],
-        "nodes": [{"mesh": 0}],
-        "meshes": [{"primitives": [{"attributes": {"POSITION": 1}, "indices": 0}]}],
-        "buffers": [{"byteLength": len(data), "uri": "data:application/octet-stream;base64,"
-                     + base64.b64encode(data).decode()}],
-        "bufferViews": [{"buffer": 0, "byteOffset": 0, "byteLength": len(indices)},
-                        {"buffer": 0, "byteOffset": len(indices), "byteLength": len(positions)}],
-        "accessors": [{"bufferView": 0, "componentType": 5125, "count": 3, "type": "SCALAR"},
-                      {"bufferView": 1, "componentType": 5126, "count": 3,
-                       "type": position_type}],
-    })
+    return json.dumps(
+        {
+            "asset": {"version": "2.0"},
+            "scene": 0,
+            "scenes": [{"nodes": [0]}],
+            "nodes": [{"mesh": 0}],
+            "meshes": [{"primitives": [{"attributes": {"POSITION": 1}, "indices": 0}]}],
+            "buffers": [
+                {
+                    "byteLength": len(data),
+                    "uri": "data:application/octet-stream;base64,"
+                    + base64.b64encode(data).decode(),
+                }
+            ],
+            "bufferViews": [
+                {"buffer": 0, "byteOffset": 0, "byteLength": len(indices)},
+                {"buffer": 0, "byteOffset": len(indices), "byteLength": len(positions)},
+            ],
+            "accessors": [
+                {"bufferView": 0, "componentType": 5125, "count": 3, "type": "SCALAR"},
+                {"bufferView": 1, "componentType": 5126, "count": 3, "type": position_type},
+            ],
+        }
+    )
 
 
 def test_gltf_positions_of_one_component_are_refused(tmp_path):

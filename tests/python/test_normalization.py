@@ -1,5 +1,6 @@
 # SPDX-License-Identifier: GPL-3.0-or-later
 """shape_diameter.normalize (native, parallel) against the numpy expression it replaced."""
+
 import numpy as np
 import pytest
 import shape_diameter as sd

@@ -10,12 +10,10 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-
 import shape_diameter as sd
+from opencl_devices import OPENCL
 from shape_diameter import _core
 from shape_diameter.mesh_io import load_mesh
-
-from opencl_devices import OPENCL
 
 DATA = Path(__file__).resolve().parents[1] / "data"
 MESHES = sorted(p.name for p in DATA.iterdir() if p.suffix in (".obj", ".off", ".ply"))
@@ -38,8 +36,11 @@ def agreement(a, b):
     rel = np.abs(a.raw - b.raw) / np.maximum(np.abs(b.raw), 1e-30)
     bad = (rel > 1e-4) | (a.valid_rays != b.valid_rays)
     worst = np.argsort(-rel)[:5]
-    return bad, [(int(i), float(a.raw[i]), float(b.raw[i]), int(a.valid_rays[i]),
-                  int(b.valid_rays[i])) for i in worst if bad[i]]
+    return bad, [
+        (int(i), float(a.raw[i]), float(b.raw[i]), int(a.valid_rays[i]), int(b.valid_rays[i]))
+        for i in worst
+        if bad[i]
+    ]
 
 
 @pytest.fixture(scope="module", params=MESHES)
@@ -246,7 +247,7 @@ def test_program_cache_skips_the_compiler_and_rebuilds_a_corrupt_entry(tmp_path)
 
 
 def test_a_program_cache_that_cannot_be_written_is_warned_of(tmp_path):
-    # A trial's: every run compiled again (about 9 s on PoCL) without a word. Said once a
+    # Every run compiled again (about 9 s on PoCL) without a word. Said once a
     # process (a batch said it for every input).
     (tmp_path / "file").write_text("")
     code = (
@@ -258,8 +259,9 @@ def test_a_program_cache_that_cannot_be_written_is_warned_of(tmp_path):
         "    sd.compute(*shapes.icosphere(1.0, 1), engine='cpu', rays=3)\n"
         "print(json.dumps([str(w.message) for w in caught]))\n"
     )
-    path = os.pathsep.join([str(Path(__file__).parent),
-                            *filter(None, [os.environ.get("PYTHONPATH")])])
+    path = os.pathsep.join(
+        [str(Path(__file__).parent), *filter(None, [os.environ.get("PYTHONPATH")])]
+    )
     said = run_python(code, SDF_CACHE_DIR=tmp_path / "file" / "cache", PYTHONPATH=path)
     assert len(said) == 1 and "cannot be written: each process compiles" in said[0], said
     assert said[0].startswith(f"the OpenCL program cache {tmp_path / 'file' / 'cache'}")
@@ -381,15 +383,27 @@ def test_stages_of_an_opencl_run_account_for_its_time():
     t = sd.compute(vertices, triangles, engine=OPENCL[0]).timings
     # 'build' overlaps 'prepare' and the upload; the others follow one another (a tree made on
     # the device, on GPUs: 'build (device)', after the upload).
-    serial = sum(t.get(k, 0.0) for k in ("devices", "prepare", "build wait", "build (device)",
-                                         "setup", "upload", "cast", "download", "fill",
-                                         "normalize"))
+    serial = sum(
+        t.get(k, 0.0)
+        for k in (
+            "devices",
+            "prepare",
+            "build wait",
+            "build (device)",
+            "setup",
+            "upload",
+            "cast",
+            "download",
+            "fill",
+            "normalize",
+        )
+    )
     # Not all of total: the mesh's conversion and checks come before the first stage.
     assert 0.75 * t["total"] <= serial <= t["total"] * 1.001
     if "build (device)" in t:
         assert t["build (device)"] > 0.0 and "build" not in t
     else:
-        assert 0.0 <= t["build wait"] and t["build"] > 0.0
+        assert t["build wait"] >= 0.0 and t["build"] > 0.0
 
 
 def test_progress_and_cancellation_on_opencl():

@@ -6,14 +6,21 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-
 import shape_diameter as sd
 from shape_diameter.mesh_io import load_mesh
 from shapes import box, cylinder, icosphere
 
 DATA = Path(__file__).resolve().parents[1] / "data"
-RIGHT_WAY_OUT = ["bunny00.off", "armadillo.off", "fandisk.obj", "spot.obj", "cow.obj",
-                 "suzanne.obj", "teapot.obj", "ChineseDragon-10kv.off"]
+RIGHT_WAY_OUT = [
+    "bunny00.off",
+    "armadillo.off",
+    "fandisk.obj",
+    "spot.obj",
+    "cow.obj",
+    "suzanne.obj",
+    "teapot.obj",
+    "ChineseDragon-10kv.off",
+]
 
 
 @pytest.mark.parametrize("name", RIGHT_WAY_OUT)
@@ -54,7 +61,7 @@ def test_scattered_reversed_faces_are_put_back():
 
 
 def test_reversed_faces_are_put_back_across_unwelded_seams():
-    # A trial's: faces meet at positions, not only at shared vertices. A triangle soup (each
+    # Faces meet at positions, not only at shared vertices. A triangle soup (each
     # face on vertices of its own, as an STL or trimesh's process=False gives) and a box whose
     # sides each have their own vertices (a CAD export), some faces reversed, were left so.
     vertices, triangles = icosphere(1.0, 3)
@@ -88,10 +95,17 @@ def test_projected_smoothing_moves_points_inward_on_the_mesh_as_oriented(points)
     # then move along the turned mesh's inward axes too (they once took the caller's winding
     # and moved outward: values off by up to 0.04).
     vertices, triangles = load_mesh(DATA / "horse.ply")
-    inside_out = sd.compute(vertices, triangles, rays=10, points=points, engine="cpu",
-                            smoothing="projected")
-    outward = sd.compute(vertices, triangles[:, [0, 2, 1]], rays=10, points=points,
-                         engine="cpu", smoothing="projected")
+    inside_out = sd.compute(
+        vertices, triangles, rays=10, points=points, engine="cpu", smoothing="projected"
+    )
+    outward = sd.compute(
+        vertices,
+        triangles[:, [0, 2, 1]],
+        rays=10,
+        points=points,
+        engine="cpu",
+        smoothing="projected",
+    )
     assert inside_out.flipped_faces == len(triangles) and outward.flipped_faces == 0
     np.testing.assert_array_equal(inside_out.raw, outward.raw)
     np.testing.assert_array_equal(inside_out.values, outward.values)
@@ -107,10 +121,24 @@ def test_kring_corner_weights_use_the_normals_of_the_mesh_as_oriented(points):
     messy = triangles.copy()
     messy[::7] = messy[::7][:, [0, 2, 1]]
     options = {"corner_angle": 30.0}
-    clean = sd.compute(vertices, triangles, rays=10, points=points, engine="cpu",
-                       smoothing="kring", smoothing_options=options)
-    fixed = sd.compute(vertices, messy, rays=10, points=points, engine="cpu",
-                       smoothing="kring", smoothing_options=options)
+    clean = sd.compute(
+        vertices,
+        triangles,
+        rays=10,
+        points=points,
+        engine="cpu",
+        smoothing="kring",
+        smoothing_options=options,
+    )
+    fixed = sd.compute(
+        vertices,
+        messy,
+        rays=10,
+        points=points,
+        engine="cpu",
+        smoothing="kring",
+        smoothing_options=options,
+    )
     assert fixed.flipped_faces == len(messy[::7])
     np.testing.assert_array_equal(fixed.raw, clean.raw)
     np.testing.assert_array_equal(fixed.values, clean.values)
@@ -150,8 +178,9 @@ def test_a_hollow_spheres_inner_wall_stays_inward():
 
 def test_a_flat_open_sheet_is_not_flipped_on_rounding():
     grid = np.array([[x, y, 0.0] for y in range(4) for x in range(4)], dtype=float)
-    quads = [(y * 4 + x, y * 4 + x + 1, y * 4 + x + 5, y * 4 + x + 4)
-             for y in range(3) for x in range(3)]
+    quads = [
+        (y * 4 + x, y * 4 + x + 1, y * 4 + x + 5, y * 4 + x + 4) for y in range(3) for x in range(3)
+    ]
     triangles = np.array([t for a, b, c, d in quads for t in ((a, b, c), (a, c, d))])
     with pytest.warns(RuntimeWarning, match="no ray"):
         result = sd.compute(grid, triangles)
@@ -159,7 +188,7 @@ def test_a_flat_open_sheet_is_not_flipped_on_rounding():
 
 
 def test_a_long_thin_part_inside_out_is_turned():
-    # A trial's: its volume was weighed against 1e-6 x its diagonal cubed, so a cylinder
+    # Its volume was weighed against 1e-6 x its diagonal cubed, so a cylinder
     # 2000 times longer than its radius read as flat and stayed inside out (every value 0).
     vertices, triangles = cylinder(0.005, 10.0, 32, 16)
     outward = sd.compute(vertices, triangles)
@@ -174,8 +203,11 @@ def test_a_tilted_flat_sheet_is_not_flipped_on_rounding():
     # distance from the mesh's centre: a review's 1 x 1 sheet 1500 units from a sphere of
     # radius 1000 was turned in 25 of 80 placements.
     grid = np.array([[x, y, 0.0] for y in range(9) for x in range(9)], dtype=float) / 8 - 0.5
-    quads = [(y * 9 + x, y * 9 + x + 1, y * 9 + x + 10, y * 9 + x + 9)
-             for y in range(8) for x in range(8)]
+    quads = [
+        (y * 9 + x, y * 9 + x + 1, y * 9 + x + 10, y * 9 + x + 9)
+        for y in range(8)
+        for x in range(8)
+    ]
     sheet = np.array([t for a, b, c, d in quads for t in ((a, b, c), (a, c, d))])
     ball_v, ball_f = icosphere(1000.0, 2)
     rng = np.random.default_rng(1)
@@ -211,5 +243,6 @@ def test_reversed_faces_let_smooth_repeat_computes_smoothing():
     wound = messy.copy()
     wound[result.reversed_faces] = wound[result.reversed_faces][:, [0, 2, 1]]
     np.testing.assert_array_equal(
-        sd.smooth(vertices, wound, result.raw, "projected", engine="cpu"), result.values)
+        sd.smooth(vertices, wound, result.raw, "projected", engine="cpu"), result.values
+    )
     assert sd.compute(vertices, triangles, rays=10, engine="cpu").reversed_faces is None

@@ -1,7 +1,7 @@
 # SPDX-License-Identifier: GPL-3.0-or-later
-"""The README documents the whole Python API, with the ranges the code enforces, and its note
-on scale matches what the rule gives (a new-user trial found options, Result fields and ranges
-missing)."""
+"""docs/python.md documents the whole Python API (every option, every Result field), with the
+ranges the code enforces, and its note on scale matches what the rule gives: a reader who
+looks up an option, a field or a range finds it, and finds it right."""
 
 import dataclasses
 import inspect
@@ -14,14 +14,14 @@ import shape_diameter
 from shape_diameter.smoothing import OPTIONS
 from shapes import box, icosphere
 
-README = (Path(__file__).resolve().parents[2] / "README.md").read_text()
-# The part about the Python package (the Blender add-on's API has fields of its own).
-PYTHON = README[README.index("## Python") : README.index("## Command line")]
+# The Python package's reference (the Blender add-on's API, in docs/blender.md, has fields of
+# its own).
+PYTHON = (Path(__file__).resolve().parents[2] / "docs" / "python.md").read_text()
 
 
 def _table_row(name):
     rows = [line for line in PYTHON.splitlines() if line.startswith(f"| `{name}` |")]
-    assert len(rows) == 1, f"no row for `{name}` in the README's compute() table"
+    assert len(rows) == 1, f"no row for `{name}` in docs/python.md's compute() table"
     return rows[0]
 
 
@@ -45,8 +45,9 @@ def test_every_result_field_is_documented():
         assert re.search(rf"\b[rR]esult\.{field.name}\b", PYTHON), field.name
 
 
-@pytest.mark.parametrize(("name", "low", "high"), [("octree_depth", 0, 16),
-                                                   ("octree_leaf_size", 1, 2**31 - 1)])
+@pytest.mark.parametrize(
+    ("name", "low", "high"), [("octree_depth", 0, 16), ("octree_leaf_size", 1, 2**31 - 1)]
+)
 def test_octree_ranges_are_the_ones_checked(name, low, high):
     vertices, triangles = icosphere(1.0, 1)
     for value in (low, high):  # accepted

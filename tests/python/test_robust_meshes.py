@@ -1,5 +1,5 @@
 # SPDX-License-Identifier: GPL-3.0-or-later
-"""Meshes as people have them (issue 7): non-manifold edges and vertices, self-intersections,
+"""Meshes as people have them: non-manifold edges and vertices, self-intersections,
 unwelded patches and holes give finite values everywhere, with valid rays on the faces that
 can see the other side."""
 
@@ -8,7 +8,6 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-
 import shape_diameter as sd
 from shape_diameter.mesh_io import load_mesh
 from shapes import box, icosphere
@@ -69,14 +68,20 @@ def test_far_beyond_everyday_scales_the_values_still_scale(scale):
     np.testing.assert_allclose(scaled.raw / scale, unit.raw, rtol=1e-4)
 
 
-@pytest.mark.parametrize("path", [
-    dict(engine="cpu"),
-    dict(engine="cpu", env={"SDF_CPU_NO_AVX2": "1"}),
-    dict(engine="opencl"),
-    dict(engine="opencl", env={"SDF_OPENCL_KERNEL": "bvh_per_ray", "SDF_OPENCL_TREE": "device"}),
-    dict(engine="opencl", env={"SDF_OPENCL_KERNEL": "bvh_per_ray", "SDF_OPENCL_TREE": "host"}),
-    dict(engine="opencl", accel="octree"),
-], ids=["cpu", "cpu-4-wide", "opencl", "opencl-device-tree", "opencl-binary", "octree"])
+@pytest.mark.parametrize(
+    "path",
+    [
+        dict(engine="cpu"),
+        dict(engine="cpu", env={"SDF_CPU_NO_AVX2": "1"}),
+        dict(engine="opencl"),
+        dict(
+            engine="opencl", env={"SDF_OPENCL_KERNEL": "bvh_per_ray", "SDF_OPENCL_TREE": "device"}
+        ),
+        dict(engine="opencl", env={"SDF_OPENCL_KERNEL": "bvh_per_ray", "SDF_OPENCL_TREE": "host"}),
+        dict(engine="opencl", accel="octree"),
+    ],
+    ids=["cpu", "cpu-4-wide", "opencl", "opencl-device-tree", "opencl-binary", "octree"],
+)
 def test_rays_along_an_axis_survive_far_from_the_origin(monkeypatch, path):
     # A box's faces cast their first ray along their normal, so its direction has exactly
     # zero components: their slab distances once took 1e30 x the origin, which overflowed past
@@ -93,15 +98,21 @@ def test_rays_along_an_axis_survive_far_from_the_origin(monkeypatch, path):
         np.testing.assert_allclose(scaled.raw / scale, unit.raw, rtol=1e-4)
 
 
-@pytest.mark.parametrize("path", [
-    dict(engine="cpu"),
-    dict(engine="opencl"),
-    dict(engine="opencl", env={"SDF_OPENCL_KERNEL": "bvh_per_ray", "SDF_OPENCL_TREE": "device"}),
-    dict(engine="cpu", accel="octree"),
-], ids=["cpu", "opencl", "opencl-device-tree", "octree"])
+@pytest.mark.parametrize(
+    "path",
+    [
+        dict(engine="cpu"),
+        dict(engine="opencl"),
+        dict(
+            engine="opencl", env={"SDF_OPENCL_KERNEL": "bvh_per_ray", "SDF_OPENCL_TREE": "device"}
+        ),
+        dict(engine="cpu", accel="octree"),
+    ],
+    ids=["cpu", "opencl", "opencl-device-tree", "octree"],
+)
 def test_any_accepted_scale_gives_the_same_values(monkeypatch, path):
     # The triangle test's products reach a length cubed: a sphere 1e14 units wide (or 1e-15)
-    # once lost every ray, values all 0 (found by a new-user trial). Scaled inside compute()
+    # once lost every ray, values all 0. Scaled inside compute()
     # by a power of two to unit size, and back, the values are those of the unit sphere
     # scaled, to the bit: float arithmetic commutes with powers of two.
     for name, value in path.get("env", {}).items():
@@ -111,9 +122,9 @@ def test_any_accepted_scale_gives_the_same_values(monkeypatch, path):
     unit = sd.compute(vertices, triangles, **options)
     assert (unit.valid_rays == 30).all()
     for exponent in (-100, -60, -25, 35, 60, 98):
-        scaled = sd.compute(vertices * 2.0 ** exponent, triangles, **options)
+        scaled = sd.compute(vertices * 2.0**exponent, triangles, **options)
         np.testing.assert_array_equal(scaled.valid_rays, unit.valid_rays)
-        np.testing.assert_array_equal(scaled.raw, unit.raw * np.float32(2.0 ** exponent))
+        np.testing.assert_array_equal(scaled.raw, unit.raw * np.float32(2.0**exponent))
 
 
 @pytest.mark.parametrize("engine", ["cpu", "opencl"])
@@ -122,16 +133,26 @@ def test_smoothing_far_from_unit_size_gives_the_scaled_values(engine):
     # values were 7% off, beyond 1e19 it did nothing (found by a review). It runs scaled by a
     # power of two now, as the cast does; k-ring and texture smoothing needed nothing.
     vertices, triangles = box(4.0, 1.0, 0.5, 4)
-    uvs = ((vertices[:, :2] - vertices[:, :2].min(0)) / np.ptp(vertices[:, :2], 0) * 0.98 + 0.01)[triangles]
+    uvs = ((vertices[:, :2] - vertices[:, :2].min(0)) / np.ptp(vertices[:, :2], 0) * 0.98 + 0.01)[
+        triangles
+    ]
     for smoothing, options in (("projected", {}), ("kring", {}), ("texture", {"uvs": uvs})):
         unit = sd.compute(vertices, triangles, smoothing=smoothing, engine=engine, **options)
         for exponent in (-90, -40, 35, 90):
             with warnings.catch_warnings():
                 warnings.simplefilter("error")
-                far = sd.compute(vertices * 2.0**exponent, triangles, smoothing=smoothing,
-                                 engine=engine, **options)
-            np.testing.assert_array_equal(far.values, unit.values * np.float32(2.0**exponent),
-                                          err_msg=f"{smoothing} at 2^{exponent}")
+                far = sd.compute(
+                    vertices * 2.0**exponent,
+                    triangles,
+                    smoothing=smoothing,
+                    engine=engine,
+                    **options,
+                )
+            np.testing.assert_array_equal(
+                far.values,
+                unit.values * np.float32(2.0**exponent),
+                err_msg=f"{smoothing} at 2^{exponent}",
+            )
 
 
 def test_projected_smoothing_refuses_a_mesh_wider_than_float_range():
@@ -176,7 +197,7 @@ def test_a_double_sided_mesh_gets_the_single_sided_values(split, points):
 
 @pytest.mark.parametrize("points", ["faces", "vertices"])
 def test_a_zero_area_face_does_not_undo_a_double_sided_part(points):
-    # A trial's: one stray zero-area face in a double-sided part (it has no twin) made the
+    # One stray zero-area face in a double-sided part (it has no twin) made the
     # whole part be cast with both sides, values up to 19% off (vertices: 0.0002-1.16x).
     v, t = load_mesh(DATA / "spot.obj")
     single = sd.compute(v, t, points=points)
@@ -198,7 +219,7 @@ def test_twins_listed_first_keep_their_places_and_are_oriented():
     assert both.twin_faces == len(t) and both.flipped_faces == len(t)
     np.testing.assert_array_equal(both.reversed_faces, np.arange(2 * len(t)) < len(t))
     np.testing.assert_array_equal(both.raw[: len(t)], single.raw)
-    np.testing.assert_array_equal(both.raw[len(t):], single.raw)
+    np.testing.assert_array_equal(both.raw[len(t) :], single.raw)
 
 
 @pytest.mark.parametrize("points", ["faces", "vertices"])
@@ -210,11 +231,19 @@ def test_a_double_sided_mesh_smooths_as_the_single_sided_one(smoothing, points):
     v, t = load_mesh(DATA / "spot.obj")
     uvs = np.random.default_rng(5).random((len(t), 3, 2)).astype(np.float32)
     options = {"texture_size": 64} if smoothing == "texture" else None
-    single = sd.compute(v, t, smoothing=smoothing, uvs=uvs, smoothing_options=options,
-                        points=points, rays=8)
+    single = sd.compute(
+        v, t, smoothing=smoothing, uvs=uvs, smoothing_options=options, points=points, rays=8
+    )
     vertices, triangles = double_sided(v, t, split=True)
-    both = sd.compute(vertices, triangles, smoothing=smoothing, uvs=np.vstack([uvs, uvs]),
-                      smoothing_options=options, points=points, rays=8)
+    both = sd.compute(
+        vertices,
+        triangles,
+        smoothing=smoothing,
+        uvs=np.vstack([uvs, uvs]),
+        smoothing_options=options,
+        points=points,
+        rays=8,
+    )
     assert both.twin_faces == len(t)
     n = len(single.values)
     np.testing.assert_array_equal(both.values[:n], single.values)
@@ -246,7 +275,7 @@ def test_a_double_sided_part_beside_a_single_sided_one():
     assert result.twin_faces == len(bt)
     alone = sd.compute(np.vstack([v, bv]), np.vstack([t, bt + len(v)]))
     np.testing.assert_array_equal(result.raw[: len(t) + len(bt)], alone.raw)
-    np.testing.assert_array_equal(result.raw[len(t) + len(bt):], alone.raw[len(t):])
+    np.testing.assert_array_equal(result.raw[len(t) + len(bt) :], alone.raw[len(t) :])
 
 
 def test_a_flap_doubled_on_a_single_sided_body_is_cast_as_it_is():
@@ -270,10 +299,10 @@ def test_two_solids_meeting_at_a_wall_each_keep_their_thickness():
     triangles = np.vstack([st, ct + len(sv)])
     centroids = vertices[triangles].mean(axis=1)
     wall = np.abs(centroids[:, 0] - 0.2) < 1e-9
-    assert wall[: len(st)].any() and wall[len(st):].any()  # both sides of the wall
+    assert wall[: len(st)].any() and wall[len(st) :].any()  # both sides of the wall
     result = sd.compute(vertices, triangles)
     assert result.twin_faces == 0
-    cube_wall = result.raw[len(st):][wall[len(st):]]
+    cube_wall = result.raw[len(st) :][wall[len(st) :]]
     slab_wall = result.raw[: len(st)][wall[: len(st)]]
     assert np.median(cube_wall) > 0.5 and np.median(slab_wall) < 0.3
 
@@ -297,4 +326,4 @@ def test_faces_at_the_same_positions_wound_alike_are_not_twins():
     result = sd.compute(v, np.vstack([t, t]))
     assert result.twin_faces == 0
     np.testing.assert_array_equal(result.raw[: len(t)], sd.compute(v, t).raw)
-    np.testing.assert_array_equal(result.raw[len(t):], result.raw[: len(t)])
+    np.testing.assert_array_equal(result.raw[len(t) :], result.raw[: len(t)])

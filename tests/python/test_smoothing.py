@@ -7,7 +7,6 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-
 import shape_diameter
 from shape_diameter import smooth
 from shape_diameter.smoothing import OPTIONS, TextureResult, default_k, default_radius
@@ -231,8 +230,9 @@ def test_kring_split_seams_smooth_like_the_welded_mesh(spot):
     # in), and the seams walls again.
     apart_v = split_v + 1e-9 * np.random.default_rng(7).standard_normal(split_v.shape)
     welded = smooth(apart_v, split_t, noisy, "kring", k=3)
-    assert not np.array_equal(welded, smooth(apart_v, split_t, noisy, "kring", k=3,
-                                             weld_tolerance=None))
+    assert not np.array_equal(
+        welded, smooth(apart_v, split_t, noisy, "kring", k=3, weld_tolerance=None)
+    )
     stray_v = np.vstack([apart_v, [1e20, 0.0, 0.0]])
     np.testing.assert_array_equal(smooth(stray_v, split_t, noisy, "kring", k=3), welded)
 
@@ -408,10 +408,14 @@ def test_texture_warns_about_faces_outside_the_uv_square(spot, engine):
             out = smooth(v, t, faces, "texture", uvs=shifted, engine=engine)
         np.testing.assert_array_equal(out[away], faces[away])
     # A bake (return_image) says the image leaves them out.
-    with pytest.warns(RuntimeWarning, match=r"square \(UDIM tiles or an offset layout\): the "
-                                            r"image leaves them out"):
-        smooth(v, t, faces, "texture", uvs=shifted, engine=engine, return_image=True,
-               texture_size=64)
+    with pytest.warns(
+        RuntimeWarning,
+        match=r"square \(UDIM tiles or an offset layout\): the "
+        r"image leaves them out",
+    ):
+        smooth(
+            v, t, faces, "texture", uvs=shifted, engine=engine, return_image=True, texture_size=64
+        )
     with pytest.warns(RuntimeWarning, match=rf"^{away.sum()} of {len(t)} faces"):
         shape_diameter.compute(v, t, rays=8, smoothing="texture", uvs=shifted, engine=engine)
     # A few faces just over the edge (under 1%) lose little and warn nothing.
@@ -504,8 +508,12 @@ def test_texture_cost_bytes_are_what_the_core_holds(spot, tmp_path):
     import sys
 
     for size, radius in ((2048, 16.0), (2048, 0.0)):
-        out = subprocess.run([sys.executable, "-c", script, str(tmp_path / "spot.npz"),
-                              str(size), str(radius)], capture_output=True, text=True, check=True)
+        out = subprocess.run(
+            [sys.executable, "-c", script, str(tmp_path / "spot.npz"), str(size), str(radius)],
+            capture_output=True,
+            text=True,
+            check=True,
+        )
         grown = int(out.stdout.split()[-1])
         expected = texture_cost(size, radius, uvs=uvs).bytes
         assert 0.85 * expected < grown < 1.15 * expected, (size, radius, grown, expected)
@@ -561,7 +569,10 @@ def test_errors_name_the_problem(spot):
         (dict(method="texture", uvs=uvs, bilateral="yes"), "bilateral must be True or False"),
         (dict(method="texture", uvs=uvs[:10]), r"uvs must have shape \(5856, 3, 2\)"),
         (dict(method="texture", uvs=np.full_like(uvs, np.nan)), "uvs must be finite"),
-        (dict(method="none", k=1), r"unknown option for smoothing 'none': k \(it takes no options\)"),
+        (
+            dict(method="none", k=1),
+            r"unknown option for smoothing 'none': k \(it takes no options\)",
+        ),
         (dict(method="kring", points="edges"), "points must be 'faces' or 'vertices'"),
         (dict(method="kring", threads=-1), "threads"),
         (dict(method="kring", threads=2**40), r"threads must be an integer in \[0, 4096\]"),
@@ -682,8 +693,9 @@ def test_cli_texture_reads_uvs(tmp_path, capsys):
             "--texture-size", 256, "--radius", 4, "--values", values]  # fmt: skip
     assert _cli(*argv) == 0
     v, t, uvs, _ = _read_obj(DATA / "spot.obj")
-    expected = shape_diameter.compute(v, t, smoothing="texture", uvs=uvs,
-                                      smoothing_options={"texture_size": 256, "radius": 4.0})
+    expected = shape_diameter.compute(
+        v, t, smoothing="texture", uvs=uvs, smoothing_options={"texture_size": 256, "radius": 4.0}
+    )
     np.testing.assert_array_equal(np.load(values), expected.values)
 
 
@@ -714,10 +726,13 @@ def test_the_public_reader_gives_the_uvs_texture_smoothing_needs():
     np.testing.assert_array_equal(uvs, ruvs)
     v2, t2, source, uvs2 = shape_diameter.load_mesh(DATA / "spot.obj", source_faces=True, uvs=True)
     np.testing.assert_array_equal(uvs2, uvs)
-    np.testing.assert_array_equal(source, shape_diameter.load_mesh(DATA / "spot.obj", source_faces=True)[2])
+    np.testing.assert_array_equal(
+        source, shape_diameter.load_mesh(DATA / "spot.obj", source_faces=True)[2]
+    )
     assert shape_diameter.load_mesh(DATA / "cow.obj", uvs=True)[2] is None
-    result = shape_diameter.compute(v, t, rays=4, smoothing="texture", uvs=uvs,
-                        smoothing_options={"texture_size": 64})
+    result = shape_diameter.compute(
+        v, t, rays=4, smoothing="texture", uvs=uvs, smoothing_options={"texture_size": 64}
+    )
     assert np.isfinite(result.values).all()
 
 
@@ -728,19 +743,22 @@ def test_kring_on_vertices_leaves_out_the_values_of_vertices_no_face_uses():
     v, t = shape_diameter.load_mesh(DATA / "spot.obj")
     values = np.random.default_rng(2).random(len(v)).astype(np.float32)
     alone = shape_diameter.smooth(v, t, values, "kring", points="vertices")
-    stray = shape_diameter.smooth(np.vstack([v, v]), t, np.concatenate([values, 10 * values]),
-                                  "kring", points="vertices")
+    stray = shape_diameter.smooth(
+        np.vstack([v, v]), t, np.concatenate([values, 10 * values]), "kring", points="vertices"
+    )
     np.testing.assert_array_equal(stray[: len(v)], alone)
-    np.testing.assert_array_equal(stray[len(v):], alone)  # they take their merged vertex's
+    np.testing.assert_array_equal(stray[len(v) :], alone)  # they take their merged vertex's
 
 
 def test_texture_smoothing_refuses_uvs_that_cover_no_area():
-    # A trial's (in Blender, a mesh never unwrapped): every face drew into the same texels and
+    # In Blender, a mesh never unwrapped: every face drew into the same texels and
     # every value came out as one, without a word.
     v, t = _icosphere(2)
     values = np.linspace(0.1, 1.0, len(t)).astype(np.float32)
-    for uvs in (np.zeros((len(t), 3, 2)), np.stack([np.linspace(0, 1, 3 * len(t))] * 2,
-                                                    axis=1).reshape(-1, 3, 2)):
+    for uvs in (
+        np.zeros((len(t), 3, 2)),
+        np.stack([np.linspace(0, 1, 3 * len(t))] * 2, axis=1).reshape(-1, 3, 2),
+    ):
         with pytest.raises(ValueError, match=r"^the UVs cover no area .*unwrap the mesh first"):
             smooth(v, t, values, "texture", uvs=uvs, texture_size=16)
         with pytest.raises(ValueError, match=r"^the UVs cover no area"):

@@ -1,5 +1,5 @@
 # SPDX-License-Identifier: GPL-3.0-or-later
-"""The OpenCL versions of projected-points and texture-space smoothing (issue 4): the same
+"""The OpenCL versions of projected-points and texture-space smoothing: the same
 kernel code as the CPU versions (kernels/sdf_smooth_*.h), so they agree within 1e-4 relative
 on real meshes; a constant field stays constant; compute() smooths on the engine that cast;
 bad engine names fail clearly. On PoCL here; on a GPU machine, the GPU (listed first)."""
@@ -8,11 +8,9 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-
 import shape_diameter as sd
-from shape_diameter.mesh_io import load_mesh, load_mesh_with_uvs
-
 from opencl_devices import OPENCL
+from shape_diameter.mesh_io import load_mesh, load_mesh_with_uvs
 
 DATA = Path(__file__).resolve().parents[1] / "data"
 DEVICE = OPENCL[0]
@@ -53,8 +51,14 @@ def test_projected_octree_built_on_the_device_is_the_cpus_to_the_bit(spot, point
     spot with each option, and on points that all coincide, at tiny and huge scales."""
     v, t, _, faces, vertices = spot
     values = faces if points == "faces" else vertices
-    for options in [{}, {"iterations": 3}, {"branch_on": "min"}, {"max_depth": 12},
-                    {"max_depth": 4, "min_points": 0.0}, {"node_size_ratio": 4.0}]:
+    for options in [
+        {},
+        {"iterations": 3},
+        {"branch_on": "min"},
+        {"max_depth": 12},
+        {"max_depth": 4, "min_points": 0.0},
+        {"node_size_ratio": 4.0},
+    ]:
         cpu = sd.smooth(v, t, values, "projected", points=points, engine="cpu", **options)
         opencl = sd.smooth(v, t, values, "projected", points=points, engine=DEVICE, **options)
         np.testing.assert_array_equal(opencl, cpu, err_msg=str(options))
@@ -87,15 +91,15 @@ def test_compute_smooths_projected_from_the_cast_points_oriented(points):
     messy[::2] = t[::2]
     for tris in (t, messy):
         cpu = sd.compute(v, tris, rays=10, points=points, engine="cpu", smoothing="projected")
-        device = sd.compute(v, tris, rays=10, points=points, engine=DEVICE,
-                            smoothing="projected")
+        device = sd.compute(v, tris, rays=10, points=points, engine=DEVICE, smoothing="projected")
         assert device.flipped_faces > 0 and "beside cast: upload" in device.timings
         np.testing.assert_array_equal(device.raw, cpu.raw)
         np.testing.assert_array_equal(device.values, cpu.values)
 
 
-@pytest.mark.parametrize("options", [{}, {"iterations": 3}, {"branch_on": "min"},
-                                     {"max_depth": 4, "min_points": 0.0}])
+@pytest.mark.parametrize(
+    "options", [{}, {"iterations": 3}, {"branch_on": "min"}, {"max_depth": 4, "min_points": 0.0}]
+)
 @pytest.mark.parametrize("points", ["faces", "vertices"])
 def test_projected_on_spot_agrees_with_cpu(spot, points, options):
     v, t, _, faces, vertices = spot
@@ -114,16 +118,25 @@ def test_projected_on_real_meshes_agrees_with_cpu(mesh_sdf):
     assert not np.array_equal(opencl, raw)  # it did smooth
 
 
-@pytest.mark.parametrize("options", [{}, {"bilateral": True}, {"texture_size": (300, 200)},
-                                     {"radius": 30, "margin": 0}, {"radius": 0.5, "margin": 5}])
+@pytest.mark.parametrize(
+    "options",
+    [
+        {},
+        {"bilateral": True},
+        {"texture_size": (300, 200)},
+        {"radius": 30, "margin": 0},
+        {"radius": 0.5, "margin": 5},
+    ],
+)
 @pytest.mark.parametrize("points", ["faces", "vertices"])
 def test_texture_on_spot_agrees_with_cpu(spot, points, options):
     v, t, uvs, faces, vertices = spot
     values = faces if points == "faces" else vertices
     options = {"texture_size": 512, **options}
     cpu = sd.smooth(v, t, values, "texture", uvs=uvs, engine="cpu", return_image=True, **options)
-    opencl = sd.smooth(v, t, values, "texture", uvs=uvs, engine=DEVICE, return_image=True,
-                       **options)
+    opencl = sd.smooth(
+        v, t, values, "texture", uvs=uvs, engine=DEVICE, return_image=True, **options
+    )
     assert_agree(opencl.values, cpu.values, f"texture {points} {options}")
     np.testing.assert_array_equal(opencl.mask, cpu.mask)
     assert_agree(opencl.image[cpu.mask], cpu.image[cpu.mask], f"texture image {options}")
@@ -180,7 +193,8 @@ def test_compute_smooths_on_the_engine_that_cast(spot, method):
     np.testing.assert_array_equal(result.values, alone)
     cpu = sd.compute(v, t, engine="cpu", smoothing=method, uvs=uvs, smoothing_options=options)
     np.testing.assert_array_equal(
-        cpu.values, sd.smooth(v, t, cpu.raw, method, uvs=uvs, engine="cpu", **options))
+        cpu.values, sd.smooth(v, t, cpu.raw, method, uvs=uvs, engine="cpu", **options)
+    )
 
 
 @pytest.mark.parametrize("engine", ["cpu", DEVICE])
@@ -299,8 +313,24 @@ def test_a_prepared_texture_keeps_its_uvs_alive(spot):
     v, t, uvs, faces, _ = spot
     v64, t64 = v.astype(np.float64), t.astype(np.int64)
     corner_uvs = np.array(uvs, dtype=np.float64)
-    expected = _core.smooth_texture(v64, t64, faces, "faces", corner_uvs.astype(np.float32), 64,
-                                    64, 2.0, False, 0.1, 2, 1e-6, False, 0, None, DEVICE)  # fmt: skip
+    expected = _core.smooth_texture(
+        v64,
+        t64,
+        faces,
+        "faces",
+        corner_uvs.astype(np.float32),
+        64,
+        64,
+        2.0,
+        False,
+        0.1,
+        2,
+        1e-6,
+        False,
+        0,
+        None,
+        DEVICE,
+    )
     ready = _core.prepare_texture(v64, t64, corner_uvs, 64, 64, 1e-6, False, 0, DEVICE)
     del corner_uvs
     gc.collect()
@@ -336,17 +366,27 @@ def test_faces_spanning_many_texels_are_drawn_on_the_cpu():
         out = sd.smooth(v, t, values, "texture", uvs=uvs, texture_size=512, engine=DEVICE)
     assert caught[0].filename == __file__
     np.testing.assert_array_equal(
-        out, sd.smooth(v, t, values, "texture", uvs=uvs, texture_size=512, engine="cpu"))
+        out, sd.smooth(v, t, values, "texture", uvs=uvs, texture_size=512, engine="cpu")
+    )
     with pytest.warns(RuntimeWarning, match="ran on the CPU threads") as caught:
-        sd.compute(v, t, rays=4, engine=DEVICE, smoothing="texture", uvs=uvs,
-                   smoothing_options={"texture_size": 512})
+        sd.compute(
+            v,
+            t,
+            rays=4,
+            engine=DEVICE,
+            smoothing="texture",
+            uvs=uvs,
+            smoothing_options={"texture_size": 512},
+        )
     assert [w.filename for w in caught if "CPU threads" in str(w.message)] == [__file__]
 
 
 def test_kring_runs_on_the_cpu_whatever_the_engine(spot):
     v, t, _, faces, _ = spot
-    np.testing.assert_array_equal(sd.smooth(v, t, faces, "kring", engine=DEVICE),
-                                  sd.smooth(v, t, faces, "kring", engine="cpu"))
+    np.testing.assert_array_equal(
+        sd.smooth(v, t, faces, "kring", engine=DEVICE),
+        sd.smooth(v, t, faces, "kring", engine="cpu"),
+    )
 
 
 @pytest.mark.parametrize("method", ["projected", "texture"])
@@ -364,13 +404,16 @@ def test_a_device_that_does_not_exist_is_a_clear_error(spot, method):
 def test_opencl_all_smooths_on_its_first_device(spot, method):
     v, t, uvs, faces, _ = spot
     options = {"uvs": uvs, "texture_size": 256} if method == "texture" else {}
-    np.testing.assert_array_equal(sd.smooth(v, t, faces, method, engine="opencl:all", **options),
-                                  sd.smooth(v, t, faces, method, engine=DEVICE, **options))
+    np.testing.assert_array_equal(
+        sd.smooth(v, t, faces, method, engine="opencl:all", **options),
+        sd.smooth(v, t, faces, method, engine=DEVICE, **options),
+    )
 
 
 @pytest.mark.parametrize("method", ["projected", "texture"])
-def test_a_cancel_raising_runtime_error_is_not_taken_for_a_device_failure(spot, method,
-                                                                           monkeypatch):
+def test_a_cancel_raising_runtime_error_is_not_taken_for_a_device_failure(
+    spot, method, monkeypatch
+):
     """engine='auto' runs the work again on the CPU after an OpenCL failure only: a progress
     callback's own exception, a RuntimeError included, propagates from compute() and
     smooth() (they once took it for a device failure and ran on)."""

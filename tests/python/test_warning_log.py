@@ -8,7 +8,6 @@ from concurrent.futures import ThreadPoolExecutor
 
 import numpy as np
 import pytest
-
 import shape_diameter
 import shapes
 
@@ -41,8 +40,14 @@ def test_a_warning_names_the_callers_line_from_inside_another_call():
             with warnings.catch_warnings(record=True) as inner:
                 warnings.simplefilter("always")
                 shape_diameter.compute(*TRIANGLE)
-                shape_diameter.smooth(V, F, np.ones(len(F), dtype=np.float32), "texture",
-                                      uvs=uvs_outside_the_square(len(F)), texture_size=16)
+                shape_diameter.smooth(
+                    V,
+                    F,
+                    np.ones(len(F), dtype=np.float32),
+                    "texture",
+                    uvs=uvs_outside_the_square(len(F)),
+                    texture_size=16,
+                )
             seen.extend(inner)
 
     shape_diameter.compute(V, F, progress=progress)
@@ -74,8 +79,9 @@ def test_collect_warnings_takes_smooths_warnings_too():
     V, F = shapes.icosphere(1.0, 2)
     uvs = uvs_outside_the_square(len(F))
     with shape_diameter.collect_warnings() as caught:
-        shape_diameter.smooth(V, F, np.ones(len(F), dtype=np.float32), "texture", uvs=uvs,
-                              texture_size=16)
+        shape_diameter.smooth(
+            V, F, np.ones(len(F), dtype=np.float32), "texture", uvs=uvs, texture_size=16
+        )
     assert len(caught) == 1 and "outside the [0, 1] square" in caught[0]
 
 

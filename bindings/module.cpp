@@ -1,0 +1,502 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
+// The private compiled module shape_diameter._core. The Python layer (api.py) validates and
+// documents; this file only converts arrays and releases the GIL around native work.
+#include <pybind11/functional.h>
+#include <pybind11/numpy.h>
+#include <pybind11/pybind11.h>
+#include <pybind11/stl.h>
+
+#include <stdexcept>
+#include <string>
+#include <memory>
+#include <utility>
+
+#include <chrono>
+#include <cstddef>
+
+#include "traverse/sdf_octree.h"
+#include "ray/sdf_reduce.h"
+#include "smooth/sdf_smooth_projected.h"
+#include "accel/bvh.h"
+#include "accel/bvh_stats.h"
+#include "post/normalize.h"
+#include "prepare/orientation_parts.h"
+#include "util/parallel.h"
+#include "cast_points.h"
+#include "progress.h"
+#include "timings.h"
+#include "pipeline/sdf.h"
+#include "prepare/unit_scale.h"
+#ifdef SDF_HAVE_OPENCL
+#include "opencl/devices.h"
+#include "opencl/device_tree.h"
+#include "opencl/opencl_engine.h"
+#include "opencl/program_cache.h"
+#endif
+
+namespace py = pybind11;
+
+void bind_smoothing(py::module_& m);  // python_smoothing.cpp
+void bind_segmentation(py::module_& m);  // segmentation.cpp
+
+namespace {
+
+using Doubles = py::array_t<double, py::array::c_style | py::array::forcecast>;
+using Int64s = py::array_t<std::int64_t, py::array::c_style | py::array::forcecast>;
+using Floats = py::array_t<float, py::array::c_style | py::array::forcecast>;
+
+sdf::Sampling parse_sampling(const std::string& name) {
+  if (name == "fibonacci") return sdf::Sampling::Fibonacci;
+  if (name == "random") return sdf::Sampling::Random;
+  if (name == "cgal") return sdf::Sampling::Cgal;
+  throw std::invalid_argument("sampling must be 'fibonacci', 'random' or 'cgal', got '" + name +
+                              "'");
+}
+
+sdf::PointKind parse_points(const std::string& name) {
+  if (name == "faces") return sdf::PointKind::Faces;
+  if (name == "vertices") return sdf::PointKind::Vertices;
+  throw std::invalid_argument("points must be 'faces' or 'vertices', got '" + name + "'");
+}
+
+void require_rows_of_3(const py::array& a, const char* what) {
+  if (a.ndim() != 2 || a.shape(1) != 3)
+    throw std::invalid_argument(std::string(what) + " must have shape (n, 3)");
+}
+
+// The caller's mesh arrays as the core's functions take them, their shapes checked.
+struct MeshArrays {
+  const double* vertices;
+  std::size_t vertex_count;
+  const std::int64_t* triangles;
+  std::size_t triangle_count;
+};
+
+MeshArrays mesh_arrays(const Doubles& vertices, const Int64s& triangles) {
+  require_rows_of_3(vertices, "vertices");
+  require_rows_of_3(triangles, "triangles");
+  return {vertices.data(), static_cast<std::size_t>(vertices.shape(0)), triangles.data(),
+          static_cast<std::size_t>(triangles.shape(0))};
+}
+
+sdf::Mesh to_mesh(const Doubles& vertices, const Int64s& triangles, unsigned threads = 0) {
+  const MeshArrays a = mesh_arrays(vertices, triangles);
+  return sdf::make_mesh(a.vertices, a.vertex_count, a.triangles, a.triangle_count, threads);
+}
+
+const char* fill_name(sdf::FillResult r) {
+  switch (r) {
+    case sdf::FillResult::NothingToFill: return "none";
+    case sdf::FillResult::Filled: return "filled";
+    case sdf::FillResult::NoValueAnywhere: return "no-value-anywhere";
+  }
+  return "?";
+}
+
+sdf::BvhQuality parse_bvh_quality(const std::string& name) {
+  if (name == "auto") return sdf::BvhQuality::Auto;
+  if (name == "high") return sdf::BvhQuality::High;
+  if (name == "fast") return sdf::BvhQuality::Fast;
+  throw std::invalid_argument("bvh_quality must be 'auto', 'high' or 'fast', got '" + name + "'");
+}
+
+sdf::Orientation parse_orientation(const std::string& name) {
+  if (name == "auto") return sdf::Orientation::Auto;
+  if (name == "as_is") return sdf::Orientation::AsIs;
+  if (name == "flip") return sdf::Orientation::Flip;
+  throw std::invalid_argument("orientation must be 'auto', 'as_is' or 'flip', got '" + name + "'");
+}
+
+sdf::Accel parse_accel(const std::string& name) {
+  if (name == "bvh") return sdf::Accel::Bvh;
+  if (name == "octree") return sdf::Accel::Octree;
+  throw std::invalid_argument("accel must be 'bvh' or 'octree', got '" + name + "'");
+}
+
+// A vector as a new numpy array of its element type.
+template <typename T>
+py::array_t<T> to_array(const std::vector<T>& items) {
+  py::array_t<T> out(static_cast<py::ssize_t>(items.size()));
+  std::copy(items.begin(), items.end(), out.mutable_data());
+  return out;
+}
+
+py::dict compute(const Doubles& vertices, const Int64s& triangles, int rays, double cone_angle,
+                 const std::string& sampling, std::uint32_t seed, const std::string& points,
+                 unsigned threads, const py::object& progress, const std::string& engine,
+                 const std::string& accel, int octree_max_depth, int octree_leaf_size,
+                 const std::string& orientation, const std::string& bvh_quality,
+                 const py::object& beside_cast, bool find_twins) {
+  sdf::Options options;
+  options.rays = rays;
+  options.cone_angle = cone_angle;
+  options.sampling = parse_sampling(sampling);
+  options.seed = seed;
+  options.points = parse_points(points);
+  options.threads = threads;
+  options.engine = engine;
+  options.accel = parse_accel(accel);
+  options.octree.max_depth = octree_max_depth;
+  options.octree.leaf_size = octree_leaf_size;
+  options.orientation = parse_orientation(orientation);
+  options.bvh_quality = parse_bvh_quality(bvh_quality);
+  options.find_twins = find_twins;
+
+  const sdf::ProgressFn report = sdf::python_progress(progress);
+  // Also on the calling thread, taking the GIL for its Python code; it gets the cast's points
+  // (sdf::CastPoints) for the length of the call.
+  sdf::BesideCast beside;
+  if (!beside_cast.is_none()) {
+    beside = [&beside_cast](const sdf::SamplePoints& points) {
+      py::gil_scoped_acquire gil;
+      auto lent = std::make_shared<sdf::CastPoints>(sdf::CastPoints{&points});
+      struct Return {
+        sdf::CastPoints& lent;
+        ~Return() { lent.points = nullptr; }
+      } give_back{*lent};
+      beside_cast(lent);
+    };
+  }
+  sdf::Output out;
+  {
+    sdf::Mesh mesh = to_mesh(vertices, triangles, threads);
+    py::gil_scoped_release release;
+    out = sdf::compute(std::move(mesh), options, report, beside);  // moved: no copy of a large mesh
+  }
+  py::dict result;
+  result["raw"] = py::array_t<float>(out.raw.size(), out.raw.data());
+  result["valid_rays"] = py::array_t<std::int32_t>(out.valid_rays.size(), out.valid_rays.data());
+  result["timings"] = sdf::timings_dict(out.timings);
+  result["fill"] = fill_name(out.fill);
+  result["engine"] = out.engine;
+  result["device_bytes"] = out.device_bytes;
+  result["near_cutoff"] = out.near_cutoff;
+  result["flipped_faces"] = out.orientation.flipped_faces;
+  result["parts"] = out.orientation.parts;
+  // Which faces were reversed (None when none was): what runs on the caller's arrays after
+  // the cast and depends on the winding (projected smoothing) reverses them too.
+  if (out.orientation.reversed.empty()) {
+    result["reversed"] = py::none();
+  } else {
+    py::array_t<bool> reversed(static_cast<py::ssize_t>(out.orientation.reversed.size()));
+    std::copy(out.orientation.reversed.begin(), out.orientation.reversed.end(),
+              reversed.mutable_data());
+    result["reversed"] = reversed;
+  }
+  // Faces with a reversed twin (the computation stopped on finding them): (dropped, twin,
+  // corner) as mesh_twins.h describes them; None when there are none.
+  if (out.twins.empty()) {
+    result["twins"] = py::none();
+  } else {
+    result["twins"] = py::make_tuple(to_array(out.twins.dropped), to_array(out.twins.twin),
+                                     to_array(out.twins.corner));
+  }
+  return result;
+}
+
+// Every OpenCL device as a dict, in the order "opencl:N" counts them.
+py::list opencl_devices() {
+  py::list list;
+#ifdef SDF_HAVE_OPENCL
+  for (const sdf::cl::Device& d : sdf::cl::devices()) {
+    py::dict e;
+    e["index"] = d.index;
+    e["device"] = d.name;
+    e["platform"] = d.platform_name;
+    e["vendor"] = d.vendor;
+    e["driver"] = d.driver_version;
+    e["version"] = d.device_version;
+    e["type"] = d.gpu ? "GPU" : "CPU";
+    e["memory"] = d.global_memory;
+    e["max_allocation"] = d.max_allocation;
+    e["compute_units"] = d.compute_units;
+    e["clock_mhz"] = d.clock_mhz;
+    e["double"] = d.fp64;
+    list.append(e);
+  }
+#endif
+  return list;
+}
+
+// The octree alone, for the benchmark's build-time table (paper's Table 2).
+py::dict octree_stats(const Doubles& vertices, const Int64s& triangles, int max_depth,
+                      int leaf_size) {
+  const sdf::Mesh mesh = to_mesh(vertices, triangles);
+  sdf::OctreeConfig config;
+  config.max_depth = max_depth;
+  config.leaf_size = leaf_size;
+  sdf::Octree tree;
+  double seconds = 0.0;
+  {
+    py::gil_scoped_release release;
+    const auto start = std::chrono::steady_clock::now();
+    tree = sdf::build_octree(mesh, config);
+    seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  }
+  py::dict d;
+  d["seconds"] = seconds;
+  d["nodes"] = tree.nodes.size();
+  d["leaf_words"] = tree.leaves.size();
+  d["depth"] = tree.depth;
+  return d;
+}
+
+// The BVH alone, for the build benchmark: its time, size and SAH cost (a tree quality figure).
+py::dict bvh_stats(const Doubles& vertices, const Int64s& triangles, unsigned threads) {
+  const sdf::Mesh mesh = to_mesh(vertices, triangles);
+  sdf::BvhConfig config;
+  config.threads = threads;
+  sdf::Bvh bvh;
+  double seconds = 0.0;
+  {
+    py::gil_scoped_release release;
+    const auto start = std::chrono::steady_clock::now();
+    bvh = sdf::build_bvh(mesh, config);
+    seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  }
+  py::dict d;
+  d["seconds"] = seconds;
+  d["nodes"] = bvh.nodes.size();
+  d["triangles"] = bvh.triangles.size();
+  d["depth"] = sdf::bvh_depth(bvh);
+  d["sah_cost"] = sdf::bvh_sah_cost(bvh);
+  return d;
+}
+
+std::string opencl_unavailable_reason() {
+#ifdef SDF_HAVE_OPENCL
+  return sdf::cl::devices().empty() ? sdf::cl::unavailable_reason() : "";
+#else
+  return "this build has no OpenCL engine";
+#endif
+}
+
+// Sizes and member offsets of the structs shared with the kernels, in the order the layout
+// probe kernel writes them.
+std::vector<std::uint32_t> host_layout() {
+  using namespace sdf::kern;
+  return {sizeof(SdfBvhNode),      offsetof(SdfBvhNode, first),     offsetof(SdfBvhNode, hi_x),
+          offsetof(SdfBvhNode, count), sizeof(SdfTriangle),         offsetof(SdfTriangle, id),
+          offsetof(SdfTriangle, e1_x), offsetof(SdfTriangle, e2_x), sizeof(SdfOctreeRoot),
+          offsetof(SdfOctreeRoot, size), sizeof(SdfCastParams),    offsetof(SdfCastParams, tmin),
+          offsetof(SdfCastParams, count), sizeof(SdfPointNode),  offsetof(SdfPointNode, half_side),
+          offsetof(SdfPointNode, count), offsetof(SdfPointNode, first_child),
+          offsetof(SdfPointNode, child_count), sizeof(SdfBvh8Node),
+          offsetof(SdfBvh8Node, hi_x), offsetof(SdfBvh8Node, child),
+          offsetof(SdfBvh8Node, count), sizeof(SdfTrianglePacket4),
+          offsetof(SdfTrianglePacket4, id)};
+}
+
+glm::vec3 unit_vector(const Floats& v, const char* what) {
+  if (v.size() != 3) throw std::invalid_argument(std::string(what) + " must have 3 components");
+  glm::vec3 n(v.data()[0], v.data()[1], v.data()[2]);
+  const float len = glm::length(n);
+  if (!(len > 0.0f) || !std::isfinite(len))
+    throw std::invalid_argument(std::string(what) + " must be a finite, non-zero vector");
+  return n / len;
+}
+
+py::tuple cone_rays(const Floats& axis, int rays, double cone_angle, const std::string& sampling,
+                    std::uint32_t seed, std::uint32_t point, const py::object& tangent) {
+  const glm::vec3 n = unit_vector(axis, "normal");
+  glm::vec3 t = sdf::fallback_tangent(n);
+  if (!tangent.is_none()) {
+    const glm::vec3 given = unit_vector(tangent.cast<Floats>(), "tangent");
+    const glm::vec3 perpendicular = given - glm::dot(given, n) * n;
+    if (!(glm::length(perpendicular) > 1e-6f))
+      throw std::invalid_argument("tangent must not be parallel to the normal");
+    t = glm::normalize(perpendicular);
+  }
+  const sdf::Cone cone = sdf::make_cone(rays, cone_angle, parse_sampling(sampling), seed);
+  py::array_t<float> directions({rays, 3});
+  py::array_t<float> angles(rays);
+  sdf::cone_rays(cone, n, t, point, reinterpret_cast<glm::vec3*>(directions.mutable_data()),
+                 angles.mutable_data());
+  return py::make_tuple(directions, angles);
+}
+
+float reduce_lengths(const Floats& lengths, const Floats& angles, const std::string& sampling,
+                     int rays, double cone_angle) {
+  if (lengths.ndim() != 1 || angles.ndim() != 1 || lengths.size() != angles.size())
+    throw std::invalid_argument("lengths and angles must be 1-D arrays of the same length");
+  const int n = static_cast<int>(lengths.size());
+  if (n > sdf::kMaxRays) throw std::invalid_argument("more lengths than the most rays allowed");
+  if (n == 0) return std::nanf("");
+  const sdf::Cone cone = sdf::make_cone(rays > 0 ? rays : n, cone_angle, parse_sampling(sampling), 0);
+  std::vector<float> l(lengths.data(), lengths.data() + n), a(angles.data(), angles.data() + n);
+  return sdf::kern::sdf_reduce(static_cast<int>(cone.sampling), l.data(), a.data(), n,
+                               cone.angle_floor);
+}
+
+py::tuple sample_points(const Doubles& vertices, const Int64s& triangles,
+                        const std::string& points) {
+  const sdf::Mesh mesh = to_mesh(vertices, triangles);
+  const sdf::SamplePoints s = sdf::sample_points(mesh, parse_points(points));
+  const py::ssize_t n = static_cast<py::ssize_t>(s.size());
+  py::array_t<float> origins({n, py::ssize_t(3)}), axes({n, py::ssize_t(3)}),
+      tangents({n, py::ssize_t(3)});
+  float* o = origins.mutable_data();
+  float* a = axes.mutable_data();
+  float* t = tangents.mutable_data();
+  for (py::ssize_t i = 0; i < n; ++i) {
+    for (int k = 0; k < 3; ++k) {
+      o[3 * i + k] = static_cast<float>(s.origins[i][k] + mesh.center[k]);
+      a[3 * i + k] = s.axes[i][k];
+      t[3 * i + k] = s.tangents[i][k];
+    }
+  }
+  return py::make_tuple(origins, axes, tangents);
+}
+
+// Result.normalized from values of any shape (float32 or float64, C order), same shape out.
+template <class T>
+py::array_t<float> normalize(const py::array_t<T, py::array::c_style>& values,
+                             const std::string& method, unsigned threads) {
+  sdf::Normalization how;
+  if (method == "linear") {
+    how = sdf::Normalization::Linear;
+  } else if (method == "log") {
+    how = sdf::Normalization::Log;
+  } else {
+    throw std::invalid_argument("normalize must be 'linear' or 'log', got '" + method + "'");
+  }
+  py::array_t<float> out(std::vector<py::ssize_t>(values.shape(), values.shape() + values.ndim()));
+  const T* in = values.data();
+  float* to = out.mutable_data();
+  const std::size_t n = static_cast<std::size_t>(values.size());
+  py::gil_scoped_release release;
+  sdf::normalize(in, n, how, threads, to);
+  return out;
+}
+
+}  // namespace
+
+PYBIND11_MODULE(_core, m) {
+  m.doc() = "Shape Diameter native core (private; use the shape_diameter package)";
+  py::register_exception<sdf::Cancelled>(m, "Cancelled");
+  m.def("compute", &compute, py::arg("vertices"), py::arg("triangles"), py::arg("rays"),
+        py::arg("cone_angle"), py::arg("sampling"), py::arg("seed"), py::arg("points"),
+        py::arg("threads"), py::arg("progress"), py::arg("engine") = "cpu",
+        py::arg("accel") = "bvh", py::arg("octree_max_depth") = 10,
+        py::arg("octree_leaf_size") = 8, py::arg("orientation") = "auto", py::arg("bvh_quality") = "auto",
+        py::arg("beside_cast") = py::none(), py::arg("find_twins") = true);
+  m.def("opencl_devices", &opencl_devices);
+  m.def("octree_stats", &octree_stats, py::arg("vertices"), py::arg("triangles"),
+        py::arg("max_depth") = 10, py::arg("leaf_size") = 8);
+  m.def("normalize", &normalize<float>, py::arg("values"), py::arg("method"),
+        py::arg("threads") = 0);
+  m.def("normalize", &normalize<double>, py::arg("values"), py::arg("method"),
+        py::arg("threads") = 0);
+  m.def("bvh_stats", &bvh_stats, py::arg("vertices"), py::arg("triangles"),
+        py::arg("threads") = 0);
+  m.def("opencl_unavailable_reason", &opencl_unavailable_reason);
+  m.def("opencl_gpu_lost_to_fork", [] {
+#ifdef SDF_HAVE_OPENCL
+    return sdf::cl::gpu_lost_to_fork();
+#else
+    return false;
+#endif
+  });
+  m.def("opencl_select", [](const std::string& engine) {
+#ifdef SDF_HAVE_OPENCL
+    std::vector<int> indices;
+    for (const sdf::cl::Device* d : sdf::cl::select_devices(engine)) indices.push_back(d->index);
+    return indices;
+#else
+    throw std::invalid_argument("this build of shape_diameter has no OpenCL engine (engine '" +
+                                engine + "')");
+#endif
+  }, "The indices of the devices an OpenCL engine string selects; ValueError as compute() "
+     "would raise it (OpenCL not available, no device matching).");
+  m.def("host_layout", &host_layout);
+#ifdef SDF_HAVE_OPENCL
+  m.def("opencl_layout", [](int index) {
+    py::gil_scoped_release release;
+    return sdf::cl::probe_layout(index);
+  });
+  m.def("opencl_tree_keys", [](const Doubles& vertices, const Int64s& triangles, int index) {
+    const sdf::Mesh mesh = to_mesh(vertices, triangles);
+    sdf::cl::TreeKeys keys;
+    {
+      py::gil_scoped_release release;
+      keys = sdf::cl::device_tree_keys(index, mesh);
+    }
+    return py::make_tuple(
+        py::array_t<std::uint32_t>(keys.order.size(), keys.order.data()),
+        py::array_t<std::uint32_t>(keys.codes.size(), keys.codes.data()), keys.with_area,
+        keys.margin);
+  }, "Test hook: the device-built tree's keys (order, codes, faces with area, margin) as "
+     "device `index` makes them.");
+  m.def("opencl_build_source", [](int index, const std::string& source) {
+    py::gil_scoped_release release;
+    sdf::cl::build_source_for_test(index, source);
+  }, "Test hook: build an OpenCL source on device `index`; raises with the build log.");
+  m.def("opencl_program_stats", [] {
+    const sdf::cl::ProgramStats s = sdf::cl::program_stats();
+    py::dict d;
+    d["compiled"] = s.compiled;
+    d["from_cache"] = s.from_cache;
+    return d;
+  });
+  m.def("opencl_cache_directory", &sdf::cl::cache_directory);
+  py::register_exception<sdf::cl::Error>(m, "OpenCLError", PyExc_RuntimeError);
+#endif
+  m.def("cone_rays", &cone_rays, py::arg("normal"), py::arg("rays"), py::arg("cone_angle"),
+        py::arg("sampling"), py::arg("seed"), py::arg("point_index"),
+        py::arg("tangent") = py::none());
+  m.def("reduce_lengths", &reduce_lengths, py::arg("lengths"), py::arg("angles"),
+        py::arg("sampling"), py::arg("rays"), py::arg("cone_angle"));
+  m.def("sample_points", &sample_points, py::arg("vertices"), py::arg("triangles"),
+        py::arg("points"));
+  m.def("hardware_threads", [] { return sdf::resolve_threads(0); });
+  // compute()'s rule for meshes far from unit size, for the smoothing that runs outside it.
+  m.def("unit_scale_exponent", &sdf::unit_scale_exponent, py::arg("max_extent"));
+  m.def(
+      "used_width",
+      [](const Doubles& vertices, const Int64s& triangles) {
+        const MeshArrays a = mesh_arrays(vertices, triangles);
+        py::gil_scoped_release release;
+        return sdf::used_width(a.vertices, a.vertex_count, a.triangles, a.triangle_count);
+      },
+      py::arg("vertices"), py::arg("triangles"));
+  m.def(
+      "mesh_values",
+      [](const Doubles& vertices, const Int64s& triangles, unsigned threads) {
+        const MeshArrays a = mesh_arrays(vertices, triangles);
+        sdf::MeshValues values;
+        {
+          py::gil_scoped_release release;
+          values = sdf::mesh_values(a.vertices, a.vertex_count, a.triangles, a.triangle_count,
+                                    threads);
+        }
+        return py::make_tuple(values.not_finite, values.first_not_finite, values.min_index,
+                              values.max_index);
+      },
+      py::arg("vertices"), py::arg("triangles"), py::arg("threads") = 0);
+  // Per face its part (faces joined through shared vertex positions: orientation's parts,
+  // orientation_parts.h) and per part the largest side of its bounding box: for compute()'s
+  // check of parts the near-hit cutoff, set by the whole mesh, reaches.
+  m.def(
+      "mesh_parts",
+      [](const Doubles& vertices, const Int64s& triangles, unsigned threads) {
+        const sdf::Mesh mesh = to_mesh(vertices, triangles, threads);
+        sdf::Parts parts;
+        std::vector<double> extents;
+        {
+          py::gil_scoped_release release;
+          parts = sdf::find_parts(mesh, threads);
+          for (const sdf::PartBox& box : sdf::part_boxes(mesh, parts, threads)) {
+            const glm::dvec3 side = box.hi - box.lo;
+            extents.push_back(std::max({side.x, side.y, side.z}));
+          }
+        }
+        return py::make_tuple(
+            py::array_t<std::uint32_t>(parts.part_of.size(), parts.part_of.data()),
+            py::array_t<double>(extents.size(), extents.data()));
+      },
+      py::arg("vertices"), py::arg("triangles"), py::arg("threads") = 0);
+  m.attr("MAX_RAYS") = sdf::kMaxRays;
+  m.attr("NEAR_CUTOFF_SHARE") = sdf::kNearCutoffShare;
+  bind_smoothing(m);
+  bind_segmentation(m);
+}

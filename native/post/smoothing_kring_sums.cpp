@@ -1,0 +1,65 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
+// AVX-512 is enabled for one function by attribute (as bvh8_traverse_avx2.cpp does for AVX2),
+// and picked at run time.
+#include "post/smoothing_kring_sums.h"
+
+#if defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__))
+#define SDF_HAVE_AVX512_SUMS 1
+#include <immintrin.h>
+#else
+#define SDF_HAVE_AVX512_SUMS 0
+#endif
+
+namespace sdf {
+
+void add_ring_scalar(const RingItem* items, std::size_t count, double w, double* sum,
+                     double* weight) {
+  for (std::size_t i = 0; i < count; ++i) add_item(items[i], w, sum, weight);
+}
+
+#if SDF_HAVE_AVX512_SUMS
+
+bool add_ring_avx512_supported() {
+  static const bool supported = __builtin_cpu_supports("avx512f");
+  return supported;
+}
+
+// 64 sums and 64 weights in 16 registers of 8 doubles; an item's mask, 8 bits at a time,
+// selects the lanes of each register that add (w x, w). Masked-off lanes keep their value,
+// so each lane sees exactly the scalar loop's additions.
+__attribute__((target("avx512f"))) void add_ring_avx512(const RingItem* items,
+                                                        std::size_t count, double w,
+                                                        double* sum, double* weight) {
+  __m512d s[8], t[8];
+  for (int j = 0; j < 8; ++j) {
+    s[j] = _mm512_loadu_pd(sum + 8 * j);
+    t[j] = _mm512_loadu_pd(weight + 8 * j);
+  }
+  const __m512d ww = _mm512_set1_pd(w);
+  for (std::size_t i = 0; i < count; ++i) {
+    const __m512d wx = _mm512_set1_pd(w * static_cast<double>(items[i].value));
+    const std::uint64_t bits = items[i].points;
+    for (int j = 0; j < 8; ++j) {
+      const __mmask8 lanes = static_cast<__mmask8>(bits >> (8 * j));
+      s[j] = _mm512_mask_add_pd(s[j], lanes, s[j], wx);
+      t[j] = _mm512_mask_add_pd(t[j], lanes, t[j], ww);
+    }
+  }
+  for (int j = 0; j < 8; ++j) {
+    _mm512_storeu_pd(sum + 8 * j, s[j]);
+    _mm512_storeu_pd(weight + 8 * j, t[j]);
+  }
+}
+
+#else
+
+bool add_ring_avx512_supported() { return false; }
+
+void add_ring_avx512(const RingItem* items, std::size_t count, double w, double* sum,
+                     double* weight) {
+  add_ring_scalar(items, count, w, sum, weight);
+}
+
+#endif
+
+}  // namespace sdf
