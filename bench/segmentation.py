@@ -18,7 +18,9 @@ Quality: each mesh is segmented with the defaults (5 clusters, lambda 0.26) by
 - ours: shape_diameter.segment(vertices, triangles), the SDF computed with compute()'s defaults,
   mode "auto"; and again with mode="cgal";
 - ours, mode="cgal" on CGAL's post-processed SDF: the same input as CGAL's segmentation, so its
-  labels should equal CGAL's ("same labels" gives the share of faces that do).
+  labels should equal CGAL's ("same labels" gives the share of faces that do), and its
+  graph-cut energy CGAL's; the energies of CGAL's labels and of ours (both modes) on those
+  values are tabled too.
 Each is compared with every human segmentation of the mesh and the errors averaged over the
 humans, then over a category's meshes, then over the categories, as the benchmark does
 (measures in segmentation_measures.py: 1 - Rand index, cut discrepancy, Hamming distance,
@@ -61,6 +63,8 @@ CATEGORIES = {1: "human", 21: "cup", 41: "glasses", 61: "airplane", 81: "ant", 1
               341: "bearing", 361: "vase", 381: "fourleg"}
 MEASURES = ("1-RI", "CD", "HD", "GCE", "LCE")
 HAVE_SEGMENT = hasattr(sd, "segment")
+if HAVE_SEGMENT:
+    from shape_diameter.segmentation import segmentation_energy
 
 
 def category(number: int) -> str:
@@ -125,9 +129,12 @@ def segmentations(off: Path, vertices, triangles, cgal: str, tmp: Path) -> dict:
     for name, kwargs in (("ours", {}), ('ours, mode="cgal"', {"mode": "cgal"})):
         out[name] = np.asarray(sd.segment(vertices, triangles, **kwargs).labels)
     if ref is not None:
-        labels = np.asarray(sd.segment(vertices, triangles, ref.sdf, mode="cgal").labels)
-        out['ours, mode="cgal", CGAL\'s SDF'] = labels
-        out["same labels"] = float(np.mean(labels == ref.labels))
+        same = sd.segment(vertices, triangles, ref.sdf, mode="cgal")
+        out['ours, mode="cgal", CGAL\'s SDF'] = np.asarray(same.labels)
+        out["same labels"] = float(np.mean(np.asarray(same.labels) == ref.labels))
+        auto = sd.segment(vertices, triangles, ref.sdf)
+        out["energy"] = (segmentation_energy(vertices, triangles, ref.sdf, ref.clusters),
+                         same.energy, auto.energy)
     return out
 
 
@@ -141,7 +148,8 @@ def quality_of_mesh(number: int, off: Path, human_files: list, cgal: str, tmp: P
     human_cuts = [cuts.distance_to_cuts(h) for h in humans]
     found = segmentations(off, vertices, triangles, cgal, tmp)
     row = {"mesh": number, "category": category(number), "faces": len(triangles),
-           "humans": len(humans), "same labels": found.pop("same labels", None), "methods": {}}
+           "humans": len(humans), "same labels": found.pop("same labels", None),
+           "energy": found.pop("energy", None), "methods": {}}
     for method, labels in found.items():
         row["methods"][method] = dict(zip(MEASURES, scores(cuts, labels, humans, human_cuts)),
                                       segments=len(np.unique(labels)))
@@ -166,6 +174,12 @@ def quality_tables(rows: list) -> list[str]:
         same = "" if r["same labels"] is None else f"{100 * r['same labels']:.2f}%"
         lines.append(f"| {r['mesh']} | {r['category']} | {r['faces']:,} | {r['humans']} | "
                      + " | ".join(cells) + f" | {same} |")
+    if rows[0]["energy"] is not None:
+        lines += ["", "Graph-cut energy of the labels on CGAL's SDF (CGAL's probabilities and "
+                  "edge weights)", "", "| mesh | CGAL | ours, mode=\"cgal\" | ours (auto) | "
+                  "auto / CGAL |", "|---:|---:|---:|---:|---:|"]
+        lines += [f"| {r['mesh']} | {r['energy'][0]:.6g} | {r['energy'][1]:.6g} | "
+                  f"{r['energy'][2]:.6g} | {r['energy'][2] / r['energy'][0]:.4f} |" for r in rows]
     by_category = {}
     for r in rows:
         by_category.setdefault(r["category"], []).append(r)
