@@ -171,7 +171,9 @@ def quality_tables(rows: list) -> list[str]:
     for r in rows:
         cells = [f"{r['methods'][m]['1-RI']:.3f} ({r['methods'][m]['segments']:.0f})"
                  for m in methods]
-        same = "" if r["same labels"] is None else f"{100 * r['same labels']:.2f}%"
+        same = "" if r["same labels"] is None else (
+            f"{100 * r['same labels']:.2f}% ({round((1 - r['same labels']) * r['faces'])} "
+            "differ)")
         lines.append(f"| {r['mesh']} | {r['category']} | {r['faces']:,} | {r['humans']} | "
                      + " | ".join(cells) + f" | {same} |")
     if rows[0]["energy"] is not None:
@@ -274,7 +276,8 @@ def speed_table(rows: list) -> list[str]:
         if "auto" in r:
             ours = (f"{pair(r['auto'])} | {ratio(cgal, r['auto'])} | {pair(r['cgal'])} | "
                     f"{ratio(cgal, r['cgal'])} | {r['segments CGAL']} / {r['segments cgal']} / "
-                    f"{r['segments auto']} | {100 * r['same labels']:.2f}%")
+                    f"{r['segments auto']} | {100 * r['same labels']:.2f}% "
+                    f"({round((1 - r['same labels']) * r['faces'])} differ)")
         else:
             ours = f"- | - | - | - | {r['segments CGAL']} / - / - | -"
         lines.append(f"| {r['mesh']} | {r['faces']:,} | {r['sdf']:.2f} | {pair(cgal)} | {ours} |")
