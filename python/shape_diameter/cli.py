@@ -35,9 +35,10 @@ import numpy as np
 from . import __version__
 from . import _core
 from .api import MAX_RAYS, _check_engine, compute, engines
-from .colormap import colormap
+from .colormap import colormap, segment_colors
 from .cli_jobs import DEFAULT_SUFFIX, EXIT_ENVIRONMENT, EXIT_USAGE, CommandError, plan
 from .output_files import written_whole
+from .segmentation import segment
 from .smoothing import DEVICE_ERRORS, texture_cost
 
 PROG = "shape-diameter"
@@ -320,6 +321,29 @@ def build_parser() -> argparse.ArgumentParser:
         "of k corners giving k-2 consecutive rows (shape_diameter.load_mesh(INPUT, "
         "source_faces=True) gives each row's face); with --points vertices one per vertex, in "
         "INPUT's order (STL: positions merged, by first use)",
+    )
+    parser.add_argument(
+        "--segment",
+        nargs="?",
+        const=5,
+        type=_int_in(1, 256),
+        metavar="K",
+        help="also split the mesh into parts by thickness (shape_diameter.segment, K clusters, "
+        "default 5): colour the output mesh by segment instead of by SDF and save the labels "
+        "(int32 per triangle, INPUT's face order) next to it with .segments.npy in place of "
+        "its suffix (cow.obj -> cow.sdf.segments.npy); needs --points faces",
+    )
+    parser.add_argument(
+        "--smoothness",
+        type=_positive_float(1e6),
+        metavar="LAMBDA",
+        help="--segment: weight of cutting edges against the cluster fit (default: 0.26)",
+    )
+    parser.add_argument(
+        "--segment-mode",
+        choices=("auto", "cgal"),
+        help="--segment: auto (the graph cut run until no move helps), or cgal (CGAL 5.5's "
+        "segmentation_from_sdf_values exactly) (default: auto)",
     )
     parser.add_argument(
         "--output-dir",
@@ -613,13 +637,32 @@ def _compute_one(args, job, mesh_io, smoothing_options, several, warned, interru
             uvs=uvs,
             smoothing_options=smoothing_options,
         )
+    parts = None
+    if args.segment is not None:
+        with _warnings_to(job, warned):
+            parts = segment(vertices, triangles, result.values, clusters=args.segment,
+                            smoothness=0.26 if args.smoothness is None else args.smoothness,
+                            mode=args.segment_mode or "auto", postprocess=True,
+                            threads=args.threads)
     computed = time.perf_counter()
     interrupts.check()
+    colors = colormap(result.normalized) if parts is None else segment_colors(parts.labels)
 
     def save_mesh():
         with _warnings_to(job, warned):  # GLB and STL: float32 coordinates
-            mesh_io.save_colored(job.output, vertices, triangles, colormap(result.normalized),
-                                 args.points)
+            mesh_io.save_colored(job.output, vertices, triangles, colors, args.points)
+
+    def save_segments_then_mesh():
+        if not job.segments:
+            save_mesh()
+            return
+        with written_whole(job.segments) as temporary:
+            with open(temporary, "wb") as stream:
+                npy = io.BytesIO()
+                np.save(npy, np.asarray(parts.labels, dtype=np.int32))
+                stream.write(npy.getbuffer())
+            interrupts.check()
+            save_mesh()
 
     if job.values:
         # The values are written first and take their place after the mesh: a failure in
@@ -631,19 +674,28 @@ def _compute_one(args, job, mesh_io, smoothing_options, several, warned, interru
                 np.save(npy, np.asarray(result.values, dtype=np.float32))
                 stream.write(npy.getbuffer())
             interrupts.check()  # (before the temporary files take the outputs' places)
-            save_mesh()
+            save_segments_then_mesh()
     else:
-        save_mesh()
+        save_segments_then_mesh()
     finished = time.perf_counter()
 
     # The CLI's own stages, apart from compute()'s: reading and writing files.
     io_seconds = {"load": loaded - started, "write": finished - computed}
     report = _report(args, job, vertices, triangles, result, io_seconds, finished - started)
+    if parts is not None:
+        report["segments"] = {
+            "count": parts.segment_count, "clusters": int(len(parts.mixture)),
+            "smoothness": 0.26 if args.smoothness is None else args.smoothness,
+            "mode": args.segment_mode or "auto",
+            "seconds": {stage: float(t) for stage, t in parts.timings.items()},
+        }
+        report["outputs"]["segments"] = job.segments
     report["warnings"] = list(warned)
     if not args.quiet and not args.json:
+        parts_said = f", {parts.segment_count} segments" if parts is not None else ""
         _say(
-            f"{job.source}: {report['point_count']} {args.points}, {args.rays} rays, "
-            f"{report['total_seconds']:.2f} s on {result.engine} -> {job.output}"
+            f"{job.source}: {report['point_count']} {args.points}, {args.rays} rays"
+            f"{parts_said}, {report['total_seconds']:.2f} s on {result.engine} -> {job.output}"
         )
     return report
 
@@ -732,6 +784,11 @@ def _check_combinations(args) -> None:
     if args.values and args.save_values:
         raise CommandError("--values and --save-values both say where values go: give one "
                            "(--values for one INPUT, --save-values for several)")
+    if args.segment is not None and args.points != "faces":
+        raise CommandError("--segment needs --points faces (segments are made of faces)")
+    for flag in ("smoothness", "segment_mode"):
+        if getattr(args, flag) is not None and args.segment is None:
+            raise CommandError(f"--{flag.replace('_', '-')} applies to --segment")
     args.seed = 0 if args.seed is None else args.seed
     args.bvh_quality = args.bvh_quality or "auto"
 
