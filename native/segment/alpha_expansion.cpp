@@ -104,10 +104,18 @@ double alpha_expansion(const FaceGraph& graph, const double* weights, const doub
   ExpansionNetwork network;
   std::vector<int> candidate(n);
   double best = std::numeric_limits<double>::max();
+  // A move to alpha from labels it has already been tried on, or from the labels its own
+  // kept move made, finds nothing better (every expansion of the moved labels is an expansion
+  // of the labels it moved from): such moves are skipped, which leaves the result as it was
+  // and saves most of the last sweep.
+  std::vector<long> tried(k, -1);
+  long moves = 0, last_kept = 0;
   bool improved = true;
   while (improved) {
     improved = false;
     for (std::size_t alpha = 0; alpha < k; ++alpha) {
+      if (tried[alpha] >= last_kept) continue;
+      tried[alpha] = ++moves;
       const int a = static_cast<int>(alpha);
       network.build(graph, weights, costs, k, labels, n, a);
       std::copy(labels, labels + n, candidate.begin());
@@ -117,6 +125,7 @@ double alpha_expansion(const FaceGraph& graph, const double* weights, const doub
       if (best - energy <= energy * 1e-10) continue;
       best = energy;
       improved = true;
+      last_kept = moves;
       std::copy(candidate.begin(), candidate.end(), labels);
       if (rules.first_move_only) return best;
     }
