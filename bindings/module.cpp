@@ -34,7 +34,8 @@
 
 namespace py = pybind11;
 
-void bind_smoothing(py::module_& m);  // smoothing.cpp
+void bind_smoothing(py::module_& m);     // smoothing.cpp
+void bind_segmentation(py::module_& m);  // segmentation.cpp
 
 namespace {
 
@@ -412,6 +413,7 @@ PYBIND11_MODULE(_core, m) {
   m.attr("MAX_RAYS") = sdf::kMaxRays;
   m.attr("NEAR_CUTOFF_SHARE") = sdf::kNearCutoffShare;
   bind_smoothing(m);
+  bind_segmentation(m);
   // For the test-only module shape_diameter._testing alone (test_bridge.h).
   static sdf::TestBridge bridge{
       [](const sdf::TestOverrides& overrides) { sdf::test_overrides() = overrides; },

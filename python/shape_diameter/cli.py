@@ -279,12 +279,13 @@ def build_parser() -> argparse.ArgumentParser:
     )
     parser.add_argument(
         "--smooth",
-        choices=("none", "kring", "projected", "texture"),
+        choices=("none", "kring", "projected", "texture", "bilateral"),
         default="none",
         help="smooth the SDF before colouring (paper 4.4): kring = Gaussian over mesh rings, "
         "projected = octree of points moved inward by half their SDF, texture = blur in the "
         "UV layout (needs UVs in INPUT: OBJ vt, glTF TEXCOORD_0 of a primitive with a "
-        "material, PLY texture coordinates) (default: none)",
+        "material, PLY texture coordinates), bilateral = CGAL's filter over rings of edge "
+        "neighbours (--points faces) (default: none)",
     )
     parser.add_argument(
         "--k",
@@ -319,6 +320,29 @@ def build_parser() -> argparse.ArgumentParser:
         "of k corners giving k-2 consecutive rows (shape_diameter.load_mesh(INPUT, "
         "source_faces=True) gives each row's face); with --points vertices one per vertex, in "
         "INPUT's order (STL: positions merged, by first use)",
+    )
+    parser.add_argument(
+        "--segment",
+        nargs="?",
+        const=5,
+        type=_int_in(1, 256),
+        metavar="K",
+        help="also split the mesh into parts by thickness (shape_diameter.segment, K clusters, "
+        "default 5): colour the output mesh by segment instead of by SDF and save the labels "
+        "(int32 per triangle, INPUT's face order) next to it with .segments.npy in place of "
+        "its suffix (cow.obj -> cow.sdf.segments.npy); needs --points faces",
+    )
+    parser.add_argument(
+        "--smoothness",
+        type=_positive_float(1e6),
+        metavar="LAMBDA",
+        help="--segment: weight of cutting edges against the cluster fit (default: 0.26)",
+    )
+    parser.add_argument(
+        "--segment-mode",
+        choices=("auto", "cgal"),
+        help="--segment: auto (the graph cut run until no move helps), or cgal (CGAL 5.5's "
+        "segmentation_from_sdf_values exactly) (default: auto)",
     )
     parser.add_argument(
         "--output-dir",
@@ -577,6 +601,7 @@ def _compute_one(args, job, mesh_io, several, warned, interrupts) -> dict:
             job,
             compute_options(args),
             mesh_io,
+            segment_options=segment_options(args),
             warn=lambda message: _warn(job, warned, message),
             progress=interrupts.checked(progress),
             check=interrupts.check,
@@ -588,11 +613,23 @@ def _compute_one(args, job, mesh_io, several, warned, interrupts) -> dict:
 
 
 def _say_done(args, job, report) -> None:
+    parts = f", {report['segments']['count']} segments" if "segments" in report else ""
     _say(
         f"{job.source}: {report['point_count']} {args.points}, {args.rays} rays, "
-        f"{_smoothing_words(args.smooth)}, {report['total_seconds']:.2f} s on "
+        f"{_smoothing_words(args.smooth)}{parts}, {report['total_seconds']:.2f} s on "
         f"{report['engine']} -> {job.output}"
     )
+
+
+def segment_options(args):
+    """--segment's options as segment() keywords, or None without --segment."""
+    if args.segment is None:
+        return None
+    return {
+        "clusters": args.segment,
+        "smoothness": 0.26 if args.smoothness is None else args.smoothness,
+        "mode": args.segment_mode or "auto",
+    }
 
 
 def _smoothing_words(method: str) -> str:
@@ -698,6 +735,13 @@ def _check_combinations(args) -> None:
             "--values and --save-values both say where values go: give one "
             "(--values for one INPUT, --save-values for several)"
         )
+    if args.segment is not None and args.points != "faces":
+        raise CommandError("--segment needs --points faces (segments are made of faces)")
+    if args.segment is not None and args.scheduler is not None:
+        raise CommandError("--segment runs in this process only: leave out --scheduler")
+    for flag in ("smoothness", "segment_mode"):
+        if getattr(args, flag) is not None and args.segment is None:
+            raise CommandError(f"--{flag.replace('_', '-')} applies to --segment")
     args.seed = 0 if args.seed is None else args.seed
     args.bvh_quality = args.bvh_quality or "auto"
 
