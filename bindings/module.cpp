@@ -37,6 +37,7 @@
 namespace py = pybind11;
 
 void bind_smoothing(py::module_& m);  // python_smoothing.cpp
+void bind_segmentation(py::module_& m);  // segmentation.cpp
 
 namespace {
 
@@ -497,4 +498,5 @@ PYBIND11_MODULE(_core, m) {
   m.attr("MAX_RAYS") = sdf::kMaxRays;
   m.attr("NEAR_CUTOFF_SHARE") = sdf::kNearCutoffShare;
   bind_smoothing(m);
+  bind_segmentation(m);
 }

@@ -57,6 +57,7 @@ suite "C++ (ctest)" "$LOGS/ctest.log" build_and_ctest
 suite "ASan+UBSan, fuzzers" "$LOGS/fuzz.log" bash scripts/fuzz.sh
 suite "Blender" "$LOGS/blender.log" bash scripts/test_blender.sh
 export SDF_CGAL_REFERENCE="$PWD/build/cpp/tests/reference/cgal_sdf"
+export SDF_CGAL_SEGMENT="$PWD/build/cpp/tests/reference/cgal_segment"
 suite "Python (pytest)" "$LOGS/pytest.log" .venv/bin/python -m pytest -q "$@"
 
 echo "test: summary (logs in $LOGS)"

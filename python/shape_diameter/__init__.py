@@ -12,11 +12,13 @@ from ._version import __version__
 from .api import Result, compute, cone_rays, engines, reduce_lengths, sample_points
 from .load import load_mesh
 from .normalization import normalize_values as normalize
+from .segmentation import Segmentation, segment
 from .smoothing import smooth
 from .warning_log import collect_warnings
 
 __all__ = [
     "Result",
+    "Segmentation",
     "collect_warnings",
     "compute",
     "cone_rays",
@@ -25,6 +27,7 @@ __all__ = [
     "normalize",
     "reduce_lengths",
     "sample_points",
+    "segment",
     "smooth",
     "__version__",
 ]

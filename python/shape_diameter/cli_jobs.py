@@ -51,13 +51,24 @@ def default_values(output_path: str) -> str:
     return os.path.splitext(output_path)[0] + ".npy"
 
 
+def default_segments(output_path: str) -> str:
+    """--segment: OUTPUT with its suffix replaced by .segments.npy (cow.sdf.ply ->
+    cow.sdf.segments.npy)."""
+    return os.path.splitext(output_path)[0] + ".segments.npy"
+
+
 class Job:
     """One input file and the outputs it writes; `problem` when it cannot even start (a
     folder without meshes); `done` when --skip-existing finds its outputs written."""
 
-    def __init__(self, source: str, output=None, values=None, problem=None, done=False):
+    def __init__(self, source: str, output=None, values=None, problem=None, done=False,
+                 segments=None):
         self.source, self.output, self.values, self.problem = source, output, values, problem
-        self.done = done
+        self.done, self.segments = done, segments
+
+    def paths(self) -> tuple:
+        """The files this input writes (None where it writes none)."""
+        return (self.output, self.values, self.segments)
 
 
 def plan(args, write_suffixes) -> list:
@@ -124,12 +135,16 @@ def plan(args, write_suffixes) -> list:
                 continue
         output = args.output or default_output(source, args.output_dir, subfolder)
         values = args.values or (default_values(output) if args.save_values else None)
+        segments = default_segments(output) if args.segment is not None else None
         try:
             if args.output or os.path.exists(source):  # (a missing input fails on its own)
                 _check_writable_path(output, write_suffixes)
             if args.values or (values and os.path.exists(source)):
                 _check_writable_path(values, None)
             _check_distinct(source, output, values)
+            if segments is not None:
+                _check_writable_path(segments, None)
+                _check_distinct(source, output, segments)
         except CommandError as exc:  # this input's failure: the others go on
             jobs.append(Job(source, problem=str(exc)))
             continue
@@ -140,9 +155,11 @@ def plan(args, write_suffixes) -> list:
         done = (
             args.skip_existing
             and os.path.exists(source)
-            and all(os.path.exists(path) for path in (output, values) if path is not None)
+            and all(
+                os.path.exists(path) for path in (output, values, segments) if path is not None
+            )
         )
-        jobs.append(Job(source, output, values, done=done))
+        jobs.append(Job(source, output, values, done=done, segments=segments))
     _check_no_collisions([job for job in jobs if job.problem is None])
     return jobs
 
@@ -195,7 +212,7 @@ def _check_no_collisions(jobs) -> None:
     another input's run would overwrite, refuses the run."""
     written = {}  # real path of an earlier input's output -> that input
     for job in jobs:
-        for path in (job.output, job.values):
+        for path in job.paths():
             if path is None:
                 continue
             key = os.path.realpath(path)
@@ -209,7 +226,7 @@ def _check_no_collisions(jobs) -> None:
                 break
         if job.problem is not None:
             continue
-        for path in (job.output, job.values):
+        for path in job.paths():
             if path is not None:
                 written[os.path.realpath(path)] = job.source
     identities = {}  # each input: its real path and, where it exists, (device, inode)

@@ -65,3 +65,26 @@ def colormap(values) -> np.ndarray:
     rgba[:, 3] = 255
     rgba[missing] = NAN_RGBA
     return rgba
+
+
+# A qualitative palette for segments: ColorBrewer's Set3 and Dark2 (Cynthia Brewer, Apache
+# 2.0), 20 colours that neighbouring labels tell apart; labels past 20 reuse them in turn.
+# fmt: off
+_SEGMENT_PALETTE = np.array(
+    [
+        (141, 211, 199), (27, 158, 119), (255, 255, 179), (217, 95, 2), (190, 186, 218),
+        (117, 112, 179), (251, 128, 114), (231, 41, 138), (128, 177, 211), (102, 166, 30),
+        (253, 180, 98), (230, 171, 2), (179, 222, 105), (166, 118, 29), (252, 205, 229),
+        (102, 102, 102), (217, 217, 217), (188, 128, 189), (204, 235, 197), (255, 237, 111),
+    ],
+    dtype=np.uint8,
+)
+# fmt: on
+
+
+def segment_colors(labels) -> np.ndarray:
+    """Map integer segment labels (>= 0) to (k, 4) uint8 RGBA from a qualitative palette."""
+    labels = np.asarray(labels, dtype=np.int64).ravel()
+    rgba = np.full((labels.size, 4), 255, dtype=np.uint8)
+    rgba[:, :3] = _SEGMENT_PALETTE[labels % len(_SEGMENT_PALETTE)]
+    return rgba

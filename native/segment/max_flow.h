@@ -1,0 +1,61 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
+// Minimum s-t cut by Boykov and Kolmogorov's augmenting-path algorithm ("An experimental
+// comparison of min-cut/max-flow algorithms for energy minimization in vision", PAMI 2004):
+// two search trees, one from the source and one from the sink, that are grown, augmented
+// through and repaired rather than rebuilt, which suits the short paths of mesh graphs.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <vector>
+
+namespace sdf::segment {
+
+// One undirected edge of the network with a capacity each way.
+struct FlowEdge {
+  std::uint32_t from, to;
+  double capacity, reverse_capacity;  // from -> to, to -> from
+};
+
+class MaxFlow {
+ public:
+  // A network of `nodes` nodes. terminal[i] > 0: an arc source -> i of that capacity;
+  // terminal[i] < 0: an arc i -> sink of capacity -terminal[i] (give a node both arcs as their
+  // difference: the smaller one is flow that crosses any cut). Capacities >= 0, finite.
+  // Buffers are kept between calls.
+  void reset(std::size_t nodes, const std::vector<double>& terminal,
+             const std::vector<FlowEdge>& edges);
+
+  // The maximum flow (not counting what `terminal`'s differences took out).
+  double solve();
+
+  // After solve(): whether node i is on the sink's side of the minimum cut whose sink side is
+  // smallest (the nodes with a residual path to the sink), or of the one whose sink side is
+  // largest (the nodes with no residual path from the source). Either cut is the same whatever
+  // the order of augmentations, so the same answer as any exact max-flow gives.
+  bool in_smallest_sink_side(std::size_t i) const { return tree_[i] == kSink; }
+  bool in_largest_sink_side(std::size_t i) const { return tree_[i] != kSource; }
+
+ private:
+  static constexpr std::int32_t kTerminal = -1, kOrphan = -2, kNone = -3;
+  static constexpr std::uint8_t kFree = 0, kSource = 1, kSink = 2;
+
+  std::int32_t grow(std::uint32_t i);
+  void augment(std::int32_t middle);
+  void adopt(std::uint32_t orphan);
+  bool origin_distance(std::uint32_t j, std::uint32_t& distance);
+  void activate(std::uint32_t i);
+
+  std::size_t nodes_ = 0;
+  std::vector<std::uint32_t> first_, head_, sister_;  // arcs of node i: first_[i]..first_[i+1]
+  std::vector<double> residual_, terminal_;
+  std::vector<std::int32_t> parent_;  // the arc to the parent (node -> parent), or a kind
+  std::vector<std::uint8_t> tree_, active_;
+  std::vector<std::uint32_t> stamp_, distance_;
+  std::vector<std::uint32_t> queue_, orphans_;
+  std::size_t queue_head_ = 0;
+  std::uint32_t time_ = 0;
+  double flow_ = 0.0;
+};
+
+}  // namespace sdf::segment

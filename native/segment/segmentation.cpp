@@ -1,0 +1,115 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
+#include "segment/segmentation.h"
+
+#include <algorithm>
+#include <stdexcept>
+
+#include "segment/alpha_expansion.h"
+#include "segment/edge_weights.h"
+#include "segment/postprocess.h"
+
+namespace sdf::segment {
+namespace {
+
+// CGAL's constants (Surface_mesh_segmentation.h, Expectation_maximization.h).
+constexpr double kLogAlpha = 5.0;          // log(5 x + 1) / log(6)
+constexpr std::size_t kMaxIterations = 10;  // k-means and EM
+constexpr double kLikelihoodGain = 1e-3;    // EM stops below this relative gain
+
+// Filled, optionally filtered, rescaled to [0, 1].
+std::vector<double> prepare_values(const FaceGraph& graph, const double* values,
+                                   std::size_t n, const SegmentOptions& options) {
+  std::vector<double> out(values, values + n);
+  fill_missing_from_edge_neighbours(graph, out.data(), n);
+  if (options.filter) {
+    std::vector<double> filtered(n);
+    bilateral_filter(graph, out.data(), n, bilateral_window(n), options.threads,
+                     filtered.data());
+    out.swap(filtered);
+  }
+  rescale_to_unit(out.data(), n);
+  return out;
+}
+
+// The unary costs (n x k) and starting labels; returns the number of clusters, which is
+// below the one asked for when the values take fewer distinct levels.
+std::size_t soft_clusters(const std::vector<double>& values, const SegmentOptions& options,
+                          std::vector<Gaussian>& mixture, std::vector<double>& costs,
+                          std::vector<int>& labels) {
+  const std::size_t n = values.size();
+  std::vector<double> logs(n);
+  log_normalize(values.data(), n, kLogAlpha, logs.data());
+  const std::size_t k = std::min(options.clusters, n);
+  const std::vector<double> centres =
+      kmeans_centres(logs.data(), n, k, kMaxIterations, options.threads);
+  mixture = fit_mixture(logs.data(), n, centres, kMaxIterations, kLikelihoodGain,
+                        options.threads);
+  costs.resize(n * mixture.size());
+  labels.resize(n);
+  cluster_costs(logs.data(), n, mixture, options.threads, costs.data(), labels.data());
+  return mixture.size();
+}
+
+void check(std::size_t face_count, const SegmentOptions& options) {
+  if (face_count == 0) throw std::invalid_argument("segmentation needs at least one face");
+  if (options.clusters < 1) throw std::invalid_argument("clusters must be at least 1");
+}
+
+}  // namespace
+
+Segmentation segment_mesh(const double* vertices, std::size_t vertex_count,
+                          const std::int64_t* triangles, std::size_t n,
+                          const double* values, const SegmentOptions& options) {
+  check(n, options);
+  Segmentation out;
+  StageClock clock(&out.timings);
+  const FaceGraph graph = build_face_graph(triangles, n, vertex_count, options.threads);
+  clock.lap("face_graph");
+  out.values = prepare_values(graph, values, n, options);
+  clock.lap(options.filter ? "postprocess" : "rescale");
+  std::vector<double> costs;
+  const std::size_t k = soft_clusters(out.values, options, out.mixture, costs, out.clusters);
+  clock.lap("soft_clustering");
+  const std::vector<double> weights =
+      edge_weights(graph, vertices, triangles, options.smoothness, options.threads);
+  clock.lap("edge_weights");
+  out.energy = alpha_expansion(graph, weights.data(), costs.data(), k, options.expansion,
+                               out.clusters.data(), n, options.threads);
+  clock.lap("graph_cut");
+  out.segments.resize(n);
+  out.segment_count =
+      number_segments(graph, out.clusters.data(), out.values.data(), n, out.segments.data());
+  clock.lap("segments");
+  const std::vector<double> areas = face_areas(vertices, triangles, n, options.threads);
+  out.stats = segment_stats(areas.data(), out.values.data(), out.segments.data(), n,
+                            out.segment_count);
+  out.vertex_labels =
+      vertex_labels(vertex_count, triangles, areas.data(), out.segments.data(), n);
+  out.vertex_weights = vertex_weights(vertex_count, triangles, areas.data(),
+                                      out.segments.data(), n, options.weight_rings,
+                                      options.threads);
+  out.boundaries = boundaries(graph, vertices, vertex_count, triangles, out.segments.data());
+  clock.lap("parts");
+  return out;
+}
+
+double segmentation_energy(const double* vertices, std::size_t vertex_count,
+                           const std::int64_t* triangles, std::size_t n,
+                           const double* values, const SegmentOptions& options,
+                           const int* clusters) {
+  check(n, options);
+  const FaceGraph graph = build_face_graph(triangles, n, vertex_count, options.threads);
+  const std::vector<double> prepared = prepare_values(graph, values, n, options);
+  std::vector<Gaussian> mixture;
+  std::vector<double> costs;
+  std::vector<int> labels;
+  const std::size_t k = soft_clusters(prepared, options, mixture, costs, labels);
+  for (std::size_t f = 0; f < n; ++f)
+    if (clusters[f] < 0 || static_cast<std::size_t>(clusters[f]) >= k)
+      throw std::invalid_argument("a cluster label is outside [0, k)");
+  const std::vector<double> weights =
+      edge_weights(graph, vertices, triangles, options.smoothness, options.threads);
+  return potts_energy(graph, weights.data(), costs.data(), k, clusters, n, options.threads);
+}
+
+}  // namespace sdf::segment

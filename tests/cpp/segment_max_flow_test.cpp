@@ -1,0 +1,77 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
+// The max-flow against every cut of small random networks.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <random>
+#include <vector>
+
+#include "segment/max_flow.h"
+
+namespace {
+
+using sdf::segment::FlowEdge;
+using sdf::segment::MaxFlow;
+
+struct Network {
+  std::size_t nodes;
+  std::vector<double> terminal;
+  std::vector<FlowEdge> edges;
+};
+
+Network random_network(std::mt19937& rng, std::size_t nodes, double density) {
+  std::uniform_real_distribution<double> capacity(0.0, 10.0), coin(0.0, 1.0);
+  Network net{nodes, std::vector<double>(nodes), {}};
+  for (double& t : net.terminal) t = coin(rng) < 0.2 ? 0.0 : capacity(rng) - 5.0;
+  for (std::uint32_t i = 0; i < nodes; ++i)
+    for (std::uint32_t j = i + 1; j < nodes; ++j)
+      if (coin(rng) < density)
+        net.edges.push_back(FlowEdge{i, j, coin(rng) < 0.3 ? 0.0 : capacity(rng),
+                                     coin(rng) < 0.3 ? 0.0 : capacity(rng)});
+  return net;
+}
+
+// The capacity of the cut whose sink side is `sink` (bit i: node i).
+double cut_value(const Network& net, unsigned sink) {
+  double value = 0.0;
+  for (std::size_t i = 0; i < net.nodes; ++i) {
+    const bool t = (sink >> i) & 1u;
+    if (t && net.terminal[i] > 0) value += net.terminal[i];    // source -> i cut
+    if (!t && net.terminal[i] < 0) value -= net.terminal[i];   // i -> sink cut
+  }
+  for (const FlowEdge& e : net.edges) {
+    const bool tf = (sink >> e.from) & 1u, tt = (sink >> e.to) & 1u;
+    if (!tf && tt) value += e.capacity;
+    if (tf && !tt) value += e.reverse_capacity;
+  }
+  return value;
+}
+
+TEST(SegmentMaxFlow, MatchesEveryCutOfSmallNetworks) {
+  std::mt19937 rng(7);
+  MaxFlow flow;
+  for (int trial = 0; trial < 400; ++trial) {
+    const std::size_t nodes = 1 + trial % 10;
+    const Network net = random_network(rng, nodes, trial % 3 == 0 ? 0.8 : 0.35);
+    double best = INFINITY;
+    for (unsigned s = 0; s < (1u << nodes); ++s) best = std::min(best, cut_value(net, s));
+    flow.reset(net.nodes, net.terminal, net.edges);
+    const double value = flow.solve();
+    EXPECT_NEAR(value, best, 1e-9 * (1 + best)) << "trial " << trial;
+    unsigned smallest = 0, largest = 0;
+    for (std::size_t i = 0; i < nodes; ++i) {
+      smallest |= flow.in_smallest_sink_side(i) ? 1u << i : 0u;
+      largest |= flow.in_largest_sink_side(i) ? 1u << i : 0u;
+    }
+    EXPECT_NEAR(cut_value(net, smallest), best, 1e-9 * (1 + best)) << "trial " << trial;
+    EXPECT_NEAR(cut_value(net, largest), best, 1e-9 * (1 + best)) << "trial " << trial;
+    // Every optimal cut's sink side holds the smallest and lies within the largest.
+    for (unsigned s = 0; s < (1u << nodes); ++s)
+      if (cut_value(net, s) <= best + 1e-9 * (1 + best)) {
+        EXPECT_EQ(smallest & ~s, 0u) << "trial " << trial;
+        EXPECT_EQ(s & ~largest, 0u) << "trial " << trial;
+      }
+  }
+}
+
+}  // namespace
