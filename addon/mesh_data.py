@@ -185,3 +185,47 @@ def polygon_loop_expand(values, loop_totals):
     """Per-polygon rows repeated for each of the polygon's corners (loops are stored polygon
     by polygon, in order)."""
     return np.repeat(values, loop_totals, axis=0)
+
+
+# A mesh property recording what the SDF values on the mesh were computed with (JSON):
+# the attribute, the options that change the values, and the geometry's digest, so that
+# segmenting reuses them only where they are still what a new computation would give.
+SDF_SETTINGS_PROPERTY = "shape_diameter_sdf"
+
+
+def geometry_digest(me):
+    """A digest of the vertex positions and the polygons' corners: equal digests mean the
+    same geometry (any edit since changes it)."""
+    import hashlib
+
+    co = np.empty(len(me.vertices) * 3, dtype=np.float32)
+    me.vertices.foreach_get("co", co)
+    shape = topology(me)
+    digest = hashlib.blake2b(digest_size=16)
+    for array in (co, shape.corner_vertices, shape.loop_totals):
+        digest.update(array.tobytes())
+    return digest.hexdigest()
+
+
+def record_sdf_settings(me, attribute, settings, linear):
+    """Records that the FACE attribute `attribute` holds values computed with `settings`
+    (JSON-able), through the 3x3 transform `linear` (rows; None: the mesh's own units)."""
+    record = {
+        "attribute": attribute,
+        "settings": settings,
+        "linear": linear,
+        "geometry": geometry_digest(me),
+    }
+    me[SDF_SETTINGS_PROPERTY] = json.dumps(record, sort_keys=True)
+
+
+def recorded_sdf(me):
+    """{attribute, settings, linear, geometry} of the recorded SDF, or None."""
+    try:
+        record = json.loads(me.get(SDF_SETTINGS_PROPERTY, ""))
+        if {"attribute", "settings", "linear", "geometry"} <= set(record):
+            return record
+    except (TypeError, ValueError, AttributeError):
+        pass
+    return None
+
