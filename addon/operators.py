@@ -81,7 +81,7 @@ class WorkerRun:
             options, tasks = self._prepare(context)
             wm.progress_begin(0, 1000)
             try:
-                type(self).work(tasks, options, lambda f: wm.progress_update(int(1000 * f)))
+                self.work(tasks, options, lambda f: wm.progress_update(int(1000 * f)))
             finally:
                 wm.progress_end()
             self._finish(context, options, tasks, started)
@@ -100,7 +100,7 @@ class WorkerRun:
         except Exception as ex:
             self._report_error(ex)
             return {"CANCELLED"}
-        running = process.Job(tasks, self._options_used, type(self).work).start()
+        running = process.Job(tasks, self._options_used, self.work).start()
         wm = context.window_manager
         self._timer = wm.event_timer_add(0.1, window=context.window)
         wm.progress_begin(0, 1000)

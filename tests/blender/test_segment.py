@@ -333,3 +333,92 @@ def test_undo_restores_the_mesh_and_removes_the_armature():
     assert "dumbbell_parts" not in bpy.data.objects
     assert name in bpy.data.objects
     assert state() == before
+
+
+def modal_segment(monkeypatch, **values):
+    """The Segment operator's own invoke() and modal() on a stand-in instance and context, as
+    test_worker drives Compute's (a headless Blender has no window or event loop)."""
+    import dataclasses
+    import functools
+    import math
+    import types
+
+    from test_worker import FakeWindowManager
+
+    operators = addon_module("operators")
+    process = addon_module("process")
+    segmenting = addon_module("segmenting")
+    monkeypatch.setattr(operators, "can_run_modal", lambda context: True)
+    options = {
+        f.name: getattr(process.Options(), f.name)
+        for f in dataclasses.fields(process.Options)
+        if f.name != "extra"
+    }
+    options.update(
+        {
+            f.name: getattr(segmenting.SegmentOptions(), f.name)
+            for f in dataclasses.fields(segmenting.SegmentOptions)
+            if f.name != "sdf"
+        }
+    )
+    options.update(cone_angle=math.radians(120.0), **values)
+    reports = []
+    op = types.SimpleNamespace(report=lambda kind, text: reports.append((kind, text)), **options)
+    cls = addon_module("segment_operator").OBJECT_OT_shape_diameter_segment
+    for name in ("_prepare", "_finish", "_report_error", "_stop", "invoke", "modal"):
+        setattr(op, name, functools.partial(getattr(cls, name), op))
+    op.work, op.title = cls.work, cls.title
+    context = types.SimpleNamespace(
+        window=object(),
+        window_manager=FakeWindowManager(),
+        workspace=None,
+        screen=None,
+        scene=bpy.context.scene,
+        view_layer=bpy.context.view_layer,
+        selected_objects=bpy.context.selected_objects,
+        active_object=bpy.context.active_object,
+        evaluated_depsgraph_get=bpy.context.evaluated_depsgraph_get,
+        preferences=bpy.context.preferences,
+    )
+    return op, context, reports
+
+
+def event(kind, value="NOTHING"):
+    import types
+
+    return types.SimpleNamespace(type=kind, value=value)
+
+
+def test_modal_segment_runs_on_the_worker_and_writes_at_the_end(monkeypatch):
+    import time
+
+    operators = addon_module("operators")
+    ob = dumbbell()
+    op, context, reports = modal_segment(monkeypatch, clusters=2)
+    assert op.invoke(context, event("LEFTMOUSE")) == {"RUNNING_MODAL"}
+    assert operators.running is not None and not bpy.ops.object.shape_diameter_segment.poll()
+    while (result := op.modal(context, event("TIMER"))) == {"PASS_THROUGH"}:
+        assert not ob.vertex_groups  # nothing is written before the end
+        time.sleep(0.01)
+    assert result == {"FINISHED"} and operators.running is None
+    assert [g.name for g in ob.vertex_groups] == ["part_01", "part_02", "part_03"]
+    assert reports[-1][0] == {"INFO"} and "dumbbell: 3 parts" in reports[-1][1]
+
+
+def test_modal_segment_cancels_on_escape(monkeypatch):
+    operators = addon_module("operators")
+    ob = dumbbell()
+    before = state()
+    op, context, reports = modal_segment(monkeypatch, rays=256)
+    assert op.invoke(context, event("LEFTMOUSE")) == {"RUNNING_MODAL"}
+    assert op.modal(context, event("ESC", "PRESS")) == {"CANCELLED"}
+    assert operators.running is None
+    assert state() == before and ob.name in bpy.data.objects
+    assert reports == [({"WARNING"}, "Segment cancelled: nothing was changed")]
+
+
+def test_invoke_runs_synchronously_in_background():
+    ob = dumbbell()
+    assert bpy.app.background
+    assert bpy.ops.object.shape_diameter_segment("INVOKE_DEFAULT", clusters=2) == {"FINISHED"}
+    assert len(ob.vertex_groups) == 3
