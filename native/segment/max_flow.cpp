@@ -15,67 +15,59 @@ void MaxFlow::reset(std::size_t nodes, const std::vector<double>& terminal,
     ++first_[e.to + 1];
   }
   for (std::size_t i = 0; i < nodes; ++i) first_[i + 1] += first_[i];
-  const std::size_t arcs = first_[nodes];
-  head_.resize(arcs);
-  sister_.resize(arcs);
-  residual_.resize(arcs);
+  arcs_.resize(first_[nodes]);
   std::vector<std::uint32_t> fill(first_.begin(), first_.end() - 1);
   for (const FlowEdge& e : edges) {
     const std::uint32_t a = fill[e.from]++, b = fill[e.to]++;
-    head_[a] = e.to;
-    head_[b] = e.from;
-    sister_[a] = b;
-    sister_[b] = a;
-    residual_[a] = e.capacity;
-    residual_[b] = e.reverse_capacity;
+    arcs_[a] = Arc{e.to, b, e.capacity};
+    arcs_[b] = Arc{e.from, a, e.reverse_capacity};
   }
-  terminal_.assign(terminal.begin(), terminal.begin() + static_cast<std::ptrdiff_t>(nodes));
-  parent_.assign(nodes, kNone);
-  tree_.assign(nodes, kFree);
-  active_.assign(nodes, 0);
-  stamp_.assign(nodes, 0);
-  distance_.assign(nodes, 0);
+  node_.resize(nodes);
   queue_.clear();
   orphans_.clear();
   queue_head_ = 0;
   time_ = 0;
   flow_ = 0.0;
   for (std::uint32_t i = 0; i < nodes; ++i) {
-    if (terminal_[i] == 0.0) continue;
-    tree_[i] = terminal_[i] > 0.0 ? kSource : kSink;
-    parent_[i] = kTerminal;
-    distance_[i] = 1;
+    Node& v = node_[i];
+    v = Node{terminal[i], kNone, 0, 0, kFree, 0};
+    if (v.terminal == 0.0) continue;
+    v.tree = v.terminal > 0.0 ? kSource : kSink;
+    v.parent = kTerminal;
+    v.distance = 1;
     activate(i);
   }
 }
 
 void MaxFlow::activate(std::uint32_t i) {
-  if (active_[i]) return;
-  active_[i] = 1;
+  if (node_[i].active) return;
+  node_[i].active = 1;
   queue_.push_back(i);
 }
 
 // Grows i's tree by its free neighbours; returns the arc (source tree -> sink tree) of a path
 // found, or -1.
 std::int32_t MaxFlow::grow(std::uint32_t i) {
-  const bool from_source = tree_[i] == kSource;
+  Node& v = node_[i];
+  const bool from_source = v.tree == kSource;
   for (std::uint32_t a = first_[i]; a < first_[i + 1]; ++a) {
-    const std::uint32_t j = head_[a];
+    const Arc& arc = arcs_[a];
     // Residual in the direction the tree grows: away from the source, toward the sink.
-    if (!(residual_[from_source ? a : sister_[a]] > 0.0)) continue;
-    if (tree_[j] == kFree) {
-      tree_[j] = tree_[i];
-      parent_[j] = static_cast<std::int32_t>(sister_[a]);
-      stamp_[j] = stamp_[i];
-      distance_[j] = distance_[i] + 1;
-      activate(j);
-    } else if (tree_[j] != tree_[i]) {
-      return static_cast<std::int32_t>(from_source ? a : sister_[a]);
-    } else if (stamp_[j] <= stamp_[i] && distance_[j] > distance_[i]) {
+    if (!((from_source ? arc.residual : arcs_[arc.sister].residual) > 0.0)) continue;
+    Node& w = node_[arc.head];
+    if (w.tree == kFree) {
+      w.tree = v.tree;
+      w.parent = static_cast<std::int32_t>(arc.sister);
+      w.stamp = v.stamp;
+      w.distance = v.distance + 1;
+      activate(arc.head);
+    } else if (w.tree != v.tree) {
+      return static_cast<std::int32_t>(from_source ? a : arc.sister);
+    } else if (w.stamp <= v.stamp && w.distance > v.distance) {
       // A shorter way to the terminal: keeps the trees shallow.
-      parent_[j] = static_cast<std::int32_t>(sister_[a]);
-      stamp_[j] = stamp_[i];
-      distance_[j] = distance_[i] + 1;
+      w.parent = static_cast<std::int32_t>(arc.sister);
+      w.stamp = v.stamp;
+      w.distance = v.distance + 1;
     }
   }
   return -1;
@@ -84,41 +76,47 @@ std::int32_t MaxFlow::grow(std::uint32_t i) {
 // Pushes the bottleneck along source -> ... -> middle -> ... -> sink; nodes whose arc to
 // their parent saturates become orphans.
 void MaxFlow::augment(std::int32_t middle) {
-  double delta = residual_[middle];
-  std::uint32_t x = head_[sister_[middle]];
-  for (; parent_[x] != kTerminal; x = head_[parent_[x]])
-    delta = std::min(delta, residual_[sister_[parent_[x]]]);
-  delta = std::min(delta, terminal_[x]);
-  for (x = head_[middle]; parent_[x] != kTerminal; x = head_[parent_[x]])
-    delta = std::min(delta, residual_[parent_[x]]);
-  delta = std::min(delta, -terminal_[x]);
+  const std::uint32_t s_end = arcs_[arcs_[middle].sister].head, t_end = arcs_[middle].head;
+  double delta = arcs_[middle].residual;
+  std::uint32_t x = s_end;
+  for (; node_[x].parent != kTerminal; x = arcs_[node_[x].parent].head)
+    delta = std::min(delta, arcs_[arcs_[node_[x].parent].sister].residual);
+  delta = std::min(delta, node_[x].terminal);
+  for (x = t_end; node_[x].parent != kTerminal; x = arcs_[node_[x].parent].head)
+    delta = std::min(delta, arcs_[node_[x].parent].residual);
+  delta = std::min(delta, -node_[x].terminal);
 
-  residual_[middle] -= delta;
-  residual_[sister_[middle]] += delta;
-  for (x = head_[sister_[middle]];; ) {
-    const std::int32_t a = parent_[x];
+  arcs_[middle].residual -= delta;
+  arcs_[arcs_[middle].sister].residual += delta;
+  auto orphan = [&](std::uint32_t y) {
+    node_[y].parent = kOrphan;
+    orphans_.push_back(y);
+  };
+  for (x = s_end;;) {
+    const std::int32_t a = node_[x].parent;
     if (a == kTerminal) {
-      terminal_[x] -= delta;
-      if (!(terminal_[x] > 0.0)) parent_[x] = kOrphan, orphans_.push_back(x);
+      node_[x].terminal -= delta;
+      if (!(node_[x].terminal > 0.0)) orphan(x);
       break;
     }
-    residual_[sister_[a]] -= delta;
-    residual_[a] += delta;
-    const std::uint32_t up = head_[a];
-    if (!(residual_[sister_[a]] > 0.0)) parent_[x] = kOrphan, orphans_.push_back(x);
+    Arc& down = arcs_[arcs_[a].sister];  // parent -> x, the way the flow goes
+    down.residual -= delta;
+    arcs_[a].residual += delta;
+    const std::uint32_t up = arcs_[a].head;
+    if (!(down.residual > 0.0)) orphan(x);
     x = up;
   }
-  for (x = head_[middle];;) {
-    const std::int32_t a = parent_[x];
+  for (x = t_end;;) {
+    const std::int32_t a = node_[x].parent;
     if (a == kTerminal) {
-      terminal_[x] += delta;
-      if (!(terminal_[x] < 0.0)) parent_[x] = kOrphan, orphans_.push_back(x);
+      node_[x].terminal += delta;
+      if (!(node_[x].terminal < 0.0)) orphan(x);
       break;
     }
-    residual_[a] -= delta;
-    residual_[sister_[a]] += delta;
-    const std::uint32_t up = head_[a];
-    if (!(residual_[a] > 0.0)) parent_[x] = kOrphan, orphans_.push_back(x);
+    arcs_[a].residual -= delta;
+    arcs_[arcs_[a].sister].residual += delta;
+    const std::uint32_t up = arcs_[a].head;
+    if (!(arcs_[a].residual > 0.0)) orphan(x);
     x = up;
   }
   flow_ += delta;
@@ -127,74 +125,77 @@ void MaxFlow::augment(std::int32_t middle) {
 // Whether j still reaches its terminal through parents, and how far (stamped for this round).
 bool MaxFlow::origin_distance(std::uint32_t j, std::uint32_t& distance) {
   std::uint32_t d = 0;
-  for (std::uint32_t x = j;; x = head_[parent_[x]]) {
-    if (stamp_[x] == time_) {
-      d += distance_[x];
+  for (std::uint32_t x = j;; x = arcs_[node_[x].parent].head) {
+    Node& v = node_[x];
+    if (v.stamp == time_) {
+      d += v.distance;
       break;
     }
-    const std::int32_t a = parent_[x];
     ++d;
-    if (a == kTerminal) {
-      stamp_[x] = time_;
-      distance_[x] = 1;
+    if (v.parent == kTerminal) {
+      v.stamp = time_;
+      v.distance = 1;
       break;
     }
-    if (a == kOrphan || a == kNone) return false;
+    if (v.parent == kOrphan || v.parent == kNone) return false;
   }
   distance = d;
-  for (std::uint32_t x = j; stamp_[x] != time_; x = head_[parent_[x]]) {
-    stamp_[x] = time_;
-    distance_[x] = d--;
+  for (std::uint32_t x = j; node_[x].stamp != time_; x = arcs_[node_[x].parent].head) {
+    node_[x].stamp = time_;
+    node_[x].distance = d--;
   }
   return true;
 }
 
 // Finds the orphan a new parent in its tree, or frees it (and orphans its children).
 void MaxFlow::adopt(std::uint32_t o) {
-  const bool source = tree_[o] == kSource;
+  const std::uint8_t tree = node_[o].tree;
+  const bool source = tree == kSource;
   std::int32_t best_arc = -1;
   std::uint32_t best = std::numeric_limits<std::uint32_t>::max();
   for (std::uint32_t a = first_[o]; a < first_[o + 1]; ++a) {
-    const std::uint32_t j = head_[a];
-    if (tree_[j] != tree_[o] || !(residual_[source ? sister_[a] : a] > 0.0)) continue;
+    const Arc& arc = arcs_[a];
+    if (node_[arc.head].tree != tree ||
+        !((source ? arcs_[arc.sister].residual : arc.residual) > 0.0))
+      continue;
     std::uint32_t d;
-    if (origin_distance(j, d) && d < best) {
+    if (origin_distance(arc.head, d) && d < best) {
       best = d;
       best_arc = static_cast<std::int32_t>(a);
     }
   }
   if (best_arc >= 0) {
-    parent_[o] = best_arc;
-    stamp_[o] = time_;
-    distance_[o] = best + 1;
+    node_[o].parent = best_arc;
+    node_[o].stamp = time_;
+    node_[o].distance = best + 1;
     return;
   }
   for (std::uint32_t a = first_[o]; a < first_[o + 1]; ++a) {
-    const std::uint32_t j = head_[a];
-    if (tree_[j] != tree_[o]) continue;
-    if (residual_[source ? sister_[a] : a] > 0.0) activate(j);
-    const std::int32_t p = parent_[j];
-    if (p >= 0 && head_[p] == o) {
-      parent_[j] = kOrphan;
-      orphans_.push_back(j);
+    const Arc& arc = arcs_[a];
+    Node& w = node_[arc.head];
+    if (w.tree != tree) continue;
+    if ((source ? arcs_[arc.sister].residual : arc.residual) > 0.0) activate(arc.head);
+    if (w.parent >= 0 && arcs_[w.parent].head == o) {
+      w.parent = kOrphan;
+      orphans_.push_back(arc.head);
     }
   }
-  tree_[o] = kFree;
-  parent_[o] = kNone;
+  node_[o].tree = kFree;
+  node_[o].parent = kNone;
 }
 
 double MaxFlow::solve() {
   std::int64_t current = -1;
   for (;;) {
     std::uint32_t i;
-    if (current >= 0 && tree_[current] != kFree) {
+    if (current >= 0 && node_[current].tree != kFree) {
       i = static_cast<std::uint32_t>(current);
     } else {
-      while (queue_head_ < queue_.size() && tree_[queue_[queue_head_]] == kFree)
-        active_[queue_[queue_head_++]] = 0;
+      while (queue_head_ < queue_.size() && node_[queue_[queue_head_]].tree == kFree)
+        node_[queue_[queue_head_++]].active = 0;
       if (queue_head_ == queue_.size()) break;
       i = queue_[queue_head_++];
-      active_[i] = 0;
+      node_[i].active = 0;
       if (queue_head_ > 4096 && queue_head_ * 2 > queue_.size()) {
         queue_.erase(queue_.begin(), queue_.begin() + static_cast<std::ptrdiff_t>(queue_head_));
         queue_head_ = 0;
@@ -206,11 +207,10 @@ double MaxFlow::solve() {
     current = i;
     ++time_;
     augment(middle);
-    while (!orphans_.empty()) {
-      const std::uint32_t o = orphans_.back();
-      orphans_.pop_back();
-      adopt(o);
-    }
+    // Orphans in the order found (first in, first out); adoption appends the children it
+    // orphans.
+    for (std::size_t k = 0; k < orphans_.size(); ++k) adopt(orphans_[k]);
+    orphans_.clear();
   }
   return flow_;
 }

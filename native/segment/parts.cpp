@@ -58,26 +58,69 @@ std::vector<int> vertex_labels(std::size_t vertex_count, const std::int64_t* tri
   return labels;
 }
 
+namespace {
+
+// Per vertex, whether a face of another segment than its own lies within `reach` steps along
+// edges: only those vertices blend segments (a breadth-first search from the vertices where
+// segments meet). The others weigh their one segment fully.
+std::vector<std::uint8_t> near_boundary(const VertexFaces& vf, const std::int64_t* triangles,
+                                        const int* segments, std::size_t vertex_count,
+                                        std::size_t reach) {
+  std::vector<std::uint8_t> near(vertex_count, 0);
+  std::vector<std::uint32_t> frontier, next;
+  for (std::size_t v = 0; v < vertex_count; ++v)
+    for (std::uint32_t i = vf.offsets[v] + 1; i < vf.offsets[v + 1]; ++i)
+      if (segments[vf.faces[i]] != segments[vf.faces[vf.offsets[v]]]) {
+        near[v] = 1;
+        frontier.push_back(static_cast<std::uint32_t>(v));
+        break;
+      }
+  for (std::size_t step = 0; step < reach && !frontier.empty(); ++step) {
+    next.clear();
+    for (std::uint32_t v : frontier)
+      for (std::uint32_t i = vf.offsets[v]; i < vf.offsets[v + 1]; ++i)
+        for (int c = 0; c < 3; ++c) {
+          const auto u = static_cast<std::uint32_t>(triangles[3 * vf.faces[i] + c]);
+          if (!near[u]) near[u] = 1, next.push_back(u);
+        }
+    frontier.swap(next);
+  }
+  return near;
+}
+
+}  // namespace
+
 VertexWeights vertex_weights(std::size_t vertex_count, const std::int64_t* triangles,
                              const double* face_areas, const int* segments, std::size_t n,
                              std::size_t rings, unsigned threads) {
   const VertexFaces vf = vertex_faces(triangles, n, vertex_count);
+  // A vertex's window reaches faces within rings + 1 edge steps of it.
+  const std::vector<std::uint8_t> near =
+      near_boundary(vf, triangles, segments, vertex_count, rings + 1);
   constexpr std::size_t kBlock = 4096;
   const std::size_t blocks = (vertex_count + kBlock - 1) / kBlock;
   std::vector<std::vector<std::pair<int, double>>> block_entries(blocks);
   std::vector<std::vector<std::uint32_t>> block_counts(blocks);
   parallel_for(blocks, 1, threads, [&](std::size_t b0, std::size_t b1) {
-    std::vector<std::uint8_t> seen(n, 0);
+    thread_local std::vector<std::uint8_t> seen;
+    if (seen.size() < n) seen.resize(n, 0);
     std::vector<std::uint32_t> ring, next, visited;
     std::vector<std::pair<int, double>> sums;
     for (std::size_t b = b0; b < b1; ++b) {
       for (std::size_t v = b * kBlock; v < std::min(vertex_count, (b + 1) * kBlock); ++v) {
+        if (!near[v]) {  // one segment all around (or no face at all)
+          const bool used = vf.offsets[v + 1] > vf.offsets[v];
+          if (used) block_entries[b].emplace_back(segments[vf.faces[vf.offsets[v]]], 1.0);
+          block_counts[b].push_back(used ? 1 : 0);
+          continue;
+        }
         sums.clear();
         ring.assign(vf.faces.begin() + vf.offsets[v], vf.faces.begin() + vf.offsets[v + 1]);
         for (std::uint32_t f : ring) seen[f] = 1;
         visited = ring;
         for (std::size_t r = 0; r <= rings && !ring.empty(); ++r) {
-          const double falloff = static_cast<double>(rings + 1 - r) / static_cast<double>(rings + 1);
+          const double falloff =
+              static_cast<double>(rings + 1 - r) / static_cast<double>(rings + 1);
           next.clear();
           for (std::uint32_t f : ring) {
             accumulate(sums, segments[f], falloff * face_areas[f]);
@@ -118,6 +161,54 @@ VertexWeights vertex_weights(std::size_t vertex_count, const std::int64_t* trian
   return out;
 }
 
+namespace {
+
+// The loops among one pair of segments' edges (pair indices into graph.pairs), appended to
+// `loops`: edges sharing a vertex join one loop (a union-find over their vertices).
+void split_into_loops(const FaceGraph& graph, const double* vertices,
+                      const std::int64_t* triangles, int a, int b,
+                      const std::vector<std::uint32_t>& edges, std::vector<Boundary>& loops) {
+  auto end_of = [&](std::uint32_t e, int which) {
+    const FacePair& p = graph.pairs[e];
+    return triangles[3 * p.first + (p.first_corner + which) % 3];
+  };
+  std::vector<std::int64_t> ends;
+  for (std::uint32_t e : edges) ends.push_back(end_of(e, 0)), ends.push_back(end_of(e, 1));
+  std::sort(ends.begin(), ends.end());
+  ends.erase(std::unique(ends.begin(), ends.end()), ends.end());
+  auto index = [&](std::int64_t v) {
+    return static_cast<std::size_t>(std::lower_bound(ends.begin(), ends.end(), v) -
+                                    ends.begin());
+  };
+  std::vector<std::size_t> up(ends.size());
+  std::iota(up.begin(), up.end(), 0);
+  auto root = [&](std::size_t x) {
+    while (up[x] != x) x = up[x] = up[up[x]];
+    return x;
+  };
+  for (std::uint32_t e : edges) up[root(index(end_of(e, 0)))] = root(index(end_of(e, 1)));
+  std::vector<std::int64_t> loop_of(ends.size(), -1);
+  const std::size_t first = loops.size();
+  for (std::uint32_t e : edges) {
+    const std::size_t r = root(index(end_of(e, 0)));
+    if (loop_of[r] < 0) {
+      loop_of[r] = static_cast<std::int64_t>(loops.size());
+      loops.push_back(Boundary{a, b, {0, 0, 0}, 0.0, 0});
+    }
+    Boundary& loop = loops[static_cast<std::size_t>(loop_of[r])];
+    const double* p = vertices + 3 * end_of(e, 0);
+    const double* q = vertices + 3 * end_of(e, 1);
+    const double length = std::hypot(p[0] - q[0], p[1] - q[1], p[2] - q[2]);
+    for (int c = 0; c < 3; ++c) loop.centroid[c] += length * 0.5 * (p[c] + q[c]);
+    loop.length += length;
+    ++loop.edges;
+  }
+  for (std::size_t l = first; l < loops.size(); ++l)
+    for (double& c : loops[l].centroid) c = loops[l].length > 0.0 ? c / loops[l].length : 0.0;
+}
+
+}  // namespace
+
 std::vector<Boundary> boundaries(const FaceGraph& graph, const double* vertices,
                                  std::size_t, const std::int64_t* triangles,
                                  const int* segments) {
@@ -129,51 +220,13 @@ std::vector<Boundary> boundaries(const FaceGraph& graph, const double* vertices,
   }
   std::sort(cut.begin(), cut.end());
   std::vector<Boundary> loops;
+  std::vector<std::uint32_t> edges;
   for (std::size_t i = 0; i < cut.size();) {
-    std::size_t j = i;
-    while (j < cut.size() && std::get<0>(cut[j]) == std::get<0>(cut[i]) &&
-           std::get<1>(cut[j]) == std::get<1>(cut[i]))
-      ++j;
-    // The group's vertices, and a union-find over them joining each edge's two ends.
-    std::vector<std::int64_t> ends;
-    auto edge_end = [&](std::size_t e, int which) {
-      const FacePair& p = graph.pairs[std::get<2>(cut[e])];
-      return triangles[3 * p.first + (p.first_corner + which) % 3];
-    };
-    for (std::size_t e = i; e < j; ++e) ends.push_back(edge_end(e, 0)), ends.push_back(edge_end(e, 1));
-    std::sort(ends.begin(), ends.end());
-    ends.erase(std::unique(ends.begin(), ends.end()), ends.end());
-    auto index = [&](std::int64_t v) {
-      return static_cast<std::size_t>(std::lower_bound(ends.begin(), ends.end(), v) - ends.begin());
-    };
-    std::vector<std::size_t> up(ends.size());
-    std::iota(up.begin(), up.end(), 0);
-    auto root = [&](std::size_t x) {
-      while (up[x] != x) x = up[x] = up[up[x]];
-      return x;
-    };
-    for (std::size_t e = i; e < j; ++e) up[root(index(edge_end(e, 0)))] = root(index(edge_end(e, 1)));
-    std::vector<std::int64_t> loop_of(ends.size(), -1);
-    const std::size_t first_loop = loops.size();
-    for (std::size_t e = i; e < j; ++e) {
-      const std::size_t r = root(index(edge_end(e, 0)));
-      if (loop_of[r] < 0) {
-        loop_of[r] = static_cast<std::int64_t>(loops.size());
-        loops.push_back(Boundary{std::get<0>(cut[e]), std::get<1>(cut[e]), {0, 0, 0}, 0.0, 0});
-      }
-      Boundary& loop = loops[static_cast<std::size_t>(loop_of[r])];
-      const double* a = vertices + 3 * edge_end(e, 0);
-      const double* b = vertices + 3 * edge_end(e, 1);
-      const double length = std::sqrt((a[0] - b[0]) * (a[0] - b[0]) + (a[1] - b[1]) * (a[1] - b[1]) +
-                                      (a[2] - b[2]) * (a[2] - b[2]));
-      for (int c = 0; c < 3; ++c) loop.centroid[c] += length * 0.5 * (a[c] + b[c]);
-      loop.length += length;
-      ++loop.edges;
-    }
-    for (std::size_t l = first_loop; l < loops.size(); ++l)
-      for (int c = 0; c < 3; ++c)
-        loops[l].centroid[c] = loops[l].length > 0.0 ? loops[l].centroid[c] / loops[l].length : 0.0;
-    i = j;
+    const int a = std::get<0>(cut[i]), b = std::get<1>(cut[i]);
+    edges.clear();
+    for (; i < cut.size() && std::get<0>(cut[i]) == a && std::get<1>(cut[i]) == b; ++i)
+      edges.push_back(std::get<2>(cut[i]));
+    split_into_loops(graph, vertices, triangles, a, b, edges, loops);
   }
   return loops;
 }

@@ -155,16 +155,15 @@ void maximization(const double* points, std::size_t n, const std::vector<double>
                   unsigned threads, std::vector<Gaussian>& mixture) {
   const std::size_t k = mixture.size(), blocks = (n + kBlock - 1) / kBlock;
   std::vector<double> mass(blocks * k), first(blocks * k), second(blocks * k);
+  // Point by point, all components at once: one pass over the posteriors.
   for_blocks(n, threads, [&](std::size_t b, std::size_t begin, std::size_t end) {
-    for (std::size_t c = 0; c < k; ++c) {
-      double m = 0.0, s = 0.0;
-      for (std::size_t j = begin; j < end; ++j) {
-        m += posterior[j * k + c];
-        s += posterior[j * k + c] * points[j];
+    double* m = &mass[b * k];
+    double* s = &first[b * k];
+    for (std::size_t j = begin; j < end; ++j)
+      for (std::size_t c = 0; c < k; ++c) {
+        m[c] += posterior[j * k + c];
+        s[c] += posterior[j * k + c] * points[j];
       }
-      mass[b * k + c] = m;
-      first[b * k + c] = s;
-    }
   });
   std::vector<double> total(k, 0.0), means(k, 0.0);
   for (std::size_t c = 0; c < k; ++c) {
@@ -176,12 +175,10 @@ void maximization(const double* points, std::size_t n, const std::vector<double>
     means[c] = total[c] > 0.0 ? s / total[c] : mixture[c].mean;
   }
   for_blocks(n, threads, [&](std::size_t b, std::size_t begin, std::size_t end) {
-    for (std::size_t c = 0; c < k; ++c) {
-      double s = 0.0;
-      for (std::size_t j = begin; j < end; ++j)
-        s += posterior[j * k + c] * (points[j] - means[c]) * (points[j] - means[c]);
-      second[b * k + c] = s;
-    }
+    double* s = &second[b * k];
+    for (std::size_t j = begin; j < end; ++j)
+      for (std::size_t c = 0; c < k; ++c)
+        s[c] += posterior[j * k + c] * (points[j] - means[c]) * (points[j] - means[c]);
   });
   for (std::size_t c = 0; c < k; ++c) {
     double s = 0.0;

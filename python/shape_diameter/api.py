@@ -14,6 +14,7 @@ from . import _core
 from .normalization import NORMALIZATIONS
 from .part_warnings import part_warnings
 from .smoothing import (
+    check_bilateral_points,
     check_smoothing,
     prepare_projected_for,
     prepare_texture_for,
@@ -315,7 +316,8 @@ def compute(
         the computation stops and the exception propagates.
     threads: CPU threads, 0 for every core the process may use (its affinity; then the BVH
         builds beside orientation and sampling, each on every core).
-    smoothing: 'none', 'kring', 'projected' or 'texture' (paper 4.4; see smooth()), applied
+    smoothing: 'none', 'kring', 'projected', 'texture' (paper 4.4) or 'bilateral' (CGAL's
+        filter, per face; see smooth()), applied
         to the SDF after filling: Result.values and Result.normalized are the smoothed field,
         Result.raw stays as cast. 'projected' and 'texture' run on the engine that cast (an
         OpenCL device, or the CPU; after an 'auto' fallback, the CPU; 'opencl:all': its first
@@ -345,6 +347,8 @@ def compute(
     )
     if smoothing_options and smoothing_options.get("return_image"):
         raise ValueError("return_image is an option of shape_diameter.smooth(), not compute()")
+    if smoothing == "bilateral":
+        check_bilateral_points(points)
     clock = time.perf_counter()
     chosen = _resolve_engine(engine)
     if chosen.startswith("opencl") and (folder := _unwritable_program_cache()):

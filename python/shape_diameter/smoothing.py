@@ -13,6 +13,7 @@ rounding). Options are checked before any work and a wrong one raises ValueError
 from __future__ import annotations
 
 import math
+import time
 from typing import Callable, NamedTuple, Optional
 
 import numpy as np
@@ -21,7 +22,7 @@ from . import _core
 from .normalization import check_finite_float32, check_threads
 from .warning_log import warn
 
-METHODS = ("none", "kring", "projected", "texture")
+METHODS = ("none", "kring", "projected", "texture", "bilateral")
 
 # What engine='auto' takes for a failed device (and then runs on the CPU): the OpenCL
 # engine's own errors, including a device too small for the work. Any other exception, a
@@ -52,6 +53,7 @@ OPTIONS = {
         "node_size_ratio": 1.0,
         "branch_on": "mean",
     },
+    "bilateral": {"window": None},
     "texture": {
         "texture_size": 1024,
         "radius": None,
@@ -110,7 +112,8 @@ def smooth(
     vertices: (n, 3) real array. triangles: (m, 3) integer array, 0-based, counter-clockwise
         seen from outside (projected points move inward, against the face normals).
     values: (m,) for a value per face or (n,) for a value per vertex; finite reals.
-    method: 'none' (a float32 copy), 'kring', 'projected' or 'texture'.
+    method: 'none' (a float32 copy), 'kring', 'projected', 'texture' or 'bilateral' (per-face
+        values only: CGAL's filter, docs/segmentation.md).
     uvs: per-corner texture coordinates, (m, 3, 2) (Blender's per-loop UVs, glTF/OBJ corner
         UVs), or per-vertex (n, 2). Needed by 'texture'; the other methods ignore them, but
         check them when given.
@@ -149,6 +152,11 @@ def smooth(
             most this times its side (default 1, paper); branch_on: which value that is,
             'mean' (default, paper) or 'min' (keeps thin parts next to thick ones: with
             'mean' they share a leaf whose mean the thick points set).
+    Options of 'bilateral' (CGAL's post-processing filter: each face takes the mean of the faces
+        within `window` rings of edge neighbours, weighted by a Gaussian over the ring, sigma
+        window / 2, times a Gaussian over the value difference, sigma 1.5 times the RMS
+        difference in the window; on the CPU):
+        window: rings, int in [1, 1000]; default CGAL's floor(sqrt(m / 2000)) + 1.
     Options of 'texture' (blur in the UV layout, islands kept apart):
         texture_size: int or (width, height), default 1024.
         radius: blur reach in texels (Gaussian deviation radius / 2); default
@@ -175,6 +183,8 @@ def smooth(
     if progress is not None and not callable(progress):
         raise ValueError("progress must be a callable taking a fraction in [0, 1], or None")
     _check_engine(engine)
+    if method == "bilateral":
+        check_bilateral_points(points)
     if method == "projected" and values.size and float(values.min()) < 0.0:
         raise ValueError(
             "smoothing 'projected' needs lengths >= 0 (the SDF): "
@@ -189,6 +199,13 @@ def smooth(
     if failure is not None:
         warn(f"smoothing on {chosen} failed ({str(failure).splitlines()[0]}); ran on the CPU")
     return out
+
+
+def check_bilateral_points(points) -> None:
+    """The bilateral filter works on per-face values only (rings of edge neighbours)."""
+    if points != "faces":
+        raise ValueError("smoothing 'bilateral' smooths per-face values: points must be "
+                         f"'faces', got {points!r}")
 
 
 def check_smoothing(
@@ -230,6 +247,9 @@ def check_smoothing(
         o["node_size_ratio"] = _real("node_size_ratio", o["node_size_ratio"], 0.0, math.inf)
         if o["branch_on"] not in ("mean", "min"):
             raise ValueError(f"branch_on must be 'mean' or 'min', got {o['branch_on']!r}")
+    elif method == "bilateral":
+        if o["window"] is not None:
+            o["window"] = _integer("window", o["window"], 1, 1000)
     elif method == "texture":
         o["texture_size"] = _texture_size(o["texture_size"])
         if o["radius"] is None:
@@ -368,6 +388,13 @@ def run_checked(
         timings = {}
     if method == "none":
         return values.copy()
+    if method == "bilateral":
+        check_bilateral_points(points)
+        start = time.perf_counter()
+        out = _core.bilateral_filter(t, len(v), np.asarray(values, dtype=np.float64),
+                                     0 if o["window"] is None else o["window"], threads)
+        timings["bilateral"] = time.perf_counter() - start
+        return out.astype(np.float32)
     if method == "kring":
         out = _core.smooth_kring(
             v,

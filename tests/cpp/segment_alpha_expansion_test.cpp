@@ -30,7 +30,8 @@ Problem random_problem(const sdf::test::Arrays& mesh, std::size_t k, unsigned se
   p.n = mesh.triangles.size() / 3;
   p.k = k;
   p.graph = build_face_graph(mesh.triangles.data(), p.n, mesh.vertices.size() / 3, 1);
-  for (std::size_t i = 0; i < p.graph.pairs.size(); ++i) p.weights.push_back(u(rng) < 0.3 ? 12.2 : 3 * u(rng));
+  for (std::size_t i = 0; i < p.graph.pairs.size(); ++i)
+    p.weights.push_back(u(rng) < 0.3 ? 12.2 : 3 * u(rng));
   for (std::size_t i = 0; i < p.n * k; ++i) p.costs.push_back(u(rng) < 0.3 ? 12.2 : 5 * u(rng));
   for (std::size_t f = 0; f < p.n; ++f) p.labels.push_back(static_cast<int>(rng() % k));
   return p;

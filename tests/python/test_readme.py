@@ -33,7 +33,7 @@ def test_every_keyword_is_documented(function):
             assert f"{name}=" in PYTHON or f"`{name}`" in PYTHON, (function, name)
 
 
-@pytest.mark.parametrize("method", ["kring", "projected", "texture"])
+@pytest.mark.parametrize("method", ["kring", "projected", "texture", "bilateral"])
 def test_every_smoothing_option_is_in_the_methods_row(method):
     row = next(line for line in PYTHON.splitlines() if line.startswith(f"| `{method}` |"))
     for option in OPTIONS[method]:
