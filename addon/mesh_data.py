@@ -228,4 +228,3 @@ def recorded_sdf(me):
     except (TypeError, ValueError, AttributeError):
         pass
     return None
-

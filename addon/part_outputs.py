@@ -72,7 +72,12 @@ def face_set_data(polygon_labels):
 
 def color_data(name, polygon_colors, loop_totals):
     """The colour attribute per corner (as the SDF colours), each polygon's colour."""
-    return (name, "BYTE_COLOR", "CORNER", mesh_data.polygon_loop_expand(polygon_colors, loop_totals))
+    return (
+        name,
+        "BYTE_COLOR",
+        "CORNER",
+        mesh_data.polygon_loop_expand(polygon_colors, loop_totals),
+    )
 
 
 def show_colors(me, name, undo):

@@ -76,7 +76,9 @@ def _attributes(ob, part, options, undo):
         data.append((options.label_name, "INT", "FACE", labels))
     if options.segment_color_name:
         loop_totals = part.task.topology.loop_totals
-        data.append(part_outputs.color_data(options.segment_color_name, part.polygon_colors, loop_totals))
+        data.append(
+            part_outputs.color_data(options.segment_color_name, part.polygon_colors, loop_totals)
+        )
     if data:
         undo.append(process._colors_restorer(me))
         part_outputs.write_attributes(me, data, undo)

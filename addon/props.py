@@ -330,8 +330,7 @@ def segment_options():
         ),
         "label_name": StringProperty(
             name="Part Attribute",
-            description="INT face attribute with each polygon's part, from 0 (empty: not "
-            "written)",
+            description="INT face attribute with each polygon's part, from 0 (empty: not written)",
             default="segment",
         ),
         "segment_color_name": StringProperty(

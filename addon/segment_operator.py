@@ -19,7 +19,9 @@ def summary(parts, written, seconds):
         count = part.segmentation.segment_count
         source = "SDF reused" if part.reused else "SDF computed"
         rig = f", armature {out.armature}" if out.armature else ""
-        pieces.append(f"{part.object_name}: {count} part{'s' if count != 1 else ''} ({source}{rig})")
+        pieces.append(
+            f"{part.object_name}: {count} part{'s' if count != 1 else ''} ({source}{rig})"
+        )
     return f"Segment: {'; '.join(pieces)}; {seconds:.2f} s"
 
 

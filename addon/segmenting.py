@@ -1,12 +1,12 @@
 # SPDX-License-Identifier: GPL-3.0-or-later
 """One segmentation run on Blender objects, in the three steps of process.py:
 
-  prepare()  main thread: process.prepare's checks and mesh reading, the outputs' names
-             checked against what is on each object, SDF values already on a mesh taken
-             when they were computed with the same settings on the same geometry.
-  compute()  any thread, no bpy: the SDF where needed, shape_diameter.segment, labels per
-             polygon, colours, the proto-skeleton (shape_diameter.rigging).
-  write()    main thread: every output of every object, all or none.
+prepare()  main thread: process.prepare's checks and mesh reading, the outputs' names
+           checked against what is on each object, SDF values already on a mesh taken
+           when they were computed with the same settings on the same geometry.
+compute()  any thread, no bpy: the SDF where needed, shape_diameter.segment, labels per
+           polygon, colours, the proto-skeleton (shape_diameter.rigging).
+write()    main thread: every output of every object, all or none.
 """
 
 import re
@@ -133,7 +133,7 @@ def names_problem(ob, options, count=None):
     groups are checked by pattern (prefix and digits); after, by the exact names."""
     me = ob.data
     record = part_outputs.object_record(ob)
-    for name, data_type, domain in options.attribute_outputs():
+    for name, _, _ in options.attribute_outputs():
         existing = me.attributes.get(name)
         if existing is not None and not mesh_data.is_written_output(me, existing):
             what = "face sets" if name == part_outputs.FACE_SETS else f"attribute {name!r}"
@@ -149,8 +149,11 @@ def names_problem(ob, options, count=None):
             pattern = _group_pattern(options.group_prefix)
             taken = [g.name for g in ob.vertex_groups if pattern.match(g.name)]
         else:
-            taken = [n for n in part_outputs.part_names(options.group_prefix, count)
-                     if ob.vertex_groups.get(n) is not None or me.attributes.get(n) is not None]
+            taken = [
+                n
+                for n in part_outputs.part_names(options.group_prefix, count)
+                if ob.vertex_groups.get(n) is not None or me.attributes.get(n) is not None
+            ]
         foreign = [name for name in taken if name not in ours]
         if foreign:
             return (
@@ -210,8 +213,9 @@ def prepare(depsgraph, objects, options, active=None):
     Raises UserError, having changed nothing, when the run cannot go ahead."""
     options.check()
     options.sdf.check_values()
-    tasks, notices = process.prepare(depsgraph, objects, options.sdf, for_writing=False,
-                                     active=active)
+    tasks, notices = process.prepare(
+        depsgraph, objects, options.sdf, for_writing=False, active=active
+    )
     import bpy
 
     parts = []
@@ -246,9 +250,12 @@ def compute(parts, options, progress=None, cancelled=None):
         if values is None:
             try:
                 with core.collect_warnings() as caught:
-                    result = core.compute(mesh.vertices, mesh.triangles,
-                                          options.sdf.compute_options(),
-                                          lambda f: step(0.9 * f))
+                    result = core.compute(
+                        mesh.vertices,
+                        mesh.triangles,
+                        options.sdf.compute_options(),
+                        lambda f: step(0.9 * f),
+                    )
             except ValueError as ex:
                 raise UserError(f"{part.object_name}: {ex}") from ex
             part.warnings.extend(f"{part.object_name}: {m}" for m in caught)
@@ -261,8 +268,9 @@ def compute(parts, options, progress=None, cancelled=None):
         step(0.95)
         part.segmentation = seg
         areas = rig.triangle_areas(mesh.vertices, mesh.triangles)
-        part.polygon_labels = rig.polygon_labels(seg.labels, mesh.triangle_polygons, areas,
-                                                 part.task.topology.polygon_count)
+        part.polygon_labels = rig.polygon_labels(
+            seg.labels, mesh.triangle_polygons, areas, part.task.topology.polygon_count
+        )
         part.polygon_colors = core.segment_colors(part.polygon_labels)
         if options.armature:
             part.skeleton = _local_skeleton(rig, mesh, seg, part.task.linear)
@@ -277,8 +285,14 @@ def compute(parts, options, progress=None, cancelled=None):
 def _local_skeleton(rig, mesh, seg, linear):
     """The proto-skeleton in the mesh's own coordinates (the segmentation ran on vertices
     through the object's 3x3 transform; a bone in the mesh's space follows the object)."""
-    skeleton = rig.proto_skeleton(mesh.vertices, mesh.triangles, seg.labels, seg.segment_count,
-                                  seg.boundaries, seg.segment_area)
+    skeleton = rig.proto_skeleton(
+        mesh.vertices,
+        mesh.triangles,
+        seg.labels,
+        seg.segment_count,
+        seg.boundaries,
+        seg.segment_area,
+    )
     if linear is not None:
         inverse = np.linalg.inv(np.asarray(linear, dtype=np.float64)).T
         skeleton.head = skeleton.head @ inverse

@@ -72,11 +72,15 @@ def principal_axes(vertices, triangles, labels, segment_count) -> Axes:
     weight = np.bincount(labels, weights=area, minlength=s)
     count = np.bincount(labels, minlength=s).astype(np.float64)
     plain = np.stack([np.bincount(labels, weights=mid[:, i], minlength=s) for i in range(3)], 1)
-    summed = np.stack([np.bincount(labels, weights=area * mid[:, i], minlength=s)
-                       for i in range(3)], 1)
+    summed = np.stack(
+        [np.bincount(labels, weights=area * mid[:, i], minlength=s) for i in range(3)], 1
+    )
     has_area = weight > 0.0
-    centroid = np.where(has_area[:, None], summed / np.where(has_area, weight, 1.0)[:, None],
-                        plain / np.maximum(count, 1.0)[:, None])
+    centroid = np.where(
+        has_area[:, None],
+        summed / np.where(has_area, weight, 1.0)[:, None],
+        plain / np.maximum(count, 1.0)[:, None],
+    )
     # Second moment of a triangle about the origin: area/12 (sum p p^T + 9 m m^T).
     corner = a[:, :, None] * a[:, None, :] + b[:, :, None] * b[:, None, :]
     corner += c[:, :, None] * c[:, None, :]
@@ -92,8 +96,9 @@ def principal_axes(vertices, triangles, labels, segment_count) -> Axes:
     # Extent of the segment's vertices along its axis.
     corner_labels = np.repeat(labels, 3)
     points = t.reshape(-1)
-    projection = np.einsum("ij,ij->i", v[points] - centroid[corner_labels],
-                           direction[corner_labels])
+    projection = np.einsum(
+        "ij,ij->i", v[points] - centroid[corner_labels], direction[corner_labels]
+    )
     low = np.full(s, np.inf)
     high = np.full(s, -np.inf)
     np.minimum.at(low, corner_labels, projection)
@@ -164,8 +169,9 @@ def _tree(segment_count, joint, ordered, area):
     return parent
 
 
-def proto_skeleton(vertices, triangles, labels, segment_count, boundaries, area,
-                   min_length=None) -> Skeleton:
+def proto_skeleton(
+    vertices, triangles, labels, segment_count, boundaries, area, min_length=None
+) -> Skeleton:
     """Bones of a proto-skeleton, in the mesh's coordinates. Each root bone runs along its
     segment's principal axis over the segment's extent. Every other bone starts at the
     centroid of the boundary loop to its parent (the longest loop where there are several)
@@ -198,8 +204,9 @@ def proto_skeleton(vertices, triangles, labels, segment_count, boundaries, area,
                 c = children[i][0]
                 tail[i] = joint[(min(i, c), max(i, c))]
             else:
-                tail[i] = head[i] + _reach(v, triangles, labels, i, head[i], centroid,
-                                           direction, axes.extent[i])
+                tail[i] = head[i] + _reach(
+                    v, triangles, labels, i, head[i], centroid, direction, axes.extent[i]
+                )
         along = tail[i] - head[i]
         length = float(np.linalg.norm(along))
         if length < min_length:

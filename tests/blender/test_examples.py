@@ -89,3 +89,30 @@ def test_render_example_shows_a_coloured_mesh(tmp_path):
     assert len(coloured) > 0.1 * len(rgb)  # the mesh, not just a white background
     # Both ends of the colour map: purple-blue (thin) and green-yellow (thick) pixels.
     assert (coloured[:, 2] > coloured[:, 1]).any() and (coloured[:, 1] > coloured[:, 2]).any()
+
+
+def test_segment_example_processes_a_folder(tmp_path):
+    meshes = tmp_path / "meshes"
+    meshes.mkdir()
+    for name in ("suzanne.obj", "spot.obj"):
+        shutil.copy(DATA / name, meshes / name)
+    (meshes / "broken.obj").write_text("v 0 0 0\nv 1 0 0\nv 0 1 0\n")  # no faces
+    out = tmp_path / "out"
+    run = blender("segment_folder.py", meshes, out, "--clusters", "4")
+    assert run.returncode != 0 and "failed: broken.obj" in run.stderr
+    for stem, polygons in {"suzanne": 500, "spot": 5856}.items():
+        (labels,) = np.load(out / f"{stem}.segments.npz").values()
+        assert labels.shape == (polygons,) and labels.dtype == np.int32
+        count = int(labels.max()) + 1
+        assert f"{stem}.obj: {stem}: {count} parts over {polygons} polygons" in run.stdout
+        with bpy.data.libraries.load(str(out / f"{stem}.blend")) as (source, target):
+            target.objects = [name for name in source.objects if name.startswith(stem)]
+        mesh = next(ob for ob in target.objects if ob.type == "MESH")
+        rig = next(ob for ob in target.objects if ob.type == "ARMATURE")
+        assert rig.name == f"{stem}_parts" and len(rig.data.bones) == count
+        assert [g.name for g in mesh.vertex_groups] == [
+            f"part_{i:02d}" for i in range(1, count + 1)
+        ]
+        face_sets = np.empty(polygons, dtype=np.int32)
+        mesh.data.attributes[".sculpt_face_set"].data.foreach_get("value", face_sets)
+        np.testing.assert_array_equal(face_sets, labels + 1)

@@ -7,10 +7,9 @@ Blender's own triangles; the armature deforms the mesh; failures and undo change
 import bpy
 import numpy as np
 import pytest
-from helpers import DATA, addon_module, select_only, snapshot_all, world_triangles
-
 import shape_diameter
 import shape_diameter.colormap
+from helpers import DATA, addon_module, select_only, snapshot_all, world_triangles
 
 BALL, NECK, CENTRE = 1.0, 0.25, 1.6  # ball radius, neck radius, ball centres at x = +-CENTRE
 
@@ -22,8 +21,13 @@ def dumbbell(name="dumbbell", sides=32, rings=80):
     radius = np.maximum(np.sqrt(np.clip(BALL**2 - (np.abs(x) - CENTRE) ** 2, 0, None)), NECK)
     theta = np.linspace(0.0, 2 * np.pi, sides, endpoint=False)
     ring = np.stack(
-        [np.repeat(x, sides), np.outer(radius, np.cos(theta)).ravel(),
-         np.outer(radius, np.sin(theta)).ravel()], axis=1)
+        [
+            np.repeat(x, sides),
+            np.outer(radius, np.cos(theta)).ravel(),
+            np.outer(radius, np.sin(theta)).ravel(),
+        ],
+        axis=1,
+    )
     vertices = np.vstack([[-CENTRE - BALL, 0, 0], ring, [CENTRE + BALL, 0, 0]])
     last = len(vertices) - 1
     faces = []
@@ -101,8 +105,12 @@ def state():
         for ob in bpy.data.objects
     }
     weights = {ob.name: group_weights(ob) for ob in bpy.data.objects if ob.type == "MESH"}
-    return snapshot_all(), objects, weights, sorted(bpy.data.materials.keys()), len(
-        bpy.data.armatures
+    return (
+        snapshot_all(),
+        objects,
+        weights,
+        sorted(bpy.data.materials.keys()),
+        len(bpy.data.armatures),
     )
 
 
@@ -325,9 +333,7 @@ def test_undo_restores_the_mesh_and_removes_the_armature():
     name = ob.name
     before = state()
     bpy.ops.ed.undo_push(message="before Segment")
-    assert bpy.ops.object.shape_diameter_segment("EXEC_DEFAULT", True, clusters=2) == {
-        "FINISHED"
-    }
+    assert bpy.ops.object.shape_diameter_segment("EXEC_DEFAULT", True, clusters=2) == {"FINISHED"}
     assert "dumbbell_parts" in bpy.data.objects
     assert bpy.ops.ed.undo() == {"FINISHED"}
     assert "dumbbell_parts" not in bpy.data.objects
