@@ -71,13 +71,13 @@ def face_set_data(polygon_labels):
 
 
 def color_data(name, polygon_colors, loop_totals):
-    """The colour attribute per corner (as the SDF colours), each polygon's colour."""
-    return (
-        name,
-        "BYTE_COLOR",
-        "CORNER",
-        mesh_data.polygon_loop_expand(polygon_colors, loop_totals),
-    )
+    """The colour attribute per corner, each polygon's colour. FLOAT_COLOR, written in
+    scene-linear: Blender stores its floats as they are (0.02 s for 4M corners), where a
+    BYTE_COLOR attribute converts every value on the way in (0.6 s)."""
+    linear = np.empty_like(polygon_colors)
+    linear[:, :3] = srgb_to_linear(polygon_colors[:, :3])
+    linear[:, 3] = polygon_colors[:, 3]
+    return (name, "FLOAT_COLOR", "CORNER", mesh_data.polygon_loop_expand(linear, loop_totals))
 
 
 def show_colors(me, name, undo):
@@ -173,7 +173,7 @@ def set_materials(ob, names, colors, undo):
         else:
             before = tuple(material.diffuse_color)
             undo.append(lambda m=material, c=before: setattr(m, "diffuse_color", c))
-        material.diffuse_color = (*_linear(color[:3]), 1.0)
+        material.diffuse_color = (*srgb_to_linear(color[:3]).tolist(), 1.0)
         materials.append(material)
     me.materials.clear()
     for material in materials:
@@ -182,13 +182,12 @@ def set_materials(ob, names, colors, undo):
 
 
 def write_material_indices(me, polygon_labels, undo):
-    before = np.empty(len(me.polygons), dtype=np.int32)
-    me.polygons.foreach_get("material_index", before)
-    undo.append(lambda: me.polygons.foreach_set("material_index", before))
-    me.polygons.foreach_set("material_index", np.ascontiguousarray(polygon_labels, np.int32))
+    """The polygons' material_index, through its attribute (polygons' material_index is read
+    and written element by element: 0.6 s for a million)."""
+    process.put_attribute(me, "material_index", "INT", "FACE", polygon_labels, undo)
 
 
-def _linear(srgb):
-    """sRGB in [0, 1] to scene-linear (a material's colour is linear)."""
-    c = np.asarray(srgb, dtype=np.float64)
-    return tuple(np.where(c <= 0.04045, c / 12.92, ((c + 0.055) / 1.055) ** 2.4))
+def srgb_to_linear(srgb):
+    """sRGB in [0, 1] to scene-linear (float colours and materials are linear)."""
+    c = np.asarray(srgb, dtype=np.float32)
+    return np.where(c <= 0.04045, c / 12.92, ((c + 0.055) / 1.055) ** 2.4).astype(np.float32)

@@ -68,7 +68,7 @@ class SegmentOptions:
         if self.label_name:
             out.append((self.label_name, "INT", "FACE"))
         if self.segment_color_name:
-            out.append((self.segment_color_name, "BYTE_COLOR", "CORNER"))
+            out.append((self.segment_color_name, "FLOAT_COLOR", "CORNER"))
         return out
 
     def check(self):

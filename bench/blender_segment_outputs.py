@@ -112,7 +112,9 @@ def new_mesh(vertices, quads, fans):
 def segmented(modules, ob):
     """The object's PartsTask, segmented from its exact SDF (twice the radius of revolution)."""
     segmenting = modules["segmenting"]
-    options = segmenting.SegmentOptions.from_keywords(clusters=2)
+    # The values are exact: they need no filtering, which segment() skips for values the SDF's
+    # own smoothing made (any smoothing option says so; no SDF is computed here).
+    options = segmenting.SegmentOptions.from_keywords(clusters=2, smoothing="kring")
     (part,), _ = segmenting.prepare(bpy.context.evaluated_depsgraph_get(), [ob], options)
     mesh = part.task.mesh
     centre = mesh.vertices[mesh.triangles].mean(axis=1)

@@ -123,10 +123,10 @@ def check_outputs(ob, result, labels, seg):
     np.testing.assert_array_equal(face_ints(me, ".sculpt_face_set"), labels + 1)
     np.testing.assert_array_equal(face_ints(me, "segment"), labels)
     colors = me.attributes["segment_color"]
-    assert (colors.data_type, colors.domain) == ("BYTE_COLOR", "CORNER")
+    assert (colors.data_type, colors.domain) == ("FLOAT_COLOR", "CORNER")
     assert me.color_attributes.active_color_name == "segment_color"
     rgba = np.empty(len(me.loops) * 4, dtype=np.float32)
-    colors.data.foreach_get("color_srgb", rgba)
+    colors.data.foreach_get("color_srgb", rgba)  # Blender's own conversion from linear
     per_corner = rgba.reshape(-1, 4)
     first_corner = np.empty(len(me.polygons), dtype=np.int32)
     me.polygons.foreach_get("loop_start", first_corner)
