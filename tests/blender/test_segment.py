@@ -428,3 +428,33 @@ def test_invoke_runs_synchronously_in_background():
     assert bpy.app.background
     assert bpy.ops.object.shape_diameter_segment("INVOKE_DEFAULT", clusters=2) == {"FINISHED"}
     assert len(ob.vertex_groups) == 3
+
+
+def test_segment_panel_and_operator_draw():
+    import types
+
+    from test_extension import FakeLayout, draw
+
+    dumbbell()
+    panel = bpy.types.VIEW3D_PT_shape_diameter_segment
+    assert panel.poll(bpy.context)
+    drawn = draw(panel, bpy.context)
+    assert ("operator", "object.shape_diameter_segment") in drawn
+    for name in ("clusters", "smoothness", "mode", "face_sets", "group_prefix", "armature"):
+        assert ("prop", name) in drawn, name
+    operator = addon_module("segment_operator").OBJECT_OT_shape_diameter_segment
+    names = bpy.ops.object.shape_diameter_segment.get_rna_type().properties.keys()
+    fake = types.SimpleNamespace(layout=FakeLayout([]), **{n: 0 for n in names if n != "rna_type"})
+    operator.draw(fake, bpy.context)
+
+
+def test_unregister_removes_the_segment_operator_and_panel():
+    import addon_utils
+
+    addon_utils.disable("bl_ext.user_default.shape_diameter", default_set=True)
+    try:
+        assert not hasattr(bpy.types, "OBJECT_OT_shape_diameter_segment")
+        assert not hasattr(bpy.types, "VIEW3D_PT_shape_diameter_segment")
+    finally:
+        addon_utils.enable("bl_ext.user_default.shape_diameter", default_set=True)
+    assert bpy.types.OBJECT_OT_shape_diameter_segment.is_registered
