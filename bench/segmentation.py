@@ -18,17 +18,22 @@ Quality: each mesh is segmented with the defaults (5 clusters, lambda 0.26) by
 - ours: shape_diameter.segment(vertices, triangles), the SDF computed with compute()'s defaults,
   mode "auto"; and again with mode="cgal";
 - ours, mode="cgal" on CGAL's post-processed SDF: the same input as CGAL's segmentation, so its
-  labels should equal CGAL's ("same labels" gives the share of faces that do).
+  labels should equal CGAL's ("same labels" gives the share of faces that do), and its
+  graph-cut energy CGAL's; the energies of CGAL's labels and of ours (both modes) on those
+  values are tabled too.
 Each is compared with every human segmentation of the mesh and the errors averaged over the
 humans, then over a category's meshes, then over the categories, as the benchmark does
 (measures in segmentation_measures.py: 1 - Rand index, cut discrepancy, Hamming distance,
 GCE and LCE). "humans" compares each human segmentation with the mesh's other ones.
 
-Speed: the SDF of a mesh is computed once (compute()'s defaults) and rescaled linearly to
-[0, 1]; those same values go to our segment() (values given, so no ray casting; best of 3
-runs, wall time of the call) and to CGAL's segmentation_from_sdf_values (its own timer, one
-run), at about 20k, 100k, 500k, 830k and 1.2M faces (repository meshes, larger ones made by 1-to-4
-subdivision as in meshes.py). The ratio is CGAL's time over ours.
+Speed: the SDF of a mesh is computed once (compute() with smoothing="kring", since a
+segmentation wants a smoothed field) and rescaled linearly to [0, 1]; those same values go to
+our segment() (values given, so no ray casting; best of 3 runs, wall and processor time of the
+call) and to CGAL's segmentation_from_sdf_values (its own timers, one run), at about 20k,
+100k, 500k, 830k and 1.2M faces (repository meshes, the larger ones made by 1-to-4
+subdivision as in meshes.py). The ratio is CGAL's time over ours. CGAL's segmentation runs on
+one thread, so its processor time is its wall time on an idle machine: on a busy machine
+compare the processor times too (ours counts every thread's).
 """
 
 from __future__ import annotations
@@ -58,6 +63,8 @@ CATEGORIES = {1: "human", 21: "cup", 41: "glasses", 61: "airplane", 81: "ant", 1
               341: "bearing", 361: "vase", 381: "fourleg"}
 MEASURES = ("1-RI", "CD", "HD", "GCE", "LCE")
 HAVE_SEGMENT = hasattr(sd, "segment")
+if HAVE_SEGMENT:
+    from shape_diameter.segmentation import segmentation_energy
 
 
 def category(number: int) -> str:
@@ -122,9 +129,12 @@ def segmentations(off: Path, vertices, triangles, cgal: str, tmp: Path) -> dict:
     for name, kwargs in (("ours", {}), ('ours, mode="cgal"', {"mode": "cgal"})):
         out[name] = np.asarray(sd.segment(vertices, triangles, **kwargs).labels)
     if ref is not None:
-        labels = np.asarray(sd.segment(vertices, triangles, ref.sdf, mode="cgal").labels)
-        out['ours, mode="cgal", CGAL\'s SDF'] = labels
-        out["same labels"] = float(np.mean(labels == ref.labels))
+        same = sd.segment(vertices, triangles, ref.sdf, mode="cgal")
+        out['ours, mode="cgal", CGAL\'s SDF'] = np.asarray(same.labels)
+        out["same labels"] = float(np.mean(np.asarray(same.labels) == ref.labels))
+        auto = sd.segment(vertices, triangles, ref.sdf)
+        out["energy"] = (segmentation_energy(vertices, triangles, ref.sdf, ref.clusters),
+                         same.energy, auto.energy)
     return out
 
 
@@ -138,7 +148,8 @@ def quality_of_mesh(number: int, off: Path, human_files: list, cgal: str, tmp: P
     human_cuts = [cuts.distance_to_cuts(h) for h in humans]
     found = segmentations(off, vertices, triangles, cgal, tmp)
     row = {"mesh": number, "category": category(number), "faces": len(triangles),
-           "humans": len(humans), "same labels": found.pop("same labels", None), "methods": {}}
+           "humans": len(humans), "same labels": found.pop("same labels", None),
+           "energy": found.pop("energy", None), "methods": {}}
     for method, labels in found.items():
         row["methods"][method] = dict(zip(MEASURES, scores(cuts, labels, humans, human_cuts)),
                                       segments=len(np.unique(labels)))
@@ -160,9 +171,17 @@ def quality_tables(rows: list) -> list[str]:
     for r in rows:
         cells = [f"{r['methods'][m]['1-RI']:.3f} ({r['methods'][m]['segments']:.0f})"
                  for m in methods]
-        same = "" if r["same labels"] is None else f"{100 * r['same labels']:.2f}%"
+        same = "" if r["same labels"] is None else (
+            f"{100 * r['same labels']:.2f}% ({round((1 - r['same labels']) * r['faces'])} "
+            "differ)")
         lines.append(f"| {r['mesh']} | {r['category']} | {r['faces']:,} | {r['humans']} | "
                      + " | ".join(cells) + f" | {same} |")
+    if rows[0]["energy"] is not None:
+        lines += ["", "Graph-cut energy of the labels on CGAL's SDF (CGAL's probabilities and "
+                  "edge weights)", "", "| mesh | CGAL | ours, mode=\"cgal\" | ours (auto) | "
+                  "auto / CGAL |", "|---:|---:|---:|---:|---:|"]
+        lines += [f"| {r['mesh']} | {r['energy'][0]:.6g} | {r['energy'][1]:.6g} | "
+                  f"{r['energy'][2]:.6g} | {r['energy'][2] / r['energy'][0]:.4f} |" for r in rows]
     by_category = {}
     for r in rows:
         by_category.setdefault(r["category"], []).append(r)
@@ -215,22 +234,23 @@ def speed_of_mesh(name, vertices, triangles, cgal: str, tmp: Path) -> dict:
     off = tmp / f"{name}.off"
     write_off(off, vertices, triangles)
     start = time.perf_counter()
-    sdf = sd.compute(vertices, triangles)
+    sdf = sd.compute(vertices, triangles, smoothing="kring")
     sdf_seconds = time.perf_counter() - start
     values = np.asarray(sdf.values, dtype=np.float64)
     values = (values - values.min()) / max(values.max() - values.min(), 1e-300)
     ref = cgal_ref.run(off, tmp / f"{name}.txt", values=values)
     row = {"mesh": name, "faces": len(triangles), "sdf": sdf_seconds,
-           "CGAL": ref.header["segmentation_seconds"], "segments CGAL": ref.header["segments"]}
+           "CGAL": (ref.header["segmentation_seconds"], ref.header["segmentation_cpu_seconds"]),
+           "segments CGAL": ref.header["segments"]}
     if not HAVE_SEGMENT:
         return row
     for mode in ("auto", "cgal"):
         best = None
         for _ in range(3):
-            start = time.perf_counter()
+            wall, cpu = time.perf_counter(), time.process_time()
             result = sd.segment(vertices, triangles, values, mode=mode)
-            wall = time.perf_counter() - start
-            best = wall if best is None else min(best, wall)
+            times = (time.perf_counter() - wall, time.process_time() - cpu)
+            best = times if best is None or times[0] < best[0] else best
         row[mode] = best
         row[f"segments {mode}"] = int(result.segment_count)
         if mode == "cgal":
@@ -239,19 +259,28 @@ def speed_of_mesh(name, vertices, triangles, cgal: str, tmp: Path) -> dict:
 
 
 def speed_table(rows: list) -> list[str]:
-    lines = ["Speed: segmentation from the same SDF values (seconds; ratio = CGAL / ours)", "",
-             "| mesh | faces | our SDF | CGAL segmentation | ours (auto) | ratio | "
-             "ours (mode=cgal) | ratio | segments CGAL / cgal / auto | same labels |",
+    lines = ["Speed: segmentation from the same SDF values, seconds of wall time (processor time "
+             "in brackets; ratio = CGAL / ours, wall and processor)", "",
+             "| mesh | faces | our SDF | CGAL | ours (auto) | ratio | ours (mode=cgal) | ratio | "
+             "segments CGAL / cgal / auto | same labels |",
              "|---|---:|---:|---:|---:|---:|---:|---:|---|---:|"]
+
+    def pair(t):
+        return f"{t[0]:.3f} ({t[1]:.3f})"
+
+    def ratio(a, b):
+        return f"{a[0] / b[0]:.1f}x ({a[1] / max(b[1], 1e-9):.1f}x)"
+
     for r in rows:
-        cgal_s = r["CGAL"]
+        cgal = r["CGAL"]
         if "auto" in r:
-            ours = (f"{r['auto']:.3f} | {cgal_s / r['auto']:.1f}x | {r['cgal']:.3f} | "
-                    f"{cgal_s / r['cgal']:.1f}x | {r['segments CGAL']} / {r['segments cgal']} / "
-                    f"{r['segments auto']} | {100 * r['same labels']:.2f}%")
+            ours = (f"{pair(r['auto'])} | {ratio(cgal, r['auto'])} | {pair(r['cgal'])} | "
+                    f"{ratio(cgal, r['cgal'])} | {r['segments CGAL']} / {r['segments cgal']} / "
+                    f"{r['segments auto']} | {100 * r['same labels']:.2f}% "
+                    f"({round((1 - r['same labels']) * r['faces'])} differ)")
         else:
             ours = f"- | - | - | - | {r['segments CGAL']} / - / - | -"
-        lines.append(f"| {r['mesh']} | {r['faces']:,} | {r['sdf']:.3f} | {cgal_s:.3f} | {ours} |")
+        lines.append(f"| {r['mesh']} | {r['faces']:,} | {r['sdf']:.2f} | {pair(cgal)} | {ours} |")
     return lines
 
 
@@ -270,7 +299,8 @@ def main():
     os.environ["SDF_CGAL_SEGMENT"] = cgal
     tmp = Path(tempfile.mkdtemp(prefix="sdf-segmentation-"))
     print(f"{datetime.datetime.now(datetime.timezone.utc):%Y-%m-%d %H:%M} UTC, "
-          f"{machine_line()}, shape_diameter {sd.__version__}")
+          f"{machine_line()}, load average {os.getloadavg()[0]:.1f} at the start, "
+          f"shape_diameter {sd.__version__}")
     if not HAVE_SEGMENT:
         print("shape_diameter.segment is not in this build: CGAL's half only")
     if not args.speed:
@@ -285,7 +315,7 @@ def main():
         rows = []
         for name, vertices, triangles in speed_meshes(args.largest):
             rows.append(speed_of_mesh(name, vertices, triangles, cgal, tmp))
-            print(f"  {name}: CGAL {rows[-1]['CGAL']:.3f} s", flush=True)
+            print(f"  {name}: CGAL {rows[-1]['CGAL'][0]:.3f} s", flush=True)
         print("\n".join(["", *speed_table(rows)]))
 
 

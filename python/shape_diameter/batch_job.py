@@ -17,8 +17,9 @@ import numpy as np
 from . import _core
 from .api import compute, engines
 from .cli_jobs import EXIT_ENVIRONMENT, EXIT_USAGE, CommandError
-from .colormap import colormap
+from .colormap import colormap, segment_colors
 from .output_files import written_whole
+from .segmentation import segment
 from .smoothing import DEVICE_ERRORS, texture_cost
 
 # Texture smoothing estimated past this on the CPU threads is announced before it starts (a
@@ -75,9 +76,13 @@ def skipped_report(job) -> dict:
     }
 
 
-def run_job(job, options: dict, mesh_io, *, warn, progress=None, check=None) -> dict:
+def run_job(job, options: dict, mesh_io, *, warn, progress=None, check=None,
+            segment_options=None) -> dict:
     """Read, compute (compute()'s keyword arguments in `options`) and write one input; returns
     its --json object without its warnings, which go to warn(message) as they come.
+
+    `segment_options`: segment()'s keywords (clusters, smoothness, mode) to also segment the
+    SDF: the mesh is coloured by segment and the labels written to job.segments.
 
     `progress`: compute()'s callback; `check`: called between the steps (the command line's
     Ctrl-C check points). Failures raise; failure() maps them to a status and a message."""
@@ -90,14 +95,28 @@ def run_job(job, options: dict, mesh_io, *, warn, progress=None, check=None) -> 
         if uvs is not None and (notice := long_texture_work(options, uvs)):
             warn(notice)  # now, not once the work is done
         result = compute(vertices, triangles, progress=progress, uvs=uvs, **options)
+        parts = None
+        if segment_options is not None:
+            parts = segment(vertices, triangles, result.values, postprocess=True,
+                            threads=options.get("threads", 0), **segment_options)
     computed = time.perf_counter()
     check()
+    colors = colormap(result.normalized) if parts is None else segment_colors(parts.labels)
 
     def save_mesh():
         with _warnings_to(warn):  # GLB and STL: float32 coordinates
-            mesh_io.save_colored(
-                job.output, vertices, triangles, colormap(result.normalized), options["points"]
-            )
+            mesh_io.save_colored(job.output, vertices, triangles, colors, options["points"])
+        if parts is not None and job.segments:
+            save_labels()
+
+    def save_labels():
+        # Written whole after the mesh's temporary file took its place: the labels are the
+        # last output, so an existing one tells --skip-existing that the input is finished.
+        with written_whole(job.segments) as temporary:
+            with open(temporary, "wb") as stream:
+                npy = io.BytesIO()
+                np.save(npy, np.asarray(parts.labels, dtype=np.int32))
+                stream.write(npy.getbuffer())
 
     if job.values:
         # The values are written first and take their place after the mesh: a failure in
@@ -115,7 +134,18 @@ def run_job(job, options: dict, mesh_io, *, warn, progress=None, check=None) -> 
     finished = time.perf_counter()
     # The batch's own stages, apart from compute()'s: reading and writing files.
     io_seconds = {"load": loaded - started, "write": finished - computed}
-    return _report(options, job, vertices, triangles, result, io_seconds, finished - started)
+    report = _report(options, job, vertices, triangles, result, io_seconds,
+                     finished - started)
+    if parts is not None:
+        report["segments"] = {
+            "count": parts.segment_count,
+            "clusters": int(len(parts.mixture)),
+            "smoothness": float(segment_options["smoothness"]),
+            "mode": segment_options["mode"],
+            "seconds": {stage: float(t) for stage, t in parts.timings.items()},
+        }
+        report["outputs"]["segments"] = job.segments
+    return report
 
 
 def _load(job, options: dict, mesh_io):

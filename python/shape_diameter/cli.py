@@ -321,6 +321,29 @@ def build_parser() -> argparse.ArgumentParser:
         "INPUT's order (STL: positions merged, by first use)",
     )
     parser.add_argument(
+        "--segment",
+        nargs="?",
+        const=5,
+        type=_int_in(1, 256),
+        metavar="K",
+        help="also split the mesh into parts by thickness (shape_diameter.segment, K clusters, "
+        "default 5): colour the output mesh by segment instead of by SDF and save the labels "
+        "(int32 per triangle, INPUT's face order) next to it with .segments.npy in place of "
+        "its suffix (cow.obj -> cow.sdf.segments.npy); needs --points faces",
+    )
+    parser.add_argument(
+        "--smoothness",
+        type=_positive_float(1e6),
+        metavar="LAMBDA",
+        help="--segment: weight of cutting edges against the cluster fit (default: 0.26)",
+    )
+    parser.add_argument(
+        "--segment-mode",
+        choices=("auto", "cgal"),
+        help="--segment: auto (the graph cut run until no move helps), or cgal (CGAL 5.5's "
+        "segmentation_from_sdf_values exactly) (default: auto)",
+    )
+    parser.add_argument(
         "--output-dir",
         metavar="DIR",
         help="write each input's outputs into DIR (made if missing) instead of next to the "
@@ -577,6 +600,7 @@ def _compute_one(args, job, mesh_io, several, warned, interrupts) -> dict:
             job,
             compute_options(args),
             mesh_io,
+            segment_options=segment_options(args),
             warn=lambda message: _warn(job, warned, message),
             progress=interrupts.checked(progress),
             check=interrupts.check,
@@ -588,11 +612,23 @@ def _compute_one(args, job, mesh_io, several, warned, interrupts) -> dict:
 
 
 def _say_done(args, job, report) -> None:
+    parts = f", {report['segments']['count']} segments" if "segments" in report else ""
     _say(
         f"{job.source}: {report['point_count']} {args.points}, {args.rays} rays, "
-        f"{_smoothing_words(args.smooth)}, {report['total_seconds']:.2f} s on "
+        f"{_smoothing_words(args.smooth)}{parts}, {report['total_seconds']:.2f} s on "
         f"{report['engine']} -> {job.output}"
     )
+
+
+def segment_options(args):
+    """--segment's options as segment() keywords, or None without --segment."""
+    if args.segment is None:
+        return None
+    return {
+        "clusters": args.segment,
+        "smoothness": 0.26 if args.smoothness is None else args.smoothness,
+        "mode": args.segment_mode or "auto",
+    }
 
 
 def _smoothing_words(method: str) -> str:
@@ -698,6 +734,13 @@ def _check_combinations(args) -> None:
             "--values and --save-values both say where values go: give one "
             "(--values for one INPUT, --save-values for several)"
         )
+    if args.segment is not None and args.points != "faces":
+        raise CommandError("--segment needs --points faces (segments are made of faces)")
+    if args.segment is not None and args.scheduler is not None:
+        raise CommandError("--segment runs in this process only: leave out --scheduler")
+    for flag in ("smoothness", "segment_mode"):
+        if getattr(args, flag) is not None and args.segment is None:
+            raise CommandError(f"--{flag.replace('_', '-')} applies to --segment")
     args.seed = 0 if args.seed is None else args.seed
     args.bvh_quality = args.bvh_quality or "auto"
 

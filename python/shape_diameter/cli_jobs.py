@@ -155,9 +155,8 @@ def plan(args, write_suffixes) -> list:
         done = (
             args.skip_existing
             and os.path.exists(source)
-            and all(
-                os.path.exists(path) for path in (output, values, segments) if path is not None
-            )
+            and all(os.path.exists(path) for path in (output, values, segments)
+                    if path is not None)
         )
         jobs.append(Job(source, output, values, done=done, segments=segments))
     _check_no_collisions([job for job in jobs if job.problem is None])

@@ -38,7 +38,9 @@
 //   postprocess_seconds (sdf_values_postprocessing; 0 unless --postprocess),
 //   cluster_seconds (segmentation_from_sdf_values with output_cluster_ids=true),
 //   segmentation_seconds (segmentation_from_sdf_values with output_cluster_ids=false,
-//   which is CGAL's segmentation as users call it).
+//   which is CGAL's segmentation as users call it), and segmentation_cpu_seconds, the
+//   processor time of that call (std::clock; CGAL's segmentation runs on one thread, so
+//   this is its wall time on an idle machine, whatever else the machine runs).
 // Then one line per face: "SDF CLUSTER SEGMENT", the SDF value the segmentation used
 // (%.17g), the face's cluster id (0 = thinnest cluster) and its segment id (segments
 // numbered by increasing mean SDF). numpy.loadtxt(OUT.txt) reads the table.
@@ -50,6 +52,7 @@
 
 #include <chrono>
 #include <cmath>
+#include <ctime>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
@@ -188,7 +191,7 @@ int main(int argc, char** argv) {
 
   double sdf_seconds = 0.0, postprocess_seconds = 0.0;
   std::size_t segments = 0;
-  double cluster_seconds = 0.0, segmentation_seconds = 0.0;
+  double cluster_seconds = 0.0, segmentation_seconds = 0.0, segmentation_cpu_seconds = 0.0;
   try {
     if (opt.values.empty()) {
       const auto t0 = std::chrono::steady_clock::now();
@@ -208,7 +211,9 @@ int main(int argc, char** argv) {
     CGAL::segmentation_from_sdf_values(mesh, sdf, cluster, k, opt.lambda, true);
     cluster_seconds = seconds_since(t0);
     t0 = std::chrono::steady_clock::now();
+    const std::clock_t cpu0 = std::clock();
     segments = CGAL::segmentation_from_sdf_values(mesh, sdf, segment, k, opt.lambda, false);
+    segmentation_cpu_seconds = static_cast<double>(std::clock() - cpu0) / CLOCKS_PER_SEC;
     segmentation_seconds = seconds_since(t0);
   } catch (const std::exception& e) {
     fail(std::string("CGAL failed: ") + e.what());
@@ -219,10 +224,11 @@ int main(int argc, char** argv) {
   std::fprintf(fo,
                "# {\"faces\": %zu, \"clusters\": %ld, \"lambda\": %.17g, \"segments\": %zu, "
                "\"source\": \"%s\", \"sdf_seconds\": %.6f, \"postprocess_seconds\": %.6f, "
-               "\"cluster_seconds\": %.6f, \"segmentation_seconds\": %.6f}\n",
+               "\"cluster_seconds\": %.6f, \"segmentation_seconds\": %.6f, "
+               "\"segmentation_cpu_seconds\": %.6f}\n",
                faces, opt.clusters, opt.lambda, segments,
                opt.values.empty() ? "sdf_values" : "values", sdf_seconds, postprocess_seconds,
-               cluster_seconds, segmentation_seconds);
+               cluster_seconds, segmentation_seconds, segmentation_cpu_seconds);
   for (size_t i = 0; i < faces; ++i) {
     const Face_index f(static_cast<Mesh::size_type>(i));
     std::fprintf(fo, "%.17g %zu %zu\n", sdf[f], cluster[f], segment[f]);
