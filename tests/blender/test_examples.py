@@ -116,3 +116,33 @@ def test_segment_example_processes_a_folder(tmp_path):
         face_sets = np.empty(polygons, dtype=np.int32)
         mesh.data.attributes[".sculpt_face_set"].data.foreach_get("value", face_sets)
         np.testing.assert_array_equal(face_sets, labels + 1)
+
+
+def test_render_segments_example_shows_parts_and_bones(tmp_path):
+    png = tmp_path / "human.png"
+    run = blender(
+        "render_segments.py",
+        DATA / "psb" / "1.off",
+        png,
+        "--size",
+        "320",
+        "--up",
+        "z",
+        "--view-y",
+        "1.6",
+    )
+    assert run.returncode == 0, run.stdout[-2000:] + run.stderr[-2000:]
+    assert "1: " in run.stdout and "armature 1_parts" in run.stdout
+    image = bpy.data.images.load(str(png))
+    try:
+        assert tuple(image.size) == (320, 240)
+        pixels = np.empty(320 * 240 * 4, dtype=np.float32)
+        image.pixels.foreach_get(pixels)
+        rgb = pixels.reshape(-1, 4)[:, :3]
+    finally:
+        bpy.data.images.remove(image)
+    # The bones: near-black pixels; the parts: several distinct saturated colours.
+    assert (rgb.max(axis=1) < 0.15).sum() > 50
+    saturated = rgb[(rgb.max(axis=1) - rgb.min(axis=1)) > 0.15]
+    hues = {tuple(np.round(c / c.max() * 4)) for c in saturated}
+    assert len(saturated) > 200 and len(hues) >= 3
