@@ -279,12 +279,13 @@ def build_parser() -> argparse.ArgumentParser:
     )
     parser.add_argument(
         "--smooth",
-        choices=("none", "kring", "projected", "texture"),
+        choices=("none", "kring", "projected", "texture", "bilateral"),
         default="none",
         help="smooth the SDF before colouring (paper 4.4): kring = Gaussian over mesh rings, "
         "projected = octree of points moved inward by half their SDF, texture = blur in the "
         "UV layout (needs UVs in INPUT: OBJ vt, glTF TEXCOORD_0 of a primitive with a "
-        "material, PLY texture coordinates) (default: none)",
+        "material, PLY texture coordinates), bilateral = CGAL's filter over rings of edge "
+        "neighbours (--points faces) (default: none)",
     )
     parser.add_argument(
         "--k",

@@ -135,7 +135,9 @@ def plan(args, write_suffixes) -> list:
                 continue
         output = args.output or default_output(source, args.output_dir, subfolder)
         values = args.values or (default_values(output) if args.save_values else None)
-        segments = default_segments(output) if args.segment is not None else None
+        # (shape_diameter.distributed plans without a --segment option)
+        segment = getattr(args, "segment", None)
+        segments = default_segments(output) if segment is not None else None
         try:
             if args.output or os.path.exists(source):  # (a missing input fails on its own)
                 _check_writable_path(output, write_suffixes)

@@ -99,3 +99,16 @@ def test_bad_use_is_refused(call, message):
     v, t = icosphere(1.0, 1)
     with pytest.raises(ValueError, match=message):
         call(v, t)
+
+
+def test_command_line_smooths_with_it(tmp_path):
+    from shape_diameter import cli
+
+    source = DATA / "psb" / "341.off"
+    values = tmp_path / "values.npy"
+    argv = [str(source), "-o", str(tmp_path / "out.ply"), "--rays", "8", "--smooth",
+            "bilateral", "--values", str(values)]
+    assert cli.main(argv) == 0
+    v, t = read_off(source)
+    expected = shape_diameter.compute(v, t, rays=8, smoothing="bilateral")
+    np.testing.assert_array_equal(np.load(values), expected.values)
