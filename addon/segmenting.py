@@ -13,6 +13,7 @@ import re
 import time
 from dataclasses import dataclass, field, fields
 
+import bpy
 import numpy as np
 
 from . import armature, core, mesh_data, part_outputs, process
@@ -161,8 +162,6 @@ def names_problem(ob, options, count=None):
                 "by Shape Diameter: rename them, or choose another group prefix"
             )
     if options.armature:
-        import bpy
-
         name = options.armature_name.replace("{object}", ob.name)
         existing = bpy.data.objects.get((name, None))
         if existing is not None and not (
@@ -173,8 +172,6 @@ def names_problem(ob, options, count=None):
                 "for it: rename it, or choose another armature name"
             )
     if options.materials and count is not None:
-        import bpy
-
         for name in part_outputs.part_names(options.group_prefix, count):
             material = bpy.data.materials.get((name, None))
             if material is not None and not material.get(part_outputs.MATERIAL_MARK):
@@ -216,8 +213,6 @@ def prepare(depsgraph, objects, options, active=None):
     tasks, notices = process.prepare(
         depsgraph, objects, options.sdf, for_writing=False, active=active
     )
-    import bpy
-
     parts = []
     for task in tasks:
         ob = process._find_object(bpy.data, task.object_uid)
