@@ -10,6 +10,10 @@ The add-on's modules live under `bl_ext.<repository>.shape_diameter`; installed 
     result.values        # float32 per polygon (or vertex): the SDF, in world units
     result.attributes    # the attributes written: ["sdf", "sdf_normalized", "sdf_color"]
 
+    parts = api.segment_object(bpy.data.objects["Suzanne"], clusters=5)
+    parts.segment_count  # parts found; parts.labels: int32 per polygon
+    parts.vertex_groups  # ["part_01", ...]; parts.armature: the armature object's name
+
 It does what the operator object.shape_diameter does, synchronously, and raises instead of
 reporting: ValueError (process.UserError, a subclass) for anything the user can fix, with the
 message the operator would report; nothing is written then; Cancelled when a `progress`
@@ -23,7 +27,7 @@ from dataclasses import dataclass, field
 import bpy
 import numpy as np
 
-from . import core, operators, process
+from . import core, operators, part_writing, process, segmenting
 
 UserError = process.UserError
 Cancelled = process.Cancelled  # a progress callback returned False
@@ -134,3 +138,92 @@ def compute_object(obj, *, depsgraph=None, write=True, **options):
         what = "None" if obj is None else f"{obj.name} ({obj.type.lower()})"
         raise UserError(f"Not a mesh: {what}")
     return compute_objects([obj], depsgraph=depsgraph, write=write, **options)[0]
+
+
+@dataclass
+class PartsResult:
+    """What one object got from segment_objects(). labels: int32 per polygon, its part in
+    [0, segment_count) (a polygon split into triangles of several parts takes the one with
+    the largest area); triangle_labels: per loop triangle (Blender's triangulation, the
+    core's labels); vertex_labels: int32 per vertex (-1 for a vertex in no face);
+    segmentation: the core's shape_diameter.Segmentation (boundaries, adjacency, weights);
+    reused_values: the SDF attribute on the mesh was segmented (not computed again);
+    attributes, vertex_groups, materials, armature: what was written (names)."""
+
+    object_name: str
+    segment_count: int
+    labels: np.ndarray
+    triangle_labels: np.ndarray
+    vertex_labels: np.ndarray
+    segmentation: object
+    reused_values: bool
+    timings: dict
+    attributes: list = field(default_factory=list)
+    vertex_groups: list = field(default_factory=list)
+    materials: list = field(default_factory=list)
+    armature: str = ""
+    warnings: list = field(default_factory=list)
+
+
+def segment_objects(objects, *, depsgraph=None, write=True, progress=None, **options):
+    """Segments every mesh object in `objects` into parts by thickness and writes the
+    outputs (all or none), as the operator object.shape_diameter_segment does. Options:
+    clusters=5, smoothness=0.26, mode='auto' ('cgal'), reuse_values=True (the SDF attribute
+    Compute wrote per face with the same settings on the same geometry is segmented as it
+    is), face_sets=True, label_name='segment', segment_color_name='segment_color' (empty:
+    not written), vertex_groups=True, group_prefix='part_', soft_weights=True,
+    materials=False, armature=True, armature_name='{object}_parts'; and compute_objects()'
+    options for the SDF where it is computed (points is always 'faces'). Raises UserError
+    (nothing written) for what the user can fix, Cancelled when `progress` returns False."""
+    if progress is not None and not callable(progress):
+        raise UserError("progress must be a callable taking the fraction done, or None")
+    context = bpy.context
+    if options.get("engine") in (None, "DEFAULT"):
+        options["engine"] = operators.resolve_engine(context, "DEFAULT")
+    opts = segmenting.SegmentOptions.from_keywords(**options)
+    if depsgraph is None:
+        depsgraph = context.evaluated_depsgraph_get()
+    parts, run_warnings = segmenting.prepare(depsgraph, objects, opts)
+    for warning in run_warnings:
+        warnings.warn(warning, RuntimeWarning, stacklevel=2)
+    stopped = []
+
+    def report(fraction):
+        if progress(fraction) is False:
+            stopped.append(True)
+
+    segmenting.compute(
+        parts, opts, progress=report if progress else None, cancelled=lambda: bool(stopped)
+    )
+    if stopped:
+        raise Cancelled()
+    written = part_writing.write(context, parts, opts) if write else [None] * len(parts)
+    return [_parts_result(part, out, run_warnings) for part, out in zip(parts, written)]
+
+
+def _parts_result(part, out, run_warnings):
+    seg = part.segmentation
+    out = out or part_writing.Written()
+    return PartsResult(
+        object_name=part.object_name,
+        segment_count=seg.segment_count,
+        labels=part.polygon_labels,
+        triangle_labels=seg.labels,
+        vertex_labels=seg.vertex_labels,
+        segmentation=seg,
+        reused_values=part.reused,
+        timings=part.timings,
+        attributes=out.attributes,
+        vertex_groups=out.vertex_groups,
+        materials=out.materials,
+        armature=out.armature,
+        warnings=[*run_warnings, *part.warnings],
+    )
+
+
+def segment_object(obj, *, depsgraph=None, write=True, **options):
+    """segment_objects() on one mesh object; returns its PartsResult."""
+    if obj is None or obj.type != "MESH":
+        what = "None" if obj is None else f"{obj.name} ({obj.type.lower()})"
+        raise UserError(f"Not a mesh: {what}")
+    return segment_objects([obj], depsgraph=depsgraph, write=write, **options)[0]

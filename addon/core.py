@@ -160,3 +160,24 @@ def bake(
     rgba[..., :3] = out.image[..., None]
     rgba[..., 3] = out.mask
     return rgba
+
+
+def segment(vertices, triangles, values, options):
+    """shape_diameter.segment on one triangle mesh from per-triangle values; `options` holds
+    segment()'s keywords (clusters, smoothness, mode, ...)."""
+    return load().segment(vertices, triangles, values, **options)
+
+
+def segment_colors(labels):
+    """(k, 4) float32 sRGB colours in [0, 1], one qualitative colour per segment label."""
+    import shape_diameter.colormap
+
+    return shape_diameter.colormap.segment_colors(labels).astype("float32") / 255.0
+
+
+def rigging():
+    """The package's bpy-free rigging module (polygon labels, principal axes, skeleton)."""
+    load()
+    import shape_diameter.rigging
+
+    return shape_diameter.rigging

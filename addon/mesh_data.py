@@ -68,10 +68,31 @@ class Triangulation:
 def topology(me):
     n_loops = len(me.loops)
     corner_vertices = np.empty(n_loops, dtype=np.int32)
-    me.loops.foreach_get("vertex_index", corner_vertices)
-    loop_totals = np.empty(len(me.polygons), dtype=np.int32)
-    me.polygons.foreach_get("loop_total", loop_totals)
-    return Topology(len(me.vertices), len(me.polygons), corner_vertices, loop_totals)
+    # The corners' vertices are the attribute '.corner_vert' (Blender 4.0 on), read as one
+    # array: through me.loops, element by element, a million corners took 0.9 s.
+    corner_vert = me.attributes.get(".corner_vert")
+    if corner_vert is not None and len(corner_vert.data) == n_loops:
+        corner_vert.data.foreach_get("value", corner_vertices)
+    else:
+        me.loops.foreach_get("vertex_index", corner_vertices)
+    # Polygons are stored corner range after corner range: the totals are the starts' steps
+    # (loop_start reads faster than loop_total).
+    starts = np.empty(len(me.polygons) + 1, dtype=np.int32)
+    me.polygons.foreach_get("loop_start", starts[:-1])
+    starts[-1] = n_loops
+    return Topology(len(me.vertices), len(me.polygons), corner_vertices, np.diff(starts))
+
+
+def positions(me):
+    """float32 (n * 3,): the vertex positions, through the attribute 'position' where it is
+    one (a hundred times faster than vertices' co on a million vertices)."""
+    co = np.empty(len(me.vertices) * 3, dtype=np.float32)
+    position = me.attributes.get("position")
+    if position is not None and position.data_type == "FLOAT_VECTOR" and position.domain == "POINT":
+        position.data.foreach_get("vector", co)
+    else:
+        me.vertices.foreach_get("co", co)
+    return co
 
 
 def triangulation(me, matrix=None):
@@ -80,9 +101,7 @@ def triangulation(me, matrix=None):
     rotation; translation does not change the SDF). A transform that mirrors (negative
     determinant) turns faces inside out, so the triangles' winding is reversed with it."""
     n = len(me.vertices)
-    co = np.empty(n * 3, dtype=np.float32)
-    me.vertices.foreach_get("co", co)
-    vertices = co.reshape(n, 3).astype(np.float64)
+    vertices = positions(me).reshape(n, 3).astype(np.float64)
     me.calc_loop_triangles()
     m = len(me.loop_triangles)
     tris = np.empty(m * 3, dtype=np.int32)
@@ -185,3 +204,45 @@ def polygon_loop_expand(values, loop_totals):
     """Per-polygon rows repeated for each of the polygon's corners (loops are stored polygon
     by polygon, in order)."""
     return np.repeat(values, loop_totals, axis=0)
+
+
+# A mesh property recording what the SDF values on the mesh were computed with (JSON):
+# the attribute, the options that change the values, and the geometry's digest, so that
+# segmenting reuses them only where they are still what a new computation would give.
+SDF_SETTINGS_PROPERTY = "shape_diameter_sdf"
+
+
+def geometry_digest(me):
+    """A digest of the vertex positions and the polygons' corners: equal digests mean the
+    same geometry (any edit since changes it)."""
+    import hashlib
+
+    co = positions(me)
+    shape = topology(me)
+    digest = hashlib.blake2b(digest_size=16)
+    for array in (co, shape.corner_vertices, shape.loop_totals):
+        digest.update(array.tobytes())
+    return digest.hexdigest()
+
+
+def record_sdf_settings(me, attribute, settings, linear):
+    """Records that the FACE attribute `attribute` holds values computed with `settings`
+    (JSON-able), through the 3x3 transform `linear` (rows; None: the mesh's own units)."""
+    record = {
+        "attribute": attribute,
+        "settings": settings,
+        "linear": linear,
+        "geometry": geometry_digest(me),
+    }
+    me[SDF_SETTINGS_PROPERTY] = json.dumps(record, sort_keys=True)
+
+
+def recorded_sdf(me):
+    """{attribute, settings, linear, geometry} of the recorded SDF, or None."""
+    try:
+        record = json.loads(me.get(SDF_SETTINGS_PROPERTY, ""))
+        if {"attribute", "settings", "linear", "geometry"} <= set(record):
+            return record
+    except (TypeError, ValueError, AttributeError):
+        pass
+    return None

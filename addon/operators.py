@@ -52,14 +52,14 @@ def _redraw(context):
             area.tag_redraw()
 
 
-@props.operator_options
-class OBJECT_OT_shape_diameter(bpy.types.Operator):
-    """Compute the Shape Diameter Function (local thickness) of the selected meshes into
-    attributes and a color attribute"""
+class WorkerRun:
+    """What the operators that run the core share: in the interface the work runs on a worker
+    thread (process.Job) while a modal timer shows progress and Esc cancels; headless, or
+    through execute(), synchronously. Subclasses give _prepare(context) -> (options, tasks),
+    `work` (process.compute's signature: tasks, options, progress, cancelled), _finish(context,
+    options, tasks, started) and `title`, the name in messages."""
 
-    bl_idname = "object.shape_diameter"
-    bl_label = "Compute Shape Diameter"
-    bl_options = {"REGISTER", "UNDO"}
+    title = "Shape Diameter"
 
     @classmethod
     def poll(cls, context):
@@ -67,6 +67,106 @@ class OBJECT_OT_shape_diameter(bpy.types.Operator):
             cls.poll_message_set("A Shape Diameter computation is running (Esc cancels it)")
             return False
         return True
+
+    def _report_error(self, ex):
+        if isinstance(ex, (process.UserError, core.CoreUnavailable)):
+            self.report({"ERROR"}, str(ex))
+        else:  # an engine error, or a bug: say what it was, keep Blender running
+            self.report({"ERROR"}, f"{self.title} failed: {type(ex).__name__}: {ex}")
+
+    def execute(self, context):
+        started = time.perf_counter()
+        wm = context.window_manager
+        try:
+            options, tasks = self._prepare(context)
+            wm.progress_begin(0, 1000)
+            try:
+                self.work(tasks, options, lambda f: wm.progress_update(int(1000 * f)))
+            finally:
+                wm.progress_end()
+            self._finish(context, options, tasks, started)
+        except Exception as ex:
+            self._report_error(ex)
+            return {"CANCELLED"}
+        return {"FINISHED"}
+
+    def invoke(self, context, event):
+        global running
+        if not can_run_modal(context):
+            return self.execute(context)
+        self._started = time.perf_counter()
+        try:
+            self._options_used, tasks = self._prepare(context)
+        except Exception as ex:
+            self._report_error(ex)
+            return {"CANCELLED"}
+        running = process.Job(tasks, self._options_used, self.work).start()
+        wm = context.window_manager
+        self._timer = wm.event_timer_add(0.1, window=context.window)
+        wm.progress_begin(0, 1000)
+        wm.modal_handler_add(self)
+        return {"RUNNING_MODAL"}
+
+    def _stop(self, context):
+        global running
+        wm = context.window_manager
+        wm.event_timer_remove(self._timer)
+        wm.progress_end()
+        if context.workspace:
+            context.workspace.status_text_set(None)
+        job, running = running, None
+        _redraw(context)
+        return job
+
+    def modal(self, context, event):
+        job = running
+        if event.type == "ESC" and event.value == "PRESS":
+            job.cancel()
+            job.wait()
+            self._stop(context)
+            self.report({"WARNING"}, f"{self.title} cancelled: nothing was changed")
+            return {"CANCELLED"}
+        if event.type != "TIMER":
+            return {"PASS_THROUGH"}
+        if not job.done:
+            context.window_manager.progress_update(int(1000 * job.progress))
+            if context.workspace:
+                context.workspace.status_text_set(
+                    f"{self.title}: {100 * job.progress:.0f}%   Esc: cancel"
+                )
+            _redraw(context)
+            return {"PASS_THROUGH"}
+        self._stop(context)
+        if job.error is not None:
+            self._report_error(job.error)
+            return {"CANCELLED"}
+        try:
+            self._finish(context, self._options_used, job.tasks, self._started)
+        except Exception as ex:
+            self._report_error(ex)
+            return {"CANCELLED"}
+        return {"FINISHED"}
+
+    def cancel(self, context):
+        # Blender ends the modal operator (the window closes, a file is loaded).
+        if running is not None:
+            running.cancel()
+            running.wait()
+            self._stop(context)
+
+
+@props.operator_options
+class OBJECT_OT_shape_diameter(WorkerRun, bpy.types.Operator):
+    """Compute the Shape Diameter Function (local thickness) of the selected meshes into
+    attributes and a color attribute"""
+
+    bl_idname = "object.shape_diameter"
+    bl_label = "Compute Shape Diameter"
+    bl_options = {"REGISTER", "UNDO"}
+
+    @staticmethod
+    def work(tasks, options, progress=None, cancelled=None):
+        return process.compute(tasks, options, progress, cancelled)
 
     def _options(self, context):
         values = props.option_values(self)
@@ -94,92 +194,6 @@ class OBJECT_OT_shape_diameter(bpy.types.Operator):
         last_run.clear()
         last_run.update(text=text, options=options, objects=[t.object_name for t in tasks])
         self.report({"INFO"}, text)
-
-    def _report_error(self, ex):
-        if isinstance(ex, (process.UserError, core.CoreUnavailable)):
-            self.report({"ERROR"}, str(ex))
-        else:  # an engine error, or a bug: say what it was, keep Blender running
-            self.report({"ERROR"}, f"Shape Diameter failed: {type(ex).__name__}: {ex}")
-
-    def execute(self, context):
-        started = time.perf_counter()
-        wm = context.window_manager
-        try:
-            options, tasks = self._prepare(context)
-            wm.progress_begin(0, 1000)
-            try:
-                process.compute(tasks, options, lambda f: wm.progress_update(int(1000 * f)))
-            finally:
-                wm.progress_end()
-            self._finish(context, options, tasks, started)
-        except Exception as ex:
-            self._report_error(ex)
-            return {"CANCELLED"}
-        return {"FINISHED"}
-
-    def invoke(self, context, event):
-        global running
-        if not can_run_modal(context):
-            return self.execute(context)
-        self._started = time.perf_counter()
-        try:
-            self._options_used, tasks = self._prepare(context)
-        except Exception as ex:
-            self._report_error(ex)
-            return {"CANCELLED"}
-        running = process.Job(tasks, self._options_used).start()
-        wm = context.window_manager
-        self._timer = wm.event_timer_add(0.1, window=context.window)
-        wm.progress_begin(0, 1000)
-        wm.modal_handler_add(self)
-        return {"RUNNING_MODAL"}
-
-    def _stop(self, context):
-        global running
-        wm = context.window_manager
-        wm.event_timer_remove(self._timer)
-        wm.progress_end()
-        if context.workspace:
-            context.workspace.status_text_set(None)
-        job, running = running, None
-        _redraw(context)
-        return job
-
-    def modal(self, context, event):
-        job = running
-        if event.type == "ESC" and event.value == "PRESS":
-            job.cancel()
-            job.wait()
-            self._stop(context)
-            self.report({"WARNING"}, "Shape Diameter cancelled: nothing was changed")
-            return {"CANCELLED"}
-        if event.type != "TIMER":
-            return {"PASS_THROUGH"}
-        if not job.done:
-            context.window_manager.progress_update(int(1000 * job.progress))
-            if context.workspace:
-                context.workspace.status_text_set(
-                    f"Shape Diameter: {100 * job.progress:.0f}%   Esc: cancel"
-                )
-            _redraw(context)
-            return {"PASS_THROUGH"}
-        self._stop(context)
-        if job.error is not None:
-            self._report_error(job.error)
-            return {"CANCELLED"}
-        try:
-            self._finish(context, self._options_used, job.tasks, self._started)
-        except Exception as ex:
-            self._report_error(ex)
-            return {"CANCELLED"}
-        return {"FINISHED"}
-
-    def cancel(self, context):
-        # Blender ends the modal operator (the window closes, a file is loaded).
-        if running is not None:
-            running.cancel()
-            running.wait()
-            self._stop(context)
 
     def draw(self, context):
         layout = self.layout

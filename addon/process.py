@@ -10,6 +10,7 @@ the scripting API:
              (a failure half-way restores what was written).
 """
 
+import json
 import os
 import threading
 import time
@@ -132,6 +133,21 @@ class Options:
         options.update(self.extra)
         return options
 
+    # Options that do not change the values: which device casts, how the values are mapped
+    # to [0, 1] and colours, the structure rays are traced through, threads.
+    NOT_CHANGING_VALUES = ("engine", "normalize", "accel", "threads", "progress")
+
+    def sdf_settings(self):
+        """What the per-face values depend on, as JSON-able values: equal settings give the
+        same values, so that segmenting may reuse values already on a mesh."""
+        settings = {
+            key: value
+            for key, value in self.compute_options().items()
+            if key not in self.NOT_CHANGING_VALUES
+        }
+        settings.update(apply_scale=self.apply_scale, use_modifiers=self.use_modifiers)
+        return json.loads(json.dumps(settings, sort_keys=True, default=str))
+
     def outputs(self):
         """[(name, data_type, domain)] written by a run; empty names are not written."""
         on_vertices = self.points == "vertices"
@@ -201,6 +217,7 @@ class Task:
     topology: mesh_data.Topology
     mesh: mesh_data.Triangulation
     shared_by: list = field(default_factory=list)  # other objects using the same mesh
+    linear: list = None  # the 3x3 transform applied (apply_scale), row by row, or None
     # Filled by compute():
     values: np.ndarray = None  # float32 per polygon (or vertex): the SDF
     normalized: np.ndarray = None  # float32 per polygon (or vertex), in [0, 1]
@@ -420,6 +437,8 @@ def prepare(depsgraph, objects, options, for_writing=True, active=None):
                 "by deleting those vertices in Edit Mode"
             )
         task = Task(ob.name, ob.session_uid, uid, original, triangles, corner_uvs=uvs)
+        if matrix is not None:
+            task.linear = [list(row) for row in matrix.to_3x3()]
         if not options.use_modifiers:
             left_out = _shape_changes(ob)
             if left_out:
@@ -727,6 +746,7 @@ def write(bpy_data, tasks, options):
         for ob, task in targets:
             me = ob.data
             undo.append(_record_restorer(me))
+            undo.append(_record_restorer(me, mesh_data.SDF_SETTINGS_PROPERTY))
             if options.points == "faces":
                 colors = (
                     mesh_data.polygon_loop_expand(task.colors, task.topology.loop_totals)
@@ -744,24 +764,7 @@ def write(bpy_data, tasks, options):
             if options.color_name:
                 data[options.color_name] = colors
             for name, data_type, domain in options.outputs():
-                attribute = me.attributes.get(name)
-                if attribute is not None and (attribute.data_type, attribute.domain) != (
-                    data_type,
-                    domain,
-                ):  # an earlier run's, on the other domain (_attribute_problem checked)
-                    undo.append(_recreator(me, attribute))
-                    me.attributes.remove(attribute)
-                    attribute = None
-                if attribute is None:
-                    attribute = me.attributes.new(name, data_type, domain)
-                    if attribute is None or attribute.name != name:
-                        if attribute is not None:
-                            me.attributes.remove(attribute)
-                        raise RuntimeError(f"Blender could not create attribute {name!r}")
-                    undo.append(_remover(me, name))
-                else:
-                    undo.append(_rewriter(me, attribute))
-                mesh_data.write_attribute(attribute, data[name])
+                put_attribute(me, name, data_type, domain, data[name], undo)
             if options.color_name:
                 me.color_attributes.active_color = me.color_attributes[options.color_name]
                 # The render colour too, where it was ours or none: replacing our attribute
@@ -769,6 +772,10 @@ def write(bpy_data, tasks, options):
                 if default_before in ("", options.color_name):
                     me.color_attributes.default_color_name = options.color_name
             mesh_data.record_outputs(me, options.outputs())
+            if options.points == "faces":  # what segmenting may reuse
+                mesh_data.record_sdf_settings(
+                    me, options.attribute_name, options.sdf_settings(), task.linear
+                )
             me.update()
         # Images are made under a temporary name and replace the old ones (same name) only
         # when everything else is written: users of an old image (materials) get the new one.
@@ -789,6 +796,27 @@ def write(bpy_data, tasks, options):
             bpy_data.images.remove(old)
         image.name = name
     return [ob for ob, _ in targets]
+
+
+def put_attribute(me, name, data_type, domain, data, undo):
+    """Writes `data` into the attribute `name` of this type and domain, made (or remade, when
+    an earlier run's is on another domain or of another type: checked before) as needed;
+    appends to `undo` what takes it back."""
+    attribute = me.attributes.get(name)
+    if attribute is not None and (attribute.data_type, attribute.domain) != (data_type, domain):
+        undo.append(_recreator(me, attribute))
+        me.attributes.remove(attribute)
+        attribute = None
+    if attribute is None:
+        attribute = me.attributes.new(name, data_type, domain)
+        if attribute is None or attribute.name != name:
+            if attribute is not None:
+                me.attributes.remove(attribute)
+            raise RuntimeError(f"Blender could not create attribute {name!r}")
+        undo.append(_remover(me, name))
+    else:
+        undo.append(_rewriter(me, attribute))
+    mesh_data.write_attribute(attribute, data)
 
 
 def _remover(me, name):
@@ -831,14 +859,15 @@ def _colors_restorer(me):
     return take_back
 
 
-def _record_restorer(me):
-    before = me.get(mesh_data.OUTPUTS_PROPERTY)
+def _record_restorer(me, name=mesh_data.OUTPUTS_PROPERTY):
+    """Puts back (or removes) the custom property `name` as it is now."""
+    before = me.get(name)
 
     def take_back():
         if before is None:
-            me.pop(mesh_data.OUTPUTS_PROPERTY, None)
+            me.pop(name, None)
         else:
-            me[mesh_data.OUTPUTS_PROPERTY] = before
+            me[name] = before
 
     return take_back
 
@@ -854,11 +883,13 @@ def _image_problem(bpy_data, name):
 
 
 class Job:
-    """compute() on a worker thread, for a modal operator to poll from the main thread."""
+    """compute() (or `work`, which takes the same arguments) on a worker thread, for a modal
+    operator to poll from the main thread."""
 
-    def __init__(self, tasks, options):
+    def __init__(self, tasks, options, work=None):
         self.tasks = tasks
         self.options = options
+        self._work = work or compute
         self.progress = 0.0
         self.error = None
         self._cancel = threading.Event()
@@ -871,7 +902,7 @@ class Job:
 
     def _run(self):
         try:
-            compute(self.tasks, self.options, self._set_progress, self._cancel.is_set)
+            self._work(self.tasks, self.options, self._set_progress, self._cancel.is_set)
         except BaseException as ex:  # reported on the main thread
             self.error = ex
         finally:

@@ -283,6 +283,130 @@ def options():
     }
 
 
+SEGMENT_MODE_ITEMS = (
+    (
+        "auto",
+        "Auto",
+        "Graph cut run until no move lowers its energy (a lower energy than CGAL's)",
+    ),
+    ("cgal", "CGAL", "CGAL's segmentation_from_sdf_values exactly (its graph cut's first move)"),
+)
+
+
+def segment_options():
+    """Fresh property definitions of the segmentation options, by name (the scripting names,
+    segmenting.SegmentOptions' fields)."""
+    return {
+        "clusters": IntProperty(
+            name="Clusters",
+            description="Levels of thickness the faces are grouped into (CGAL: 5); each "
+            "connected piece of a level is a part",
+            default=5,
+            min=1,
+            max=256,
+            soft_max=16,
+        ),
+        "smoothness": FloatProperty(
+            name="Smoothness",
+            description="How dear it is to cut between faces (CGAL's lambda, 0.26): higher "
+            "gives fewer, rounder parts cut along creases",
+            default=0.26,
+            min=0.0,
+            soft_max=2.0,
+        ),
+        "mode": EnumProperty(
+            name="Mode", description="The graph cut", items=SEGMENT_MODE_ITEMS, default="auto"
+        ),
+        "reuse_values": BoolProperty(
+            name="Reuse SDF Values",
+            description="Segment the SDF attribute already on a mesh when Compute wrote it per "
+            "face with these settings on this geometry, instead of computing it again",
+            default=True,
+        ),
+        "face_sets": BoolProperty(
+            name="Face Sets",
+            description="Sculpt Mode's face sets, one per part (ids from 1)",
+            default=True,
+        ),
+        "label_name": StringProperty(
+            name="Part Attribute",
+            description="INT face attribute with each polygon's part, from 0 (empty: not written)",
+            default="segment",
+        ),
+        "segment_color_name": StringProperty(
+            name="Part Colors",
+            description="Color attribute with one colour per part, made active (empty: not "
+            "written)",
+            default="segment_color",
+        ),
+        "vertex_groups": BoolProperty(
+            name="Vertex Groups",
+            description="One vertex group per part (the armature needs them)",
+            default=True,
+        ),
+        "group_prefix": StringProperty(
+            name="Prefix",
+            description="Vertex groups, bones and materials are named prefix + number: "
+            "part_01, part_02, ...",
+            default="part_",
+        ),
+        "soft_weights": BoolProperty(
+            name="Soft Weights",
+            description="Weights that fall off smoothly across the boundaries between parts "
+            "(else 1 inside each part)",
+            default=True,
+        ),
+        "materials": BoolProperty(
+            name="Material Slots",
+            description="Replace the mesh's material slots by one material per part",
+            default=False,
+        ),
+        "armature": BoolProperty(
+            name="Proto-Skeleton",
+            description="An armature parented to the mesh, one bone per part along its main "
+            "axis, joined where parts meet, deforming the mesh through the vertex groups",
+            default=True,
+        ),
+        "armature_name": StringProperty(
+            name="Armature",
+            description="Name of the armature object; {object} is replaced by the mesh "
+            "object's name",
+            default="{object}_parts",
+        ),
+    }
+
+
+def with_segment_options(cls):
+    """Class decorator: adds the segmentation options to the class's annotations."""
+    annotations = dict(inspect.get_annotations(cls))
+    annotations.update(segment_options())
+    cls.__annotations__ = annotations
+    return cls
+
+
+def segment_operator_options(cls):
+    """An operator's SDF and segmentation options, starting from the defaults at every call."""
+    operator_options(cls)
+    with_segment_options(cls)
+    cls.__annotations__ = {
+        name: _skip_save(prop) if name in segment_options() else prop
+        for name, prop in cls.__annotations__.items()
+    }
+    return cls
+
+
+def copy_segment_options(source, target):
+    copy_options(source, target)
+    for name in segment_options():
+        setattr(target, name, getattr(source, name))
+
+
+def segment_option_values(holder):
+    values = option_values(holder)
+    values.update({name: getattr(holder, name) for name in segment_options()})
+    return values
+
+
 def engine_property():
     return EnumProperty(
         name="Engine",
@@ -369,6 +493,7 @@ with_options(
     ShapeDiameterSettings,
     engine=stored_engine_property("engine_name", True, "What casts the rays"),
 )
+with_segment_options(ShapeDiameterSettings)
 
 
 classes = (ShapeDiameterSettings,)

@@ -2,7 +2,8 @@
 # SPDX-License-Identifier: GPL-3.0-or-later
 # The demo: set-up, then the SDF of a real mesh kept in the repository, written as a coloured
 # mesh and the raw values into out/, and a picture of it rendered by Blender (bpy from PyPI,
-# with the extension installed into a user directory of the demo's own).
+# with the extension installed into a user directory of the demo's own); then a character of
+# the Princeton Segmentation Benchmark split into parts with its proto-skeleton, rendered too.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 bash scripts/setup.sh
@@ -20,3 +21,6 @@ rm -rf "$BLENDER_USER_RESOURCES" && mkdir -p "$BLENDER_USER_RESOURCES"
 .venv-bpy45/bin/python -c "import bpy, sys; bpy.ops.extensions.package_install_files(filepath=sys.argv[1], repo='user_default', enable_on_install=True)" "$ZIP" >/dev/null
 .venv-bpy45/bin/python examples/blender/render_sdf.py -- "$MESH" "out/$name.sdf.png"
 echo "demo: wrote out/$name.sdf.ply (coloured by SDF), out/$name.sdf.npy (raw values) and out/$name.sdf.png (Blender's render)"
+.venv-bpy45/bin/python examples/blender/render_segments.py -- tests/data/psb/1.off out/segments_human.png \
+  --up z --view-x 0.4 --view-y 1.6 --view-z 0.3
+echo "demo: wrote out/segments_human.png (parts by thickness and the proto-skeleton, Blender's render)"

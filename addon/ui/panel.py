@@ -4,7 +4,7 @@ settings (props.ShapeDiameterSettings); the button runs object.shape_diameter wi
 
 import bpy
 
-from .. import core, operators, props
+from .. import core, operators, props, segment_operator
 from .preferences import draw_status
 
 
@@ -145,6 +145,32 @@ class VIEW3D_PT_shape_diameter_result(ShapeDiameterSubPanel, bpy.types.Panel):
         layout.operator(operators.VIEW3D_OT_shape_diameter_show.bl_idname, icon="SHADING_SOLID")
 
 
+class VIEW3D_PT_shape_diameter_segment(ShapeDiameterSubPanel, bpy.types.Panel):
+    """Parts from thickness: the Segment button and its options (the SDF's options above
+    apply when the values are computed)."""
+
+    bl_label = "Segment"
+    bl_options = set()
+
+    @classmethod
+    def poll(cls, context):
+        return core.has("segment")
+
+    def draw_settings(self, layout, settings, context):
+        meshes = [ob for ob in context.selected_objects if ob.type == "MESH"]
+        row = layout.row()
+        row.scale_y = 1.3
+        op = row.operator(
+            segment_operator.OBJECT_OT_shape_diameter_segment.bl_idname,
+            text=f"Segment ({len(meshes)} mesh{'es' if len(meshes) != 1 else ''})",
+            icon="MOD_EXPLODE",
+        )
+        props.copy_segment_options(settings, op)
+        segment_operator.draw_segment_settings(layout, settings)
+        if segment_operator.last_run:
+            layout.label(text=segment_operator.last_run["text"], icon="INFO")
+
+
 classes = (
     VIEW3D_PT_shape_diameter,
     VIEW3D_PT_shape_diameter_rays,
@@ -154,4 +180,5 @@ classes = (
     VIEW3D_PT_shape_diameter_bake,
     VIEW3D_PT_shape_diameter_engine,
     VIEW3D_PT_shape_diameter_result,
+    VIEW3D_PT_shape_diameter_segment,
 )

@@ -89,3 +89,60 @@ def test_render_example_shows_a_coloured_mesh(tmp_path):
     assert len(coloured) > 0.1 * len(rgb)  # the mesh, not just a white background
     # Both ends of the colour map: purple-blue (thin) and green-yellow (thick) pixels.
     assert (coloured[:, 2] > coloured[:, 1]).any() and (coloured[:, 1] > coloured[:, 2]).any()
+
+
+def test_segment_example_processes_a_folder(tmp_path):
+    meshes = tmp_path / "meshes"
+    meshes.mkdir()
+    for name in ("suzanne.obj", "spot.obj"):
+        shutil.copy(DATA / name, meshes / name)
+    (meshes / "broken.obj").write_text("v 0 0 0\nv 1 0 0\nv 0 1 0\n")  # no faces
+    out = tmp_path / "out"
+    run = blender("segment_folder.py", meshes, out, "--clusters", "4")
+    assert run.returncode != 0 and "failed: broken.obj" in run.stderr
+    for stem, polygons in {"suzanne": 500, "spot": 5856}.items():
+        (labels,) = np.load(out / f"{stem}.segments.npz").values()
+        assert labels.shape == (polygons,) and labels.dtype == np.int32
+        count = int(labels.max()) + 1
+        assert f"{stem}.obj: {stem}: {count} parts over {polygons} polygons" in run.stdout
+        with bpy.data.libraries.load(str(out / f"{stem}.blend")) as (source, target):
+            target.objects = [name for name in source.objects if name.startswith(stem)]
+        mesh = next(ob for ob in target.objects if ob.type == "MESH")
+        rig = next(ob for ob in target.objects if ob.type == "ARMATURE")
+        assert rig.name == f"{stem}_parts" and len(rig.data.bones) == count
+        assert [g.name for g in mesh.vertex_groups] == [
+            f"part_{i:02d}" for i in range(1, count + 1)
+        ]
+        face_sets = np.empty(polygons, dtype=np.int32)
+        mesh.data.attributes[".sculpt_face_set"].data.foreach_get("value", face_sets)
+        np.testing.assert_array_equal(face_sets, labels + 1)
+
+
+def test_render_segments_example_shows_parts_and_bones(tmp_path):
+    png = tmp_path / "human.png"
+    run = blender(
+        "render_segments.py",
+        DATA / "psb" / "1.off",
+        png,
+        "--size",
+        "320",
+        "--up",
+        "z",
+        "--view-y",
+        "1.6",
+    )
+    assert run.returncode == 0, run.stdout[-2000:] + run.stderr[-2000:]
+    assert "1: " in run.stdout and "armature 1_parts" in run.stdout
+    image = bpy.data.images.load(str(png))
+    try:
+        assert tuple(image.size) == (320, 240)
+        pixels = np.empty(320 * 240 * 4, dtype=np.float32)
+        image.pixels.foreach_get(pixels)
+        rgb = pixels.reshape(-1, 4)[:, :3]
+    finally:
+        bpy.data.images.remove(image)
+    # The bones: near-black pixels; the parts: several distinct saturated colours.
+    assert (rgb.max(axis=1) < 0.15).sum() > 50
+    saturated = rgb[(rgb.max(axis=1) - rgb.min(axis=1)) > 0.15]
+    hues = {tuple(np.round(c / c.max() * 4)) for c in saturated}
+    assert len(saturated) > 200 and len(hues) >= 3

@@ -115,6 +115,7 @@ def modal_operator(monkeypatch, **values):
     cls = operators.OBJECT_OT_shape_diameter
     for name in ("_options", "_prepare", "_finish", "_report_error", "_stop", "invoke", "modal"):
         setattr(op, name, functools.partial(getattr(cls, name), op))
+    op.work, op.title = cls.work, cls.title  # a static method and a string: no instance
     context = types.SimpleNamespace(
         window=object(),
         window_manager=FakeWindowManager(),
