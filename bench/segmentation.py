@@ -47,20 +47,37 @@ import time
 from pathlib import Path
 
 import numpy as np
-
 import shape_diameter as sd
-from bench import machine_line
 from meshes import CACHE, DATA, ROOT, read_off, subdivide, write_off
 from segmentation_measures import MeshCuts, consistency, hamming, rand_error
+
+from bench import machine_line
 
 sys.path.insert(0, str(ROOT / "tests" / "python"))
 import cgal_segment_reference as cgal_ref  # noqa: E402  (reads cgal_segment's output)
 
 # The benchmark's categories: meshes 20 * i + 1 .. 20 * i + 20 (261-280 are not used).
-CATEGORIES = {1: "human", 21: "cup", 41: "glasses", 61: "airplane", 81: "ant", 101: "chair",
-              121: "octopus", 141: "table", 161: "teddy", 181: "hand", 201: "plier",
-              221: "fish", 241: "bird", 281: "armadillo", 301: "bust", 321: "mech",
-              341: "bearing", 361: "vase", 381: "fourleg"}
+CATEGORIES = {
+    1: "human",
+    21: "cup",
+    41: "glasses",
+    61: "airplane",
+    81: "ant",
+    101: "chair",
+    121: "octopus",
+    141: "table",
+    161: "teddy",
+    181: "hand",
+    201: "plier",
+    221: "fish",
+    241: "bird",
+    281: "armadillo",
+    301: "bust",
+    321: "mech",
+    341: "bearing",
+    361: "vase",
+    381: "fourleg",
+}
 MEASURES = ("1-RI", "CD", "HD", "GCE", "LCE")
 HAVE_SEGMENT = hasattr(sd, "segment")
 if HAVE_SEGMENT:
@@ -72,11 +89,16 @@ def category(number: int) -> str:
 
 
 def cgal_binary(given: str) -> str:
-    path = given or os.environ.get("SDF_CGAL_SEGMENT", "") or str(
-        ROOT / "build" / "cpp" / "tests" / "reference" / "cgal_segment")
+    path = (
+        given
+        or os.environ.get("SDF_CGAL_SEGMENT", "")
+        or str(ROOT / "build" / "cpp" / "tests" / "reference" / "cgal_segment")
+    )
     if not os.access(path, os.X_OK):
-        sys.exit(f"cgal_segment not found at {path}: build tests/reference (needs libcgal-dev) "
-                 "or pass --cgal")
+        sys.exit(
+            f"cgal_segment not found at {path}: build tests/reference (needs libcgal-dev) "
+            "or pass --cgal"
+        )
     return path
 
 
@@ -112,9 +134,15 @@ def scores(cuts: MeshCuts, labels: np.ndarray, humans: list, human_cuts: list) -
     rows = []
     for human, distance in zip(humans, human_cuts):
         gce, lce = consistency(labels, human)
-        rows.append((rand_error(labels, human),
-                     cuts.cut_discrepancy(labels, human, own_cuts, distance),
-                     hamming(labels, human)[0], gce, lce))
+        rows.append(
+            (
+                rand_error(labels, human),
+                cuts.cut_discrepancy(labels, human, own_cuts, distance),
+                hamming(labels, human)[0],
+                gce,
+                lce,
+            )
+        )
     return _mean(rows)
 
 
@@ -133,8 +161,11 @@ def segmentations(off: Path, vertices, triangles, cgal: str, tmp: Path) -> dict:
         out['ours, mode="cgal", CGAL\'s SDF'] = np.asarray(same.labels)
         out["same labels"] = float(np.mean(np.asarray(same.labels) == ref.labels))
         auto = sd.segment(vertices, triangles, ref.sdf)
-        out["energy"] = (segmentation_energy(vertices, triangles, ref.sdf, ref.clusters),
-                         same.energy, auto.energy)
+        out["energy"] = (
+            segmentation_energy(vertices, triangles, ref.sdf, ref.clusters),
+            same.energy,
+            auto.energy,
+        )
     return out
 
 
@@ -147,56 +178,97 @@ def quality_of_mesh(number: int, off: Path, human_files: list, cgal: str, tmp: P
     cuts = MeshCuts(vertices, triangles)
     human_cuts = [cuts.distance_to_cuts(h) for h in humans]
     found = segmentations(off, vertices, triangles, cgal, tmp)
-    row = {"mesh": number, "category": category(number), "faces": len(triangles),
-           "humans": len(humans), "same labels": found.pop("same labels", None),
-           "energy": found.pop("energy", None), "methods": {}}
+    row = {
+        "mesh": number,
+        "category": category(number),
+        "faces": len(triangles),
+        "humans": len(humans),
+        "same labels": found.pop("same labels", None),
+        "energy": found.pop("energy", None),
+        "methods": {},
+    }
     for method, labels in found.items():
-        row["methods"][method] = dict(zip(MEASURES, scores(cuts, labels, humans, human_cuts)),
-                                      segments=len(np.unique(labels)))
+        row["methods"][method] = dict(
+            zip(MEASURES, scores(cuts, labels, humans, human_cuts)), segments=len(np.unique(labels))
+        )
     others = []
     for i in range(len(humans)):
         rest = [j for j in range(len(humans)) if j != i]
-        others.append(scores(cuts, humans[i], [humans[j] for j in rest],
-                             [human_cuts[j] for j in rest]))
-    row["methods"]["humans"] = dict(zip(MEASURES, _mean(others)),
-                                    segments=float(np.mean([len(np.unique(h)) for h in humans])))
+        others.append(
+            scores(cuts, humans[i], [humans[j] for j in rest], [human_cuts[j] for j in rest])
+        )
+    row["methods"]["humans"] = dict(
+        zip(MEASURES, _mean(others)), segments=float(np.mean([len(np.unique(h)) for h in humans]))
+    )
     return row
 
 
 def quality_tables(rows: list) -> list[str]:
     methods = list(rows[0]["methods"])
-    lines = ["Per mesh: 1 - Rand index (segments)", "",
-             "| mesh | category | faces | humans | " + " | ".join(methods) + " | same labels |",
-             "|---:|---|---:|---:|" + "---:|" * (len(methods) + 1)]
+    lines = [
+        "Per mesh: 1 - Rand index (segments)",
+        "",
+        "| mesh | category | faces | humans | " + " | ".join(methods) + " | same labels |",
+        "|---:|---|---:|---:|" + "---:|" * (len(methods) + 1),
+    ]
     for r in rows:
-        cells = [f"{r['methods'][m]['1-RI']:.3f} ({r['methods'][m]['segments']:.0f})"
-                 for m in methods]
-        same = "" if r["same labels"] is None else (
-            f"{100 * r['same labels']:.2f}% ({round((1 - r['same labels']) * r['faces'])} "
-            "differ)")
-        lines.append(f"| {r['mesh']} | {r['category']} | {r['faces']:,} | {r['humans']} | "
-                     + " | ".join(cells) + f" | {same} |")
+        cells = [
+            f"{r['methods'][m]['1-RI']:.3f} ({r['methods'][m]['segments']:.0f})" for m in methods
+        ]
+        same = (
+            ""
+            if r["same labels"] is None
+            else (
+                f"{100 * r['same labels']:.2f}% ({round((1 - r['same labels']) * r['faces'])} "
+                "differ)"
+            )
+        )
+        lines.append(
+            f"| {r['mesh']} | {r['category']} | {r['faces']:,} | {r['humans']} | "
+            + " | ".join(cells)
+            + f" | {same} |"
+        )
     if rows[0]["energy"] is not None:
-        lines += ["", "Graph-cut energy of the labels on CGAL's SDF (CGAL's probabilities and "
-                  "edge weights)", "", "| mesh | CGAL | ours, mode=\"cgal\" | ours (auto) | "
-                  "auto / CGAL |", "|---:|---:|---:|---:|---:|"]
-        lines += [f"| {r['mesh']} | {r['energy'][0]:.6g} | {r['energy'][1]:.6g} | "
-                  f"{r['energy'][2]:.6g} | {r['energy'][2] / r['energy'][0]:.4f} |" for r in rows]
+        lines += [
+            "",
+            "Graph-cut energy of the labels on CGAL's SDF (CGAL's probabilities and edge weights)",
+            "",
+            '| mesh | CGAL | ours, mode="cgal" | ours (auto) | auto / CGAL |',
+            "|---:|---:|---:|---:|---:|",
+        ]
+        lines += [
+            f"| {r['mesh']} | {r['energy'][0]:.6g} | {r['energy'][1]:.6g} | "
+            f"{r['energy'][2]:.6g} | {r['energy'][2] / r['energy'][0]:.4f} |"
+            for r in rows
+        ]
     by_category = {}
     for r in rows:
         by_category.setdefault(r["category"], []).append(r)
-    lines += ["", "Per category: 1 - Rand index", "",
-              "| category | meshes | " + " | ".join(methods) + " |",
-              "|---|---:|" + "---:|" * len(methods)]
+    lines += [
+        "",
+        "Per category: 1 - Rand index",
+        "",
+        "| category | meshes | " + " | ".join(methods) + " |",
+        "|---|---:|" + "---:|" * len(methods),
+    ]
     category_means = {}
     for name, members in by_category.items():
-        category_means[name] = {m: _mean([[r["methods"][m][k] for k in MEASURES]
-                                          for r in members]) for m in methods}
-        lines.append(f"| {name} | {len(members)} | " + " | ".join(
-            f"{category_means[name][m][0]:.3f}" for m in methods) + " |")
-    lines += ["", f"Overall (mean over {len(category_means)} categories; cut discrepancy: "
-              "shortest paths along edges)", "", "| method | " + " | ".join(MEASURES) + " |",
-              "|---|" + "---:|" * len(MEASURES)]
+        category_means[name] = {
+            m: _mean([[r["methods"][m][k] for k in MEASURES] for r in members]) for m in methods
+        }
+        lines.append(
+            f"| {name} | {len(members)} | "
+            + " | ".join(f"{category_means[name][m][0]:.3f}" for m in methods)
+            + " |"
+        )
+    lines += [
+        "",
+        f"Overall (mean over {len(category_means)} categories; cut discrepancy: "
+        "shortest paths along edges)",
+        "",
+        "| method | " + " | ".join(MEASURES) + " |",
+        "|---|" + "---:|" * len(MEASURES),
+    ]
     for m in methods:
         overall = _mean([category_means[c][m] for c in category_means])
         lines.append(f"| {m} | " + " | ".join(f"{v:.3f}" for v in overall) + " |")
@@ -208,11 +280,13 @@ def quality_tables(rows: list) -> list[str]:
 
 def speed_meshes(largest: int) -> list[tuple[str, np.ndarray, np.ndarray]]:
     """Repository meshes of about 20k, 100k, 500k, 830k and 1.2M faces."""
-    plan = [("ChineseDragon-10kv", DATA / "ChineseDragon-10kv.off", 0),
-            ("psb-241-x16", DATA / "psb" / "241.off", 2),
-            ("psb-241-x64", DATA / "psb" / "241.off", 3),
-            ("armadillo-x16", DATA / "armadillo.off", 2),
-            ("bunny00-x16", DATA / "bunny00.off", 2)]
+    plan = [
+        ("ChineseDragon-10kv", DATA / "ChineseDragon-10kv.off", 0),
+        ("psb-241-x16", DATA / "psb" / "241.off", 2),
+        ("psb-241-x64", DATA / "psb" / "241.off", 3),
+        ("armadillo-x16", DATA / "armadillo.off", 2),
+        ("bunny00-x16", DATA / "bunny00.off", 2),
+    ]
     CACHE.mkdir(parents=True, exist_ok=True)
     meshes = []
     for name, source, times in plan:
@@ -239,9 +313,13 @@ def speed_of_mesh(name, vertices, triangles, cgal: str, tmp: Path) -> dict:
     values = np.asarray(sdf.values, dtype=np.float64)
     values = (values - values.min()) / max(values.max() - values.min(), 1e-300)
     ref = cgal_ref.run(off, tmp / f"{name}.txt", values=values)
-    row = {"mesh": name, "faces": len(triangles), "sdf": sdf_seconds,
-           "CGAL": (ref.header["segmentation_seconds"], ref.header["segmentation_cpu_seconds"]),
-           "segments CGAL": ref.header["segments"]}
+    row = {
+        "mesh": name,
+        "faces": len(triangles),
+        "sdf": sdf_seconds,
+        "CGAL": (ref.header["segmentation_seconds"], ref.header["segmentation_cpu_seconds"]),
+        "segments CGAL": ref.header["segments"],
+    }
     if not HAVE_SEGMENT:
         return row
     for mode in ("auto", "cgal"):
@@ -259,11 +337,14 @@ def speed_of_mesh(name, vertices, triangles, cgal: str, tmp: Path) -> dict:
 
 
 def speed_table(rows: list) -> list[str]:
-    lines = ["Speed: segmentation from the same SDF values, seconds of wall time (processor time "
-             "in brackets; ratio = CGAL / ours, wall and processor)", "",
-             "| mesh | faces | our SDF | CGAL | ours (auto) | ratio | ours (mode=cgal) | ratio | "
-             "segments CGAL / cgal / auto | same labels |",
-             "|---|---:|---:|---:|---:|---:|---:|---:|---|---:|"]
+    lines = [
+        "Speed: segmentation from the same SDF values, seconds of wall time (processor time "
+        "in brackets; ratio = CGAL / ours, wall and processor)",
+        "",
+        "| mesh | faces | our SDF | CGAL | ours (auto) | ratio | ours (mode=cgal) | ratio | "
+        "segments CGAL / cgal / auto | same labels |",
+        "|---|---:|---:|---:|---:|---:|---:|---:|---|---:|",
+    ]
 
     def pair(t):
         return f"{t[0]:.3f} ({t[1]:.3f})"
@@ -274,10 +355,12 @@ def speed_table(rows: list) -> list[str]:
     for r in rows:
         cgal = r["CGAL"]
         if "auto" in r:
-            ours = (f"{pair(r['auto'])} | {ratio(cgal, r['auto'])} | {pair(r['cgal'])} | "
-                    f"{ratio(cgal, r['cgal'])} | {r['segments CGAL']} / {r['segments cgal']} / "
-                    f"{r['segments auto']} | {100 * r['same labels']:.2f}% "
-                    f"({round((1 - r['same labels']) * r['faces'])} differ)")
+            ours = (
+                f"{pair(r['auto'])} | {ratio(cgal, r['auto'])} | {pair(r['cgal'])} | "
+                f"{ratio(cgal, r['cgal'])} | {r['segments CGAL']} / {r['segments cgal']} / "
+                f"{r['segments auto']} | {100 * r['same labels']:.2f}% "
+                f"({round((1 - r['same labels']) * r['faces'])} differ)"
+            )
         else:
             ours = f"- | - | - | - | {r['segments CGAL']} / - / - | -"
         lines.append(f"| {r['mesh']} | {r['faces']:,} | {r['sdf']:.2f} | {pair(cgal)} | {ours} |")
@@ -290,17 +373,20 @@ def main():
     parser.add_argument("--quality", action="store_true", help="only the benchmark's measures")
     parser.add_argument("--speed", action="store_true", help="only the speed table")
     parser.add_argument("--only", default="", help="comma-separated mesh numbers (quality)")
-    parser.add_argument("--largest", type=int, default=2_000_000,
-                        help="speed: skip meshes above this many faces")
+    parser.add_argument(
+        "--largest", type=int, default=2_000_000, help="speed: skip meshes above this many faces"
+    )
     parser.add_argument("--cgal", default="", help="path of the cgal_segment reference")
     args = parser.parse_args()
     folder = args.psb / "dev" if (args.psb / "dev").is_dir() else args.psb
     cgal = cgal_binary(args.cgal)
     os.environ["SDF_CGAL_SEGMENT"] = cgal
     tmp = Path(tempfile.mkdtemp(prefix="sdf-segmentation-"))
-    print(f"{datetime.datetime.now(datetime.timezone.utc):%Y-%m-%d %H:%M} UTC, "
-          f"{machine_line()}, load average {os.getloadavg()[0]:.1f} at the start, "
-          f"shape_diameter {sd.__version__}")
+    print(
+        f"{datetime.datetime.now(datetime.timezone.utc):%Y-%m-%d %H:%M} UTC, "
+        f"{machine_line()}, load average {os.getloadavg()[0]:.1f} at the start, "
+        f"shape_diameter {sd.__version__}"
+    )
     if not HAVE_SEGMENT:
         print("shape_diameter.segment is not in this build: CGAL's half only")
     if not args.speed:
@@ -308,8 +394,11 @@ def main():
         rows = []
         for number, off, humans in psb_meshes(folder, only):
             rows.append(quality_of_mesh(number, off, humans, cgal, tmp))
-            print(f"  mesh {number}: " + ", ".join(
-                f"{m} {v['1-RI']:.3f}" for m, v in rows[-1]["methods"].items()), flush=True)
+            print(
+                f"  mesh {number}: "
+                + ", ".join(f"{m} {v['1-RI']:.3f}" for m, v in rows[-1]["methods"].items()),
+                flush=True,
+            )
         print("\n".join(["", *quality_tables(rows), ""]))
     if not args.quality:
         rows = []

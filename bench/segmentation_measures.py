@@ -97,22 +97,29 @@ class MeshCuts:
         self.edge_faces = np.stack([faces[:-1][same], faces[1:][same]], axis=1)
         self.edge_vertices = edges[:-1][same]
         self.edge_length = np.linalg.norm(
-            vertices[self.edge_vertices[:, 0]] - vertices[self.edge_vertices[:, 1]], axis=1)
+            vertices[self.edge_vertices[:, 0]] - vertices[self.edge_vertices[:, 1]], axis=1
+        )
         unique = np.unique(edges, axis=0)
         length = np.linalg.norm(vertices[unique[:, 0]] - vertices[unique[:, 1]], axis=1)
         # Zero-length edges would vanish from a sparse matrix: keep them as tiny weights.
         length = np.maximum(length, 1e-12 * max(length.max(), 1e-300))
         n = self.vertex_count + 1  # one extra node: the source joined to every cut vertex
         self._graph = coo_matrix(
-            (np.r_[length, length], (np.r_[unique[:, 0], unique[:, 1]],
-                                     np.r_[unique[:, 1], unique[:, 0]])), shape=(n, n)).tocsr()
+            (
+                np.r_[length, length],
+                (np.r_[unique[:, 0], unique[:, 1]], np.r_[unique[:, 1], unique[:, 0]]),
+            ),
+            shape=(n, n),
+        ).tocsr()
         corners = vertices[triangles]
         area = 0.5 * np.linalg.norm(
-            np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0]), axis=1)
+            np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0]), axis=1
+        )
         centres = corners.mean(axis=1)
         centroid = (area[:, None] * centres).sum(axis=0) / area.sum()
         self.average_radius = float(
-            (area * np.linalg.norm(centres - centroid, axis=1)).sum() / area.sum())
+            (area * np.linalg.norm(centres - centroid, axis=1)).sum() / area.sum()
+        )
 
     def cut_edges(self, labels: np.ndarray) -> np.ndarray:
         """Indices of the interior edges whose two faces lie in different segments."""
@@ -126,8 +133,9 @@ class MeshCuts:
             return None
         source = self.vertex_count
         tiny = np.full(len(cut_vertices), 1e-300)
-        link = csr_matrix((tiny, (np.full(len(cut_vertices), source), cut_vertices)),
-                          shape=self._graph.shape)
+        link = csr_matrix(
+            (tiny, (np.full(len(cut_vertices), source), cut_vertices)), shape=self._graph.shape
+        )
         distance = dijkstra(self._graph + link, directed=True, indices=source)
         return np.maximum(distance[:-1] - 1e-300, 0.0)  # the link's own length taken off
 
@@ -138,9 +146,13 @@ class MeshCuts:
         weight = self.edge_length[cut]
         return float((weight * ends.mean(axis=1)).sum() / weight.sum())
 
-    def cut_discrepancy(self, a: np.ndarray, b: np.ndarray,
-                        distance_a: np.ndarray | None = None,
-                        distance_b: np.ndarray | None = None) -> float:
+    def cut_discrepancy(
+        self,
+        a: np.ndarray,
+        b: np.ndarray,
+        distance_a: np.ndarray | None = None,
+        distance_b: np.ndarray | None = None,
+    ) -> float:
         """Cut discrepancy of a against b (distances to their cuts may be given, cached)."""
         distance_a = self.distance_to_cuts(a) if distance_a is None else distance_a
         distance_b = self.distance_to_cuts(b) if distance_b is None else distance_b

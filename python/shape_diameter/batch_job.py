@@ -76,8 +76,9 @@ def skipped_report(job) -> dict:
     }
 
 
-def run_job(job, options: dict, mesh_io, *, warn, progress=None, check=None,
-            segment_options=None) -> dict:
+def run_job(
+    job, options: dict, mesh_io, *, warn, progress=None, check=None, segment_options=None
+) -> dict:
     """Read, compute (compute()'s keyword arguments in `options`) and write one input; returns
     its --json object without its warnings, which go to warn(message) as they come.
 
@@ -97,8 +98,14 @@ def run_job(job, options: dict, mesh_io, *, warn, progress=None, check=None,
         result = compute(vertices, triangles, progress=progress, uvs=uvs, **options)
         parts = None
         if segment_options is not None:
-            parts = segment(vertices, triangles, result.values, postprocess=True,
-                            threads=options.get("threads", 0), **segment_options)
+            parts = segment(
+                vertices,
+                triangles,
+                result.values,
+                postprocess=True,
+                threads=options.get("threads", 0),
+                **segment_options,
+            )
     computed = time.perf_counter()
     check()
     colors = colormap(result.normalized) if parts is None else segment_colors(parts.labels)
@@ -112,11 +119,10 @@ def run_job(job, options: dict, mesh_io, *, warn, progress=None, check=None,
     def save_labels():
         # Written whole after the mesh's temporary file took its place: the labels are the
         # last output, so an existing one tells --skip-existing that the input is finished.
-        with written_whole(job.segments) as temporary:
-            with open(temporary, "wb") as stream:
-                npy = io.BytesIO()
-                np.save(npy, np.asarray(parts.labels, dtype=np.int32))
-                stream.write(npy.getbuffer())
+        with written_whole(job.segments) as temporary, open(temporary, "wb") as stream:
+            npy = io.BytesIO()
+            np.save(npy, np.asarray(parts.labels, dtype=np.int32))
+            stream.write(npy.getbuffer())
 
     if job.values:
         # The values are written first and take their place after the mesh: a failure in
@@ -134,8 +140,7 @@ def run_job(job, options: dict, mesh_io, *, warn, progress=None, check=None,
     finished = time.perf_counter()
     # The batch's own stages, apart from compute()'s: reading and writing files.
     io_seconds = {"load": loaded - started, "write": finished - computed}
-    report = _report(options, job, vertices, triangles, result, io_seconds,
-                     finished - started)
+    report = _report(options, job, vertices, triangles, result, io_seconds, finished - started)
     if parts is not None:
         report["segments"] = {
             "count": parts.segment_count,

@@ -61,8 +61,9 @@ class Job:
     """One input file and the outputs it writes; `problem` when it cannot even start (a
     folder without meshes); `done` when --skip-existing finds its outputs written."""
 
-    def __init__(self, source: str, output=None, values=None, problem=None, done=False,
-                 segments=None):
+    def __init__(
+        self, source: str, output=None, values=None, problem=None, done=False, segments=None
+    ):
         self.source, self.output, self.values, self.problem = source, output, values, problem
         self.done, self.segments = done, segments
 
@@ -157,8 +158,7 @@ def plan(args, write_suffixes) -> list:
         done = (
             args.skip_existing
             and os.path.exists(source)
-            and all(os.path.exists(path) for path in (output, values, segments)
-                    if path is not None)
+            and all(os.path.exists(path) for path in (output, values, segments) if path is not None)
         )
         jobs.append(Job(source, output, values, done=done, segments=segments))
     _check_no_collisions([job for job in jobs if job.problem is None])

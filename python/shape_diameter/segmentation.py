@@ -164,14 +164,23 @@ def segment(
             postprocess = True
     values = _check_values(values, t.shape[0])
     cgal = mode == "cgal"
-    out = _core.segment(v, t, values, clusters=int(clusters), smoothness=float(smoothness),
-                        filter=bool(postprocess), ties_move=cgal, first_move_only=cgal,
-                        weight_rings=int(weight_rings), threads=threads)
+    out = _core.segment(
+        v,
+        t,
+        values,
+        clusters=int(clusters),
+        smoothness=float(smoothness),
+        filter=bool(postprocess),
+        ties_move=cgal,
+        first_move_only=cgal,
+        weight_rings=int(weight_rings),
+        threads=threads,
+    )
     timings.update(out["timings"])
     timings["total"] = time.perf_counter() - start
     boundaries = out["boundaries"]
     pairs = boundaries["segments"]
-    adjacency = (np.unique(pairs, axis=0) if len(pairs) else np.zeros((0, 2), np.int32))
+    adjacency = np.unique(pairs, axis=0) if len(pairs) else np.zeros((0, 2), np.int32)
     return Segmentation(
         labels=out["labels"].astype(np.int32, copy=False),
         clusters=out["clusters"].astype(np.int32, copy=False),
@@ -180,9 +189,11 @@ def segment(
         mixture=out["mixture"],
         energy=float(out["energy"]),
         vertex_labels=out["vertex_labels"].astype(np.int32, copy=False),
-        vertex_weights=VertexWeights(out["weight_offsets"].astype(np.int64),
-                                     out["weight_segments"].astype(np.int32, copy=False),
-                                     out["weight_values"]),
+        vertex_weights=VertexWeights(
+            out["weight_offsets"].astype(np.int64),
+            out["weight_segments"].astype(np.int32, copy=False),
+            out["weight_values"],
+        ),
         adjacency=adjacency.astype(np.int32, copy=False),
         boundaries=dict(boundaries),
         segment_area=out["segment_area"],
@@ -191,8 +202,17 @@ def segment(
     )
 
 
-def segmentation_energy(vertices, triangles, values, clusters_per_face, *, clusters=5,
-                        smoothness=0.26, postprocess=False, threads=0) -> float:
+def segmentation_energy(
+    vertices,
+    triangles,
+    values,
+    clusters_per_face,
+    *,
+    clusters=5,
+    smoothness=0.26,
+    postprocess=False,
+    threads=0,
+) -> float:
     """The energy segment() minimises, of any labelling `clusters_per_face` (int, in [0, k)):
     to compare another optimiser's labels (CGAL's) with ours on the same terms."""
     _check_integer("clusters", clusters, 1, MAX_CLUSTERS)
@@ -201,6 +221,15 @@ def segmentation_energy(vertices, triangles, values, clusters_per_face, *, clust
     v, t = _check_mesh(vertices, triangles, threads)
     values = _check_values(values, t.shape[0])
     labels = np.ascontiguousarray(clusters_per_face, dtype=np.int32)
-    return float(_core.segmentation_energy(v, t, values, labels, clusters=int(clusters),
-                                           smoothness=float(smoothness),
-                                           filter=bool(postprocess), threads=threads))
+    return float(
+        _core.segmentation_energy(
+            v,
+            t,
+            values,
+            labels,
+            clusters=int(clusters),
+            smoothness=float(smoothness),
+            filter=bool(postprocess),
+            threads=threads,
+        )
+    )

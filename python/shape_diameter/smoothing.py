@@ -204,8 +204,9 @@ def smooth(
 def check_bilateral_points(points) -> None:
     """The bilateral filter works on per-face values only (rings of edge neighbours)."""
     if points != "faces":
-        raise ValueError("smoothing 'bilateral' smooths per-face values: points must be "
-                         f"'faces', got {points!r}")
+        raise ValueError(
+            f"smoothing 'bilateral' smooths per-face values: points must be 'faces', got {points!r}"
+        )
 
 
 def check_smoothing(
@@ -391,8 +392,13 @@ def run_checked(
     if method == "bilateral":
         check_bilateral_points(points)
         start = time.perf_counter()
-        out = _core.bilateral_filter(t, len(v), np.asarray(values, dtype=np.float64),
-                                     0 if o["window"] is None else o["window"], threads)
+        out = _core.bilateral_filter(
+            t,
+            len(v),
+            np.asarray(values, dtype=np.float64),
+            0 if o["window"] is None else o["window"],
+            threads,
+        )
         timings["bilateral"] = time.perf_counter() - start
         return out.astype(np.float32)
     if method == "kring":

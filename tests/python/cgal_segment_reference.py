@@ -44,8 +44,9 @@ def reference_binary() -> str:
     import pytest  # only here: the benchmark imports this module too, with the path set
 
     if os.environ.get("CI", "").strip().lower() not in _NOT_CI:
-        pytest.fail(f"{problem} (CI is set, so the CGAL comparison may not be skipped)",
-                    pytrace=False)
+        pytest.fail(
+            f"{problem} (CI is set, so the CGAL comparison may not be skipped)", pytrace=False
+        )
     pytest.skip(problem)
 
 
@@ -62,16 +63,35 @@ def read_output(path: Path) -> CgalSegmentation:
     header = json.loads(first[2:])
     table = np.loadtxt(path, dtype=np.float64, ndmin=2)
     assert table.shape == (header["faces"], 3), f"{path}: table {table.shape}, header {header}"
-    return CgalSegmentation(sdf=table[:, 0], clusters=table[:, 1].astype(np.int64),
-                            labels=table[:, 2].astype(np.int64), header=header)
+    return CgalSegmentation(
+        sdf=table[:, 0],
+        clusters=table[:, 1].astype(np.int64),
+        labels=table[:, 2].astype(np.int64),
+        header=header,
+    )
 
 
-def run(off: Path, out: Path, *, clusters: int = 5, smoothness: float = 0.26,
-        values: np.ndarray | None = None, postprocess: bool = False,
-        extra: tuple[str, ...] = ()) -> CgalSegmentation:
+def run(
+    off: Path,
+    out: Path,
+    *,
+    clusters: int = 5,
+    smoothness: float = 0.26,
+    values: np.ndarray | None = None,
+    postprocess: bool = False,
+    extra: tuple[str, ...] = (),
+) -> CgalSegmentation:
     """CGAL's segmentation of the OFF mesh: from its own sdf_values, or from `values`."""
-    cmd = [reference_binary(), str(off), str(out), "--clusters", str(clusters),
-           "--lambda", repr(float(smoothness)), *extra]
+    cmd = [
+        reference_binary(),
+        str(off),
+        str(out),
+        "--clusters",
+        str(clusters),
+        "--lambda",
+        repr(float(smoothness)),
+        *extra,
+    ]
     if values is not None:
         values_path = out.with_suffix(".values.txt")
         write_values(values_path, values)

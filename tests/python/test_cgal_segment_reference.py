@@ -14,12 +14,11 @@ from __future__ import annotations
 import subprocess
 from pathlib import Path
 
+import cgal_segment_reference as ref
 import numpy as np
 import pytest
 from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import connected_components
-
-import cgal_segment_reference as ref
 
 MESH = Path(__file__).resolve().parents[1] / "data" / "psb" / "341.off"
 
@@ -28,7 +27,7 @@ def _read_off_triangles(path: Path) -> np.ndarray:
     tokens = path.read_text().split()
     assert tokens[0] == "OFF"
     nv, nf = int(tokens[1]), int(tokens[2])
-    rows = np.array(tokens[4 + 3 * nv:4 + 3 * nv + 4 * nf], dtype=np.int64).reshape(nf, 4)
+    rows = np.array(tokens[4 + 3 * nv : 4 + 3 * nv + 4 * nf], dtype=np.int64).reshape(nf, 4)
     assert np.all(rows[:, 0] == 3), "triangles only"
     return rows[:, 1:]
 
@@ -69,8 +68,12 @@ def test_every_face_labelled_and_segments_counted(cgal_run):
     # Post-processing ends with a linear normalisation to [0, 1].
     assert cgal_run.sdf.min() == pytest.approx(0.0, abs=1e-12)
     assert cgal_run.sdf.max() == pytest.approx(1.0, abs=1e-12)
-    for key in ("sdf_seconds", "cluster_seconds", "segmentation_seconds",
-                "segmentation_cpu_seconds"):
+    for key in (
+        "sdf_seconds",
+        "cluster_seconds",
+        "segmentation_seconds",
+        "segmentation_cpu_seconds",
+    ):
         assert header[key] > 0.0
 
 
@@ -104,11 +107,16 @@ def test_refuses_polygons_and_short_value_files(tmp_path):
     binary = ref.reference_binary()
     quad = tmp_path / "quad.off"
     quad.write_text("OFF\n4 1 0\n0 0 0\n1 0 0\n1 1 0\n0 1 0\n4 0 1 2 3\n")
-    proc = subprocess.run([binary, str(quad), str(tmp_path / "q.txt")], capture_output=True,
-                          text=True, timeout=60)
+    proc = subprocess.run(
+        [binary, str(quad), str(tmp_path / "q.txt")], capture_output=True, text=True, timeout=60
+    )
     assert proc.returncode == 2 and "not triangles" in proc.stderr
     short = tmp_path / "short.txt"
     short.write_text("0.5\n")
-    proc = subprocess.run([binary, str(MESH), str(tmp_path / "s.txt"), "--values", str(short)],
-                          capture_output=True, text=True, timeout=60)
+    proc = subprocess.run(
+        [binary, str(MESH), str(tmp_path / "s.txt"), "--values", str(short)],
+        capture_output=True,
+        text=True,
+        timeout=60,
+    )
     assert proc.returncode == 2 and "1 values for 3322 faces" in proc.stderr

@@ -21,8 +21,20 @@ RAYS = 12
 def test_segment_writes_labels_and_colours_by_segment(tmp_path, capsys):
     source = DATA / "psb" / "241.off"
     output = tmp_path / "bird.ply"
-    argv = [str(source), "-o", str(output), "--rays", str(RAYS), "--segment", "4",
-            "--smoothness", "0.3", "--json", "--threads", "2"]
+    argv = [
+        str(source),
+        "-o",
+        str(output),
+        "--rays",
+        str(RAYS),
+        "--segment",
+        "4",
+        "--smoothness",
+        "0.3",
+        "--json",
+        "--threads",
+        "2",
+    ]
     assert cli.main(argv) == 0
     report = json.loads(capsys.readouterr().out)
     labels_path = tmp_path / "bird.segments.npy"
@@ -32,8 +44,9 @@ def test_segment_writes_labels_and_colours_by_segment(tmp_path, capsys):
     assert labels.dtype == np.int32 and labels.shape == (len(triangles),)
     # The same as the API on the same SDF.
     result = shape_diameter.compute(vertices, triangles, rays=RAYS, threads=2)
-    expected = shape_diameter.segment(vertices, triangles, result.values, clusters=4,
-                                      smoothness=0.3, postprocess=True)
+    expected = shape_diameter.segment(
+        vertices, triangles, result.values, clusters=4, smoothness=0.3, postprocess=True
+    )
     np.testing.assert_array_equal(labels, expected.labels)
     parts = report["segments"]
     assert parts["count"] == expected.segment_count == labels.max() + 1
@@ -45,8 +58,17 @@ def test_segment_writes_labels_and_colours_by_segment(tmp_path, capsys):
 
 def test_segment_without_k_takes_five_clusters_and_cgal_mode(tmp_path, capsys):
     output = tmp_path / "bearing.off"
-    argv = [str(DATA / "psb" / "341.off"), "-o", str(output), "--rays", str(RAYS), "--json",
-            "--segment-mode", "cgal", "--segment"]
+    argv = [
+        str(DATA / "psb" / "341.off"),
+        "-o",
+        str(output),
+        "--rays",
+        str(RAYS),
+        "--json",
+        "--segment-mode",
+        "cgal",
+        "--segment",
+    ]
     assert cli.main(argv) == 0
     report = json.loads(capsys.readouterr().out)
     assert report["segments"]["clusters"] <= 5 and report["segments"]["mode"] == "cgal"

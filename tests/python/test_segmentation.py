@@ -12,20 +12,24 @@ from __future__ import annotations
 
 from pathlib import Path
 
+import cgal_segment_reference as cgal
 import numpy as np
 import pytest
-
 import shape_diameter
 from shape_diameter.segmentation import segmentation_energy
-
-import cgal_segment_reference as cgal
 from shapes import icosphere
 
 DATA = Path(__file__).resolve().parents[1] / "data"
 
 # Five kinds of shape from the Princeton Segmentation Benchmark and one of the repository's.
-MESHES = ["psb/1.off", "psb/81.off", "psb/101.off", "psb/241.off", "psb/341.off",
-          "ChineseDragon-10kv.off"]
+MESHES = [
+    "psb/1.off",
+    "psb/81.off",
+    "psb/101.off",
+    "psb/241.off",
+    "psb/341.off",
+    "ChineseDragon-10kv.off",
+]
 CLUSTERS = [2, 5, 8]
 SMOOTHNESS = [0.1, 0.26, 0.6]
 MIN_EQUAL_LABELS = 0.999
@@ -36,8 +40,8 @@ def read_off(path: Path):
         words = [w for line in f for w in line.split("#", 1)[0].split()]
     assert words[0] == "OFF"
     nv, nf = int(words[1]), int(words[2])
-    numbers = np.array(words[4:4 + 3 * nv], dtype=np.float64).reshape(nv, 3)
-    faces = np.array(words[4 + 3 * nv:4 + 3 * nv + 4 * nf], dtype=np.int64).reshape(nf, 4)
+    numbers = np.array(words[4 : 4 + 3 * nv], dtype=np.float64).reshape(nv, 3)
+    faces = np.array(words[4 + 3 * nv : 4 + 3 * nv + 4 * nf], dtype=np.int64).reshape(nf, 4)
     assert (faces[:, 0] == 3).all()
     return numbers, faces[:, 1:]
 
@@ -65,10 +69,16 @@ def test_cgal_mode_gives_cgals_segments(name, cgal_values, tmp_path):
     vertices, triangles, sdf = cgal_values(name)
     for k in CLUSTERS:
         for smoothness in SMOOTHNESS:
-            ref = cgal.run(DATA / name, tmp_path / f"{k}_{smoothness}.txt", clusters=k,
-                           smoothness=smoothness, values=sdf)
-            ours = shape_diameter.segment(vertices, triangles, sdf, clusters=k,
-                                          smoothness=smoothness, mode="cgal")
+            ref = cgal.run(
+                DATA / name,
+                tmp_path / f"{k}_{smoothness}.txt",
+                clusters=k,
+                smoothness=smoothness,
+                values=sdf,
+            )
+            ours = shape_diameter.segment(
+                vertices, triangles, sdf, clusters=k, smoothness=smoothness, mode="cgal"
+            )
             where = f"{name} k={k} lambda={smoothness}"
             assert ours.segment_count == ref.header["segments"], where
             assert np.mean(ours.clusters == ref.clusters) >= MIN_EQUAL_LABELS, where
@@ -84,8 +94,9 @@ def test_energy_never_above_cgals(name, cgal_values, tmp_path, record_property):
         theirs = segmentation_energy(vertices, triangles, sdf, ref.clusters, clusters=k)
         same = shape_diameter.segment(vertices, triangles, sdf, clusters=k, mode="cgal")
         ours = shape_diameter.segment(vertices, triangles, sdf, clusters=k)
-        record_property(f"energy k={k}", {"cgal": theirs, "cgal_mode": same.energy,
-                                          "auto": ours.energy})
+        record_property(
+            f"energy k={k}", {"cgal": theirs, "cgal_mode": same.energy, "auto": ours.energy}
+        )
         assert same.energy == pytest.approx(theirs, rel=1e-9)
         assert ours.energy <= theirs * (1 + 1e-12)
         # Recomputed from the labels alone, our energy is what segment() reports.
@@ -102,8 +113,14 @@ def revolved(profile, x, sides=48):
     rings = len(x) - 2
     theta = np.linspace(0.0, 2 * np.pi, sides, endpoint=False)
     r = profile(x[1:-1])
-    ring = np.stack([np.repeat(x[1:-1], sides), np.outer(r, np.cos(theta)).ravel(),
-                     np.outer(r, np.sin(theta)).ravel()], axis=1)
+    ring = np.stack(
+        [
+            np.repeat(x[1:-1], sides),
+            np.outer(r, np.cos(theta)).ravel(),
+            np.outer(r, np.sin(theta)).ravel(),
+        ],
+        axis=1,
+    )
     vertices = np.vstack([[x[0], 0, 0], ring, [x[-1], 0, 0]])
     faces = []
     first, last = 0, 1 + rings * sides
@@ -124,13 +141,18 @@ BALL, NECK, CENTRE = 1.0, 0.25, 1.6  # ball radius, neck radius, ball centres at
 
 def dumbbell():
     """Two balls of radius 1 at x = -1.6 and 1.6 joined by a neck of radius 0.25."""
+
     def profile(x):
         ball = np.sqrt(np.clip(BALL**2 - (np.abs(x) - CENTRE) ** 2, 0.0, None))
         return np.maximum(ball, NECK)
 
-    x = np.concatenate([[-CENTRE - BALL], np.linspace(-CENTRE - BALL + 0.02,
-                                                       CENTRE + BALL - 0.02, 120),
-                        [CENTRE + BALL]])
+    x = np.concatenate(
+        [
+            [-CENTRE - BALL],
+            np.linspace(-CENTRE - BALL + 0.02, CENTRE + BALL - 0.02, 120),
+            [CENTRE + BALL],
+        ]
+    )
     return revolved(profile, x)
 
 
@@ -156,7 +178,8 @@ def test_dumbbell_gives_two_balls_and_a_neck():
     np.testing.assert_allclose(loops["length"], 2 * np.pi * NECK, rtol=0.05)
     np.testing.assert_allclose(np.sort(np.abs(loops["centroid"][:, 0])), neck_x, atol=0.1)
     assert sorted(map(tuple, seg.adjacency)) == sorted(
-        {tuple(sorted((0, int(left[0])))), tuple(sorted((0, int(right[0]))))})
+        {tuple(sorted((0, int(left[0])))), tuple(sorted((0, int(right[0]))))}
+    )
     # Per-vertex output: labels follow the faces, weights sum to 1 and blend only near the cuts.
     weights = seg.vertex_weights.dense(seg.segment_count)
     np.testing.assert_allclose(weights.sum(axis=1), 1.0, rtol=1e-5)
@@ -204,27 +227,31 @@ def test_separate_solids_never_share_a_segment(mode):
     assert len(np.unique(parts)) == 3
     for label in range(seg.segment_count):
         assert len(np.unique(parts[seg.labels == label])) == 1
-    assert (seg.clusters[:len(t1)] == seg.clusters[len(t1):len(t1) + len(t2)]).all()
+    assert (seg.clusters[: len(t1)] == seg.clusters[len(t1) : len(t1) + len(t2)]).all()
 
 
 def test_every_thread_count_gives_the_same_result(cgal_values):
     vertices, triangles, sdf = cgal_values("psb/1.off")
     for mode in ("auto", "cgal"):
-        runs = [shape_diameter.segment(vertices, triangles, sdf, mode=mode, threads=n)
-                for n in (1, 2, 3, 0)]
+        runs = [
+            shape_diameter.segment(vertices, triangles, sdf, mode=mode, threads=n)
+            for n in (1, 2, 3, 0)
+        ]
         for other in runs[1:]:
             np.testing.assert_array_equal(other.labels, runs[0].labels)
             np.testing.assert_array_equal(other.clusters, runs[0].clusters)
             assert other.energy == runs[0].energy
-            np.testing.assert_array_equal(other.vertex_weights.weights,
-                                          runs[0].vertex_weights.weights)
+            np.testing.assert_array_equal(
+                other.vertex_weights.weights, runs[0].vertex_weights.weights
+            )
 
 
 def test_values_none_computes_the_sdf_first():
     vertices, triangles = dumbbell()
     result = shape_diameter.compute(vertices, triangles, threads=2)
-    from_values = shape_diameter.segment(vertices, triangles, result.values, clusters=2,
-                                         postprocess=True)
+    from_values = shape_diameter.segment(
+        vertices, triangles, result.values, clusters=2, postprocess=True
+    )
     computed = shape_diameter.segment(vertices, triangles, clusters=2, threads=2)
     np.testing.assert_array_equal(computed.labels, from_values.labels)
     assert "sdf" in computed.timings and "graph_cut" in computed.timings
@@ -247,11 +274,14 @@ def test_open_nonmanifold_and_degenerate_meshes_give_complete_labels():
     v, t = icosphere(1.0, 2)
     cases = {
         "open": (v, t[v[t].mean(axis=1)[:, 2] > -0.3]),
-        "non-manifold fan": (np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, -1, 0], [0, 0, 1],
-                                       [0, 0, -1.0]]),
-                             np.array([[0, 1, 2], [1, 0, 3], [0, 1, 4], [1, 0, 5]])),
-        "degenerate and duplicate faces": (v, np.vstack([t, t[:5], [[0, 0, 1], [2, 2, 2]],
-                                                         [[0, 1, 2]]])),
+        "non-manifold fan": (
+            np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, -1, 0], [0, 0, 1], [0, 0, -1.0]]),
+            np.array([[0, 1, 2], [1, 0, 3], [0, 1, 4], [1, 0, 5]]),
+        ),
+        "degenerate and duplicate faces": (
+            v,
+            np.vstack([t, t[:5], [[0, 0, 1], [2, 2, 2]], [[0, 1, 2]]]),
+        ),
         "unused vertices": (np.vstack([v, [[9.0, 9, 9]]]), t),
         "one face": (v, t[:1]),
     }

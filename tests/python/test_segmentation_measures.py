@@ -71,8 +71,12 @@ def test_identical_and_refined_labelings():
 def _strip(columns: int):
     """A flat strip of unit squares along x (two triangles each), 0 <= x <= columns."""
     xs = np.arange(columns + 1, dtype=np.float64)
-    vertices = np.concatenate([np.c_[xs, np.zeros_like(xs), np.zeros_like(xs)],
-                               np.c_[xs, np.ones_like(xs), np.zeros_like(xs)]])
+    vertices = np.concatenate(
+        [
+            np.c_[xs, np.zeros_like(xs), np.zeros_like(xs)],
+            np.c_[xs, np.ones_like(xs), np.zeros_like(xs)],
+        ]
+    )
     top = columns + 1
     triangles = []
     for i in range(columns):

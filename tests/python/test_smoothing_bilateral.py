@@ -7,11 +7,10 @@ from __future__ import annotations
 from collections import deque
 from pathlib import Path
 
+import cgal_segment_reference as cgal
 import numpy as np
 import pytest
-
 import shape_diameter
-import cgal_segment_reference as cgal
 from shapes import icosphere
 from test_segmentation import read_off
 
@@ -47,8 +46,9 @@ def numpy_bilateral(triangles, values, window):
         if deviation == 0:
             out[f] = values[f]
             continue
-        w = np.exp(-0.5 * (levels / (window / 2)) ** 2) * np.exp(-0.5 * (diff / (1.5 * deviation))
-                                                                  ** 2)
+        w = np.exp(-0.5 * (levels / (window / 2)) ** 2) * np.exp(
+            -0.5 * (diff / (1.5 * deviation)) ** 2
+        )
         out[f] = np.sum(w * values[faces]) / np.sum(w)
     return out
 
@@ -77,8 +77,9 @@ def test_cgal_post_processing_is_fill_filter_rescale(tmp_path):
 def test_compute_runs_it_and_a_constant_field_stays_constant():
     v, t = icosphere(1.0, 3)
     result = shape_diameter.compute(v, t, rays=8, smoothing="bilateral")
-    np.testing.assert_allclose(result.values, shape_diameter.smooth(v, t, result.raw,
-                                                                    "bilateral"), rtol=1e-6)
+    np.testing.assert_allclose(
+        result.values, shape_diameter.smooth(v, t, result.raw, "bilateral"), rtol=1e-6
+    )
     assert "smooth: bilateral" in result.timings
     constant = shape_diameter.smooth(v, t, np.full(len(t), 0.5), "bilateral", window=2)
     assert (constant == np.float32(0.5)).all()
@@ -87,12 +88,20 @@ def test_compute_runs_it_and_a_constant_field_stays_constant():
 @pytest.mark.parametrize(
     "call, message",
     [
-        (lambda v, t: shape_diameter.smooth(v, t, np.zeros(len(v)), "bilateral",
-                                            points="vertices"), "per-face values"),
-        (lambda v, t: shape_diameter.smooth(v, t, np.zeros(len(t)), "bilateral", window=0),
-         "window must be"),
-        (lambda v, t: shape_diameter.compute(v, t, smoothing="bilateral", points="vertices"),
-         "per-face values"),
+        (
+            lambda v, t: shape_diameter.smooth(
+                v, t, np.zeros(len(v)), "bilateral", points="vertices"
+            ),
+            "per-face values",
+        ),
+        (
+            lambda v, t: shape_diameter.smooth(v, t, np.zeros(len(t)), "bilateral", window=0),
+            "window must be",
+        ),
+        (
+            lambda v, t: shape_diameter.compute(v, t, smoothing="bilateral", points="vertices"),
+            "per-face values",
+        ),
     ],
 )
 def test_bad_use_is_refused(call, message):
@@ -106,8 +115,17 @@ def test_command_line_smooths_with_it(tmp_path):
 
     source = DATA / "psb" / "341.off"
     values = tmp_path / "values.npy"
-    argv = [str(source), "-o", str(tmp_path / "out.ply"), "--rays", "8", "--smooth",
-            "bilateral", "--values", str(values)]
+    argv = [
+        str(source),
+        "-o",
+        str(tmp_path / "out.ply"),
+        "--rays",
+        "8",
+        "--smooth",
+        "bilateral",
+        "--values",
+        str(values),
+    ]
     assert cli.main(argv) == 0
     v, t = read_off(source)
     expected = shape_diameter.compute(v, t, rays=8, smoothing="bilateral")
