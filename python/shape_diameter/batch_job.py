@@ -76,6 +76,10 @@ def skipped_report(job) -> dict:
     }
 
 
+# segment()'s keywords a batch takes, with the defaults --segment gives them.
+SEGMENT_DEFAULTS = {"clusters": 5, "smoothness": 0.26, "mode": "auto"}
+
+
 def run_job(
     job, options: dict, mesh_io, *, warn, progress=None, check=None, segment_options=None
 ) -> dict:

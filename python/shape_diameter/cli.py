@@ -31,7 +31,15 @@ import sys
 
 from . import __version__, _core
 from .api import MAX_RAYS, _check_engine, engines
-from .batch_job import error_report, failure, naming_a_file, one_line, run_job, skipped_report
+from .batch_job import (
+    SEGMENT_DEFAULTS,
+    error_report,
+    failure,
+    naming_a_file,
+    one_line,
+    run_job,
+    skipped_report,
+)
 from .cli_jobs import DEFAULT_SUFFIX, EXIT_ENVIRONMENT, EXIT_USAGE, CommandError, plan
 
 PROG = "shape-diameter"
@@ -625,11 +633,8 @@ def segment_options(args):
     """--segment's options as segment() keywords, or None without --segment."""
     if args.segment is None:
         return None
-    return {
-        "clusters": args.segment,
-        "smoothness": 0.26 if args.smoothness is None else args.smoothness,
-        "mode": args.segment_mode or "auto",
-    }
+    given = {"clusters": args.segment, "smoothness": args.smoothness, "mode": args.segment_mode}
+    return {**SEGMENT_DEFAULTS, **{k: v for k, v in given.items() if v is not None}}
 
 
 def _smoothing_words(method: str) -> str:
@@ -713,7 +718,13 @@ def _run_on_scheduler(args, jobs) -> int:
 
     with client, _meshes_bar(None if args.quiet else len(jobs)) as bar:
         on_dask.run_jobs(
-            client, jobs, options, gpu=args.gpu, skip_existing=args.skip_existing, on_result=arrived
+            client,
+            jobs,
+            options,
+            gpu=args.gpu,
+            skip_existing=args.skip_existing,
+            segment=segment_options(args),
+            on_result=arrived,
         )
     return first_failure
 
@@ -737,8 +748,6 @@ def _check_combinations(args) -> None:
         )
     if args.segment is not None and args.points != "faces":
         raise CommandError("--segment needs --points faces (segments are made of faces)")
-    if args.segment is not None and args.scheduler is not None:
-        raise CommandError("--segment runs in this process only: leave out --scheduler")
     for flag in ("smoothness", "segment_mode"):
         if getattr(args, flag) is not None and args.segment is None:
             raise CommandError(f"--{flag.replace('_', '-')} applies to --segment")

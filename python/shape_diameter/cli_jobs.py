@@ -136,8 +136,7 @@ def plan(args, write_suffixes) -> list:
                 continue
         output = args.output or default_output(source, args.output_dir, subfolder)
         values = args.values or (default_values(output) if args.save_values else None)
-        # (shape_diameter.distributed plans without a --segment option)
-        segment = getattr(args, "segment", None)
+        segment = args.segment
         segments = default_segments(output) if segment is not None else None
         try:
             if args.output or os.path.exists(source):  # (a missing input fails on its own)

@@ -20,9 +20,18 @@ import glob
 import inspect
 import os
 import time
+from typing import Optional
 
 from .api import compute
-from .batch_job import error_report, failure, naming_a_file, one_line, run_job, skipped_report
+from .batch_job import (
+    SEGMENT_DEFAULTS,
+    error_report,
+    failure,
+    naming_a_file,
+    one_line,
+    run_job,
+    skipped_report,
+)
 from .cli_jobs import EXIT_ENVIRONMENT, CommandError, Job, plan
 from .output_files import TEMPORARY_SUFFIX
 
@@ -56,6 +65,7 @@ def compute_files(
     recursive: bool = True,
     save_values: bool = False,
     skip_existing: bool = True,
+    segment: Optional[dict] = None,
     on_result=None,
     **options,
 ) -> list:
@@ -73,6 +83,9 @@ def compute_files(
     declare one; without it, ``engine="auto"`` runs the CPU engine. save_values: each mesh's
     values next to its output as .npy (cow.sdf.npy). skip_existing: an input whose outputs
     exist is not computed again (a rerun after a crash or a preemption finishes the rest).
+    segment: segment()'s keyword arguments (clusters, smoothness, mode; {} for its defaults)
+    to also split each mesh into parts, as ``--segment``: the mesh coloured by segment and the
+    labels written next to it (cow.sdf.segments.npy); None (the default) for the SDF alone.
     on_result(job, row): called on this process as each row arrives (job.source: the input).
 
     Returns one row per input, in the inputs' order: the command line's --json object
@@ -85,15 +98,22 @@ def compute_files(
     twice, or one that another's output would overwrite).
     """
     options = task_options(options, gpu)
+    segment = segment_options(segment)
     try:
-        jobs = plan_jobs(inputs, output_dir, recursive, save_values, skip_existing)
+        jobs = plan_jobs(inputs, output_dir, recursive, save_values, skip_existing, segment)
     except CommandError as exc:
         raise ValueError(str(exc)) from None
     with contextlib.ExitStack() as stack:
         if client is None:
             client = stack.enter_context(local_client(workers, gpu))
         rows = run_jobs(
-            client, jobs, options, gpu=gpu, skip_existing=skip_existing, on_result=on_result
+            client,
+            jobs,
+            options,
+            gpu=gpu,
+            skip_existing=skip_existing,
+            segment=segment,
+            on_result=on_result,
         )
     # Every row answers faces, seconds and engine (None where nothing was computed).
     return [{"faces": None, "seconds": None, "engine": None, **row} for row in rows]
@@ -118,7 +138,22 @@ def task_options(given: dict, gpu: bool) -> dict:
     return options
 
 
-def plan_jobs(inputs, output_dir, recursive: bool, save_values: bool, skip_existing: bool):
+def segment_options(given: Optional[dict]) -> Optional[dict]:
+    """segment()'s keywords with the command line's defaults (clusters 5, smoothness 0.26,
+    mode 'auto'), or None for no segmentation; ValueError for a keyword it does not take."""
+    if given is None:
+        return None
+    unknown = sorted(set(given) - set(SEGMENT_DEFAULTS))
+    if unknown:
+        raise ValueError(
+            f"segment takes {', '.join(SEGMENT_DEFAULTS)} here, not {', '.join(map(repr, unknown))}"
+        )
+    return {**SEGMENT_DEFAULTS, **given}
+
+
+def plan_jobs(
+    inputs, output_dir, recursive: bool, save_values: bool, skip_existing: bool, segment=None
+):
     """The command line's plan of INPUTS -r --output-dir OUTPUT_DIR (folders expanded, output
     names, the checks made before any work)."""
     from . import mesh_io  # (the cli extra: trimesh)
@@ -133,12 +168,13 @@ def plan_jobs(inputs, output_dir, recursive: bool, save_values: bool, skip_exist
         output_dir=os.fspath(output_dir),
         save_values=save_values,
         skip_existing=skip_existing,
+        segment=None if segment is None else segment["clusters"],
     )
     return plan(args, mesh_io.WRITE_SUFFIXES)
 
 
 def run_jobs(
-    client, jobs, options: dict, *, gpu: bool, skip_existing: bool, on_result=None
+    client, jobs, options: dict, *, gpu: bool, skip_existing: bool, segment=None, on_result=None
 ) -> list:
     """Planned jobs as tasks on `client`; the rows, in the jobs' order (on_result(job, row)
     as each arrives). Inputs that cannot start and inputs done already are rows at once."""
@@ -164,6 +200,8 @@ def run_jobs(
                 job.values,
                 options,
                 skip_existing,
+                job.segments,
+                segment,
                 pure=False,
                 resources=resources,
             )
@@ -185,21 +223,30 @@ def _row_of(future, job) -> dict:
     return {**error_report(job, EXIT_ENVIRONMENT, naming_a_file(job, message), []), "worker": None}
 
 
-def compute_on_worker(source, output, values, options: dict, skip_existing: bool) -> dict:
-    """The task: one input read, computed and written on the worker running it; its row.
-    A failure is the row's error (the worker goes on with the next)."""
+def compute_on_worker(
+    source, output, values, options: dict, skip_existing: bool, segments=None, segment=None
+) -> dict:
+    """The task: one input read, computed (and segmented, with `segment`: segment()'s
+    keywords) and written on the worker running it; its row. A failure is the row's error
+    (the worker goes on with the next)."""
     from . import mesh_io  # (the cli extra: trimesh)
 
     started = time.time()
-    job = Job(source, output, values)
+    job = Job(source, output, values, segments=segments)
     worker = distributed.get_worker().address
-    written = [path for path in (output, values) if path is not None]
+    written = [path for path in job.paths() if path is not None]
     if skip_existing and all(map(os.path.exists, written)):
         # A retry of a task whose worker died after writing: done once, not again.
         return {**skipped_report(job), "worker": worker}
     warned = []
     try:
-        row = run_job(job, options, mesh_io, warn=lambda message: warned.append(one_line(message)))
+        row = run_job(
+            job,
+            options,
+            mesh_io,
+            warn=lambda message: warned.append(one_line(message)),
+            segment_options=segment,
+        )
         row["warnings"] = warned
     except Exception as exc:  # noqa: BLE001 - every failure is this input's row
         try:

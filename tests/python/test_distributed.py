@@ -235,3 +235,27 @@ def test_options_are_checked_before_any_task():
     assert task_options({}, gpu=False)["engine"] == "cpu"  # a worker's GPU only when held
     assert task_options({}, gpu=True)["engine"] == "auto"
     assert cli.main(["x.obj", "--gpu"]) == 2  # --gpu means nothing without --scheduler
+
+
+def test_segments_on_workers_equal_the_command_lines(folder, client, tmp_path):
+    # --segment's files (the mesh coloured by segment, the labels) come out of the workers as
+    # the in-process command line writes them, through the API and through --scheduler.
+    inputs = [str(folder / "a" / "suzanne0.obj"), str(folder / "b" / "cow1.off")]
+    common = ["--rays", str(RAYS), "--engine", "cpu", "--segment", "3", "-q"]
+    here, there = tmp_path / "here", tmp_path / "there"
+    assert cli.main([*inputs, "--output-dir", str(here), *common]) == 0
+    expected = _files(here)
+    assert sum(name.endswith(".segments.npy") for name in expected) == 2
+    rows = compute_files(inputs, tmp_path / "api", client=client, rays=RAYS,
+                         segment={"clusters": 3})  # fmt: skip
+    assert [row["segments"]["count"] > 0 for row in rows] == [True, True]
+    assert _files(tmp_path / "api") == expected
+    done = subprocess.run(
+        [sys.executable, "-m", "shape_diameter", *inputs, "--output-dir", str(there), *common,
+         "--scheduler", client.scheduler.address],
+        capture_output=True, text=True, timeout=300,
+    )  # fmt: skip
+    assert done.returncode == 0, done.stderr
+    assert _files(there) == expected
+    with pytest.raises(ValueError, match="'k'"):
+        compute_files(inputs, tmp_path / "bad", client=client, segment={"k": 3})
