@@ -37,7 +37,8 @@ from .api import MAX_RAYS, _check_engine, compute, engines
 from .cli_jobs import DEFAULT_SUFFIX, EXIT_ENVIRONMENT, EXIT_USAGE, CommandError, plan
 from .colormap import colormap
 from .output_files import written_whole
-from .smoothing import DEVICE_ERRORS, texture_cost
+from .engine_choice import DEVICE_ERRORS
+from .smoothing import texture_cost
 
 PROG = "shape-diameter"
 EXIT_INTERRUPTED = 130  # 128 + SIGINT, as shells report a run killed by Ctrl-C
