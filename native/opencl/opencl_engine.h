@@ -12,26 +12,14 @@
 #include <vector>
 
 #include "accel/bvh.h"
-#include "accel/bvh4.h"
-#include "accel/bvh8.h"
+#include "accel/scene.h"
 #include "mesh/mesh.h"
-#include "accel/octree.h"
 #include "util/parallel.h"
 #include "prepare/rays.h"
 #include "prepare/sampling.h"
 #include "devices.h"
 
 namespace sdf::cl {
-
-// Either the octree or a BVH is set. bvh4, when set, is bvh collapsed to four children per
-// node and is cast instead of it (trees too deep for its stack fall back to bvh); bvh8 is the
-// 8-wide collapse, with its own triangles (bvh may then be null: no device casts it).
-struct Scene {
-  const Bvh* bvh = nullptr;
-  const Bvh4* bvh4 = nullptr;
-  const Bvh8* bvh8 = nullptr;
-  const Octree* octree = nullptr;
-};
 
 // The kernels that cast a BVH: the binary, 4-wide or 8-wide tree, one work item per point or
 // per ray. The octree has one kernel.
@@ -40,13 +28,15 @@ enum class CastKernel { BvhPerPoint, Bvh4PerPoint, Bvh8PerPoint, BvhPerRay };
 // The kernel `device` runs (see opencl_engine.cpp for the measurements behind the choice).
 CastKernel cast_kernel_for(const Device& device);
 
-// Which trees `devices` cast, for the caller to build (Scene::bvh, bvh4, bvh8). The 4-wide
-// tree reads the binary tree's triangles, so `binary` is also set when `four` is.
+// Which trees `devices` cast, for the caller to build (Scene::widths). The 4-wide tree reads
+// the binary tree's triangles, so `binary` is also set when `four` is (a 4-wide tree too deep
+// for the kernel's stack is left for the binary one).
 BvhWidths wanted_bvhs(const std::vector<const Device*>& devices);
 
 // The scene, from where the caller makes it: cast_opencl calls it once, from a device thread
 // once the points are on their way to the devices, so the caller can still be building it.
-using SceneSource = std::function<Scene()>;
+// The scene outlives the cast.
+using SceneSource = std::function<const Scene&()>;
 
 struct CastTimings {
   double upload = 0.0, cast = 0.0, download = 0.0;
