@@ -153,8 +153,7 @@ class BackgroundBvh {
 // build's own time to out.timings as 'build' (the background part ran beside 'prepare'), and
 // the time this call took as 'build wait': what the build added to the wall time.
 void finish_scene(const Mesh& mesh, const Options& options, const Plan& plan,
-                  std::unique_ptr<BackgroundBvh>& background, bool turned, Scene& s,
-                  Output& out) {
+                  std::unique_ptr<BackgroundBvh>& background, bool turned, Scene& s, Output& out) {
   Stopwatch clock, wait;
   double seconds = 0.0;
   if (options.accel == Accel::Bvh) {

@@ -17,7 +17,7 @@ from .checks import check_integer as _check_integer
 from .checks import check_mesh as _check_mesh
 from .checks import check_progress
 from .engine_choice import check_engine as _check_engine
-from .engine_choice import engines
+from .engine_choice import engines as engines  # the API lists them here too
 from .engine_choice import fallback_line as _fallback_line
 from .engine_choice import resolve_engine as _resolve_engine
 from .engine_choice import run_with_fallback
