@@ -122,6 +122,8 @@ def _check_options(rays, cone_angle, sampling, points, normalize_method, engine,
     _check_integer("seed", seed, 0, 2**32 - 1)
 
 
+# Over 80 lines for its signature and docstring, the API's reference; the body is the checks
+# and the steps below it.
 @recorded
 def compute(
     vertices,
