@@ -76,8 +76,9 @@ for PY in "${PYTHONS[@]}"; do
   fi
   "$VENV/bin/python" -m pip install -q "scikit-build-core>=0.10" "pybind11>=2.12"
   log "building the $TAG wheel"
+  # Without the test-only module shape_diameter._testing: nothing in Blender uses it.
   "$VENV/bin/python" -m pip wheel . --no-deps --no-build-isolation -q -w "$WHEEL_DIR" \
-    -C build-dir="build/ext-{wheel_tag}"
+    -C build-dir="build/ext-{wheel_tag}" -C cmake.define.SDF_BUILD_TESTING_MODULE=OFF
 done
 ls "$WHEEL_DIR"
 
