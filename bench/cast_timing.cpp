@@ -20,6 +20,7 @@
 #include "accel/bvh4.h"
 #include "accel/bvh8.h"
 #include "accel/bvh_margin.h"
+#include "accel/scene.h"
 #include "cast/cpu_engine.h"
 #include "embree_caster.h"
 
@@ -52,21 +53,21 @@ int main(int argc, char** argv) {
 
   sdf::BvhConfig config;  // CAST_TIMING_LEAF=n tries another leaf size
   if (const char* leaf = std::getenv("CAST_TIMING_LEAF")) config.max_leaf_size = std::atoi(leaf);
-  sdf::Bvh bvh = sdf::build_bvh(m, config);
-  sdf::grow_boxes_to_cover_hits(bvh);
-  const sdf::Bvh4 wide4 = sdf::collapse_to_bvh4(bvh);
-  sdf::CpuScene scene4;
-  scene4.bvh4 = &wide4;
+  sdf::Scene scene4;  // the 4-wide tree, which reads the binary tree's triangles
+  scene4.bvh = sdf::build_bvh(m, config);
+  sdf::grow_boxes_to_cover_hits(scene4.bvh);
+  scene4.bvh4 = sdf::collapse_to_bvh4(scene4.bvh);
+  scene4.widths.four = true;
   const char* merge = std::getenv("CAST_TIMING_MERGE");  // another merge_up_to
   const double collapse_from = cpu_seconds();
-  const sdf::Bvh8 wide8 =
-      sdf::collapse_to_bvh8(bvh, merge ? std::atoi(merge) : sdf::kBvh8MergeUpTo);
+  sdf::Scene scene8;
+  scene8.bvh8 =
+      sdf::collapse_to_bvh8(scene4.bvh, merge ? std::atoi(merge) : sdf::kBvh8MergeUpTo);
+  scene8.widths.eight = true;
   std::printf("bvh8: %zu nodes, %zu packets for %zu triangles, collapsed in %.3f cpu s\n",
-              wide8.nodes.size(), wide8.packets.size(), bvh.triangles.size(),
+              scene8.bvh8.nodes.size(), scene8.bvh8.packets.size(), scene4.bvh.triangles.size(),
               cpu_seconds() - collapse_from);
-  sdf::CpuScene scene8;
-  scene8.bvh8 = &wide8;
-  if (!sdf::bvh8_supported()) scene8 = scene4;
+  const sdf::Scene& cast8 = sdf::bvh8_supported() ? scene8 : scene4;
 
   RTCDevice device = rtcNewDevice(nullptr);
   RTCScene rtc = bench::embree_scene(device, off);
@@ -74,7 +75,7 @@ int main(int argc, char** argv) {
   std::vector<float> raw(nf), raw4(nf), embree_values;
   std::vector<std::int32_t> valid(nf);
   std::vector<double> ratios4, ratios8;
-  auto ours = [&](const sdf::CpuScene& scene, std::vector<float>& values) {
+  auto ours = [&](const sdf::Scene& scene, std::vector<float>& values) {
     const double t0 = cpu_seconds();
     sdf::cast_cpu(scene, points, order, cone, tmin, 0, values.data(), valid.data(), nullptr,
                   0.0, 1.0);
@@ -86,7 +87,7 @@ int main(int argc, char** argv) {
     bench::embree_cast(rtc, m, points, cone, tmin, embree_values);
     const double embree_s = cpu_seconds() - embree_from;
     const double bvh4_s = ours(scene4, raw4);
-    const double bvh8_s = ours(scene8, raw);
+    const double bvh8_s = ours(cast8, raw);
     ratios4.push_back(embree_s / bvh4_s);
     ratios8.push_back(embree_s / bvh8_s);
     std::printf("round %d: Mrays per cpu s: embree %.2f, bvh4 %.2f (%.3f), bvh8 %.2f (%.3f)\n", r,

@@ -58,13 +58,13 @@ void cast_points(const SamplePoints& points, const std::vector<std::uint32_t>& o
 
 }  // namespace
 
-void cast_cpu(const CpuScene& scene, const SamplePoints& points,
+void cast_cpu(const Scene& scene, const SamplePoints& points,
               const std::vector<std::uint32_t>& order, const Cone& cone, float min_closeness,
               unsigned threads, float* raw, std::int32_t* valid_rays, const ProgressFn& progress,
               double progress_from, double progress_to) {
 #if SDF_HAVE_BVH8
-  if (scene.bvh8) {
-    const Bvh8& bvh = *scene.bvh8;
+  if (scene.eight()) {
+    const Bvh8& bvh = scene.bvh8;
     cast_points(points, order, cone, threads, raw, valid_rays, progress, progress_from,
                 progress_to,
                 [&](glm::vec3 o, const glm::vec3* d, int count, std::int32_t own,
@@ -74,8 +74,8 @@ void cast_cpu(const CpuScene& scene, const SamplePoints& points,
     return;
   }
 #endif
-  if (scene.bvh4) {
-    const Bvh4& bvh = *scene.bvh4;
+  if (scene.four()) {
+    const Bvh4& bvh = scene.bvh4;
     cast_points(points, order, cone, threads, raw, valid_rays, progress, progress_from,
                 progress_to,
                 [&](glm::vec3 o, const glm::vec3* d, int count, std::int32_t own,
@@ -84,7 +84,7 @@ void cast_cpu(const CpuScene& scene, const SamplePoints& points,
                     hits[r] = bvh4_closest_hit(bvh, o, d[r], min_closeness, own);
                 });
   } else {
-    const Octree& tree = *scene.octree;
+    const Octree& tree = scene.octree;
     cast_points(points, order, cone, threads, raw, valid_rays, progress, progress_from,
                 progress_to,
                 [&](glm::vec3 o, const glm::vec3* d, int count, std::int32_t own,

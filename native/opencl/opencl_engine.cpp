@@ -154,21 +154,22 @@ class SharedScene {
     if (!asked_) {
       asked_ = true;
       try {
-        scene_ = source_();
+        scene_ = &source_();
       } catch (...) {
         failure_ = std::current_exception();
       }
     }
     if (failure_) std::rethrow_exception(failure_);
-    const bool empty = (scene_.bvh && scene_.bvh->empty()) || (scene_.bvh8 && scene_.bvh8->empty());
-    return empty ? nullptr : &scene_;
+    const bool empty = (scene_->binary() && scene_->bvh.empty()) ||
+                       (scene_->eight() && scene_->bvh8.empty());
+    return empty ? nullptr : scene_;
   }
 
  private:
   const SceneSource& source_;
   std::mutex mutex_;
   bool asked_ = false;
-  Scene scene_;
+  const Scene* scene_ = nullptr;
   std::exception_ptr failure_;
 };
 
@@ -309,24 +310,24 @@ void run_device(const Device& device, std::size_t slot, SharedScene& shared_scen
     const std::size_t first_accel = sizes.size();
     // The 8-wide tree needs no depth check: its stack holds the deepest tree the builder
     // makes (sdf_bvh8_traverse.h).
-    const bool wide8 = choice == CastKernel::Bvh8PerPoint && scene.bvh8;
+    const bool wide8 = choice == CastKernel::Bvh8PerPoint && scene.eight();
     std::vector<const void*> data;
     if (wide8) {
-      sizes.push_back(bytes_of(scene.bvh8->nodes));
-      sizes.push_back(bytes_of(scene.bvh8->packets));
-      data = {scene.bvh8->nodes.data(), scene.bvh8->packets.data()};
+      sizes.push_back(bytes_of(scene.bvh8.nodes));
+      sizes.push_back(bytes_of(scene.bvh8.packets));
+      data = {scene.bvh8.nodes.data(), scene.bvh8.packets.data()};
       kernel = std::make_unique<Kernel>(program, "sdf_cast_bvh8");
-    } else if (scene.bvh) {
-      sizes.push_back(bytes_of(scene.bvh->nodes));
-      sizes.push_back(bytes_of(scene.bvh->triangles));
-      data = {scene.bvh->nodes.data(), scene.bvh->triangles.data()};
+    } else if (scene.binary()) {
+      sizes.push_back(bytes_of(scene.bvh.nodes));
+      sizes.push_back(bytes_of(scene.bvh.triangles));
+      data = {scene.bvh.nodes.data(), scene.bvh.triangles.data()};
       binary_tree_kernel("");
     } else {
-      sizes.push_back(bytes_of(scene.octree->nodes));
-      sizes.push_back(bytes_of(scene.octree->leaves));
-      sizes.push_back(bytes_of(scene.octree->triangles));
-      data = {scene.octree->nodes.data(), scene.octree->leaves.data(),
-              scene.octree->triangles.data()};
+      sizes.push_back(bytes_of(scene.octree.nodes));
+      sizes.push_back(bytes_of(scene.octree.leaves));
+      sizes.push_back(bytes_of(scene.octree.triangles));
+      data = {scene.octree.nodes.data(), scene.octree.leaves.data(),
+              scene.octree.triangles.data()};
       kernel = std::make_unique<Kernel>(program, "sdf_cast_octree");
     }
     check_fits(device, sizes);
@@ -336,7 +337,7 @@ void run_device(const Device& device, std::size_t slot, SharedScene& shared_scen
       accel[i] = owned[5 + i]->get();
     }
     result.timings.upload += seconds_since(upload_start);
-    if (!scene.bvh && !scene.bvh8) accel_root = &scene.octree->root;
+    if (scene.tree()) accel_root = &scene.octree.root;
   }
   // The results, made last: a device tree's build no longer holds its scratch by now.
   Buffer raw(s, n * sizeof(float), nullptr);

@@ -12,24 +12,14 @@
 #include <vector>
 
 #include "accel/bvh.h"
-#include "accel/bvh4.h"
-#include "accel/bvh8.h"
+#include "accel/scene.h"
 #include "mesh/mesh.h"
-#include "accel/octree.h"
 #include "util/parallel.h"
 #include "prepare/rays.h"
 #include "prepare/sampling.h"
 #include "devices.h"
 
 namespace sdf::cl {
-
-// Either the octree or a BVH is set. bvh8 is the 8-wide collapse of the binary tree, with its
-// own triangles (bvh may then be null: no device casts it).
-struct Scene {
-  const Bvh* bvh = nullptr;
-  const Bvh8* bvh8 = nullptr;
-  const Octree* octree = nullptr;
-};
 
 // The kernels that cast a BVH: the binary or 8-wide tree, one work item per point or per ray.
 // The octree has one kernel.
@@ -38,12 +28,13 @@ enum class CastKernel { BvhPerPoint, Bvh8PerPoint, BvhPerRay };
 // The kernel `device` runs (see opencl_engine.cpp for the measurements behind the choice).
 CastKernel cast_kernel_for(const Device& device);
 
-// Which trees `devices` cast, for the caller to build (Scene::bvh, bvh8).
+// Which trees `devices` cast, for the caller to build (Scene::widths).
 BvhWidths wanted_bvhs(const std::vector<const Device*>& devices);
 
 // The scene, from where the caller makes it: cast_opencl calls it once, from a device thread
 // once the points are on their way to the devices, so the caller can still be building it.
-using SceneSource = std::function<Scene()>;
+// The scene outlives the cast.
+using SceneSource = std::function<const Scene&()>;
 
 struct CastTimings {
   double upload = 0.0, cast = 0.0, download = 0.0;

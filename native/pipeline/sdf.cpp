@@ -12,6 +12,7 @@
 #include "accel/bvh4.h"
 #include "accel/bvh8.h"
 #include "accel/bvh_margin.h"
+#include "accel/scene.h"
 #include "cast/cpu_engine.h"
 #include "prepare/orientation.h"
 #include "util/stopwatch.h"
@@ -30,17 +31,6 @@ void report(const ProgressFn& progress, double fraction) {
 }
 
 const char* accel_name(Accel a) { return a == Accel::Bvh ? "bvh" : "octree"; }
-
-// The acceleration structure options.accel asks for: the binary BVH (boxes grown so that no
-// engine prunes a hit, see bvh_margin.h) and its collapses in `widths`, or the octree. The
-// 4-wide tree points at the binary tree's triangles, so a Structures never moves; the 8-wide
-// one copies them, and the binary tree is then freed unless a caster reads it.
-struct Structures {
-  Bvh bvh;
-  Bvh4 wide4;
-  Bvh8 wide8;
-  Octree tree;
-};
 
 // BvhQuality::Fast's threshold: 256 to 16384 measured within 2% of each other end to end on
 // the H100 (1024: 178 ms; 64: 199 ms, little faster to build than SAH everywhere).
@@ -157,12 +147,13 @@ class BackgroundBvh {
   bool deferred_ = false;
 };
 
-// Completes `s` from the binary tree (or builds the octree) once the mesh is oriented. Adds
-// the build's own time to out.timings as 'build' (the background part ran beside 'prepare'),
-// and the time this call took as 'build wait': what the build added to the wall time.
-void finish_structures(const Mesh& mesh, const Options& options, const Plan& plan,
-                       std::unique_ptr<BackgroundBvh>& background, bool turned, Structures& s,
-                       Output& out) {
+// Completes the scene once the mesh is oriented: the binary BVH (boxes grown so that no engine
+// prunes a hit, see bvh_margin.h) and its collapses in plan.widths, the binary tree freed
+// unless a caster reads it (the 4-wide tree reads its triangles); or the octree. Adds the
+// build's own time to out.timings as 'build' (the background part ran beside 'prepare'), and
+// the time this call took as 'build wait': what the build added to the wall time.
+void finish_scene(const Mesh& mesh, const Options& options, const Plan& plan,
+                  std::unique_ptr<BackgroundBvh>& background, bool turned, Scene& s, Output& out) {
   Stopwatch clock, wait;
   double seconds = 0.0;
   if (options.accel == Accel::Bvh) {
@@ -170,11 +161,13 @@ void finish_structures(const Mesh& mesh, const Options& options, const Plan& pla
     background.reset();
     clock.lap();  // the wait for the background build is not the build's time
     grow_boxes_to_cover_hits(s.bvh, options.threads);
-    if (plan.widths.four) s.wide4 = collapse_to_bvh4(s.bvh);
-    if (plan.widths.eight) s.wide8 = collapse_to_bvh8(s.bvh);
+    if (plan.widths.four) s.bvh4 = collapse_to_bvh4(s.bvh);
+    if (plan.widths.eight) s.bvh8 = collapse_to_bvh8(s.bvh);
     if (plan.widths.eight && !plan.widths.binary && !plan.widths.four) s.bvh = Bvh();
+    s.widths = plan.widths;
   } else {
-    s.tree = build_octree(mesh, options.octree);
+    s.octree = build_octree(mesh, options.octree);
+    s.has_octree = true;
   }
   out.timings.emplace_back("build", seconds + clock.lap());
   out.timings.emplace_back("build wait", wait.lap());
@@ -182,20 +175,9 @@ void finish_structures(const Mesh& mesh, const Options& options, const Plan& pla
 
 // Casting and reducing are fused per point: the lengths never leave the cache (CPU) or the
 // registers (OpenCL).
-void cast_on_cpu(const Options& options, const Plan& plan, const Structures& built,
-                 const Mesh& mesh, const SamplePoints& points,
-                 const std::vector<std::uint32_t>& order, const Cone& cone, Output& out,
-                 const ProgressFn& progress) {
-  CpuScene scene;
-  if (options.accel == Accel::Bvh) {
-    if (plan.widths.eight) {
-      scene.bvh8 = &built.wide8;
-    } else {
-      scene.bvh4 = &built.wide4;
-    }
-  } else {
-    scene.octree = &built.tree;
-  }
+void cast_on_cpu(const Options& options, const Scene& scene, const Mesh& mesh,
+                 const SamplePoints& points, const std::vector<std::uint32_t>& order,
+                 const Cone& cone, Output& out, const ProgressFn& progress) {
   Stopwatch clock;
   cast_cpu(scene, points, order, cone, minimum_closeness(mesh), options.threads, out.raw.data(),
            out.valid_rays.data(), progress, 0.05, 0.99);
@@ -206,23 +188,6 @@ void cast_on_cpu(const Options& options, const Plan& plan, const Structures& bui
 }
 
 #ifdef SDF_HAVE_OPENCL
-// The structure is finished from a device thread once the points are uploaded (build_scene):
-// their upload overlaps the build.
-cl::SceneSource scene_source(const Options& options, const Plan& plan,
-                             const std::function<const Structures&()>& build_scene) {
-  return [&options, &plan, build_scene] {
-    const Structures& built = build_scene();
-    cl::Scene scene;
-    if (options.accel == Accel::Bvh) {
-      scene.bvh = plan.widths.binary ? &built.bvh : nullptr;
-      scene.bvh8 = plan.widths.eight ? &built.wide8 : nullptr;
-    } else {
-      scene.octree = &built.tree;
-    }
-    return scene;
-  };
-}
-
 void cast_on_opencl(const Options& options, const Plan& plan, const cl::CastInput& input,
                     const Mesh& mesh, const Cone& cone, Output& out, const ProgressFn& progress,
                     const std::function<void()>& beside_cast) {
@@ -415,10 +380,10 @@ Output compute(Mesh mesh, const Options& options, const ProgressFn& progress,
   out.timings.insert(out.timings.end(), steps.begin(), steps.end());
   report(progress, 0.02);  // a cancel here unwinds through the background build's wait
 
-  Structures built;
+  Scene built;
   const bool turned = out.orientation.flipped_faces > 0;
-  auto build_scene = [&]() -> const Structures& {
-    finish_structures(mesh, options, plan, background, turned, built, out);
+  auto build_scene = [&]() -> const Scene& {
+    finish_scene(mesh, options, plan, background, turned, built, out);
     return built;
   };
 
@@ -437,7 +402,7 @@ Output compute(Mesh mesh, const Options& options, const ProgressFn& progress,
   if (cpu) {
     build_scene();
     report(progress, 0.05);
-    cast_on_cpu(options, plan, built, mesh, points, order, cone, out, progress);
+    cast_on_cpu(options, built, mesh, points, order, cone, out, progress);
     if (timed_beside_cast) timed_beside_cast();
   } else {
 #ifdef SDF_HAVE_OPENCL
@@ -445,7 +410,9 @@ Output compute(Mesh mesh, const Options& options, const ProgressFn& progress,
     if (plan.tree_on_device) {
       input.mesh = &mesh;
     } else {
-      input.scene = scene_source(options, plan, build_scene);
+      // The scene is finished from a device thread once the points are uploaded: their upload
+      // overlaps the build.
+      input.scene = build_scene;
       input.points = &points;
       input.order = order.data();
     }

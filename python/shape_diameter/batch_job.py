@@ -18,9 +18,10 @@ from . import _core
 from .api import compute, engines
 from .cli_jobs import EXIT_ENVIRONMENT, EXIT_USAGE, CommandError
 from .colormap import colormap, segment_colors
+from .engine_choice import DEVICE_ERRORS
 from .output_files import written_whole
 from .segmentation import segment
-from .smoothing import DEVICE_ERRORS, texture_cost
+from .smoothing import texture_cost
 
 # Texture smoothing estimated past this on the CPU threads is announced before it starts (a
 # 8192^2 run at a radius of 8192 texels went on for an hour without a word).

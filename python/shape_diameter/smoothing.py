@@ -19,27 +19,15 @@ from typing import Callable, NamedTuple, Optional
 import numpy as np
 
 from . import _core
+from .checks import check_mesh as _check_mesh
+from .checks import check_progress
+from .engine_choice import check_engine as _check_engine
+from .engine_choice import resolve_engine as _resolve_engine
+from .engine_choice import run_with_fallback
 from .normalization import check_finite_float32, check_threads
 from .warning_log import warn
 
 METHODS = ("none", "kring", "projected", "texture", "bilateral")
-
-# What engine='auto' takes for a failed device (and then runs on the CPU): the OpenCL
-# engine's own errors, including a device too small for the work. Any other exception, a
-# progress callback's cancel above all, propagates.
-DEVICE_ERRORS = (_core.OpenCLError,) if hasattr(_core, "OpenCLError") else ()
-
-
-def run_with_fallback(run, chosen, engine):
-    """run(chosen); with engine='auto', a device failure (DEVICE_ERRORS) runs it again on the
-    CPU. Returns the result and that failure (None when there was none)."""
-    try:
-        return run(chosen), None
-    except DEVICE_ERRORS as error:
-        if engine != "auto" or chosen == "cpu":
-            raise
-        return run("cpu"), error
-
 
 # Every option of every method with its default. None means "chosen from the input" (k-ring:
 # k from the face count; texture: radius from the texture size), see smooth().
@@ -180,8 +168,7 @@ def smooth(
     values, points = _check_values(values, points, len(v), len(t))
     resolved = check_smoothing(method, options, uvs=uvs, face_count=len(t), vertex_count=len(v),
                                triangles=t)  # fmt: skip
-    if progress is not None and not callable(progress):
-        raise ValueError("progress must be a callable taking a fraction in [0, 1], or None")
+    check_progress(progress)
     _check_engine(engine)
     if method == "bilateral":
         check_bilateral_points(points)
@@ -402,47 +389,32 @@ def run_checked(
         timings["bilateral"] = time.perf_counter() - start
         return out.astype(np.float32)
     if method == "kring":
-        out = _core.smooth_kring(
-            v,
-            t,
-            values,
-            points,
-            -1 if o["k"] is None else o["k"],
-            0.0 if o["sigma"] is None else o["sigma"],
-            0.0 if o["corner_angle"] is None else o["corner_angle"],
-            _weld_argument(o),
-            threads,
-            progress,
-        )
-        timings.update(out["timings"])
-        return out["values"]
-    if method == "projected" and prepared is None:
-        # It moves points along the mesh in 32-bit floats: far from unit size (7% off at 1e10
-        # units) it runs on the mesh and values scaled by a power of two, as compute()'s cast
-        # does, and scales back (exact).
-        width = mesh_width(v, t)
-        exponent = _core.unit_scale_exponent(width)
-        if width > 1e30:  # the core's limit, which the scaled mesh would no longer meet
-            raise ValueError(
-                f"the mesh spans {width:.3g} units on an axis, more than the 1e30 that 32-bit "
-                "floats leave room for; scale it down"
-            )
-        if exponent:
-            scaled = run_checked(
-                np.ldexp(v, exponent),
-                t,
-                np.ldexp(values, exponent),
-                points,
-                method,
-                o,
-                threads,
-                progress,
-                engine,
-                None,
-                timings,
-            )
-            return np.ldexp(scaled, -exponent)
-    if method == "projected" and prepared is not None:
+        return _run_kring(v, t, values, points, o, threads, progress, timings)
+    if method == "projected":
+        return _run_projected(v, t, values, points, o, threads, progress, engine, prepared,
+                              timings)  # fmt: skip
+    return _run_texture(v, t, values, points, o, threads, progress, engine, prepared, timings)
+
+
+def _run_kring(v, t, values, points, o, threads, progress, timings):
+    out = _core.smooth_kring(
+        v,
+        t,
+        values,
+        points,
+        -1 if o["k"] is None else o["k"],
+        0.0 if o["sigma"] is None else o["sigma"],
+        0.0 if o["corner_angle"] is None else o["corner_angle"],
+        _weld_argument(o),
+        threads,
+        progress,
+    )
+    timings.update(out["timings"])
+    return out["values"]
+
+
+def _run_projected(v, t, values, points, o, threads, progress, engine, prepared, timings):
+    if prepared is not None:
         return _core.smooth_projected_prepared(
             prepared,
             values,
@@ -456,22 +428,48 @@ def run_checked(
             engine,
             timings,
         )
-    if method == "projected":
-        return _core.smooth_projected(
-            v,
+    # It moves points along the mesh in 32-bit floats: far from unit size (7% off at 1e10
+    # units) it runs on the mesh and values scaled by a power of two, as compute()'s cast
+    # does, and scales back (exact).
+    width = mesh_width(v, t)
+    exponent = _core.unit_scale_exponent(width)
+    if width > 1e30:  # the core's limit, which the scaled mesh would no longer meet
+        raise ValueError(
+            f"the mesh spans {width:.3g} units on an axis, more than the 1e30 that 32-bit "
+            "floats leave room for; scale it down"
+        )
+    if exponent:
+        scaled = _run_projected(
+            np.ldexp(v, exponent),
             t,
-            values,
+            np.ldexp(values, exponent),
             points,
-            o["iterations"],
-            o["max_depth"],
-            o["min_points"],
-            o["node_size_ratio"],
-            o["branch_on"],
+            o,
             threads,
             progress,
             engine,
+            None,
             timings,
         )
+        return np.ldexp(scaled, -exponent)
+    return _core.smooth_projected(
+        v,
+        t,
+        values,
+        points,
+        o["iterations"],
+        o["max_depth"],
+        o["min_points"],
+        o["node_size_ratio"],
+        o["branch_on"],
+        threads,
+        progress,
+        engine,
+        timings,
+    )
+
+
+def _run_texture(v, t, values, points, o, threads, progress, engine, prepared, timings):
     if prepared is not None:
         out = _core.smooth_texture_prepared(
             prepared,
@@ -507,9 +505,18 @@ def run_checked(
             engine,
         )
     timings.update(out["timings"])
+    _warn_of_texture_limits(out, len(t), o, engine)
+    if o["return_image"]:
+        return TextureResult(out["values"], out["image"], out["mask"])
+    return out["values"]
+
+
+def _warn_of_texture_limits(out, face_count, o, engine):
+    """Texture smoothing's words on faces its image leaves out and on a run kept off the
+    device."""
     # A few faces just over the square's edge are common (spot.obj's layout: 0.05% at 1.5M
     # faces) and lose little; most of them outside is a UDIM or offset layout.
-    if out["faces_outside"] > 0.01 * len(t):
+    if out["faces_outside"] > 0.01 * face_count:
         # A bake (the add-on's) asks for the image: say that it leaves these faces out.
         reach = (
             "the image leaves them out and texture smoothing does not reach them (they "
@@ -518,7 +525,7 @@ def run_checked(
             else "texture smoothing does not reach them and they keep their values"
         )
         warn(
-            f"{out['faces_outside']} of {len(t)} faces have UVs wholly outside the [0, 1] "
+            f"{out['faces_outside']} of {face_count} faces have UVs wholly outside the [0, 1] "
             f"square (UDIM tiles or an offset layout): {reach}; move each tile's UVs into the "
             "square to include them"
         )
@@ -530,19 +537,9 @@ def run_checked(
             "work item; wrap-around faces of a spherical layout do this); the values are the "
             "same, and a smaller texture_size keeps it on the device"
         )
-    if o["return_image"]:
-        return TextureResult(out["values"], out["image"], out["mask"])
-    return out["values"]
 
 
 # ---- Checks ----
-
-
-def _check_mesh(vertices, triangles, threads):
-    # The same rules and messages as compute() (imported late: api imports this module).
-    from .api import _check_mesh as check
-
-    return check(vertices, triangles, threads)
 
 
 def _check_values(values, points, n, m):
@@ -610,19 +607,6 @@ def _check_uvs_cover_an_area(corners):
             "never unwrapped?): texture smoothing and bakes need a UV layout; "
             "unwrap the mesh first"
         )
-
-
-def _check_engine(engine):
-    # compute()'s rules and messages (imported late: api imports this module).
-    from .api import _check_engine as check
-
-    check(engine)
-
-
-def _resolve_engine(engine):
-    from .api import _resolve_engine as resolve
-
-    return resolve(engine)
 
 
 def _integer(name, value, lo, hi):

@@ -98,6 +98,8 @@ NOT_READING = [
 ]
 EXCLUDE = [f"trimesh.{name}" for name in NOT_READING] + [
     "shape_diameter.api",
+    "shape_diameter.checks",
+    "shape_diameter.engine_choice",
     "shape_diameter.smoothing",
     "shape_diameter.normalization",
 ]
