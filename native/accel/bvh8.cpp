@@ -131,7 +131,7 @@ bool bvh8_supported() {
   // PoCL's 4-wide kernel) end to end on the machines they have.
   const char* no_avx2 = std::getenv("SDF_CPU_NO_AVX2");
   if (no_avx2 && std::string(no_avx2) == "1") return false;
-  return __builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma");
+  return cpu_features().avx2 && cpu_features().fma;
 #else
   return false;
 #endif
