@@ -15,12 +15,18 @@
 
 namespace sdf {
 
-// Exactly one of the three is set. bvh8 only where bvh8_supported() (AVX2), else bvh4.
+// Exactly one is set. A BVH of the width cpu_bvh_width() gives.
 struct CpuScene {
   const Bvh8* bvh8 = nullptr;
   const Bvh4* bvh4 = nullptr;
+  const Bvh* bvh = nullptr;
   const Octree* octree = nullptr;
 };
+
+// The BVH the CPU engine casts on this build and CPU: the 8-wide tree where bvh8_supported()
+// (AVX2), else the 4-wide one on x86-64 (SSE), else (aarch64, ...) the binary tree through
+// the kernels' own traversal (kernels/traverse/sdf_bvh_traverse.h). All give the same hits.
+BvhWidths cpu_bvh_width();
 
 // For each point: cast its cone of rays, keep the nearest hit of each ray when it lies beyond
 // min_closeness, is not on the point's own face and leaves the solid through the hit face

@@ -66,9 +66,7 @@ Plan make_plan(const Options& options, [[maybe_unused]] std::size_t faces) {
   Plan plan;
   plan.fast_build = options.bvh_quality == BvhQuality::Fast;
   if (options.engine == "cpu") {
-    // The 8-wide tree needs AVX2 (chosen at run time); without it the 4-wide SSE tree.
-    plan.widths.eight = bvh8_supported();
-    plan.widths.four = !plan.widths.eight;
+    plan.widths = cpu_bvh_width();  // 8-wide with AVX2, 4-wide with SSE, else binary
     return plan;
   }
 #ifdef SDF_HAVE_OPENCL
@@ -187,11 +185,17 @@ void cast_on_cpu(const Options& options, const Plan& plan, const Structures& bui
                  const std::vector<std::uint32_t>& order, const Cone& cone, Output& out,
                  const ProgressFn& progress) {
   CpuScene scene;
+  std::string structure = accel_name(options.accel);
   if (options.accel == Accel::Bvh) {
     if (plan.widths.eight) {
       scene.bvh8 = &built.wide8;
-    } else {
+      structure += ", 8-wide";
+    } else if (plan.widths.four) {
       scene.bvh4 = &built.wide4;
+      structure += ", 4-wide";
+    } else {
+      scene.bvh = &built.bvh;
+      structure += ", binary";
     }
   } else {
     scene.octree = &built.tree;
@@ -202,7 +206,7 @@ void cast_on_cpu(const Options& options, const Plan& plan, const Structures& bui
   out.timings.emplace_back("cast", clock.lap());
   const unsigned threads = resolve_threads(options.threads);
   out.engine = "cpu (" + std::to_string(threads) + (threads == 1 ? " thread, " : " threads, ") +
-               accel_name(options.accel) + ")";
+               structure + ")";
 }
 
 #ifdef SDF_HAVE_OPENCL
