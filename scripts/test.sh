@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # SPDX-License-Identifier: GPL-3.0-or-later
-# Every test: set-up, C++ tests (ctest) with the CGAL reference built beside them, the
-# extension inside two real Blenders (bpy from PyPI), then pytest.
+# Every test: set-up, C++ tests (ctest) with the CGAL reference built beside them, the same
+# cross-compiled for aarch64 and run under qemu, the extension inside two real Blenders (bpy
+# from PyPI), then pytest.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 bash scripts/setup.sh
@@ -11,6 +12,8 @@ cmake -S . -B build/cpp -G Ninja -DCMAKE_BUILD_TYPE=Release -DSDF_BUILD_TESTS=ON
 cmake --build build/cpp
 echo "test: ctest"
 ctest --test-dir build/cpp --output-on-failure
+echo "test: aarch64"
+bash scripts/cross_aarch64.sh
 bash scripts/fuzz.sh
 
 echo "test: Blender"
