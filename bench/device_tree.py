@@ -1,15 +1,15 @@
 # SPDX-License-Identifier: GPL-3.0-or-later
 """The BVH made on the device against the host's, end to end: compute() on one OpenCL
-device with SDF_OPENCL_TREE=host and =device, alternating in one run, the fastest of --repeat
-calls of each by wall time, for each orientation (and for a mesh whose faces 'auto' must
-reverse); checks that both give the same values.
+device with the test override opencl_tree=host and =device, alternating in one run, the
+fastest of --repeat calls of each by wall time, for each orientation (and for a mesh whose
+faces 'auto' must reverse); checks that both give the same values.
 
     python bench/device_tree.py [ENGINE [MESH,MESH]] [--rays R] [--repeat N] [--rounds N]
         [--vary NAME=A,B]
 
 Prints one row a setting: wall time of each tree, their ratio, and the stages of each.
---vary compares two values of another environment variable instead, on the device's tree
-(e.g. SDF_OPENCL_WIDE=0,1: the binary tree against the 8-wide one)."""
+--vary compares two values of another test override instead, on the device's tree (e.g.
+opencl_kernel=bvh_per_ray,bvh_per_point; docs/testing.md lists them)."""
 
 import argparse
 import os
@@ -43,12 +43,12 @@ SETTINGS = (
 
 def timed(v, f, setting, args, orientation):
     import shape_diameter as sd
+    from shape_diameter import _testing
 
-    os.environ["SDF_OPENCL_TREE"] = "device"
-    os.environ[args.name] = setting
-    t0 = time.perf_counter()
-    r = sd.compute(v, f, rays=args.rays, engine=args.engine, orientation=orientation)
-    return (time.perf_counter() - t0) * 1e3, r
+    with _testing.overrides(**{"opencl_tree": "device", args.name: setting}):
+        t0 = time.perf_counter()
+        r = sd.compute(v, f, rays=args.rays, engine=args.engine, orientation=orientation)
+        return (time.perf_counter() - t0) * 1e3, r
 
 
 def main():
@@ -65,8 +65,8 @@ def main():
     )
     parser.add_argument(
         "--vary",
-        default="SDF_OPENCL_TREE=host,device",
-        help="the environment variable and its two values to compare",
+        default="opencl_tree=host,device",
+        help="the test override and its two values to compare",
     )
     args = parser.parse_args()
     args.name, values = args.vary.split("=", 1)
@@ -110,8 +110,6 @@ def main():
                     + f" | device memory {device[1].device_memory / len(f):.0f} B/face ({first}: "
                     f"{host[1].device_memory / len(f):.0f})"
                 )
-    os.environ.pop("SDF_OPENCL_TREE", None)
-    os.environ.pop(args.name, None)
 
 
 if __name__ == "__main__":

@@ -16,6 +16,7 @@ import numpy as np
 sys.path.insert(0, os.path.dirname(__file__))
 import shape_diameter as sd  # noqa: E402
 from meshes import benchmark_meshes  # noqa: E402
+from shape_diameter import _testing  # noqa: E402
 
 if any(a in ("-h", "--help") for a in sys.argv[1:]):
     sys.exit(print(__doc__))
@@ -36,10 +37,8 @@ for name, v, f in benchmark_meshes(largest="bunny00-x16" in wanted):  # made and
     for _ in range(rounds):
         for eng, kernel in contenders:
             label = kernel or eng
-            if kernel:
-                os.environ["SDF_OPENCL_KERNEL"] = kernel
-            r = sd.compute(v, f, rays=RAYS, engine=eng, orientation="as_is", bvh_quality="high")
-            os.environ.pop("SDF_OPENCL_KERNEL", None)
+            with _testing.overrides(opencl_kernel=kernel or "engine"):
+                r = sd.compute(v, f, rays=RAYS, engine=eng, orientation="as_is", bvh_quality="high")
             rays_per_s = len(r.raw) * RAYS / r.timings["cast"]
             best[label] = max(best.get(label, 0.0), rays_per_s)
             values[label] = r.raw

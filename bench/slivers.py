@@ -1,7 +1,7 @@
 # SPDX-License-Identifier: GPL-3.0-or-later
 """Slivers lying across the axes, cut into pieces for the BVH (native/accel/bvh_split.h), against
-the same build without cutting (SDF_BVH_SPLIT=0), in one run, alternating: CAD-like fans and
-needles, and real meshes, whose few slivers must cost nothing.
+the same build without cutting (the no_sliver_cutting test override), in one run, alternating:
+CAD-like fans and needles, and real meshes, whose few slivers must cost nothing.
 
     .venv/bin/python bench/slivers.py [--rounds 3] [--engine cpu] [--bvh-quality auto]
 
@@ -17,7 +17,7 @@ import sys
 
 import numpy as np
 import shape_diameter as sd
-from shape_diameter import _core
+from shape_diameter import _testing
 
 sys.path.insert(0, os.path.dirname(__file__))
 from meshes import DATA, read_off  # noqa: E402
@@ -69,10 +69,10 @@ def needles(count, seed=0):
 
 
 def cast_ms(vertices, faces, args, cut):
-    os.environ["SDF_BVH_SPLIT"] = "1" if cut else "0"
-    result = sd.compute(
-        vertices, faces, engine=args.engine, bvh_quality=args.bvh_quality, orientation="as_is"
-    )
+    with _testing.overrides(no_sliver_cutting=not cut):
+        result = sd.compute(
+            vertices, faces, engine=args.engine, bvh_quality=args.bvh_quality, orientation="as_is"
+        )
     return result.timings["cast"] * 1e3, result.raw
 
 
@@ -95,8 +95,7 @@ def main():
     print("| mesh | faces | BVH refs | cast ms uncut | cast ms cut | uncut/cut | values equal |")
     print("|---|---:|---:|---:|---:|---:|---|")
     for name, vertices, faces in cases:
-        os.environ.pop("SDF_BVH_SPLIT", None)
-        refs = _core.bvh_stats(vertices, faces)["triangles"]
+        refs = _testing.bvh_stats(vertices, faces)["triangles"]
         times = {False: [], True: []}
         values = {}
         for _ in range(args.rounds):

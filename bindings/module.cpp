@@ -11,32 +11,30 @@
 #include <memory>
 #include <utility>
 
-#include <chrono>
 #include <cstddef>
 
 #include "traverse/sdf_octree.h"
 #include "ray/sdf_reduce.h"
 #include "smooth/sdf_smooth_projected.h"
 #include "accel/bvh.h"
-#include "accel/bvh_stats.h"
 #include "post/normalize.h"
 #include "prepare/orientation_parts.h"
 #include "util/parallel.h"
 #include "cast_points.h"
 #include "progress.h"
+#include "test_bridge.h"
 #include "timings.h"
 #include "pipeline/sdf.h"
 #include "prepare/unit_scale.h"
 #ifdef SDF_HAVE_OPENCL
 #include "opencl/devices.h"
-#include "opencl/device_tree.h"
 #include "opencl/opencl_engine.h"
 #include "opencl/program_cache.h"
 #endif
 
 namespace py = pybind11;
 
-void bind_smoothing(py::module_& m);  // python_smoothing.cpp
+void bind_smoothing(py::module_& m);  // smoothing.cpp
 
 namespace {
 
@@ -217,73 +215,12 @@ py::list opencl_devices() {
   return list;
 }
 
-// The octree alone, for the benchmark's build-time table (paper's Table 2).
-py::dict octree_stats(const Doubles& vertices, const Int64s& triangles, int max_depth,
-                      int leaf_size) {
-  const sdf::Mesh mesh = to_mesh(vertices, triangles);
-  sdf::OctreeConfig config;
-  config.max_depth = max_depth;
-  config.leaf_size = leaf_size;
-  sdf::Octree tree;
-  double seconds = 0.0;
-  {
-    py::gil_scoped_release release;
-    const auto start = std::chrono::steady_clock::now();
-    tree = sdf::build_octree(mesh, config);
-    seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  }
-  py::dict d;
-  d["seconds"] = seconds;
-  d["nodes"] = tree.nodes.size();
-  d["leaf_words"] = tree.leaves.size();
-  d["depth"] = tree.depth;
-  return d;
-}
-
-// The BVH alone, for the build benchmark: its time, size and SAH cost (a tree quality figure).
-py::dict bvh_stats(const Doubles& vertices, const Int64s& triangles, unsigned threads) {
-  const sdf::Mesh mesh = to_mesh(vertices, triangles);
-  sdf::BvhConfig config;
-  config.threads = threads;
-  sdf::Bvh bvh;
-  double seconds = 0.0;
-  {
-    py::gil_scoped_release release;
-    const auto start = std::chrono::steady_clock::now();
-    bvh = sdf::build_bvh(mesh, config);
-    seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  }
-  py::dict d;
-  d["seconds"] = seconds;
-  d["nodes"] = bvh.nodes.size();
-  d["triangles"] = bvh.triangles.size();
-  d["depth"] = sdf::bvh_depth(bvh);
-  d["sah_cost"] = sdf::bvh_sah_cost(bvh);
-  return d;
-}
-
 std::string opencl_unavailable_reason() {
 #ifdef SDF_HAVE_OPENCL
   return sdf::cl::devices().empty() ? sdf::cl::unavailable_reason() : "";
 #else
   return "this build has no OpenCL engine";
 #endif
-}
-
-// Sizes and member offsets of the structs shared with the kernels, in the order the layout
-// probe kernel writes them.
-std::vector<std::uint32_t> host_layout() {
-  using namespace sdf::kern;
-  return {sizeof(SdfBvhNode),      offsetof(SdfBvhNode, first),     offsetof(SdfBvhNode, hi_x),
-          offsetof(SdfBvhNode, count), sizeof(SdfTriangle),         offsetof(SdfTriangle, id),
-          offsetof(SdfTriangle, e1_x), offsetof(SdfTriangle, e2_x), sizeof(SdfOctreeRoot),
-          offsetof(SdfOctreeRoot, size), sizeof(SdfCastParams),    offsetof(SdfCastParams, tmin),
-          offsetof(SdfCastParams, count), sizeof(SdfPointNode),  offsetof(SdfPointNode, half_side),
-          offsetof(SdfPointNode, count), offsetof(SdfPointNode, first_child),
-          offsetof(SdfPointNode, child_count), sizeof(SdfBvh8Node),
-          offsetof(SdfBvh8Node, hi_x), offsetof(SdfBvh8Node, child),
-          offsetof(SdfBvh8Node, count), sizeof(SdfTrianglePacket4),
-          offsetof(SdfTrianglePacket4, id)};
 }
 
 glm::vec3 unit_vector(const Floats& v, const char* what) {
@@ -368,6 +305,17 @@ py::array_t<float> normalize(const py::array_t<T, py::array::c_style>& values,
   return out;
 }
 
+// _core's OpenCL program counts, for shape_diameter._testing (test_bridge.h).
+void core_program_stats(std::uint64_t* compiled, std::uint64_t* from_cache) {
+#ifdef SDF_HAVE_OPENCL
+  const sdf::cl::ProgramStats s = sdf::cl::program_stats();
+  *compiled = s.compiled;
+  *from_cache = s.from_cache;
+#else
+  *compiled = *from_cache = 0;
+#endif
+}
+
 }  // namespace
 
 PYBIND11_MODULE(_core, m) {
@@ -380,13 +328,9 @@ PYBIND11_MODULE(_core, m) {
         py::arg("octree_leaf_size") = 8, py::arg("orientation") = "auto", py::arg("bvh_quality") = "auto",
         py::arg("beside_cast") = py::none(), py::arg("find_twins") = true);
   m.def("opencl_devices", &opencl_devices);
-  m.def("octree_stats", &octree_stats, py::arg("vertices"), py::arg("triangles"),
-        py::arg("max_depth") = 10, py::arg("leaf_size") = 8);
   m.def("normalize", &normalize<float>, py::arg("values"), py::arg("method"),
         py::arg("threads") = 0);
   m.def("normalize", &normalize<double>, py::arg("values"), py::arg("method"),
-        py::arg("threads") = 0);
-  m.def("bvh_stats", &bvh_stats, py::arg("vertices"), py::arg("triangles"),
         py::arg("threads") = 0);
   m.def("opencl_unavailable_reason", &opencl_unavailable_reason);
   m.def("opencl_gpu_lost_to_fork", [] {
@@ -407,36 +351,7 @@ PYBIND11_MODULE(_core, m) {
 #endif
   }, "The indices of the devices an OpenCL engine string selects; ValueError as compute() "
      "would raise it (OpenCL not available, no device matching).");
-  m.def("host_layout", &host_layout);
 #ifdef SDF_HAVE_OPENCL
-  m.def("opencl_layout", [](int index) {
-    py::gil_scoped_release release;
-    return sdf::cl::probe_layout(index);
-  });
-  m.def("opencl_tree_keys", [](const Doubles& vertices, const Int64s& triangles, int index) {
-    const sdf::Mesh mesh = to_mesh(vertices, triangles);
-    sdf::cl::TreeKeys keys;
-    {
-      py::gil_scoped_release release;
-      keys = sdf::cl::device_tree_keys(index, mesh);
-    }
-    return py::make_tuple(
-        py::array_t<std::uint32_t>(keys.order.size(), keys.order.data()),
-        py::array_t<std::uint32_t>(keys.codes.size(), keys.codes.data()), keys.with_area,
-        keys.margin);
-  }, "Test hook: the device-built tree's keys (order, codes, faces with area, margin) as "
-     "device `index` makes them.");
-  m.def("opencl_build_source", [](int index, const std::string& source) {
-    py::gil_scoped_release release;
-    sdf::cl::build_source_for_test(index, source);
-  }, "Test hook: build an OpenCL source on device `index`; raises with the build log.");
-  m.def("opencl_program_stats", [] {
-    const sdf::cl::ProgramStats s = sdf::cl::program_stats();
-    py::dict d;
-    d["compiled"] = s.compiled;
-    d["from_cache"] = s.from_cache;
-    return d;
-  });
   m.def("opencl_cache_directory", &sdf::cl::cache_directory);
   py::register_exception<sdf::cl::Error>(m, "OpenCLError", PyExc_RuntimeError);
 #endif
@@ -497,4 +412,9 @@ PYBIND11_MODULE(_core, m) {
   m.attr("MAX_RAYS") = sdf::kMaxRays;
   m.attr("NEAR_CUTOFF_SHARE") = sdf::kNearCutoffShare;
   bind_smoothing(m);
+  // For the test-only module shape_diameter._testing alone (test_bridge.h).
+  static sdf::TestBridge bridge{
+      [](const sdf::TestOverrides& overrides) { sdf::test_overrides() = overrides; },
+      &core_program_stats};
+  m.attr("_test_bridge") = py::capsule(&bridge, sdf::kTestBridgeName);
 }

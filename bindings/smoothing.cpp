@@ -339,31 +339,6 @@ py::dict smooth_texture_prepared(const sdf::PreparedTexture& prepared, const Flo
   });
 }
 
-py::tuple weld_vertices(const Doubles& vertices, const Int64s& triangles, double tolerance) {
-  const sdf::Mesh mesh = mesh_from(vertices, triangles);
-  sdf::Weld weld;
-  {
-    py::gil_scoped_release release;
-    weld = sdf::weld_vertices(mesh.vertices.data(), mesh.vertices.size(),
-                              sdf::weld_tolerance(mesh, tolerance));
-  }
-  py::array_t<std::int64_t> merged(static_cast<py::ssize_t>(weld.merged.size()));
-  std::copy(weld.merged.begin(), weld.merged.end(), merged.mutable_data());
-  return py::make_tuple(merged, weld.count);
-}
-
-py::array_t<std::int32_t> uv_islands(const Doubles& vertices, const Int64s& triangles,
-                                     const Floats& uvs, double weld_tolerance) {
-  const sdf::Mesh mesh = mesh_from(vertices, triangles);
-  require_corner_uvs(uvs, mesh);
-  std::vector<std::int32_t> islands;
-  {
-    py::gil_scoped_release release;
-    islands = sdf::uv_islands(mesh, uvs.data(), weld_tolerance);
-  }
-  return py::array_t<std::int32_t>(static_cast<py::ssize_t>(islands.size()), islands.data());
-}
-
 }  // namespace
 
 void bind_smoothing(py::module_& m) {
@@ -411,8 +386,4 @@ void bind_smoothing(py::module_& m) {
         py::arg("progress"), py::arg("engine") = "cpu");
   m.def("default_kring_k", [](std::size_t faces) { return sdf::default_kring_k(faces); },
         py::arg("faces"));
-  m.def("weld_vertices", &weld_vertices, py::arg("vertices"), py::arg("triangles"),
-        py::arg("tolerance"));
-  m.def("uv_islands", &uv_islands, py::arg("vertices"), py::arg("triangles"), py::arg("uvs"),
-        py::arg("weld_tolerance"));
 }

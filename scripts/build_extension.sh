@@ -11,14 +11,17 @@
 #     behind `blender --command extension build --split-platforms` and `... validate`), run by
 #     a plain Python from the bpy package in .venv-bpy45 (made here when missing).
 #
-# Environment: PY311, PY313 (interpreters), BPY45_VENV (default .venv-bpy45), SDF_REUSE_WHEELS.
+# Environment: PY311, PY313 (interpreters), BPY45_VENV (default .venv-bpy45), SDF_REUSE_WHEELS,
+# SDF_WHEELS (default "cp311 cp313"; the demo, which renders with Blender 4.5, builds only
+# cp311, so it needs no Python 3.13: the zip then lists only that wheel).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 ROOT=$PWD
 
 source scripts/pythons.sh
+SDF_WHEELS=${SDF_WHEELS:-cp311 cp313}
 need_python PY311 3.11 "the extension's wheel for Blender 4.2 to 5.0"
-need_python PY313 3.13 "the extension's wheel for Blender 5.1 and later"
+case " $SDF_WHEELS " in *" cp313 "*) need_python PY313 3.13 "the extension's wheel for Blender 5.1 and later" ;; esac
 BPY45_VENV=${BPY45_VENV:-.venv-bpy45}
 log() { echo "build_extension: $*"; }
 
@@ -47,11 +50,19 @@ fi
 
 # 1. Wheels. SDF_REUSE_WHEELS=1 keeps the last ones (to iterate on addon/ alone).
 WHEEL_DIR=build/ext-wheels
-if [ "${SDF_REUSE_WHEELS:-0}" = 1 ] && [ "$(ls "$WHEEL_DIR"/*.whl 2>/dev/null | wc -l)" = 2 ]; then
+PYTHONS=()
+for tag in $SDF_WHEELS; do
+  case $tag in
+    cp311) PYTHONS+=("$PY311") ;;
+    cp313) PYTHONS+=("$PY313") ;;
+    *) log "error: SDF_WHEELS names $tag (cp311 or cp313)" >&2; exit 2 ;;
+  esac
+done
+if [ "${SDF_REUSE_WHEELS:-0}" = 1 ] &&
+   [ "$(ls "$WHEEL_DIR"/*.whl 2>/dev/null | wc -l)" = "${#PYTHONS[@]}" ]; then
   PYTHONS=()
   log "reusing the wheels in $WHEEL_DIR"
 else
-  PYTHONS=("$PY311" "$PY313")
   rm -rf "$WHEEL_DIR"
 fi
 mkdir -p "$WHEEL_DIR"
@@ -65,8 +76,9 @@ for PY in "${PYTHONS[@]}"; do
   fi
   "$VENV/bin/python" -m pip install -q "scikit-build-core>=0.10" "pybind11>=2.12"
   log "building the $TAG wheel"
+  # Without the test-only module shape_diameter._testing: nothing in Blender uses it.
   "$VENV/bin/python" -m pip wheel . --no-deps --no-build-isolation -q -w "$WHEEL_DIR" \
-    -C build-dir="build/ext-{wheel_tag}"
+    -C build-dir="build/ext-{wheel_tag}" -C cmake.define.SDF_BUILD_TESTING_MODULE=OFF
 done
 ls "$WHEEL_DIR"
 
@@ -78,14 +90,22 @@ cp -r addon/. "$STAGE/"
 find "$STAGE" -name __pycache__ -type d -prune -exec rm -rf {} +
 cp blender_manifest.toml "$STAGE/"
 cp "$WHEEL_DIR"/*.whl "$STAGE/wheels/"
-"$PY311" - "$STAGE" <<'EOF'
-import os, sys, tomllib
-stage = sys.argv[1]
-manifest = tomllib.load(open(os.path.join(stage, "blender_manifest.toml"), "rb"))
-listed = sorted(os.path.normpath(w) for w in manifest.get("wheels", []))
+"$PY311" - "$STAGE" $SDF_WHEELS <<'EOF'
+import os, re, sys, tomllib
+stage, tags = sys.argv[1], sys.argv[2:]
+path = os.path.join(stage, "blender_manifest.toml")
+manifest = tomllib.load(open(path, "rb"))
+wanted = [w for w in manifest.get("wheels", []) if any(f"-{t}-" in w for t in tags)]
+listed = sorted(os.path.normpath(w) for w in wanted)
 built = sorted(os.path.join("wheels", f) for f in os.listdir(os.path.join(stage, "wheels")))
 if listed != built:
     sys.exit(f"build_extension: blender_manifest.toml lists wheels {listed}, but the build made {built}")
+# The staged manifest lists only the wheels built (all of them unless SDF_WHEELS says less).
+text = open(path).read()
+for w in manifest["wheels"]:
+    if w not in wanted:
+        text = re.sub(rf'\n\s*"{re.escape(w)}",?', "", text)
+open(path, "w").write(text)
 EOF
 
 # 3. Blender's build and validate logic, from the bpy package.

@@ -11,7 +11,7 @@ MESH=${1:-tests/data/bunny00.off}
 name=$(basename "${MESH%.*}")
 .venv/bin/shape-diameter "$MESH" -o "out/$name.sdf.ply" --values "out/$name.sdf.npy" --json
 
-bash scripts/build_extension.sh
+SDF_WHEELS=cp311 bash scripts/build_extension.sh  # Blender 4.5 renders: Python 3.11 alone
 source scripts/blender_venv.sh
 bpy45_venv
 ZIP=$(ls -t dist/shape_diameter-*-linux_x64.zip | head -1)

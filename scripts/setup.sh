@@ -37,7 +37,8 @@ fi
 # directory that survives between runs (incremental rebuilds).
 .venv/bin/python -m pip install -q --upgrade pip
 .venv/bin/python -m pip install -q "scikit-build-core>=0.10" "pybind11>=2.12" numpy \
-  "trimesh>=4.4" "tqdm>=4.60" "pytest>=7" "scipy>=1.9" "atheris>=2.3"
+  "trimesh>=4.4" "tqdm>=4.60" "pytest>=7" "scipy>=1.9" "atheris>=2.3" \
+  "dask[distributed]>=2024.8"
 echo "setup: building shape_diameter"
 .venv/bin/python -m pip install -q --no-build-isolation --no-deps ".[cli,test]"
 .venv/bin/python -c "import shape_diameter as s; print('setup: shape_diameter', s.__version__, 'engines:', [e['name'] for e in s.engines()])"

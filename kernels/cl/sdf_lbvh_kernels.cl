@@ -24,7 +24,7 @@
  * 48.9 ms with leaves of at most 1, 50.6-50.7 with 2, 53.4 with 3, 56.8 with 4, 63.0 with 6,
  * 69.3 with 8 (64 rays: 109.3, 113.5-113.6, 119.2, 126.4, 140.1, 154.1): Morton ranges make
  * looser leaves than SAH splits do. A build option may set it (benchmarks:
- * SDF_OPENCL_EXTRA_OPTIONS="-DSDF_LBVH_LEAF_SIZE=4"). */
+ * the test override opencl_extra_options="-DSDF_LBVH_LEAF_SIZE=4"). */
 #ifndef SDF_LBVH_LEAF_SIZE
 #define SDF_LBVH_LEAF_SIZE 1
 #endif

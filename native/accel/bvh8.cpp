@@ -2,11 +2,10 @@
 #include "accel/bvh8.h"
 
 #include <algorithm>
-#include <cstdlib>
 #include <limits>
-#include <string>
 
 #include "accel/bvh_collapse.h"
+#include "util/test_overrides.h"
 
 namespace sdf {
 
@@ -127,10 +126,9 @@ class Collapser {
 
 bool bvh8_supported() {
 #if SDF_HAVE_BVH8
-  // SDF_CPU_NO_AVX2=1 acts out a CPU without AVX2, so tests run the 4-wide fallback (and
-  // PoCL's 4-wide kernel) end to end on the machines they have.
-  const char* no_avx2 = std::getenv("SDF_CPU_NO_AVX2");
-  if (no_avx2 && std::string(no_avx2) == "1") return false;
+  // Tests act out a CPU without AVX2, to run the 4-wide fallback (and PoCL's 4-wide kernel)
+  // end to end on the machines they have.
+  if (test_overrides().cpu_without_avx2) return false;
   return cpu_features().avx2 && cpu_features().fma;
 #else
   return false;

@@ -4,15 +4,14 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
-#include <cstdlib>
 #include <limits>
 #include <numeric>
-#include <string>
 #include <vector>
 
 #include <glm/glm.hpp>
 
 #include "util/parallel.h"
+#include "util/test_overrides.h"
 
 namespace sdf::bvh_build {
 
@@ -138,9 +137,8 @@ int wanted_piece_level(const Box& box, float twice_area) {
 std::size_t split_slivers(const Mesh& mesh, const PieceCounts& wanted, std::size_t count,
                           unsigned threads, UninitializedVector<PrimRef>& refs,
                           UninitializedVector<PrimRef>& scratch, Range& root) {
-  // SDF_BVH_SPLIT=0 builds without cutting, for bench/slivers.py's comparison.
-  const char* setting = std::getenv("SDF_BVH_SPLIT");
-  const int cap = setting && std::string(setting) == "0" ? 0 : piece_cap(wanted, count);
+  // No cutting at all for bench/slivers.py's comparison (a test override).
+  const int cap = test_overrides().no_sliver_cutting ? 0 : piece_cap(wanted, count);
   if (cap == 0) return count;
   const std::size_t chunks = (count + kChunk - 1) / kChunk;
   auto pieces_of = [&](const PrimRef& r) {

@@ -29,7 +29,8 @@ struct Loaded {
 
 Loaded load() {
   Loaded loaded;
-  // Tests set SDF_OPENCL_LIBRARY to a path that does not exist to act out "no OpenCL".
+  // SDF_OPENCL_LIBRARY: a user setting for an OpenCL loader outside the library path
+  // (docs/python.md); tests set a path that does not exist to act out "no OpenCL".
   const char* forced = std::getenv("SDF_OPENCL_LIBRARY");
   const char* candidates[] = {forced, "libOpenCL.so.1", "libOpenCL.so"};
   void* handle = nullptr;

@@ -37,6 +37,7 @@ namespace sdf::cl {
   X(clEnqueueMapBuffer)       \
   X(clEnqueueUnmapMemObject)  \
   X(clWaitForEvents)          \
+  X(clGetEventProfilingInfo)  \
   X(clReleaseEvent)           \
   X(clEnqueueReadBuffer)      \
   X(clEnqueueNDRangeKernel)   \

@@ -2,12 +2,12 @@
 #include "device_state.h"
 
 #include <algorithm>
-#include <cstdlib>
 #include <memory>
 #include <vector>
 #include <stdexcept>
 
 #include "program_cache.h"
+#include "util/test_overrides.h"
 
 namespace sdf::cl {
 
@@ -32,11 +32,9 @@ DeviceState& state_of(const Device& device) {
     s->queue = cl.clCreateCommandQueue(s->context, device.id, 0, &err);
     check(err, "clCreateCommandQueue");
     s->stage_uploads = device.gpu;
-    if (const char* chunk = std::getenv("SDF_OPENCL_STAGING_CHUNK")) {
-      if (const long bytes = std::strtol(chunk, nullptr, 10); bytes > 0) {
-        s->stage_uploads = true;
-        s->staging.set_chunk_bytes(static_cast<std::size_t>(bytes));
-      }
+    if (const std::size_t bytes = test_overrides().opencl_staging_chunk; bytes > 0) {
+      s->stage_uploads = true;
+      s->staging.set_chunk_bytes(bytes);
     }
     slot = std::move(s);
   }
@@ -87,10 +85,11 @@ std::string build_options(const Device& device, int rays) {
   cl_device_fp_config fp = 0;
   api()->clGetDeviceInfo(device.id, CL_DEVICE_SINGLE_FP_CONFIG, sizeof fp, &fp, nullptr);
   if (fp & CL_FP_CORRECTLY_ROUNDED_DIVIDE_SQRT) options += " -cl-fp32-correctly-rounded-divide-sqrt";
-  // Benchmark hook: more options for the device's compiler, e.g. "-cl-nv-maxrregcount=40" or
-  // "-cl-nv-verbose" (the options are part of the program cache's key).
-  if (const char* extra = std::getenv("SDF_OPENCL_EXTRA_OPTIONS"))
-    if (*extra) options += std::string(" ") + extra;
+  // Benchmark override: more options for the device's compiler, e.g.
+  // "-cl-nv-maxrregcount=40" or "-cl-nv-verbose" (the options are part of the program cache's
+  // key).
+  if (const std::string& extra = test_overrides().opencl_extra_options; !extra.empty())
+    options += " " + extra;
   return options;
 }
 

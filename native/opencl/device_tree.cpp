@@ -122,11 +122,11 @@ bool makes_trees(const Device& device) { return device.max_group >= kSortGroup; 
 
 DeviceTree build_device_tree(const Device& device, DeviceState& s, const std::string& options,
                              const Mesh& mesh, const std::function<void()>& uploaded) {
-  // make_plan asks only such devices for a tree; SDF_OPENCL_TREE=device may ask any.
+  // make_plan asks only such devices for a tree; a test override may ask any.
   if (!makes_trees(device))
     throw Error("OpenCL device '" + device.name + "' cannot run work groups of " +
                     std::to_string(kSortGroup) + " items, which its tree's sort needs: "
-                    "set SDF_OPENCL_TREE=host (the host builds the tree)",
+                    "let the host build the tree",
                 CL_INVALID_WORK_GROUP_SIZE);
   const std::size_t faces = mesh.triangles.size();
   // Checked at the most faces can ask: the sort's buffers (the mesh, the order and codes and

@@ -4,7 +4,6 @@
 #include <algorithm>
 #include <atomic>
 #include <chrono>
-#include <cstdlib>
 #include <condition_variable>
 #include <exception>
 #include <map>
@@ -19,6 +18,7 @@
 #include "device_tree.h"
 #include "launch_sizes.h"
 #include "program_cache.h"
+#include "util/test_overrides.h"
 
 namespace sdf::cl {
 
@@ -113,20 +113,16 @@ KeptTrees::~KeptTrees() = default;
 // the rays/s of the 4-wide BVH kernel, which was itself about 20% faster than the binary BVH
 // (bench/opencl_vs_cpu.py, interleaved runs, PoCL 3.1 on a 2-core AVX-512 EPYC, 52k-1.2M
 // faces: 0.83-0.93 of the CPU engine's rays/s, the 4-wide kernel 0.38-0.40). Measured on
-// AVX2 CPUs only, so CPUs without AVX2 (and non-x86 ones) keep the 4-wide kernel. SDF_OPENCL_KERNEL (bvh_per_point, bvh4_per_point,
-// bvh8_per_point, bvh_per_ray) overrides the choice, so tests run every kernel on whatever
+// AVX2 CPUs only, so CPUs without AVX2 (and non-x86 ones) keep the 4-wide kernel. A test
+// override (util/test_overrides.h) forces any kernel, so tests run every kernel on whatever
 // device they have and benchmarks compare them.
 CastKernel cast_kernel_for(const Device& device) {
-  if (const char* forced = std::getenv("SDF_OPENCL_KERNEL")) {
-    const std::string name = forced;
-    if (name == "bvh_per_point") return CastKernel::BvhPerPoint;
-    if (name == "bvh4_per_point") return CastKernel::Bvh4PerPoint;
-    if (name == "bvh8_per_point") return CastKernel::Bvh8PerPoint;
-    if (name == "bvh_per_ray") return CastKernel::BvhPerRay;
-    if (!name.empty())
-      throw std::invalid_argument(
-          "SDF_OPENCL_KERNEL='" + name +
-          "': use bvh_per_point, bvh4_per_point, bvh8_per_point or bvh_per_ray");
+  switch (test_overrides().opencl_kernel) {
+    case KernelChoice::BvhPerPoint: return CastKernel::BvhPerPoint;
+    case KernelChoice::Bvh4PerPoint: return CastKernel::Bvh4PerPoint;
+    case KernelChoice::Bvh8PerPoint: return CastKernel::Bvh8PerPoint;
+    case KernelChoice::BvhPerRay: return CastKernel::BvhPerRay;
+    case KernelChoice::Engine: break;
   }
   if (device.gpu) return CastKernel::BvhPerRay;
   return bvh8_supported() ? CastKernel::Bvh8PerPoint : CastKernel::Bvh4PerPoint;
@@ -269,7 +265,7 @@ void run_device(const Device& device, std::size_t slot, SharedScene& shared_scen
         // Not thrown: the device works, and a thrown Error would mark it broken.
         result.failure = std::make_exception_ptr(
             Error("OpenCL devices sorted the faces differently (their float rounding differs): "
-                  "cast on one of them, or set SDF_OPENCL_TREE=host",
+                  "cast on one of them",
                   CL_INVALID_OPERATION));
         work.stop = true;
         return;
@@ -403,10 +399,9 @@ void run_device(const Device& device, std::size_t slot, SharedScene& shared_scen
   // that: measured about 3x faster than its default on fandisk.
   // (Sizes 32 to 128 measured the same on an H100.)
   const std::size_t local = device.gpu ? 64 : 1;
-  // Test hook: act out a device lost after this many launches (a driver reset, an unplugged
-  // eGPU), which real hardware cannot be asked to do on cue.
-  const char* lose = std::getenv("SDF_OPENCL_TEST_LOSE_DEVICE_AFTER");
-  const long lose_after = lose && *lose ? std::strtol(lose, nullptr, 10) : -1;
+  // Test override: act out a device lost after this many launches (a driver reset, an
+  // unplugged eGPU), which real hardware cannot be asked to do on cue.
+  const long lose_after = test_overrides().opencl_lose_device_after;
   long launches = 0;
   while (!work.stop.load()) {
     const std::size_t first = work.next.fetch_add(chunk);
@@ -426,8 +421,8 @@ void run_device(const Device& device, std::size_t slot, SharedScene& shared_scen
                                     nullptr, nullptr),
           "clEnqueueNDRangeKernel");
     if (lose_after >= 0 && launches++ >= lose_after)
-      throw Error("OpenCL clFinish (cast) failed: CL_DEVICE_NOT_AVAILABLE (simulated by "
-                  "SDF_OPENCL_TEST_LOSE_DEVICE_AFTER)", CL_DEVICE_NOT_AVAILABLE);
+      throw Error("OpenCL clFinish (cast) failed: CL_DEVICE_NOT_AVAILABLE (acted out by a "
+                  "test override)", CL_DEVICE_NOT_AVAILABLE);
     check(cl.clFinish(s.queue), "clFinish (cast)");
     const double took = seconds_since(launch);
     result.timings.cast += took;
@@ -465,12 +460,12 @@ void run_device(const Device& device, std::size_t slot, SharedScene& shared_scen
 }  // namespace
 
 bool tree_on_device(bool preferred) {
-  const char* forced = std::getenv("SDF_OPENCL_TREE");
-  if (!forced || !*forced) return preferred;
-  const std::string name = forced;
-  if (name == "device") return true;
-  if (name == "host") return false;
-  throw std::invalid_argument("SDF_OPENCL_TREE='" + name + "': use host or device");
+  switch (test_overrides().opencl_tree) {
+    case TreeChoice::Device: return true;
+    case TreeChoice::Host: return false;
+    case TreeChoice::Engine: break;
+  }
+  return preferred;
 }
 
 CastTimings cast_opencl(const std::vector<const Device*>& devices, const CastInput& input,

@@ -107,8 +107,8 @@ CastTimings cast_opencl(const std::vector<const Device*>& devices, const CastInp
                         double progress_from, double progress_to,
                         const std::function<void()>& beside_cast = nullptr);
 
-// How the tree is made: SDF_OPENCL_TREE ('host' or 'device') when set, a test and benchmark
-// hook; otherwise `preferred`.
+// Whether the tree is made on the device: `preferred`, unless a test override
+// (util/test_overrides.h) forces the host or the device.
 bool tree_on_device(bool preferred);
 
 // Test hooks: build `source` for device `index` (the build log comes back in the Error), and

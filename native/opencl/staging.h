@@ -45,8 +45,8 @@ class Staging {
     return bytes >= std::min(std::size_t{1} << 20, chunk_bytes_);
   }
 
-  // Chunks of `bytes` instead of 16 MiB, before the first write: the tests' hook
-  // (SDF_OPENCL_STAGING_CHUNK) stages every upload on any device through tiny chunks.
+  // Chunks of `bytes` instead of 16 MiB, before the first write: a test override
+  // (util/test_overrides.h) stages every upload on any device through tiny chunks.
   void set_chunk_bytes(std::size_t bytes) { chunk_bytes_ = bytes; }
 
  private:

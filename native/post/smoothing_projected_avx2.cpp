@@ -6,10 +6,8 @@
 // sdf_min/sdf_max (a < b ? a : b) are exactly _mm256_min_ps/_mm256_max_ps.
 #include "post/smoothing_projected_avx2.h"
 
-#include <cstdlib>
-#include <cstring>
-
 #include "util/cpu_features.h"
+#include "util/test_overrides.h"
 
 #if SDF_X86_SIMD
 #include <immintrin.h>
@@ -62,10 +60,9 @@ SDF_AVX2 inline __m256 cube_fraction(__m256 side, __m256 d, __m256 r) {
 }  // namespace
 
 bool projected_avx2_supported() {
-  // SDF_CPU_NO_AVX2=1 acts out a CPU without AVX2 (as for the 8-wide tree, bvh8_supported),
-  // so that the tests run the scalar gather on the machines they have.
-  const char* no_avx2 = std::getenv("SDF_CPU_NO_AVX2");
-  if (no_avx2 && std::strcmp(no_avx2, "1") == 0) return false;
+  // Tests act out a CPU without AVX2 (as for the 8-wide tree, bvh8_supported) to run the
+  // scalar gather on the machines they have.
+  if (test_overrides().cpu_without_avx2) return false;
   return cpu_features().avx2;
 }
 

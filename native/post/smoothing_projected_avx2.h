@@ -5,7 +5,8 @@
 // walk would: so each lane adds the same terms in the same order and gets the scalar result
 // bit for bit. Eight neighbours in Morton order take nearly the same path, so a visit does
 // eight points' work for about the price of one. Chosen at run time (projected_avx2_supported:
-// AVX2 by cpu_features(), and not SDF_CPU_NO_AVX2=1); elsewhere the scalar kernel runs.
+// AVX2 by cpu_features(), unless a test acts out a CPU without it); elsewhere the scalar
+// kernel runs.
 #pragma once
 
 #include <cstddef>

@@ -11,7 +11,9 @@ read), points ("faces" or "vertices"), point_count, rays, cone, sampling, seed, 
 smooth, engine, flipped_faces and twin_faces (Result's), seconds (compute()'s stages:
 Result.timings), Mrays_per_s (points cast * rays / seconds["cast"] / 1e6), io_seconds (load,
 write), total_seconds (the whole input) and outputs (mesh, values: paths or null); an input
-that failed has status, error, exit_status, warnings, input and outputs only.
+that failed has status, error, exit_status, warnings, input and outputs only. With
+``--scheduler`` (inputs computed by Dask workers: shape_diameter.distributed) each object
+also has worker, the address of the worker that computed it (or null).
 
 The console script enters through ``_shape_diameter_entry`` and console_main(), which take
 Ctrl-C over (see console_main); main() called from Python leaves signals alone.
@@ -21,23 +23,16 @@ from __future__ import annotations
 
 import argparse
 import contextlib
-import io
 import json
 import logging
 import os
 import signal
 import sys
-import time
-import warnings
-
-import numpy as np
 
 from . import __version__, _core
-from .api import MAX_RAYS, _check_engine, compute, engines
+from .api import MAX_RAYS, _check_engine, engines
+from .batch_job import error_report, failure, naming_a_file, one_line, run_job, skipped_report
 from .cli_jobs import DEFAULT_SUFFIX, EXIT_ENVIRONMENT, EXIT_USAGE, CommandError, plan
-from .colormap import colormap
-from .output_files import written_whole
-from .smoothing import DEVICE_ERRORS, texture_cost
 
 PROG = "shape-diameter"
 EXIT_INTERRUPTED = 130  # 128 + SIGINT, as shells report a run killed by Ctrl-C
@@ -70,11 +65,7 @@ class _Parser(argparse.ArgumentParser):
     """argparse reports errors as a usage block plus a message; we promise one line."""
 
     def error(self, message):
-        self.exit(EXIT_USAGE, f"{self.prog}: error: {_one_line(message)}\n")
-
-
-def _one_line(text) -> str:
-    return " ".join(str(text).split())
+        self.exit(EXIT_USAGE, f"{self.prog}: error: {one_line(message)}\n")
 
 
 # The library's warnings name its Python arguments; on the command line they are options.
@@ -370,6 +361,20 @@ def build_parser() -> argparse.ArgumentParser:
         "stderr, --json to stdout",
     )
     parser.add_argument(
+        "--scheduler",
+        metavar="ADDRESS",
+        help="send the inputs to a running Dask scheduler (tcp://host:8786), one task per "
+        "mesh, instead of computing them here: its workers read the inputs and write the "
+        "outputs at the same paths (a shared filesystem); lines and --json objects come as "
+        "meshes finish (needs the distributed extra)",
+    )
+    parser.add_argument(
+        "--gpu",
+        action="store_true",
+        help="with --scheduler: each mesh holds one GPU of a worker that declares it (dask "
+        "worker --resources GPU=1); without it, --engine auto runs on the workers' CPUs",
+    )
+    parser.add_argument(
         "--list-engines",
         action=_ListEngines,
         help="list the engines --engine takes here, one a line (with --json, "
@@ -512,26 +517,8 @@ def _die_by(signum) -> int:
 
 
 def _fail(message, status: int) -> int:
-    print(f"{PROG}: error: {_one_line(message)}", file=sys.stderr, flush=True)
+    print(f"{PROG}: error: {one_line(message)}", file=sys.stderr, flush=True)
     return status
-
-
-def _failure(exc: BaseException):
-    """An exception of one input's run as (exit status, one-line message)."""
-    if isinstance(exc, CommandError):
-        return exc.status, str(exc)
-    if isinstance(exc, ValueError):  # load_mesh, compute and save_colored: bad input
-        return EXIT_USAGE, str(exc)
-    if isinstance(exc, OSError):  # e.g. the output could not be written
-        return EXIT_ENVIRONMENT, str(exc)
-    if isinstance(exc, DEVICE_ERRORS):
-        # The device, not the mesh. Its first line: a kernel's build log follows it; the
-        # advice is worded for the Python API.
-        line = (str(exc) or "OpenCL failed").splitlines()[0]
-        return EXIT_ENVIRONMENT, line.replace("engine='cpu'", "--engine cpu")
-    if isinstance(exc, MemoryError):
-        return EXIT_ENVIRONMENT, "out of memory"
-    raise exc
 
 
 def _run(args, interrupts) -> int:
@@ -550,9 +537,11 @@ def _run(args, interrupts) -> int:
     interrupts.arm()  # a Ctrl-C held during the imports stops the run here
 
     _check_combinations(args)
-    _refuse_unusable_engine(args.engine)
-    smoothing_options = _smoothing_options(args)
+    _refuse_unusable_engine(args.engine, here=args.scheduler is None)
+    _smoothing_options(args)  # (its errors, before any work)
     jobs = plan(args, mesh_io.WRITE_SUFFIXES)
+    if args.scheduler is not None:
+        return _run_on_scheduler(args, jobs)
     several = len(jobs) > 1 or any(os.path.isdir(source) for source in args.input)
     first_failure = 0
     for job in jobs:
@@ -566,180 +555,130 @@ def _run(args, interrupts) -> int:
                     _say(json.dumps(report))
                 continue
             interrupts.check()
-            report = _compute_one(args, job, mesh_io, smoothing_options, several, warned,
-                                  interrupts)  # fmt: skip
+            report = _compute_one(args, job, mesh_io, several, warned, interrupts)
         except Exception as exc:  # noqa: BLE001 - each kind is mapped, the rest re-raised
             interrupts.check()  # a KeyboardInterrupt that a library turned into an error
-            status, message = _failure(exc)
-            message = _naming_a_file(job, message)
+            status, message = failure(exc)
+            message = naming_a_file(job, message)
             _fail(message, status)
             first_failure = first_failure or status
-            report = {"input": job.source, "status": "error", "error": _one_line(message),
-                      "exit_status": status, "warnings": warned,
-                      "outputs": {"mesh": None, "values": None}}  # fmt: skip
+            report = error_report(job, status, message, warned)
         if args.json:
             _say(json.dumps(report))
     return first_failure
 
 
-def _compute_one(args, job, mesh_io, smoothing_options, several, warned, interrupts) -> dict:
+def _compute_one(args, job, mesh_io, several, warned, interrupts) -> dict:
     """Read, compute and write one input; returns its --json object. Warnings are printed
     (one line each, naming the file) and appended to `warned`."""
-    started = time.perf_counter()
-    with warnings.catch_warnings():
-        # A parser warns before it fails on a broken file; the error line says it all.
-        warnings.simplefilter("ignore")
-        if args.smooth == "texture":
-            vertices, triangles, uvs = mesh_io.load_mesh_with_uvs(job.source)
-            if uvs is None:
-                raise CommandError(
-                    f"{job.source}: no UVs for every face (--smooth texture needs OBJ vt, "
-                    "glTF TEXCOORD_0 of a primitive with a material (trimesh reads no UVs "
-                    "without one), or PLY texture coordinates)"
-                )
-        else:
-            vertices, triangles = mesh_io.load_mesh(job.source)
-            uvs = None
-    loaded = time.perf_counter()
-    interrupts.check()  # (trimesh catches BaseException in places)
-
     bar = None if args.quiet else (os.path.basename(job.source) if several else PROG)
-    with _progress_bar(bar) as progress, _warnings_to(job, warned):
-        if uvs is not None and (notice := _long_texture_work(args, smoothing_options, uvs)):
-            _warn(job, warned, notice)  # now, not once the work is done
-        progress = interrupts.checked(progress)
-        result = compute(
-            vertices,
-            triangles,
-            rays=args.rays,
-            cone_angle=args.cone,
-            sampling=args.sampling,
-            seed=args.seed,
-            points=args.points,
-            normalize=args.normalize,
-            progress=progress,
-            orientation=args.orientation,
-            engine=args.engine,
-            accel=args.accel,
-            bvh_quality=args.bvh_quality,
-            threads=args.threads,
-            smoothing=args.smooth,
-            uvs=uvs,
-            smoothing_options=smoothing_options,
+    with _progress_bar(bar) as progress:
+        report = run_job(
+            job,
+            compute_options(args),
+            mesh_io,
+            warn=lambda message: _warn(job, warned, message),
+            progress=interrupts.checked(progress),
+            check=interrupts.check,
         )
-    computed = time.perf_counter()
-    interrupts.check()
-
-    def save_mesh():
-        with _warnings_to(job, warned):  # GLB and STL: float32 coordinates
-            mesh_io.save_colored(
-                job.output, vertices, triangles, colormap(result.normalized), args.points
-            )
-
-    if job.values:
-        # The values are written first and take their place after the mesh: a failure in
-        # either leaves neither (the mesh was written and the report said nothing was).
-        with written_whole(job.values) as temporary:
-            with open(temporary, "wb") as stream:
-                # Through memory: a pipe (a FIFO) has no position for np.save to ask.
-                npy = io.BytesIO()
-                np.save(npy, np.asarray(result.values, dtype=np.float32))
-                stream.write(npy.getbuffer())
-            interrupts.check()  # (before the temporary files take the outputs' places)
-            save_mesh()
-    else:
-        save_mesh()
-    finished = time.perf_counter()
-
-    # The CLI's own stages, apart from compute()'s: reading and writing files.
-    io_seconds = {"load": loaded - started, "write": finished - computed}
-    report = _report(args, job, vertices, triangles, result, io_seconds, finished - started)
     report["warnings"] = list(warned)
     if not args.quiet and not args.json:
-        _say(
-            f"{job.source}: {report['point_count']} {args.points}, {args.rays} rays, "
-            f"{report['total_seconds']:.2f} s on {result.engine} -> {job.output}"
-        )
+        _say_done(args, job, report)
     return report
 
 
-def _naming_a_file(job, message: str) -> str:
-    """A message about an input's run, starting with the file it is about: as it is where it
-    names one of the run's files already, else after the input's name."""
-    names = tuple(f"{path}:" for path in (job.source, job.output, job.values) if path)
-    return message if message.startswith(names) else f"{job.source}: {message}"
+def _say_done(args, job, report) -> None:
+    _say(
+        f"{job.source}: {report['point_count']} {args.points}, {args.rays} rays, "
+        f"{_smoothing_words(args.smooth)}, {report['total_seconds']:.2f} s on "
+        f"{report['engine']} -> {job.output}"
+    )
 
 
-@contextlib.contextmanager
-def _warnings_to(job, warned: list):
-    """Warnings raised inside, printed as one line each on stderr (naming a file) and kept in
-    `warned` for --json."""
-    with warnings.catch_warnings(record=True) as caught:
-        warnings.simplefilter("always")
-        try:
-            yield
-        finally:
-            for warning in caught:
-                _warn(job, warned, str(warning.message))
+def _smoothing_words(method: str) -> str:
+    """Which smoothing ran, for the line each input ends with."""
+    return "no smoothing" if method == "none" else f"{method} smoothing"
+
+
+def compute_options(args) -> dict:
+    """The options as compute()'s keyword arguments (all of them but the mesh's and
+    `progress`)."""
+    return {
+        "rays": args.rays,
+        "cone_angle": args.cone,
+        "sampling": args.sampling,
+        "seed": args.seed,
+        "points": args.points,
+        "normalize": args.normalize,
+        "orientation": args.orientation,
+        "engine": args.engine,
+        "accel": args.accel,
+        "bvh_quality": args.bvh_quality,
+        "threads": args.threads,
+        "smoothing": args.smooth,
+        "smoothing_options": _smoothing_options(args),
+    }
 
 
 def _warn(job, warned: list, message: str) -> None:
     """A warning about an input: one line on stderr naming its file, kept for --json."""
-    message = _in_option_spelling(_one_line(message))
+    message = _in_option_spelling(one_line(message))
     warned.append(message)
-    print(f"{PROG}: warning: {_naming_a_file(job, message)}", file=sys.stderr, flush=True)
-
-
-# Texture smoothing estimated past this on the CPU threads is announced before it starts (a
-# 8192^2 run at a radius of 8192 texels went on for an hour without a word).
-LONG_TEXTURE_SECONDS = 10.0
-
-
-def _long_texture_work(args, smoothing_options, uvs):
-    """Words for texture smoothing estimated to run long on the CPU, or None."""
-    if _texture_on_gpus(args.engine):
-        return None  # a GPU blurs far faster than the estimate's CPU threads
-    size = smoothing_options.get("texture_size", 1024)
-    cost = texture_cost(size, smoothing_options.get("radius"), uvs)
-    threads = args.threads or _core.hardware_threads()
-    seconds = cost.cpu_seconds(threads)
-    if seconds <= LONG_TEXTURE_SECONDS:
-        return None
-    return (
-        f"texture smoothing at {size} x {size} texels: about {seconds:.0f} s on {threads} "
-        f"CPU threads and {cost.bytes / 2**20:.0f} MiB (an estimate); a smaller --radius or "
-        "--texture-size costs less"
-    )
-
-
-def _texture_on_gpus(engine: str) -> bool:
-    """Whether texture smoothing on `engine` runs on GPUs: every device it names is one, with
-    the double precision texture smoothing needs there (else the CPU threads blur)."""
-    devices = [e for e in engines() if e["name"] != "cpu"]
-    gpus = [e for e in devices if e["type"] == "GPU"]
-    if engine in ("auto", "opencl", "opencl:all"):
-        chosen = gpus or devices if engine != "auto" else gpus
-    elif engine.startswith("opencl:") and engine[7:].isdigit():
-        chosen = [e for e in devices if e["name"] == engine]
-    elif engine.startswith("opencl:"):
-        chosen = [e for e in devices if engine[7:].lower() in e["device"].lower()][:1]
-    else:
-        chosen = []
-    return bool(chosen) and all(e["type"] == "GPU" and e["double"] for e in chosen)
+    print(f"{PROG}: warning: {naming_a_file(job, message)}", file=sys.stderr, flush=True)
 
 
 def _skipped(args, job) -> dict:
     """--skip-existing: an input whose outputs exist; its --json object."""
     if not args.quiet and not args.json:
         _say(f"{job.source}: skipped, {job.output} exists")
-    return {
-        "input": job.source,
-        "status": "skipped",
-        "error": None,
-        "exit_status": 0,
-        "warnings": [],
-        "outputs": {"mesh": job.output, "values": job.values},
-    }
+    return skipped_report(job)
+
+
+def _run_on_scheduler(args, jobs) -> int:
+    """--scheduler: the planned inputs as tasks of a running Dask scheduler's workers; each
+    input's lines and --json object printed as it arrives, as a run here prints them."""
+    try:
+        import distributed
+
+        from . import distributed as on_dask
+    except ImportError as exc:
+        raise CommandError(
+            f"--scheduler needs dask: pip install 'shape_diameter[distributed]' ({exc})",
+            EXIT_ENVIRONMENT,
+        ) from exc
+    try:
+        options = on_dask.task_options(compute_options(args), args.gpu)
+    except ValueError as exc:
+        raise CommandError(_in_option_spelling(str(exc)).replace("gpu=True", "--gpu")) from exc
+    try:
+        client = distributed.Client(args.scheduler, timeout=30)
+    except (OSError, TimeoutError, ValueError) as exc:
+        raise CommandError(
+            f"--scheduler {args.scheduler}: cannot connect ({one_line(exc)})", EXIT_ENVIRONMENT
+        ) from exc
+    first_failure = 0
+
+    def arrived(job, row):
+        nonlocal first_failure
+        row["warnings"] = [_in_option_spelling(message) for message in row["warnings"]]
+        for message in row["warnings"]:
+            print(f"{PROG}: warning: {naming_a_file(job, message)}", file=sys.stderr, flush=True)
+        if row["status"] == "error":
+            status = _fail(row["error"], row["exit_status"])
+            first_failure = first_failure or status
+        elif row["status"] == "skipped":
+            _skipped(args, job)
+        elif not args.quiet and not args.json:
+            _say_done(args, job, row)
+        if args.json:
+            _say(json.dumps(row))
+        bar.update()
+
+    with client, _meshes_bar(None if args.quiet else len(jobs)) as bar:
+        on_dask.run_jobs(
+            client, jobs, options, gpu=args.gpu, skip_existing=args.skip_existing, on_result=arrived
+        )
+    return first_failure
 
 
 def _check_combinations(args) -> None:
@@ -752,6 +691,8 @@ def _check_combinations(args) -> None:
         raise CommandError("--bvh-quality applies to --accel bvh")
     if args.output and args.output_dir is not None:
         raise CommandError("-o/--output names the output itself: leave out --output-dir")
+    if args.gpu and args.scheduler is None:
+        raise CommandError("--gpu applies to --scheduler (here, --engine picks the device)")
     if args.values and args.save_values:
         raise CommandError(
             "--values and --save-values both say where values go: give one "
@@ -761,15 +702,16 @@ def _check_combinations(args) -> None:
     args.bvh_quality = args.bvh_quality or "auto"
 
 
-def _refuse_unusable_engine(engine: str) -> None:
+def _refuse_unusable_engine(engine: str, here: bool = True) -> None:
     """The engine, before any input is read: a mistyped name is a bad option (status 2) and
     OpenCL missing on this machine is the machine's (status 1), said once, not as a failure of
-    every input (a batch reported each asset as broken, status 2)."""
+    every input (a batch reported each asset as broken, status 2). Not `here`
+    (--scheduler: the workers' devices count), the name only."""
     try:
         _check_engine(engine)
     except ValueError as exc:
         raise CommandError(_in_option_spelling(str(exc)), EXIT_USAGE) from exc
-    if engine.startswith("opencl"):
+    if here and engine.startswith("opencl"):
         try:
             _core.opencl_select(engine)
         except ValueError as exc:
@@ -790,40 +732,21 @@ def _smoothing_options(args) -> dict:
     return options
 
 
-def _report(args, job, vertices, triangles, result, io_seconds, total_seconds) -> dict:
-    """An input's --json object (documented in docs/cli.md); the
-    caller adds its warnings."""
-    point_count = len(result.raw)
-    timings = {stage: float(seconds) for stage, seconds in result.timings.items()}
-    cast = timings.get("cast", timings.get("total", 0.0))
-    cast_points = point_count - (result.twin_faces if args.points == "faces" else 0)
-    return {
-        "input": job.source,
-        "status": "ok",
-        "error": None,
-        "exit_status": 0,
-        "faces": len(triangles),
-        "vertices": len(vertices),
-        "points": args.points,
-        "point_count": point_count,
-        "rays": int(result.rays),
-        "cone": float(args.cone),
-        "sampling": args.sampling,
-        "seed": int(args.seed),
-        "normalize": args.normalize,
-        "smooth": args.smooth,
-        "engine": result.engine,
-        "flipped_faces": result.flipped_faces,
-        "twin_faces": result.twin_faces,
-        "seconds": timings,
-        # Rays cast per second over the casting stage alone (or the whole
-        # computation where the engine does not time casting separately); faces that took
-        # a twin's values cast nothing.
-        "Mrays_per_s": cast_points * int(result.rays) / cast / 1e6 if cast > 0 else None,
-        "io_seconds": io_seconds,
-        "total_seconds": total_seconds,
-        "outputs": {"mesh": job.output, "values": job.values},
-    }
+@contextlib.contextmanager
+def _meshes_bar(total):
+    """--scheduler's bar: meshes done of `total` (None: no bar), as _progress_bar shows its
+    own (on a terminal, after half a second)."""
+    bar = None
+    if total is not None and sys.stderr.isatty():
+        with contextlib.suppress(ImportError):
+            from tqdm import tqdm
+
+            bar = tqdm(total=total, delay=0.5, file=sys.stderr, leave=False, unit="mesh", desc=PROG)
+    if bar is None:
+        yield argparse.Namespace(update=lambda: None)
+        return
+    with bar:
+        yield bar
 
 
 @contextlib.contextmanager

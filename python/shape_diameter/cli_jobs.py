@@ -101,8 +101,8 @@ def plan(args, write_suffixes) -> list:
             f"--values names one file, but {what}: use --save-values to write each input's "
             "values next to its output (INPUT.sdf.npy)"
         )
-    if args.output_dir is not None:
-        _make_folder(args.output_dir)
+    if args.output_dir is not None and any(source not in problems for source in sources):
+        _make_folder(args.output_dir)  # (not for a run that found no mesh anywhere)
     jobs = []
     for source in sources:
         if source in problems:

@@ -14,6 +14,7 @@
 #include "accel/bvh_margin.h"
 #include "smoothing_test_meshes.h"
 #include "test_meshes.h"
+#include "util/test_overrides.h"
 
 namespace sdf {
 namespace {
@@ -75,6 +76,17 @@ TEST(BvhSplit, SliversAreCutWithinTheBudget) {
   const std::size_t added = build_bvh(mixed).triangles.size() - mixed.triangles.size();
   EXPECT_GT(added, 4000u * 7);  // more than 8 pieces a sliver on average
   EXPECT_LE(added, 4000u * 15);
+}
+
+TEST(BvhSplit, TheTestOverrideBuildsWithoutCutting) {
+  // bench/slivers.py compares the cut tree with one that cuts nothing.
+  const Mesh slivers = fan_in_a_box(4000).mesh();
+  const bool before = test_overrides().no_sliver_cutting;
+  test_overrides().no_sliver_cutting = true;
+  const std::size_t uncut = build_bvh(slivers).triangles.size();
+  test_overrides().no_sliver_cutting = before;
+  EXPECT_EQ(uncut, slivers.triangles.size());
+  EXPECT_GT(build_bvh(slivers).triangles.size(), uncut);
 }
 
 TEST(BvhSplit, WellShapedTrianglesAreNotCut) {

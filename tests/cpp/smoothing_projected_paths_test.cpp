@@ -6,7 +6,6 @@
 // inward axis.
 #include <gtest/gtest.h>
 
-#include <cstdlib>
 #include <cstring>
 #include <random>
 #include <string>
@@ -14,6 +13,7 @@
 
 #include "point_octree_reference.h"
 #include "post/smoothing_projected.h"
+#include "util/test_overrides.h"
 #include "smoothing_test_meshes.h"
 
 namespace sdf {
@@ -120,24 +120,16 @@ TEST(PointOctreePaths, BranchingOnTheMinimumFindsARareThinPoint) {
   EXPECT_GT(expected.size(), 100u);
 }
 
-// Sets an environment variable for its lifetime, then puts back what was there.
-class ScopedEnv {
+// Acts out a CPU with or without AVX2 for its lifetime, then puts back what was there.
+class ScopedCpu {
  public:
-  ScopedEnv(const char* name, const char* value) : name_(name) {
-    const char* old = std::getenv(name);
-    had_ = old != nullptr;
-    if (had_) old_ = old;
-    setenv(name, value, 1);
+  explicit ScopedCpu(bool without_avx2) : old_(test_overrides().cpu_without_avx2) {
+    test_overrides().cpu_without_avx2 = without_avx2;
   }
-  ~ScopedEnv() {
-    if (had_) setenv(name_, old_.c_str(), 1);
-    else unsetenv(name_);
-  }
+  ~ScopedCpu() { test_overrides().cpu_without_avx2 = old_; }
 
  private:
-  const char* name_;
-  bool had_ = false;
-  std::string old_;
+  bool old_;
 };
 
 // An icosphere with five zero-area faces (a repeated corner: no inward axis) and a vertex no
@@ -161,16 +153,16 @@ TEST(ProjectedSmoothingPaths, SameValuesAsTheSerialVersion) {
         o.iterations = iterations;
         const std::vector<float> expected = test::reference_smooth_projected(mesh, kind, v.data(), o);
         // The gather eight points at a time (AVX2), and the scalar one (as without AVX2).
-        for (const char* no_avx2 : {"0", "1"})
+        for (bool without_avx2 : {false, true})
           for (unsigned threads : {1u, 2u}) {
             SCOPED_TRACE(std::string(c.name) +
                          (kind == PointKind::Faces ? ", faces" : ", vertices") + ", " +
                          std::to_string(iterations) + " iterations, " + std::to_string(threads) +
-                         " threads, SDF_CPU_NO_AVX2=" + no_avx2);
+                         " threads" + (without_avx2 ? ", as without AVX2" : ""));
             o.threads = threads;
             std::vector<float> got;
             {
-              const ScopedEnv env("SDF_CPU_NO_AVX2", no_avx2);
+              const ScopedCpu cpu(without_avx2);
               got = smooth_projected(mesh, kind, v.data(), o);
             }
             ASSERT_EQ(got.size(), expected.size());

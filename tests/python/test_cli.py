@@ -17,7 +17,7 @@ trimesh = pytest.importorskip("trimesh")
 
 import shape_diameter
 from polygon_files import fanned, prism, write_polygons
-from shape_diameter import cli
+from shape_diameter import batch_job, cli
 from shape_diameter.colormap import colormap
 from shape_diameter.mesh_io import load_mesh
 
@@ -123,6 +123,14 @@ def test_default_output_is_next_to_the_input(tmp_path, capsys):
     assert load_mesh(tmp_path / "cow.sdf.ply")[1].shape == (5804, 3)
     out = capsys.readouterr().out
     assert out.count("\n") == 1 and "cow.sdf.ply" in out
+    assert ", no smoothing, " in out
+
+
+def test_the_line_of_an_input_says_which_smoothing_ran(tmp_path, capsys):
+    source = tmp_path / "cow.obj"
+    shutil.copy(DATA / "cow.obj", source)
+    assert cli.main([str(source), "--rays", "4", "--smooth", "kring"]) == 0
+    assert ", kring smoothing, " in capsys.readouterr().out
 
 
 def test_a_mesh_at_utm_coordinates_keeps_its_geometry(tmp_path, capsys):
@@ -293,7 +301,7 @@ def test_a_value_error_from_compute_is_one_line_and_status_2(tmp_path, capsys, m
     def compute_with_bad_cone(*args, **kwargs):
         return real_compute(*args, **{**kwargs, "cone_angle": 500.0})
 
-    monkeypatch.setattr(cli, "compute", compute_with_bad_cone)
+    monkeypatch.setattr(batch_job, "compute", compute_with_bad_cone)
     assert cli.main([str(DATA / "suzanne.obj"), "-o", str(tmp_path / "out.ply")]) == 2
     captured = capsys.readouterr()
     _assert_one_line_error(captured.err, captured.out)
@@ -339,7 +347,7 @@ def test_outputs_never_overwrite_the_input_or_each_other(tmp_path, capsys, monke
     source = tmp_path / "in.obj"
     shutil.copy(DATA / "spot.obj", source)
     (tmp_path / "sub").mkdir()
-    monkeypatch.setattr(cli, "compute", _no_compute)
+    monkeypatch.setattr(batch_job, "compute", _no_compute)
     monkeypatch.chdir(tmp_path)
     if case == "hard link":
         (tmp_path / "link.obj").hardlink_to(source)
@@ -425,7 +433,7 @@ def test_an_opencl_failure_is_one_line_and_status_1(tmp_path, capsys, monkeypatc
         raise _core.OpenCLError("OpenCL clBuildProgram failed: CL_BUILD_PROGRAM_FAILURE on X; "
                                 "build log:\nerror: line 1\nerror: line 2")  # fmt: skip
 
-    monkeypatch.setattr(cli, "compute", failing_compute)
+    monkeypatch.setattr(batch_job, "compute", failing_compute)
     assert cli.main([str(DATA / "suzanne.obj"), "-o", str(tmp_path / "out.ply")]) == 1
     captured = capsys.readouterr()
     _assert_one_line_error(captured.err, captured.out)
@@ -436,7 +444,7 @@ def test_out_of_memory_is_one_line_and_status_1(tmp_path, capsys, monkeypatch):
     def failing_compute(*args, **kwargs):
         raise MemoryError()
 
-    monkeypatch.setattr(cli, "compute", failing_compute)
+    monkeypatch.setattr(batch_job, "compute", failing_compute)
     assert cli.main([str(DATA / "suzanne.obj"), "-o", str(tmp_path / "out.ply")]) == 1
     captured = capsys.readouterr()
     _assert_one_line_error(captured.err, captured.out)
@@ -546,7 +554,7 @@ def test_progress_reaches_compute_and_json_stays_clean(tmp_path, capsys, monkeyp
         seen.append(kwargs["progress"])
         return real_compute(*args, **kwargs)
 
-    monkeypatch.setattr(cli, "compute", recording_compute)
+    monkeypatch.setattr(batch_job, "compute", recording_compute)
     monkeypatch.setattr(sys, "stderr", _Terminal())
     argv = [str(DATA / "suzanne.obj"), "-o", str(tmp_path / "out.ply"), "--json"]
     assert cli.main(argv) == 0
@@ -609,7 +617,7 @@ def test_bvh_quality_reaches_compute_and_keeps_the_values(tmp_path, monkeypatch,
         seen.update(kwargs)
         return shape_diameter.compute(*args, **kwargs)
 
-    monkeypatch.setattr(cli, "compute", recording)
+    monkeypatch.setattr(batch_job, "compute", recording)
     values = tmp_path / "values.npy"
     argv = [
         str(DATA / "cow.obj"),

@@ -15,7 +15,7 @@ import pytest
 trimesh = pytest.importorskip("trimesh")
 
 import shape_diameter
-from shape_diameter import cli, mesh_io
+from shape_diameter import batch_job, cli, mesh_io
 
 DATA = Path(__file__).resolve().parents[1] / "data"
 RAYS = "4"
@@ -75,7 +75,7 @@ def test_clashing_outputs_are_refused_before_any_work(tmp_path, capsys, monkeypa
     (tmp_path / "folder").mkdir()
     _copy(tmp_path / "folder", "suzanne.obj:only.obj")
     before = {p: p.read_bytes() for p in tmp_path.rglob("*") if p.is_file()}
-    monkeypatch.setattr(cli, "compute", _no_compute)
+    monkeypatch.setattr(batch_job, "compute", _no_compute)
     monkeypatch.chdir(tmp_path)
     assert cli.main(argv) == 2
     captured = capsys.readouterr()
@@ -293,3 +293,12 @@ def test_load_mesh_without_trimesh_says_what_to_install():
                           text=True, timeout=60)  # fmt: skip
     assert done.returncode == 0, done.stderr
     assert "pip install 'shape_diameter[cli]'" in done.stdout
+
+
+def test_a_folder_run_that_finds_no_mesh_makes_no_output_folder(tmp_path, capsys):
+    empty = tmp_path / "empty"
+    empty.mkdir()
+    out = tmp_path / "out"
+    assert cli.main([str(empty), "--output-dir", str(out), "--rays", RAYS, "-q"]) == 2
+    assert f"{empty}: no mesh files in the folder" in capsys.readouterr().err
+    assert not out.exists()

@@ -10,7 +10,7 @@ import pytest
 
 trimesh = pytest.importorskip("trimesh")
 
-from shape_diameter import cli
+from shape_diameter import batch_job, cli
 
 DATA = Path(__file__).resolve().parents[1] / "data"
 SPOT = str(DATA / "spot.obj")
@@ -229,7 +229,7 @@ def test_a_failed_write_names_the_file_that_failed_once(tmp_path):
 
 def test_long_texture_work_is_announced(tmp_path, capsys, monkeypatch):
     # An 8192^2 run at a radius of 8192 texels went on for an hour without a word.
-    monkeypatch.setattr(cli, "LONG_TEXTURE_SECONDS", 0.0)
+    monkeypatch.setattr(batch_job, "LONG_TEXTURE_SECONDS", 0.0)
     assert (
         cli.main(
             [
@@ -258,7 +258,7 @@ def test_long_texture_work_is_announced(tmp_path, capsys, monkeypatch):
         "threads and 0 MiB (an estimate)"
         in err
     ), err
-    monkeypatch.setattr(cli, "LONG_TEXTURE_SECONDS", 10.0)  # the real threshold: quiet
+    monkeypatch.setattr(batch_job, "LONG_TEXTURE_SECONDS", 10.0)  # the real threshold: quiet
     assert (
         cli.main(
             [

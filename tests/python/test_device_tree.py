@@ -3,7 +3,8 @@
 values as the CPU engine's, bit for bit, on every device and cast kernel, for meshes that
 stress the build (zero-area faces, faces that share one Morton cell, one triangle, faces to
 reverse). GPUs make this tree by default (engine 'auto'/'opencl', points 'faces'); the
-SDF_OPENCL_TREE hook forces it ('device') or the host's ('host') anywhere, PoCL included."""
+opencl_tree test override forces it ('device') or the host's ('host') anywhere, PoCL
+included."""
 
 import warnings
 
@@ -11,7 +12,7 @@ import numpy as np
 import pytest
 import shape_diameter as sd
 from opencl_devices import OPENCL
-from shape_diameter import _core
+from shape_diameter import _testing
 from shape_diameter.mesh_io import load_mesh
 from shapes import box
 from test_opencl import DATA
@@ -24,10 +25,9 @@ def same_bits(a, b):
     assert differ.size == 0, f"{differ.size} of {a.raw.size} points differ, first {differ[:5]}"
 
 
-def on_device_tree(monkeypatch, v, f, engine, kernel="bvh_per_ray", **options):
-    monkeypatch.setenv("SDF_OPENCL_TREE", "device")
-    monkeypatch.setenv("SDF_OPENCL_KERNEL", kernel)
-    result = sd.compute(v, f, engine=engine, **options)
+def on_device_tree(v, f, engine, kernel="bvh_per_ray", **options):
+    with _testing.overrides(opencl_tree="device", opencl_kernel=kernel):
+        result = sd.compute(v, f, engine=engine, **options)
     made = {"build (device)", "rewind (device)"} & set(result.timings)
     assert len(made) == 1 and "build wait" not in result.timings
     return result
@@ -99,7 +99,7 @@ def test_the_devices_sort_of_the_faces_matches_a_reference(engine, mesh):
         f[::9, 1] = f[::9, 0]
     else:
         v, f = load_mesh(DATA / mesh)
-    order, codes, with_area, margin = _core.opencl_tree_keys(v, f, int(engine.split(":")[1]))
+    order, codes, with_area, margin = _testing.opencl_tree_keys(v, f, int(engine.split(":")[1]))
     want_order, want_codes, want_with_area, want_margin = reference_keys(v, f)
     assert with_area == want_with_area
     np.testing.assert_array_equal(codes, want_codes)
@@ -110,28 +110,28 @@ def test_the_devices_sort_of_the_faces_matches_a_reference(engine, mesh):
 @pytest.mark.parametrize("engine", OPENCL)
 @pytest.mark.parametrize("kernel", KERNELS)
 @pytest.mark.parametrize("mesh", ["fandisk.obj", "teapot.obj", "spot.obj"])
-def test_device_tree_gives_the_cpu_engines_bits(monkeypatch, engine, kernel, mesh):
+def test_device_tree_gives_the_cpu_engines_bits(engine, kernel, mesh):
     v, f = load_mesh(DATA / mesh)
     cpu = sd.compute(v, f, engine="cpu")
-    same_bits(on_device_tree(monkeypatch, v, f, engine, kernel), cpu)
+    same_bits(on_device_tree(v, f, engine, kernel), cpu)
 
 
 @pytest.mark.parametrize("engine", OPENCL)
-def test_zero_area_and_clustered_faces(monkeypatch, engine):
+def test_zero_area_and_clustered_faces(engine):
     v, f = clustered_mesh()
     f = f.copy()
     f[::9, 1] = f[::9, 0]  # zero-area faces among the rest: no triangle record, still a point
     cpu = sd.compute(v, f, engine="cpu", orientation="as_is")
-    same_bits(on_device_tree(monkeypatch, v, f, engine, orientation="as_is"), cpu)
+    same_bits(on_device_tree(v, f, engine, orientation="as_is"), cpu)
 
 
 @pytest.mark.parametrize("engine", OPENCL)
-def test_reversed_faces_are_oriented_before_the_points_are_made(monkeypatch, engine):
+def test_reversed_faces_are_oriented_before_the_points_are_made(engine):
     v, f = load_mesh(DATA / "spot.obj")
     flipped = f.copy()
     flipped[::3] = flipped[::3, ::-1]
     cpu = sd.compute(v, flipped, engine="cpu")
-    device = on_device_tree(monkeypatch, v, flipped, engine)
+    device = on_device_tree(v, flipped, engine)
     assert device.flipped_faces == cpu.flipped_faces > 0
     np.testing.assert_array_equal(device.reversed_faces, cpu.reversed_faces)
     same_bits(device, cpu)
@@ -142,9 +142,9 @@ def test_reversed_faces_are_oriented_before_the_points_are_made(monkeypatch, eng
 
 
 @pytest.mark.parametrize("engine", OPENCL)
-def test_a_mesh_wound_right_is_cast_while_its_orientation_is_decided(monkeypatch, engine):
+def test_a_mesh_wound_right_is_cast_while_its_orientation_is_decided(engine):
     v, f = load_mesh(DATA / "spot.obj")
-    device = on_device_tree(monkeypatch, v, f, engine)
+    device = on_device_tree(v, f, engine)
     assert device.flipped_faces == 0
     assert "orientation (beside cast)" in device.timings
     assert "cast (discarded)" not in device.timings
@@ -153,19 +153,19 @@ def test_a_mesh_wound_right_is_cast_while_its_orientation_is_decided(monkeypatch
 
 
 @pytest.mark.parametrize("orientation", ["flip", "as_is"])
-def test_other_orientations_are_applied_before_the_cast(monkeypatch, orientation):
+def test_other_orientations_are_applied_before_the_cast(orientation):
     v, f = load_mesh(DATA / "spot.obj")
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", RuntimeWarning)  # 'flip' turns spot inside out
         cpu = sd.compute(v, f, engine="cpu", orientation=orientation)
-        device = on_device_tree(monkeypatch, v, f, OPENCL[0], orientation=orientation)
+        device = on_device_tree(v, f, OPENCL[0], orientation=orientation)
     assert "orientation (beside cast)" not in device.timings
     same_bits(device, cpu)
 
 
 @pytest.mark.parametrize("engine", OPENCL)
 @pytest.mark.parametrize("faces", [1, 2, 4])
-def test_tiny_meshes(monkeypatch, engine, faces):
+def test_tiny_meshes(engine, faces):
     # One triangle (the root is its leaf), two facing each other, a tetrahedron.
     v = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1], [1, 0, 1], [0, 1, 1]], float)
     f = {1: [[0, 1, 2]], 2: [[0, 2, 1], [3, 4, 5]], 4: [[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]]}
@@ -173,89 +173,86 @@ def test_tiny_meshes(monkeypatch, engine, faces):
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", RuntimeWarning)  # one triangle hits nothing
         cpu = sd.compute(v, f, engine="cpu", orientation="as_is")
-        device = on_device_tree(monkeypatch, v, f, engine, orientation="as_is")
+        device = on_device_tree(v, f, engine, orientation="as_is")
     same_bits(device, cpu)
     assert faces == 1 or (cpu.valid_rays > 0).any()
 
 
 @pytest.mark.parametrize("engine", OPENCL)
-def test_only_zero_area_faces_cast_nothing(monkeypatch, engine):
+def test_only_zero_area_faces_cast_nothing(engine):
     v = np.array([[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [2.0, 0.0, 0.0], [0.0, 1.0, 0.0]])
     f = np.array([[0, 1, 2], [3, 3, 1], [0, 0, 0]])
-    monkeypatch.setenv("SDF_OPENCL_TREE", "device")
-    with pytest.warns(RuntimeWarning, match=r"no ray of any point"):
+    with _testing.overrides(opencl_tree="device"), pytest.warns(RuntimeWarning, match=r"no ray"):
         result = sd.compute(v, f, engine=engine)
     assert (result.raw == 0).all() and (result.valid_rays == 0).all()
 
 
 @pytest.mark.parametrize("engine", OPENCL)
-def test_random_sampling_equals_the_host_trees_values(monkeypatch, engine):
+def test_random_sampling_equals_the_host_trees_values(engine):
     # Random rays are made with the device's sin and cos, so the reference is the same device
     # casting the host's tree: the same rays (seeded by face), the same nearest hits.
     v, f = load_mesh(DATA / "teapot.obj")
     options = dict(engine=engine, sampling="random", seed=11, rays=21)
-    monkeypatch.setenv("SDF_OPENCL_KERNEL", "bvh_per_ray")
-    monkeypatch.setenv("SDF_OPENCL_TREE", "host")
-    host = sd.compute(v, f, **options)
-    monkeypatch.setenv("SDF_OPENCL_TREE", "device")
-    same_bits(sd.compute(v, f, **options), host)
+    with _testing.overrides(opencl_kernel="bvh_per_ray", opencl_tree="host"):
+        host = sd.compute(v, f, **options)
+    with _testing.overrides(opencl_kernel="bvh_per_ray", opencl_tree="device"):
+        same_bits(sd.compute(v, f, **options), host)
 
 
 @pytest.mark.parametrize("engine", OPENCL)
-def test_smoothing_inside_compute_gets_the_hosts_points(monkeypatch, engine):
+def test_smoothing_inside_compute_gets_the_hosts_points(engine):
     # The device makes the cast's points; projected smoothing beside the cast needs them on
     # the host too, and must smooth as after a host-made cast.
     v, f = load_mesh(DATA / "spot.obj")
     cpu = sd.compute(v, f, engine="cpu", smoothing="projected")
-    device = on_device_tree(monkeypatch, v, f, engine, smoothing="projected")
+    device = on_device_tree(v, f, engine, smoothing="projected")
     np.testing.assert_array_equal(device.raw, cpu.raw)
     np.testing.assert_allclose(device.values, cpu.values, rtol=0, atol=0)
 
 
-def test_device_memory_stays_under_200_bytes_a_face(monkeypatch):
+def test_device_memory_stays_under_200_bytes_a_face():
     # 142 bytes a face: the mesh (about 18 here) and 124 (device_tree.cpp's phases); the bound
     # keeps a little room and catches a buffer that outlives its phase.
     v, f = load_mesh(DATA / "bunny00.off")
-    result = on_device_tree(monkeypatch, v, f, OPENCL[0])
+    result = on_device_tree(v, f, OPENCL[0])
     assert 0 < result.device_memory <= 150 * len(f)
 
 
-def test_a_triangle_soup_stays_under_200_bytes_a_face(monkeypatch):
+def test_a_triangle_soup_stays_under_200_bytes_a_face():
     # Three vertices of its own a face: the mesh itself takes 48 bytes a face on the device.
     v, f = load_mesh(DATA / "bunny00.off")
     corners = v[f].reshape(-1, 3)
     soup = np.arange(len(corners), dtype=np.int32).reshape(-1, 3)
-    result = on_device_tree(monkeypatch, corners, soup, OPENCL[0], orientation="as_is")
+    result = on_device_tree(corners, soup, OPENCL[0], orientation="as_is")
     assert 0 < result.device_memory <= 200 * len(soup)
 
 
-def test_an_unknown_tree_name_is_refused(monkeypatch):
-    v, f = load_mesh(DATA / "fandisk.obj")
-    monkeypatch.setenv("SDF_OPENCL_TREE", "gpu")
-    with pytest.raises(ValueError, match="SDF_OPENCL_TREE='gpu'"):
-        sd.compute(v, f, engine=OPENCL[0])
+def test_an_unknown_tree_name_is_refused():
+    with pytest.raises(ValueError, match="opencl_tree='gpu': use engine, host, device"):
+        _testing.overrides(opencl_tree="gpu")
+    assert _testing.current_overrides()["opencl_tree"] == "engine"  # nothing was set
 
 
-def test_vertex_points_and_the_octree_keep_the_host_path(monkeypatch):
+def test_vertex_points_and_the_octree_keep_the_host_path():
     # The device makes face points only, and only the BVH.
     v, f = load_mesh(DATA / "fandisk.obj")
-    monkeypatch.setenv("SDF_OPENCL_TREE", "device")
     for options in (dict(points="vertices"), dict(accel="octree")):
-        result = sd.compute(v, f, engine=OPENCL[0], **options)
+        with _testing.overrides(opencl_tree="device"):
+            result = sd.compute(v, f, engine=OPENCL[0], **options)
         assert "build (device)" not in result.timings and "build" in result.timings
 
 
 @pytest.mark.parametrize("leaf_size", [2, 4])
-def test_leaves_of_several_triangles_give_the_same_bits(monkeypatch, leaf_size):
+def test_leaves_of_several_triangles_give_the_same_bits(leaf_size):
     # The default leaf holds one triangle; the build option gathers small ranges into leaves.
     v, f = load_mesh(DATA / "teapot.obj")
     cpu = sd.compute(v, f, engine="cpu")
-    monkeypatch.setenv("SDF_OPENCL_EXTRA_OPTIONS", f"-DSDF_LBVH_LEAF_SIZE={leaf_size}")
-    same_bits(on_device_tree(monkeypatch, v, f, OPENCL[0]), cpu)
+    with _testing.overrides(opencl_extra_options=f"-DSDF_LBVH_LEAF_SIZE={leaf_size}"):
+        same_bits(on_device_tree(v, f, OPENCL[0]), cpu)
 
 
 @pytest.mark.parametrize("orientation", ["auto", "as_is", "flip"])
-def test_twins_found_beside_the_cast_give_the_cpu_engines_bits(monkeypatch, orientation):
+def test_twins_found_beside_the_cast_give_the_cpu_engines_bits(orientation):
     # A double-sided mesh: the device stops casting when the host finds the twins beside it,
     # and the mesh without them is cast again.
     v, f = load_mesh(DATA / "spot.obj")
@@ -263,12 +260,12 @@ def test_twins_found_beside_the_cast_give_the_cpu_engines_bits(monkeypatch, orie
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", RuntimeWarning)  # 'flip' turns spot inside out
         cpu = sd.compute(v, f, engine="cpu", orientation=orientation)
-        device = on_device_tree(monkeypatch, v, f, OPENCL[0], orientation=orientation)
+        device = on_device_tree(v, f, OPENCL[0], orientation=orientation)
     assert device.twin_faces == cpu.twin_faces == len(f) // 2
     same_bits(device, cpu)
 
 
-def test_twins_among_faces_to_reverse_are_found_beside_the_second_cast(monkeypatch):
+def test_twins_among_faces_to_reverse_are_found_beside_the_second_cast():
     # Every third face of spot reversed ('auto' puts them back: the first cast stops and the
     # mesh is cast again), and a double-sided box beside it: its twins are told in the
     # caller's winding, found beside the second cast.
@@ -280,7 +277,7 @@ def test_twins_among_faces_to_reverse_are_found_beside_the_second_cast(monkeypat
     v = np.vstack([v, bv + [2.0, 0.0, 0.0], bv + [2.0, 0.0, 0.0]])
     g = np.vstack([g, bf + len(v) - 2 * len(bv), back + len(v) - 2 * len(bv)])
     cpu = sd.compute(v, g, engine="cpu")
-    device = on_device_tree(monkeypatch, v, g, OPENCL[0])
+    device = on_device_tree(v, g, OPENCL[0])
     assert device.twin_faces == cpu.twin_faces == len(bf)
     assert device.flipped_faces == cpu.flipped_faces > 0
     same_bits(device, cpu)

@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 import shape_diameter as sd
 from opencl_devices import OPENCL
-from shape_diameter import _core
+from shape_diameter import _core, _testing
 from shape_diameter.mesh_io import load_mesh
 
 DATA = Path(__file__).resolve().parents[1] / "data"
@@ -75,7 +75,7 @@ def test_deterministic_samplings_give_the_cpu_engines_bits(mesh, sampling):
 
 
 # Each device runs one cast kernel by default (GPUs: binary BVH, one work item per ray; CPU
-# devices: 8-wide BVH, one per point); SDF_OPENCL_KERNEL forces each, so every kernel is
+# devices: 8-wide BVH, one per point); a test override forces each, so every kernel is
 # checked on whatever device this machine has.
 CAST_KERNELS = ["bvh_per_point", "bvh4_per_point", "bvh8_per_point", "bvh_per_ray"]
 
@@ -83,15 +83,15 @@ CAST_KERNELS = ["bvh_per_point", "bvh4_per_point", "bvh8_per_point", "bvh_per_ra
 @pytest.mark.parametrize("kernel", CAST_KERNELS)
 @pytest.mark.parametrize("sampling", ["fibonacci", "cgal", "random"])
 @pytest.mark.parametrize("bvh_quality", ["high", "fast"])
-def test_every_cast_kernel_gives_the_cpu_engines_bits(monkeypatch, kernel, sampling, bvh_quality):
+def test_every_cast_kernel_gives_the_cpu_engines_bits(kernel, sampling, bvh_quality):
     vertices, triangles = load_mesh(DATA / "fandisk.obj")
     # 37 rays: groups of the per-ray kernel are not a multiple of a warp; vertices: some
     # points sit on creases where rays graze edges. The CPU engine casts the SAH tree, the
     # device either tree: every tree gives the nearest hit.
     options = dict(sampling=sampling, rays=37, points="vertices", seed=5)
     cpu = sd.compute(vertices, triangles, engine="cpu", bvh_quality="high", **options)
-    monkeypatch.setenv("SDF_OPENCL_KERNEL", kernel)
-    cl = sd.compute(vertices, triangles, engine=OPENCL[0], bvh_quality=bvh_quality, **options)
+    with _testing.overrides(opencl_kernel=kernel):
+        cl = sd.compute(vertices, triangles, engine=OPENCL[0], bvh_quality=bvh_quality, **options)
     np.testing.assert_array_equal(cl.valid_rays, cpu.valid_rays)
     if sampling == "random":  # the device's own sin and cos make the directions
         bad, worst = agreement(cl, cpu)
@@ -102,23 +102,22 @@ def test_every_cast_kernel_gives_the_cpu_engines_bits(monkeypatch, kernel, sampl
 
 
 @pytest.mark.parametrize("engine", ["cpu", OPENCL[-1]])
-def test_the_fallback_for_cpus_without_avx2_gives_the_same_bits(monkeypatch, engine):
-    # SDF_CPU_NO_AVX2=1 acts out such a CPU: the CPU engine then casts the 4-wide SSE tree and
+def test_the_fallback_for_cpus_without_avx2_gives_the_same_bits(engine):
+    # A test override acts out such a CPU: the CPU engine then casts the 4-wide SSE tree and
     # CPU OpenCL devices the 4-wide kernel; the values must not change.
     vertices, triangles = load_mesh(DATA / "fandisk.obj")
     wide = sd.compute(vertices, triangles, engine=engine, rays=25)
-    monkeypatch.setenv("SDF_CPU_NO_AVX2", "1")
-    narrow = sd.compute(vertices, triangles, engine=engine, rays=25)
+    with _testing.overrides(cpu_without_avx2=True):
+        narrow = sd.compute(vertices, triangles, engine=engine, rays=25)
     differ = np.flatnonzero(wide.raw != narrow.raw)
     assert differ.size == 0, f"{differ.size} points differ, first {differ[:5]}"
     np.testing.assert_array_equal(wide.valid_rays, narrow.valid_rays)
 
 
-def test_an_unknown_cast_kernel_name_is_refused(monkeypatch):
-    vertices, triangles = load_mesh(DATA / "fandisk.obj")
-    monkeypatch.setenv("SDF_OPENCL_KERNEL", "bvh8")
-    with pytest.raises(ValueError, match="SDF_OPENCL_KERNEL='bvh8'"):
-        sd.compute(vertices, triangles, engine=OPENCL[0])
+def test_an_unknown_cast_kernel_name_is_refused():
+    with pytest.raises(ValueError, match="opencl_kernel='bvh8': use engine, bvh_per_point"):
+        _testing.overrides(opencl_kernel="bvh8")
+    assert _testing.current_overrides()["opencl_kernel"] == "engine"  # nothing was set
 
 
 def test_octree_matches_bvh_on_the_cpu_engine(mesh_and_cpu):
@@ -140,7 +139,7 @@ def test_opencl_matches_cpu_for_every_sampling_and_point_kind(sampling, points):
 
 
 def test_shared_struct_layouts_match_the_kernels():
-    assert _core.opencl_layout(0) == _core.host_layout()
+    assert _testing.opencl_layout(0) == _testing.host_layout()
 
 
 def test_engines_lists_opencl_devices_with_their_details():
@@ -174,7 +173,7 @@ def test_a_bad_device_gives_a_clear_error(engine):
 def test_a_kernel_that_does_not_compile_reports_its_build_log():
     broken = "__kernel void broken(__global float* x) { x[0] = undefined_name + ; }"
     with pytest.raises(RuntimeError) as error:
-        _core.opencl_build_source(0, broken)
+        _testing.opencl_build_source(0, broken)
     message = str(error.value)
     assert "clBuildProgram" in message and "CL_BUILD_PROGRAM_FAILURE" in message
     assert "undefined_name" in message or "expected expression" in message  # the log itself
@@ -221,11 +220,11 @@ def test_a_memory_cap_that_is_not_a_count_of_bytes_is_refused(cap):
 def test_program_cache_skips_the_compiler_and_rebuilds_a_corrupt_entry(tmp_path):
     code = (
         "import json, shape_diameter as sd\n"
-        "from shape_diameter import _core\n"
+        "from shape_diameter import _testing\n"
         "from shape_diameter.mesh_io import load_mesh\n"
         f"v, t = load_mesh({str(DATA / 'cow.obj')!r})\n"
         "r = sd.compute(v, t, engine='opencl:0')\n"
-        "print(json.dumps(_core.opencl_program_stats()))\n"
+        "print(json.dumps(_testing.opencl_program_stats()))\n"
     )
     cache = tmp_path / "cache"
     first = run_python(code, SDF_CACHE_DIR=cache)
@@ -340,7 +339,9 @@ def test_uploads_staged_through_pinned_chunks_give_the_same_bits():
     # through the side queue's chunks.
     code = (
         "import json, numpy as np, shape_diameter as sd\n"
+        "from shape_diameter import _testing\n"
         "from shape_diameter.mesh_io import load_mesh\n"
+        "_testing.set_overrides(opencl_staging_chunk=65536)\n"  # before the device's first use
         f"v, t = load_mesh({str(DATA / 'bunny00.off')!r})\n"
         f"engine = {OPENCL[0]!r}\n"
         "cpu = sd.compute(v, t, engine='cpu')\n"
@@ -357,7 +358,7 @@ def test_uploads_staged_through_pinned_chunks_give_the_same_bits():
         " 'texture': bool(np.array_equal(*texture)),"
         " 'projected': bool(np.array_equal(*projected)), 'smoothed': smoothed.tolist()}))\n"
     )
-    out = run_python(code, SDF_OPENCL_STAGING_CHUNK=65536)
+    out = run_python(code)
     assert out["cast"] and out["texture"]  # the texture's UVs went up the side queue's chunks
     assert out["projected"]
     vertices, triangles = load_mesh(DATA / "bunny00.off")
@@ -452,23 +453,22 @@ def test_auto_falls_back_to_the_cpu_engine_and_says_why():
 
 
 def test_a_device_lost_mid_run_is_reported_and_then_recovered_from():
-    # SDF_OPENCL_TEST_LOSE_DEVICE_AFTER=0 acts out a device lost at the first launch (any
-    # later one would need a mesh of several launches, and a GPU casts bunny00 in one).
+    # A test override acts out a device lost at the first launch (any later one would need a
+    # mesh of several launches, and a GPU casts bunny00 in one).
     code = (
-        "import json, os, numpy as np, shape_diameter as sd\n"
-        "from shape_diameter import api\n"
+        "import json, numpy as np, shape_diameter as sd\n"
+        "from shape_diameter import _testing, api\n"
         "from shape_diameter.mesh_io import load_mesh\n"
         f"v, t = load_mesh({str(DATA / 'bunny00.off')!r})\n"
         "cpu = sd.compute(v, t, engine='cpu')\n"
-        "os.environ['SDF_OPENCL_TEST_LOSE_DEVICE_AFTER'] = '0'\n"
-        "try:\n"
-        "    sd.compute(v, t, engine='opencl:0')\n"
-        "    error = None\n"
-        "except RuntimeError as e:\n"
-        "    error = str(e)\n"
-        "api._resolve_engine = lambda engine: 'opencl:0' if engine == 'auto' else engine\n"
-        "fallback = sd.compute(v, t)\n"
-        "del os.environ['SDF_OPENCL_TEST_LOSE_DEVICE_AFTER']\n"
+        "with _testing.overrides(opencl_lose_device_after=0):\n"
+        "    try:\n"
+        "        sd.compute(v, t, engine='opencl:0')\n"
+        "        error = None\n"
+        "    except RuntimeError as e:\n"
+        "        error = str(e)\n"
+        "    api._resolve_engine = lambda engine: 'opencl:0' if engine == 'auto' else engine\n"
+        "    fallback = sd.compute(v, t)\n"
         "again = sd.compute(v, t, engine='opencl:0')\n"
         "print(json.dumps({'error': error, 'fallback': fallback.engine,\n"
         "                  'fallback_same': bool(np.array_equal(fallback.raw, cpu.raw)),\n"

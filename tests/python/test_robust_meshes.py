@@ -9,6 +9,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 import shape_diameter as sd
+from shape_diameter import _testing
 from shape_diameter.mesh_io import load_mesh
 from shapes import box, icosphere
 
@@ -72,30 +73,27 @@ def test_far_beyond_everyday_scales_the_values_still_scale(scale):
     "path",
     [
         dict(engine="cpu"),
-        dict(engine="cpu", env={"SDF_CPU_NO_AVX2": "1"}),
+        dict(engine="cpu", overrides={"cpu_without_avx2": True}),
         dict(engine="opencl"),
-        dict(
-            engine="opencl", env={"SDF_OPENCL_KERNEL": "bvh_per_ray", "SDF_OPENCL_TREE": "device"}
-        ),
-        dict(engine="opencl", env={"SDF_OPENCL_KERNEL": "bvh_per_ray", "SDF_OPENCL_TREE": "host"}),
+        dict(engine="opencl", overrides={"opencl_kernel": "bvh_per_ray", "opencl_tree": "device"}),
+        dict(engine="opencl", overrides={"opencl_kernel": "bvh_per_ray", "opencl_tree": "host"}),
         dict(engine="opencl", accel="octree"),
     ],
     ids=["cpu", "cpu-4-wide", "opencl", "opencl-device-tree", "opencl-binary", "octree"],
 )
-def test_rays_along_an_axis_survive_far_from_the_origin(monkeypatch, path):
+def test_rays_along_an_axis_survive_far_from_the_origin(path):
     # A box's faces cast their first ray along their normal, so its direction has exactly
     # zero components: their slab distances once took 1e30 x the origin, which overflowed past
     # ~3e8 units and lost the ray.
-    for name, value in path.get("env", {}).items():
-        monkeypatch.setenv(name, value)
     options = dict(engine=path["engine"], accel=path.get("accel", "bvh"))
     vertices, triangles = box(1.0, 2.0, 3.0, 4)
-    unit = sd.compute(vertices, triangles, **options)
-    assert (unit.valid_rays == 30).all()
-    for scale in (1e9, 1e12):
-        scaled = sd.compute(vertices * scale, triangles, **options)
-        np.testing.assert_array_equal(scaled.valid_rays, unit.valid_rays)
-        np.testing.assert_allclose(scaled.raw / scale, unit.raw, rtol=1e-4)
+    with _testing.overrides(**path.get("overrides", {})):
+        unit = sd.compute(vertices, triangles, **options)
+        assert (unit.valid_rays == 30).all()
+        for scale in (1e9, 1e12):
+            scaled = sd.compute(vertices * scale, triangles, **options)
+            np.testing.assert_array_equal(scaled.valid_rays, unit.valid_rays)
+            np.testing.assert_allclose(scaled.raw / scale, unit.raw, rtol=1e-4)
 
 
 @pytest.mark.parametrize(
@@ -103,28 +101,25 @@ def test_rays_along_an_axis_survive_far_from_the_origin(monkeypatch, path):
     [
         dict(engine="cpu"),
         dict(engine="opencl"),
-        dict(
-            engine="opencl", env={"SDF_OPENCL_KERNEL": "bvh_per_ray", "SDF_OPENCL_TREE": "device"}
-        ),
+        dict(engine="opencl", overrides={"opencl_kernel": "bvh_per_ray", "opencl_tree": "device"}),
         dict(engine="cpu", accel="octree"),
     ],
     ids=["cpu", "opencl", "opencl-device-tree", "octree"],
 )
-def test_any_accepted_scale_gives_the_same_values(monkeypatch, path):
+def test_any_accepted_scale_gives_the_same_values(path):
     # The triangle test's products reach a length cubed: a sphere 1e14 units wide (or 1e-15)
     # once lost every ray, values all 0. Scaled inside compute()
     # by a power of two to unit size, and back, the values are those of the unit sphere
     # scaled, to the bit: float arithmetic commutes with powers of two.
-    for name, value in path.get("env", {}).items():
-        monkeypatch.setenv(name, value)
     options = dict(engine=path["engine"], accel=path.get("accel", "bvh"))
     vertices, triangles = icosphere(1.0, 2)
-    unit = sd.compute(vertices, triangles, **options)
-    assert (unit.valid_rays == 30).all()
-    for exponent in (-100, -60, -25, 35, 60, 98):
-        scaled = sd.compute(vertices * 2.0**exponent, triangles, **options)
-        np.testing.assert_array_equal(scaled.valid_rays, unit.valid_rays)
-        np.testing.assert_array_equal(scaled.raw, unit.raw * np.float32(2.0**exponent))
+    with _testing.overrides(**path.get("overrides", {})):
+        unit = sd.compute(vertices, triangles, **options)
+        assert (unit.valid_rays == 30).all()
+        for exponent in (-100, -60, -25, 35, 60, 98):
+            scaled = sd.compute(vertices * 2.0**exponent, triangles, **options)
+            np.testing.assert_array_equal(scaled.valid_rays, unit.valid_rays)
+            np.testing.assert_array_equal(scaled.raw, unit.raw * np.float32(2.0**exponent))
 
 
 @pytest.mark.parametrize("engine", ["cpu", "opencl"])

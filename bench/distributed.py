@@ -1,0 +1,248 @@
+# SPDX-License-Identifier: GPL-3.0-or-later
+"""Meshes on a Dask cluster against the command line, in one run.
+
+1. Meshes per second over one folder: the in-process command line (`shape-diameter DIR -r
+   --output-dir OUT`, one process, start-up included) against shape_diameter.distributed on a
+   LocalCluster of 1 and of 2 worker processes (cluster start-up timed apart).
+2. Per-mesh overhead for meshes of 50k faces and more, one worker (tasks run one after the
+   other, so the wall time not spent inside the tasks is the scheduling's): scheduling,
+   reading and writing against compute()'s own time.
+3. compute()'s peak memory per face, each mesh in a process of its own.
+
+    .venv/bin/python bench/distributed.py [--rays 30] [--copies 4] [--gpu]
+
+--gpu adds LocalClusters whose workers declare GPU=1, the tasks holding it (engine 'auto').
+"""
+
+from __future__ import annotations
+
+import argparse
+import importlib
+import json
+import os
+import shutil
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+
+# This file's folder comes first on sys.path, and this file bears the name of dask's package:
+# packages are looked for elsewhere first (the benchmark's meshes.py is found last).
+HERE = Path(__file__).resolve().parent
+sys.path[:] = [path for path in sys.path if Path(path or ".").resolve() != HERE] + [str(HERE)]
+from meshes import DATA, read_off, subdivide, write_off  # noqa: E402
+from shape_diameter.distributed import compute_files, local_client  # noqa: E402
+
+SMALL = ("cow.obj", "spot.obj", "teapot.obj", "fandisk.obj", "ChineseDragon-10kv.off")
+
+
+def _moved(vertices, rng):
+    """The mesh under a random rotation and stretch (its own values, same cost)."""
+    rotation, _ = np.linalg.qr(rng.normal(size=(3, 3)))
+    return vertices @ (rotation @ np.diag(rng.uniform(0.5, 2.0, 3)))
+
+
+def small_folder(root: Path, copies: int) -> Path:
+    import shape_diameter as sd
+
+    folder, rng = root / "small", np.random.default_rng(1)
+    folder.mkdir()
+    for name in SMALL:
+        vertices, triangles = sd.load_mesh(DATA / name)
+        for copy in range(copies):
+            write_off(folder / f"{Path(name).stem}{copy}.off", _moved(vertices, rng), triangles)
+    return folder
+
+
+def large_folder(root: Path) -> Path:
+    """Meshes of 52k-320k faces as binary PLY, the command line's own output format."""
+    from shape_diameter import mesh_io
+
+    folder, rng = root / "large", np.random.default_rng(2)
+    folder.mkdir()
+    for name, times in (
+        ("armadillo", 0),
+        ("bunny00", 0),
+        ("ChineseDragon-10kv", 2),
+        ("armadillo", 1),
+        ("bunny00", 1),
+    ):
+        vertices, triangles = read_off(DATA / f"{name}.off")
+        for _ in range(times):
+            vertices, triangles = subdivide(vertices, triangles)
+        colors = np.full((len(triangles), 4), 255, dtype=np.uint8)
+        mesh_io.save_colored(
+            folder / f"{name}-x{4**times}.ply", _moved(vertices, rng), triangles, colors
+        )
+    return folder
+
+
+def command_line(folder: Path, out: Path, rays: int):
+    """(the command's wall seconds, the seconds its inputs took: start-up left out)."""
+    start = time.perf_counter()
+    done = subprocess.run(
+        [
+            sys.executable,
+            "-m",
+            "shape_diameter",
+            str(folder),
+            "-r",
+            "--output-dir",
+            str(out),
+            "-q",
+            "--json",
+            "--rays",
+            str(rays),
+            "--engine",
+            "cpu",
+        ],
+        check=True,
+        capture_output=True,
+        text=True,
+    )
+    wall = time.perf_counter() - start
+    return wall, sum(json.loads(line)["total_seconds"] for line in done.stdout.splitlines())
+
+
+def on_cluster(folder: Path, out: Path, workers: int, rays: int, gpu: bool):
+    """(cluster start-up seconds, run seconds, rows)."""
+    start = time.perf_counter()
+    with local_client(workers, gpu) as client:
+        # Every worker up, with the mesh library imported (once a worker's life, not a mesh's).
+        client.run(importlib.import_module, "shape_diameter.mesh_io")
+        ready = time.perf_counter()
+        rows = compute_files([folder], out, client=client, rays=rays, gpu=gpu)
+        done = time.perf_counter()
+    failed = [row["error"] for row in rows if row["status"] != "ok"]
+    assert not failed, failed
+    return ready - start, done - ready, rows
+
+
+def throughput(root: Path, copies: int, rays: int, gpu: bool) -> None:
+    folder = small_folder(root, copies)
+    count = len(list(folder.iterdir()))
+    print(f"\n## Meshes per second: {count} meshes of 5.8k-20k faces, {rays} rays\n")
+    print("| run | start-up s | meshes s | meshes/s | vs command line |")
+    print("|---|---|---|---|---|")
+    wall, inputs = command_line(folder, root / "cli", rays)
+    print(
+        f"| command line, one process | {wall - inputs:.2f} | {inputs:.2f} | "
+        f"{count / inputs:.2f} | 1.00x |"
+    )
+    runs = [(1, False), (2, False)] + ([(1, True), (2, True)] if gpu else [])
+    for workers, holds_gpu in runs:
+        out = root / f"cluster-{workers}-{holds_gpu}"
+        startup, seconds, rows = on_cluster(folder, out, workers, rays, holds_gpu)
+        label = (
+            f"LocalCluster, {workers} worker{'s' * (workers > 1)}"
+            + (", GPU=1 each, tasks hold it" if holds_gpu else "")
+            + " ("
+            + ", ".join(sorted({row["engine"] for row in rows}))
+            + ")"
+        )
+        print(
+            f"| {label} | {startup:.2f} | {seconds:.2f} | {count / seconds:.2f} | "
+            f"{inputs / seconds:.2f}x |"
+        )
+
+
+def overhead(root: Path, rays: int) -> None:
+    folder = large_folder(root)
+    _, wall, rows = on_cluster(folder, root / "large-out", 1, rays, False)
+    print(f"\n## Per-mesh overhead, 1 worker, {rays} rays (compute = compute()'s own time)\n")
+    print("| mesh | faces | compute s | read s | write s | read+write / compute |")
+    print("|---|---|---|---|---|---|")
+    compute = read = write = inside = 0.0
+    for row in rows:
+        c, r, w = row["seconds"]["total"], row["io_seconds"]["load"], row["io_seconds"]["write"]
+        compute, read, write, inside = (
+            compute + c,
+            read + r,
+            write + w,
+            inside + row["total_seconds"],
+        )
+        print(
+            f"| {Path(row['input']).name} | {row['faces']} | {c:.3f} | {r:.3f} | {w:.3f} | "
+            f"{(r + w) / c:.1%} |"
+        )
+    scheduling = wall - inside  # the run's time outside the tasks: submitting, results back
+    print(
+        f"\nAll {len(rows)}: compute {compute:.2f} s, read {read:.2f} s, write {write:.2f} s, "
+        f"scheduling {scheduling:.2f} s ({scheduling / len(rows) * 1e3:.0f} ms a mesh). "
+        f"Overhead over compute: scheduling {scheduling / compute:.1%}, reading and writing "
+        f"{(read + write) / compute:.1%} (the command line reads and writes the same), "
+        f"together {(scheduling + read + write) / compute:.1%}."
+    )
+
+
+# The peak of compute() alone: Linux's peak resident size (VmHWM) is reset to the current one
+# (clear_refs 5) once the mesh is loaded, and read after the call.
+MEMORY_CHILD = """
+import sys, numpy as np, shape_diameter as sd
+z = np.load(sys.argv[1]); vertices, triangles = z["vertices"], z["triangles"]
+def status_kib(field):
+    with open("/proc/self/status") as f:
+        return next(int(line.split()[1]) for line in f if line.startswith(field + ":"))
+with open("/proc/self/clear_refs", "w") as f:
+    f.write("5")
+before = status_kib("VmRSS")
+sd.compute(vertices, triangles, rays=int(sys.argv[2]), engine="cpu")
+print(len(triangles), status_kib("VmHWM") - before)
+"""
+
+
+def memory(root: Path, rays: int) -> None:
+    print(f"\n## compute()'s peak memory per face (CPU engine, {rays} rays, a process each)\n")
+    print("| mesh | faces | peak above the loaded mesh, MiB | bytes/face |")
+    print("|---|---|---|---|")
+    sizes = []
+    for name, times in (
+        ("armadillo", 0),
+        ("bunny00", 0),
+        ("armadillo", 1),
+        ("bunny00", 1),
+        ("armadillo", 2),
+    ):
+        vertices, triangles = read_off(DATA / f"{name}.off")
+        for _ in range(times):
+            vertices, triangles = subdivide(vertices, triangles)
+        path = root / f"{name}-{times}.npz"
+        np.savez(path, vertices=vertices, triangles=triangles)
+        done = subprocess.run(
+            [sys.executable, "-c", MEMORY_CHILD, str(path), str(rays)],
+            capture_output=True,
+            text=True,
+            check=True,
+        )
+        faces, kib = map(int, done.stdout.split())
+        sizes.append((faces, kib * 1024))
+        print(f"| {name}-x{4**times} | {faces} | {kib / 1024:.0f} | {kib * 1024 / faces:.0f} |")
+    slope, fixed = np.polyfit(*np.array(sizes, dtype=float).T, 1)
+    print(f"\nLeast squares over the sizes: {fixed / 2**20:.0f} MiB + {slope:.0f} bytes a face.")
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--rays", type=int, default=30)
+    parser.add_argument("--copies", type=int, default=4, help="copies of each small mesh")
+    parser.add_argument("--gpu", action="store_true", help="also with GPU=1 workers")
+    args = parser.parse_args()
+    print(f"{os.cpu_count()} cores; load average {os.getloadavg()[0]:.1f} at the start")
+    root = Path(tempfile.mkdtemp(prefix="sdf-distributed-"))
+    try:
+        throughput(root, args.copies, args.rays, args.gpu)
+        overhead(root, args.rays)
+        memory(root, args.rays)
+    finally:
+        shutil.rmtree(root, ignore_errors=True)
+    print(
+        f"\nLoad average {os.getloadavg()[0]:.1f} at the end (other processes share the cores "
+        "when it is above their count)."
+    )
+
+
+if __name__ == "__main__":
+    main()

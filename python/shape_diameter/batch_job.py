@@ -1,0 +1,217 @@
+# SPDX-License-Identifier: GPL-3.0-or-later
+"""One input of a batch, in whichever process runs it (the command line's own, or a Dask
+worker's): read the mesh, compute, write its outputs whole, and its --json object.
+
+The command line and shape_diameter.distributed both run inputs through run_job(), so that
+the same options give the same files, byte for byte, wherever they were computed."""
+
+from __future__ import annotations
+
+import contextlib
+import io
+import time
+import warnings
+
+import numpy as np
+
+from . import _core
+from .api import compute, engines
+from .cli_jobs import EXIT_ENVIRONMENT, EXIT_USAGE, CommandError
+from .colormap import colormap
+from .output_files import written_whole
+from .smoothing import DEVICE_ERRORS, texture_cost
+
+# Texture smoothing estimated past this on the CPU threads is announced before it starts (a
+# 8192^2 run at a radius of 8192 texels went on for an hour without a word).
+LONG_TEXTURE_SECONDS = 10.0
+
+
+def one_line(text) -> str:
+    return " ".join(str(text).split())
+
+
+def naming_a_file(job, message: str) -> str:
+    """A message about an input's run, starting with the file it is about: as it is where it
+    names one of the run's files already, else after the input's name."""
+    names = tuple(f"{path}:" for path in (job.source, job.output, job.values) if path)
+    return message if message.startswith(names) else f"{job.source}: {message}"
+
+
+def failure(exc: BaseException):
+    """An exception of one input's run as (exit status, one-line message); any other kind is
+    re-raised (a bug, not the input's fault)."""
+    if isinstance(exc, CommandError):
+        return exc.status, str(exc)
+    if isinstance(exc, ValueError):  # load_mesh, compute and save_colored: bad input
+        return EXIT_USAGE, str(exc)
+    if isinstance(exc, OSError):  # e.g. the output could not be written
+        return EXIT_ENVIRONMENT, str(exc)
+    if isinstance(exc, DEVICE_ERRORS):
+        # The device, not the mesh. Its first line: a kernel's build log follows it; the
+        # advice is worded for the Python API.
+        line = (str(exc) or "OpenCL failed").splitlines()[0]
+        return EXIT_ENVIRONMENT, line.replace("engine='cpu'", "--engine cpu")
+    if isinstance(exc, MemoryError):
+        return EXIT_ENVIRONMENT, "out of memory"
+    raise exc
+
+
+def error_report(job, status: int, message: str, warned) -> dict:
+    """The --json object of an input that failed."""
+    return {"input": job.source, "status": "error", "error": one_line(message),
+            "exit_status": status, "warnings": list(warned),
+            "outputs": {"mesh": None, "values": None}}  # fmt: skip
+
+
+def skipped_report(job) -> dict:
+    """The --json object of an input whose outputs exist (--skip-existing)."""
+    return {
+        "input": job.source,
+        "status": "skipped",
+        "error": None,
+        "exit_status": 0,
+        "warnings": [],
+        "outputs": {"mesh": job.output, "values": job.values},
+    }
+
+
+def run_job(job, options: dict, mesh_io, *, warn, progress=None, check=None) -> dict:
+    """Read, compute (compute()'s keyword arguments in `options`) and write one input; returns
+    its --json object without its warnings, which go to warn(message) as they come.
+
+    `progress`: compute()'s callback; `check`: called between the steps (the command line's
+    Ctrl-C check points). Failures raise; failure() maps them to a status and a message."""
+    check = check or (lambda: None)
+    started = time.perf_counter()
+    vertices, triangles, uvs = _load(job, options, mesh_io)
+    loaded = time.perf_counter()
+    check()  # (trimesh catches BaseException in places)
+    with _warnings_to(warn):
+        if uvs is not None and (notice := long_texture_work(options, uvs)):
+            warn(notice)  # now, not once the work is done
+        result = compute(vertices, triangles, progress=progress, uvs=uvs, **options)
+    computed = time.perf_counter()
+    check()
+
+    def save_mesh():
+        with _warnings_to(warn):  # GLB and STL: float32 coordinates
+            mesh_io.save_colored(
+                job.output, vertices, triangles, colormap(result.normalized), options["points"]
+            )
+
+    if job.values:
+        # The values are written first and take their place after the mesh: a failure in
+        # either leaves neither (the mesh was written and the report said nothing was).
+        with written_whole(job.values) as temporary:
+            with open(temporary, "wb") as stream:
+                # Through memory: a pipe (a FIFO) has no position for np.save to ask.
+                npy = io.BytesIO()
+                np.save(npy, np.asarray(result.values, dtype=np.float32))
+                stream.write(npy.getbuffer())
+            check()  # (before the temporary files take the outputs' places)
+            save_mesh()
+    else:
+        save_mesh()
+    finished = time.perf_counter()
+    # The batch's own stages, apart from compute()'s: reading and writing files.
+    io_seconds = {"load": loaded - started, "write": finished - computed}
+    return _report(options, job, vertices, triangles, result, io_seconds, finished - started)
+
+
+def _load(job, options: dict, mesh_io):
+    with warnings.catch_warnings():
+        # A parser warns before it fails on a broken file; the error line says it all.
+        warnings.simplefilter("ignore")
+        if options["smoothing"] != "texture":
+            return (*mesh_io.load_mesh(job.source), None)
+        vertices, triangles, uvs = mesh_io.load_mesh_with_uvs(job.source)
+    if uvs is None:
+        raise CommandError(
+            f"{job.source}: no UVs for every face (--smooth texture needs OBJ vt, "
+            "glTF TEXCOORD_0 of a primitive with a material (trimesh reads no UVs "
+            "without one), or PLY texture coordinates)"
+        )
+    return vertices, triangles, uvs
+
+
+@contextlib.contextmanager
+def _warnings_to(warn):
+    """Warnings raised inside, handed to warn(message) once the block is left."""
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        try:
+            yield
+        finally:
+            for warning in caught:
+                warn(str(warning.message))
+
+
+def long_texture_work(options: dict, uvs):
+    """Words for texture smoothing estimated to run long on the CPU, or None."""
+    if _texture_on_gpus(options["engine"]):
+        return None  # a GPU blurs far faster than the estimate's CPU threads
+    smoothing_options = options["smoothing_options"] or {}
+    size = smoothing_options.get("texture_size", 1024)
+    cost = texture_cost(size, smoothing_options.get("radius"), uvs)
+    threads = options["threads"] or _core.hardware_threads()
+    seconds = cost.cpu_seconds(threads)
+    if seconds <= LONG_TEXTURE_SECONDS:
+        return None
+    return (
+        f"texture smoothing at {size} x {size} texels: about {seconds:.0f} s on {threads} "
+        f"CPU threads and {cost.bytes / 2**20:.0f} MiB (an estimate); a smaller --radius or "
+        "--texture-size costs less"
+    )
+
+
+def _texture_on_gpus(engine: str) -> bool:
+    """Whether texture smoothing on `engine` runs on GPUs: every device it names is one, with
+    the double precision texture smoothing needs there (else the CPU threads blur)."""
+    devices = [e for e in engines() if e["name"] != "cpu"]
+    gpus = [e for e in devices if e["type"] == "GPU"]
+    if engine in ("auto", "opencl", "opencl:all"):
+        chosen = gpus or devices if engine != "auto" else gpus
+    elif engine.startswith("opencl:") and engine[7:].isdigit():
+        chosen = [e for e in devices if e["name"] == engine]
+    elif engine.startswith("opencl:"):
+        chosen = [e for e in devices if engine[7:].lower() in e["device"].lower()][:1]
+    else:
+        chosen = []
+    return bool(chosen) and all(e["type"] == "GPU" and e["double"] for e in chosen)
+
+
+def _report(options, job, vertices, triangles, result, io_seconds, total_seconds) -> dict:
+    """An input's --json object (documented in docs/cli.md); the
+    caller adds its warnings."""
+    point_count = len(result.raw)
+    timings = {stage: float(seconds) for stage, seconds in result.timings.items()}
+    cast = timings.get("cast", timings.get("total", 0.0))
+    points = options["points"]
+    cast_points = point_count - (result.twin_faces if points == "faces" else 0)
+    return {
+        "input": job.source,
+        "status": "ok",
+        "error": None,
+        "exit_status": 0,
+        "faces": len(triangles),
+        "vertices": len(vertices),
+        "points": points,
+        "point_count": point_count,
+        "rays": int(result.rays),
+        "cone": float(options["cone_angle"]),
+        "sampling": options["sampling"],
+        "seed": int(options["seed"]),
+        "normalize": options["normalize"],
+        "smooth": options["smoothing"],
+        "engine": result.engine,
+        "flipped_faces": result.flipped_faces,
+        "twin_faces": result.twin_faces,
+        "seconds": timings,
+        # Rays cast per second over the casting stage alone (or the whole
+        # computation where the engine does not time casting separately); faces that took
+        # a twin's values cast nothing.
+        "Mrays_per_s": cast_points * int(result.rays) / cast / 1e6 if cast > 0 else None,
+        "io_seconds": io_seconds,
+        "total_seconds": total_seconds,
+        "outputs": {"mesh": job.output, "values": job.values},
+    }
