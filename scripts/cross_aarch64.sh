@@ -7,9 +7,9 @@
 # Every x86 path is compiled out there, so the tests check the portable ones: the binary
 # BVH's traversal in the CPU engine, the plain BVH-builder loops, the scalar smoothing.
 # All C++ tests run (the AVX-512 one skips). Cold cost on a 2-core machine shared with other
-# builds (load about 12): the packages 49 s, the build 18 min (3.5 CPU minutes), the tests under
-# emulation 10 to 16 min (4 CPU minutes; 5 to 50 times the native time); on idle cores the CPU times
-# are about the wall times.
+# builds (load about 12): the packages 49 s, the build 18 min (3.5 CPU minutes), the tests
+# under emulation 10 to 16 min (4 CPU minutes; 5 to 50 times the native time); on idle cores
+# the CPU times are about the wall times.
 #   scripts/cross_aarch64.sh                  build, then run every C++ test under qemu
 #   CROSS_TESTS=none scripts/cross_aarch64.sh build only
 set -euo pipefail
