@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # SPDX-License-Identifier: GPL-3.0-or-later
-# Every test: set-up, C++ tests (ctest) with the CGAL reference built beside them, the C++
+# Every test: set-up, C++ tests (ctest) with the CGAL reference built beside them, the same
+# cross-compiled for aarch64 and run under qemu (scripts/cross_aarch64.sh), the C++
 # tests under ASan + UBSan and the fuzzers (scripts/fuzz.sh), the extension inside two real
 # Blenders (bpy from PyPI), then pytest. Every suite runs even when one before it failed; the
 # last lines sum them up, one line a suite, and the exit status is non-zero if any failed.
@@ -53,6 +54,7 @@ build_and_ctest() {
   ctest --test-dir build/cpp --output-on-failure
 }
 suite "C++ (ctest)" "$LOGS/ctest.log" build_and_ctest
+suite "C++ on aarch64 (qemu)" "$LOGS/aarch64.log" bash scripts/cross_aarch64.sh
 # fuzz.sh prints the sanitized ctest's counts, then each fuzzer's runs.
 suite "ASan+UBSan, fuzzers" "$LOGS/fuzz.log" bash scripts/fuzz.sh
 suite "Blender" "$LOGS/blender.log" bash scripts/test_blender.sh

@@ -129,7 +129,7 @@ bool bvh8_supported() {
   // Tests act out a CPU without AVX2, to run the 4-wide fallback end to end on the machines
   // they have.
   if (test_overrides().cpu_without_avx2) return false;
-  return __builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma");
+  return cpu_features().avx2 && cpu_features().fma;
 #else
   return false;
 #endif

@@ -13,13 +13,11 @@
 #include <vector>
 
 #include "accel/bvh.h"
+#include "util/cpu_features.h"
 
-// The 8-wide traversal exists on x86-64 builds only (elsewhere the 4-wide tree is used).
-#if defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__))
-#define SDF_HAVE_BVH8 1
-#else
-#define SDF_HAVE_BVH8 0
-#endif
+// The 8-wide traversal exists on x86-64 builds only (elsewhere the CPU engine casts the
+// binary tree; the OpenCL kernels read the 8-wide tree on any host).
+#define SDF_HAVE_BVH8 SDF_X86_SIMD
 
 namespace sdf {
 
@@ -65,7 +63,8 @@ struct Bvh8 {
   bool empty() const { return nodes.empty(); }
 };
 
-// Whether this build and CPU run the 8-wide traversal (x86-64 with AVX2 and FMA).
+// Whether this build and CPU run the 8-wide traversal (x86-64 with AVX2 and FMA, and an OS
+// that saves the YMM registers: cpu_features()).
 bool bvh8_supported();
 
 // Copies `bvh`'s boxes and triangles (it need not outlive the result). Pass a tree grown by

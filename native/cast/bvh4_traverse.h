@@ -1,12 +1,17 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
 // Nearest-hit traversal of the 4-wide BVH with SSE (x86-64 baseline, no special flags): the
 // same answers as kernels/traverse/sdf_bvh_traverse.h, which the C++ tests check ray by ray.
+// x86-64 only (SDF_HAVE_BVH4_SSE); elsewhere the CPU engine casts the binary tree.
 #pragma once
 
-#include <xmmintrin.h>
-
-#include "ray/sdf_intersect.h"
 #include "accel/bvh4.h"
+#include "ray/sdf_intersect.h"
+#include "util/cpu_features.h"
+
+#define SDF_HAVE_BVH4_SSE SDF_X86_SIMD
+
+#if SDF_HAVE_BVH4_SSE
+#include <xmmintrin.h>
 
 namespace sdf {
 
@@ -76,3 +81,5 @@ inline kern::SdfHit bvh4_closest_hit(const Bvh4& bvh, glm::vec3 o, glm::vec3 d, 
 }
 
 }  // namespace sdf
+
+#endif  // SDF_HAVE_BVH4_SSE

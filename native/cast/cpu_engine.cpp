@@ -4,10 +4,11 @@
 #include <cmath>
 #include <vector>
 
-#include "traverse/sdf_octree.h"
-#include "ray/sdf_reduce.h"
 #include "cast/bvh4_traverse.h"
 #include "cast/bvh8_traverse.h"
+#include "ray/sdf_reduce.h"
+#include "traverse/sdf_bvh_traverse.h"
+#include "traverse/sdf_octree.h"
 
 namespace sdf {
 
@@ -58,6 +59,14 @@ void cast_points(const SamplePoints& points, const std::vector<std::uint32_t>& o
 
 }  // namespace
 
+BvhWidths cpu_bvh_width() {
+  BvhWidths w;
+  w.eight = bvh8_supported();
+  w.four = !w.eight && SDF_HAVE_BVH4_SSE;
+  w.binary = !w.eight && !w.four;
+  return w;
+}
+
 void cast_cpu(const Scene& scene, const SamplePoints& points,
               const std::vector<std::uint32_t>& order, const Cone& cone, float min_closeness,
               unsigned threads, float* raw, std::int32_t* valid_rays, const ProgressFn& progress,
@@ -74,6 +83,7 @@ void cast_cpu(const Scene& scene, const SamplePoints& points,
     return;
   }
 #endif
+#if SDF_HAVE_BVH4_SSE
   if (scene.four()) {
     const Bvh4& bvh = scene.bvh4;
     cast_points(points, order, cone, threads, raw, valid_rays, progress, progress_from,
@@ -82,6 +92,19 @@ void cast_cpu(const Scene& scene, const SamplePoints& points,
                     kern::SdfHit* hits) {
                   for (int r = 0; r < count; ++r)
                     hits[r] = bvh4_closest_hit(bvh, o, d[r], min_closeness, own);
+                });
+    return;
+  }
+#endif
+  if (scene.binary()) {
+    const Bvh& bvh = scene.bvh;
+    cast_points(points, order, cone, threads, raw, valid_rays, progress, progress_from,
+                progress_to,
+                [&](glm::vec3 o, const glm::vec3* d, int count, std::int32_t own,
+                    kern::SdfHit* hits) {
+                  for (int r = 0; r < count; ++r)
+                    hits[r] = kern::sdf_bvh_closest_hit(bvh.nodes.data(), bvh.triangles.data(),
+                                                        o, d[r], min_closeness, own);
                 });
   } else {
     const Octree& tree = scene.octree;

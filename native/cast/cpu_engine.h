@@ -13,6 +13,11 @@
 
 namespace sdf {
 
+// The BVH the CPU engine casts on this build and CPU: the 8-wide tree where bvh8_supported()
+// (AVX2), else the 4-wide one on x86-64 (SSE), else (aarch64, ...) the binary tree through
+// the kernels' own traversal (kernels/traverse/sdf_bvh_traverse.h). All give the same hits.
+BvhWidths cpu_bvh_width();
+
 // For each point: cast its cone of rays, keep the nearest hit of each ray when it lies beyond
 // min_closeness, is not on the point's own face and leaves the solid through the hit face
 // (dot(ray, outward normal) > 0; otherwise the ray is dropped, as in the paper and CGAL), then

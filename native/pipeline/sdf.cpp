@@ -56,9 +56,7 @@ Plan make_plan(const Options& options, [[maybe_unused]] std::size_t faces) {
   Plan plan;
   plan.fast_build = options.bvh_quality == BvhQuality::Fast;
   if (options.engine == "cpu") {
-    // The 8-wide tree needs AVX2 (chosen at run time); without it the 4-wide SSE tree.
-    plan.widths.eight = bvh8_supported();
-    plan.widths.four = !plan.widths.eight;
+    plan.widths = cpu_bvh_width();  // 8-wide with AVX2, 4-wide with SSE, else binary
     return plan;
   }
 #ifdef SDF_HAVE_OPENCL
@@ -178,13 +176,21 @@ void finish_scene(const Mesh& mesh, const Options& options, const Plan& plan,
 void cast_on_cpu(const Options& options, const Scene& scene, const Mesh& mesh,
                  const SamplePoints& points, const std::vector<std::uint32_t>& order,
                  const Cone& cone, Output& out, const ProgressFn& progress) {
+  std::string structure = accel_name(options.accel);
+  if (scene.eight()) {
+    structure += ", 8-wide";
+  } else if (scene.four()) {
+    structure += ", 4-wide";
+  } else if (scene.binary()) {
+    structure += ", binary";
+  }
   Stopwatch clock;
   cast_cpu(scene, points, order, cone, minimum_closeness(mesh), options.threads, out.raw.data(),
            out.valid_rays.data(), progress, 0.05, 0.99);
   out.timings.emplace_back("cast", clock.lap());
   const unsigned threads = resolve_threads(options.threads);
   out.engine = "cpu (" + std::to_string(threads) + (threads == 1 ? " thread, " : " threads, ") +
-               accel_name(options.accel) + ")";
+               structure + ")";
 }
 
 #ifdef SDF_HAVE_OPENCL

@@ -54,7 +54,7 @@ struct Output {
   std::vector<std::int32_t> valid_rays;    // rays kept per point; 0 = value was filled
   StageTimings timings;  // stage -> seconds
   FillResult fill = FillResult::NothingToFill;
-  std::string engine;                      // what ran, e.g. "cpu (2 threads, bvh)"
+  std::string engine;                      // what ran, e.g. "cpu (2 threads, bvh, 8-wide)"
   std::uint64_t device_bytes = 0;          // OpenCL buffers on the device (0 on the CPU)
   float near_cutoff = 0.0f;                // hits nearer than this are ignored (input units)
   OrientationReport orientation;           // faces the computation reversed

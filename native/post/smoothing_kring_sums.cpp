@@ -3,11 +3,10 @@
 // and picked at run time.
 #include "post/smoothing_kring_sums.h"
 
-#if defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__))
-#define SDF_HAVE_AVX512_SUMS 1
+#include "util/cpu_features.h"
+
+#if SDF_X86_SIMD
 #include <immintrin.h>
-#else
-#define SDF_HAVE_AVX512_SUMS 0
 #endif
 
 namespace sdf {
@@ -17,11 +16,10 @@ void add_ring_scalar(const RingItem* items, std::size_t count, double w, double*
   for (std::size_t i = 0; i < count; ++i) add_item(items[i], w, sum, weight);
 }
 
-#if SDF_HAVE_AVX512_SUMS
+#if SDF_X86_SIMD
 
 bool add_ring_avx512_supported() {
-  static const bool supported = __builtin_cpu_supports("avx512f");
-  return supported;
+  return cpu_features().avx512f;
 }
 
 // 64 sums and 64 weights in 16 registers of 8 doubles; an item's mask, 8 bits at a time,

@@ -4,8 +4,9 @@
 // (depth first, a node's children last to first), each lane taking a node only where its own
 // walk would: so each lane adds the same terms in the same order and gets the scalar result
 // bit for bit. Eight neighbours in Morton order take nearly the same path, so a visit does
-// eight points' work for about the price of one. Chosen at run time (bvh8_supported(): AVX2,
-// unless a test acts out a CPU without it); elsewhere the scalar kernel runs.
+// eight points' work for about the price of one. Chosen at run time (projected_avx2_supported:
+// AVX2 by cpu_features(), unless a test acts out a CPU without it); elsewhere the scalar
+// kernel runs.
 #pragma once
 
 #include <cstddef>

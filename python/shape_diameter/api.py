@@ -73,8 +73,9 @@ class Result:
     mesh as wound, until it stopped: the orientation's time is within it) and 'orientation:
     reverse faces' come before the stages of the cast that counts."""
     engine: str = "cpu"
-    """What ran, e.g. 'cpu (2 threads, bvh)' or 'opencl:0 <device name> (bvh)'; after an
-    'auto' fallback, with ' [fell back: <why>]'."""
+    """What ran, e.g. 'cpu (2 threads, bvh, 8-wide)' (the tree's width: 8 with AVX2, 4 with
+    SSE, binary elsewhere) or 'opencl:0 <device name> (bvh)'; after an 'auto' fallback, with
+    ' [fell back: <why>]'."""
     points: str = "faces"
     rays: int = 30
     device_memory: int = 0

@@ -55,8 +55,10 @@ TEST_P(BvhOnSoup, ClosestHitEqualsBruteForce) {
                                                      1e-4f, skip);
     const kern::SdfHit b = brute_force(bvh, o, d, 1e-4f, skip);
     ASSERT_EQ(a.t, b.t) << "ray " << r;
+#if SDF_HAVE_BVH4_SSE
     const kern::SdfHit w = bvh4_closest_hit(wide, o, d, 1e-4f, skip);
     ASSERT_EQ(w.t, b.t) << "4-wide, ray " << r;
+#endif
 #if SDF_HAVE_BVH8
     if (bvh8_supported()) {
       // Bit for bit: the SIMD triangle test rounds as the scalar one does.
@@ -264,7 +266,9 @@ TEST(Bvh, RaysAlongAnAxisAreNotLostFarFromTheCentre) {
     EXPECT_EQ(kern::sdf_bvh_closest_hit(bvh.nodes.data(), bvh.triangles.data(), o, d, 1.0f, -1).t,
               want.t)
         << "binary, tiny " << tiny;
+#if SDF_HAVE_BVH4_SSE
     EXPECT_EQ(bvh4_closest_hit(wide, o, d, 1.0f, -1).t, want.t) << "4-wide, tiny " << tiny;
+#endif
 #if SDF_HAVE_BVH8
     if (bvh8_supported()) {
       const Bvh8 wide8 = collapse_to_bvh8(bvh);
