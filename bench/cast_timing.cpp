@@ -1,8 +1,8 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
 // Benchmark tool, never part of the product: times our CPU engine's cast against the Embree 3
 // reference caster of the same rule (bench/embree_caster.h, the one embree_sdf runs) in one
-// process, alternating the two, so that the load of a shared machine hits both alike. Only casting and
-// reducing are timed: points, rays and structures are built once, outside the clock.
+// process, alternating the two, so that the load of a shared machine hits both alike. Only casting
+// and reducing are timed: points, rays and structures are built once, outside the clock.
 //   cast_timing IN.off RAYS ROUNDS [VALUES_OUT.bin]
 //   -> per round the rays per CPU second (all threads; time spent descheduled by other work on
 //      a shared machine does not count) of Embree and of our binary (the path of CPUs without
@@ -10,9 +10,9 @@
 //      give the same values, bit for bit. VALUES_OUT.bin receives our raw values (float32) to
 //      compare builds. Off x86-64 the 4-wide and 8-wide columns time the binary tree.
 #include <algorithm>
-#include <ctime>
-#include <cstdlib>
 #include <cstdio>
+#include <cstdlib>
+#include <ctime>
 #include <fstream>
 #include <string>
 #include <vector>
@@ -83,8 +83,8 @@ int main(int argc, char** argv) {
   auto ours = [&](const sdf::BvhWidths& widths, std::vector<float>& values) {
     scene.widths = widths;
     const double t0 = cpu_seconds();
-    sdf::cast_cpu(scene, points, order, cone, tmin, 0, values.data(), valid.data(), nullptr,
-                  0.0, 1.0);
+    sdf::cast_cpu(scene, points, order, cone, tmin, 0, values.data(), valid.data(), nullptr, 0.0,
+                  1.0);
     return cpu_seconds() - t0;
   };
   const double mrays = nf * rays / 1e6;
@@ -98,18 +98,20 @@ int main(int argc, char** argv) {
     ratios2.push_back(embree_s / bvh2_s);
     ratios4.push_back(embree_s / bvh4_s);
     ratios8.push_back(embree_s / bvh8_s);
-    std::printf("round %d: Mrays per cpu s: embree %.2f, binary %.2f (%.3f), bvh4 %.2f (%.3f), "
-                "bvh8 %.2f (%.3f)\n",
-                r, mrays / embree_s, mrays / bvh2_s, ratios2.back(), mrays / bvh4_s,
-                ratios4.back(), mrays / bvh8_s, ratios8.back());
+    std::printf(
+        "round %d: Mrays per cpu s: embree %.2f, binary %.2f (%.3f), bvh4 %.2f (%.3f), "
+        "bvh8 %.2f (%.3f)\n",
+        r, mrays / embree_s, mrays / bvh2_s, ratios2.back(), mrays / bvh4_s, ratios4.back(),
+        mrays / bvh8_s, ratios8.back());
   }
   std::sort(ratios2.begin(), ratios2.end());
   std::sort(ratios4.begin(), ratios4.end());
   std::sort(ratios8.begin(), ratios8.end());
-  std::printf("%s faces=%zu median ratio to Embree's rays/s: binary %.3f, bvh4 %.3f, bvh8 %.3f; "
-              "values %s\n",
-              argv[1], nf, ratios2[rounds / 2], ratios4[rounds / 2], ratios8[rounds / 2],
-              raw == raw4 && raw == raw2 ? "equal in all three" : "DIFFER between trees");
+  std::printf(
+      "%s faces=%zu median ratio to Embree's rays/s: binary %.3f, bvh4 %.3f, bvh8 %.3f; "
+      "values %s\n",
+      argv[1], nf, ratios2[rounds / 2], ratios4[rounds / 2], ratios8[rounds / 2],
+      raw == raw4 && raw == raw2 ? "equal in all three" : "DIFFER between trees");
   if (argc == 5) {
     std::ofstream out(argv[4], std::ios::binary);
     out.write(reinterpret_cast<const char*>(raw.data()), raw.size() * sizeof(float));

@@ -17,10 +17,10 @@
 #include <thread>
 #include <vector>
 
-#include "ray/sdf_reduce.h"
 #include "mesh/mesh.h"
 #include "prepare/rays.h"
 #include "prepare/sampling.h"
+#include "ray/sdf_reduce.h"
 
 namespace bench {
 

@@ -36,7 +36,8 @@ int main(int argc, char** argv) {
 
   const double build_s = std::chrono::duration<double>(t1 - t0).count();
   const double cast_s = std::chrono::duration<double>(t2 - t1).count();
-  std::fprintf(stderr, "embree_sdf: faces=%zu rays=%d threads=%u build %.3f s cast %.3f s %.2f Mrays/s\n",
+  std::fprintf(stderr,
+               "embree_sdf: faces=%zu rays=%d threads=%u build %.3f s cast %.3f s %.2f Mrays/s\n",
                nf, rays, threads, build_s, cast_s, nf * rays / cast_s / 1e6);
   FILE* o = std::fopen(argv[3], "w");
   for (float v : out) std::fprintf(o, "%.9g\n", v);

@@ -6,26 +6,26 @@
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
 
+#include <memory>
 #include <stdexcept>
 #include <string>
-#include <memory>
 #include <utility>
 
 #include <cstddef>
 
-#include "traverse/sdf_octree.h"
-#include "ray/sdf_reduce.h"
-#include "smooth/sdf_smooth_projected.h"
 #include "accel/bvh.h"
+#include "cast_points.h"
+#include "pipeline/sdf.h"
 #include "post/normalize.h"
 #include "prepare/orientation_parts.h"
-#include "util/parallel.h"
-#include "cast_points.h"
+#include "prepare/unit_scale.h"
 #include "progress.h"
+#include "ray/sdf_reduce.h"
+#include "smooth/sdf_smooth_projected.h"
 #include "test_bridge.h"
 #include "timings.h"
-#include "pipeline/sdf.h"
-#include "prepare/unit_scale.h"
+#include "traverse/sdf_octree.h"
+#include "util/parallel.h"
 #ifdef SDF_HAVE_OPENCL
 #include "opencl/devices.h"
 #include "opencl/opencl_engine.h"
@@ -259,7 +259,8 @@ float reduce_lengths(const Floats& lengths, const Floats& angles, const std::str
   const int n = static_cast<int>(lengths.size());
   if (n > sdf::kMaxRays) throw std::invalid_argument("more lengths than the most rays allowed");
   if (n == 0) return std::nanf("");
-  const sdf::Cone cone = sdf::make_cone(rays > 0 ? rays : n, cone_angle, parse_sampling(sampling), 0);
+  const sdf::Cone cone =
+      sdf::make_cone(rays > 0 ? rays : n, cone_angle, parse_sampling(sampling), 0);
   std::vector<float> l(lengths.data(), lengths.data() + n), a(angles.data(), angles.data() + n);
   return sdf::kern::sdf_reduce(static_cast<int>(cone.sampling), l.data(), a.data(), n,
                                cone.angle_floor);
@@ -325,8 +326,8 @@ PYBIND11_MODULE(_core, m) {
   m.def("compute", &compute, py::arg("vertices"), py::arg("triangles"), py::arg("rays"),
         py::arg("cone_angle"), py::arg("sampling"), py::arg("seed"), py::arg("points"),
         py::arg("threads"), py::arg("progress"), py::arg("engine") = "cpu",
-        py::arg("accel") = "bvh", py::arg("octree_max_depth") = 10,
-        py::arg("octree_leaf_size") = 8, py::arg("orientation") = "auto", py::arg("bvh_quality") = "auto",
+        py::arg("accel") = "bvh", py::arg("octree_max_depth") = 10, py::arg("octree_leaf_size") = 8,
+        py::arg("orientation") = "auto", py::arg("bvh_quality") = "auto",
         py::arg("beside_cast") = py::none(), py::arg("find_twins") = true);
   m.def("opencl_devices", &opencl_devices);
   m.def("normalize", &normalize<float>, py::arg("values"), py::arg("method"),
@@ -341,17 +342,21 @@ PYBIND11_MODULE(_core, m) {
     return false;
 #endif
   });
-  m.def("opencl_select", [](const std::string& engine) {
+  m.def(
+      "opencl_select",
+      [](const std::string& engine) {
 #ifdef SDF_HAVE_OPENCL
-    std::vector<int> indices;
-    for (const sdf::cl::Device* d : sdf::cl::select_devices(engine)) indices.push_back(d->index);
-    return indices;
+        std::vector<int> indices;
+        for (const sdf::cl::Device* d : sdf::cl::select_devices(engine))
+          indices.push_back(d->index);
+        return indices;
 #else
-    throw std::invalid_argument("this build of shape_diameter has no OpenCL engine (engine '" +
-                                engine + "')");
+        throw std::invalid_argument("this build of shape_diameter has no OpenCL engine (engine '" +
+                                    engine + "')");
 #endif
-  }, "The indices of the devices an OpenCL engine string selects; ValueError as compute() "
-     "would raise it (OpenCL not available, no device matching).");
+      },
+      "The indices of the devices an OpenCL engine string selects; ValueError as compute() "
+      "would raise it (OpenCL not available, no device matching).");
 #ifdef SDF_HAVE_OPENCL
   m.def("opencl_cache_directory", &sdf::cl::cache_directory);
   py::register_exception<sdf::cl::Error>(m, "OpenCLError", PyExc_RuntimeError);
@@ -381,8 +386,8 @@ PYBIND11_MODULE(_core, m) {
         sdf::MeshValues values;
         {
           py::gil_scoped_release release;
-          values = sdf::mesh_values(a.vertices, a.vertex_count, a.triangles, a.triangle_count,
-                                    threads);
+          values =
+              sdf::mesh_values(a.vertices, a.vertex_count, a.triangles, a.triangle_count, threads);
         }
         return py::make_tuple(values.not_finite, values.first_not_finite, values.min_index,
                               values.max_index);

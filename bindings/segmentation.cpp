@@ -8,9 +8,9 @@
 #include <stdexcept>
 #include <string>
 
-#include "timings.h"
 #include "segment/postprocess.h"
 #include "segment/segmentation.h"
+#include "timings.h"
 
 namespace py = pybind11;
 
@@ -107,8 +107,8 @@ py::dict segment(const Doubles& vertices, const Int64s& triangles, const Doubles
                  std::size_t clusters, double smoothness, bool filter, bool ties_move,
                  bool first_move_only, std::size_t weight_rings, unsigned threads) {
   check_mesh(vertices, triangles, values);
-  const auto o = options_of(clusters, smoothness, filter, ties_move, first_move_only,
-                            weight_rings, threads);
+  const auto o =
+      options_of(clusters, smoothness, filter, ties_move, first_move_only, weight_rings, threads);
   sdf::segment::Segmentation s;
   {
     py::gil_scoped_release release;
@@ -119,9 +119,9 @@ py::dict segment(const Doubles& vertices, const Int64s& triangles, const Doubles
   return to_dict(s);
 }
 
-double segmentation_energy(const Doubles& vertices, const Int64s& triangles,
-                           const Doubles& values, const Ints& labels, std::size_t clusters,
-                           double smoothness, bool filter, unsigned threads) {
+double segmentation_energy(const Doubles& vertices, const Int64s& triangles, const Doubles& values,
+                           const Ints& labels, std::size_t clusters, double smoothness, bool filter,
+                           unsigned threads) {
   check_mesh(vertices, triangles, values);
   if (labels.ndim() != 1 || labels.shape(0) != triangles.shape(0))
     throw std::invalid_argument("labels must have one entry per face");
@@ -135,8 +135,7 @@ double segmentation_energy(const Doubles& vertices, const Int64s& triangles,
 // CGAL's bilateral filter of per-face values over edge-neighbour rings (window 0: CGAL's
 // size for the face count).
 py::array_t<double> bilateral_filter(const Int64s& triangles, std::size_t vertex_count,
-                                     const Doubles& values, std::size_t window,
-                                     unsigned threads) {
+                                     const Doubles& values, std::size_t window, unsigned threads) {
   if (triangles.ndim() != 2 || triangles.shape(1) != 3)
     throw std::invalid_argument("triangles must have shape (m, 3)");
   const auto n = static_cast<std::size_t>(triangles.shape(0));
@@ -151,8 +150,7 @@ py::array_t<double> bilateral_filter(const Int64s& triangles, std::size_t vertex
   py::gil_scoped_release release;
   const auto graph = sdf::segment::build_face_graph(triangles.data(), n, vertex_count, threads);
   sdf::segment::bilateral_filter(graph, from, n,
-                                 window ? window : sdf::segment::bilateral_window(n), threads,
-                                 to);
+                                 window ? window : sdf::segment::bilateral_window(n), threads, to);
   return out;
 }
 

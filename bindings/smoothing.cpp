@@ -8,14 +8,14 @@
 #include <stdexcept>
 #include <string>
 
-#include "mesh/mesh_weld.h"
-#include "util/parallel.h"
 #include "cast_points.h"
-#include "progress.h"
-#include "timings.h"
+#include "mesh/mesh_weld.h"
 #include "post/smoothing_kring.h"
 #include "post/smoothing_projected.h"
 #include "post/smoothing_texture.h"
+#include "progress.h"
+#include "timings.h"
+#include "util/parallel.h"
 #ifdef SDF_HAVE_OPENCL
 #include "opencl/devices.h"
 #include "opencl/opencl_projected.h"
@@ -55,8 +55,8 @@ const float* values_of(const Floats& values, std::size_t n) {
 
 // ... one per point of the kind.
 const float* point_values(const sdf::Mesh& mesh, sdf::PointKind kind, const Floats& values) {
-  return values_of(values, kind == sdf::PointKind::Faces ? mesh.triangles.size()
-                                                         : mesh.vertices.size());
+  return values_of(values,
+                   kind == sdf::PointKind::Faces ? mesh.triangles.size() : mesh.vertices.size());
 }
 
 // A new array of n floats that fill(into) writes with the GIL released: the smoothing
@@ -123,31 +123,34 @@ py::dict smooth_kring(const Doubles& vertices, const Int64s& triangles, const Fl
 }
 
 sdf::ProjectedOptions projected_options(int iterations, int max_depth, double min_points,
-                                       double node_size_ratio, const std::string& branch_on,
-                                       unsigned threads) {
+                                        double node_size_ratio, const std::string& branch_on,
+                                        unsigned threads) {
   sdf::ProjectedOptions options;
   options.iterations = iterations;
   options.max_depth = max_depth;
   options.min_points = min_points;
   options.node_size_ratio = node_size_ratio;
-  if (branch_on == "mean") options.branch_on = sdf::ProjectedOptions::Branch::Mean;
-  else if (branch_on == "min") options.branch_on = sdf::ProjectedOptions::Branch::Min;
-  else throw std::invalid_argument("branch_on must be 'mean' or 'min', got '" + branch_on + "'");
+  if (branch_on == "mean")
+    options.branch_on = sdf::ProjectedOptions::Branch::Mean;
+  else if (branch_on == "min")
+    options.branch_on = sdf::ProjectedOptions::Branch::Min;
+  else
+    throw std::invalid_argument("branch_on must be 'mean' or 'min', got '" + branch_on + "'");
   options.threads = threads;
   return options;
 }
 
 py::array_t<float> smooth_projected(const Doubles& vertices, const Int64s& triangles,
-                                    const Floats& values, const std::string& points,
-                                    int iterations, int max_depth, double min_points,
-                                    double node_size_ratio, const std::string& branch_on,
-                                    unsigned threads, const py::object& progress,
-                                    const std::string& engine, const py::object& timings) {
+                                    const Floats& values, const std::string& points, int iterations,
+                                    int max_depth, double min_points, double node_size_ratio,
+                                    const std::string& branch_on, unsigned threads,
+                                    const py::object& progress, const std::string& engine,
+                                    const py::object& timings) {
   const sdf::Mesh mesh = mesh_from(vertices, triangles, threads);
   const sdf::PointKind kind = kind_from(points);
   const float* v = point_values(mesh, kind, values);
-  const sdf::ProjectedOptions options = projected_options(iterations, max_depth, min_points,
-                                                          node_size_ratio, branch_on, threads);
+  const sdf::ProjectedOptions options =
+      projected_options(iterations, max_depth, min_points, node_size_ratio, branch_on, threads);
   const auto* device = device_for(engine);
   (void)device;  // unused without OpenCL
   const sdf::ProgressFn report = sdf::python_progress(progress);
@@ -190,15 +193,14 @@ py::object prepare_projected(const sdf::CastPoints& cast, unsigned threads,
 // smooth_projected on the frames prepare_projected uploaded (the engine must name the same
 // device; else a device error, after which compute() falls back to the CPU).
 py::array_t<float> smooth_projected_prepared(const sdf::cl::PreparedProjected& prepared,
-                                             const Floats& values, int iterations,
-                                             int max_depth, double min_points,
-                                             double node_size_ratio, const std::string& branch_on,
-                                             unsigned threads, const py::object& progress,
-                                             const std::string& engine,
+                                             const Floats& values, int iterations, int max_depth,
+                                             double min_points, double node_size_ratio,
+                                             const std::string& branch_on, unsigned threads,
+                                             const py::object& progress, const std::string& engine,
                                              const py::object& timings) {
   const float* v = values_of(values, prepared.count);
-  const sdf::ProjectedOptions options = projected_options(iterations, max_depth, min_points,
-                                                          node_size_ratio, branch_on, threads);
+  const sdf::ProjectedOptions options =
+      projected_options(iterations, max_depth, min_points, node_size_ratio, branch_on, threads);
   const auto* device = device_for(engine);
   if (!device) throw std::invalid_argument("smooth_projected_prepared needs an OpenCL engine");
   const sdf::ProgressFn report = sdf::python_progress(progress);
@@ -257,8 +259,8 @@ py::dict smooth_texture(const Doubles& vertices, const Int64s& triangles, const 
   const sdf::PointKind kind = kind_from(points);
   const float* v = point_values(mesh, kind, values);
   require_corner_uvs(uvs, mesh);
-  const sdf::TextureOptions options = texture_options(width, height, radius, bilateral,
-                                                      range_sigma, margin, weld_tolerance, threads);
+  const sdf::TextureOptions options = texture_options(width, height, radius, bilateral, range_sigma,
+                                                      margin, weld_tolerance, threads);
   const auto* device = device_for(engine);
   (void)device;  // unused without OpenCL
   const sdf::ProgressFn report = sdf::python_progress(progress);
@@ -268,8 +270,8 @@ py::dict smooth_texture(const Doubles& vertices, const Int64s& triangles, const 
       return sdf::cl::smooth_texture_opencl(*device, mesh, kind, v, uvs.data(), options,
                                             return_image, report, into);
 #endif
-    return sdf::smooth_texture(mesh, kind, v, uvs.data(), options, return_image, report, 0.0,
-                               1.0, nullptr, into);
+    return sdf::smooth_texture(mesh, kind, v, uvs.data(), options, return_image, report, 0.0, 1.0,
+                               nullptr, into);
   });
 }
 
@@ -278,9 +280,8 @@ py::dict smooth_texture(const Doubles& vertices, const Int64s& triangles, const 
 // casts. An upload that fails is left to smooth_texture_prepared to make (and report).
 std::shared_ptr<sdf::PreparedTexture> prepare_texture(const Doubles& vertices,
                                                       const Int64s& triangles, const Floats& uvs,
-                                                      int width, int height,
-                                                      double weld_tolerance, bool need_merged,
-                                                      unsigned threads,
+                                                      int width, int height, double weld_tolerance,
+                                                      bool need_merged, unsigned threads,
                                                       const std::string& engine) {
   sdf::Stopwatch clock;
   sdf::Mesh mesh = mesh_from(vertices, triangles, threads);
@@ -334,18 +335,17 @@ py::dict smooth_texture_prepared(const sdf::PreparedTexture& prepared, const Flo
       return sdf::cl::smooth_texture_opencl(*device, prepared, kind, v, options, return_image,
                                             report, into);
 #endif
-    return sdf::smooth_texture(prepared, kind, v, options, return_image, report, 0.0, 1.0,
-                               nullptr, into);
+    return sdf::smooth_texture(prepared, kind, v, options, return_image, report, 0.0, 1.0, nullptr,
+                               into);
   });
 }
 
 }  // namespace
 
 void bind_smoothing(py::module_& m) {
-  m.def("smooth_kring", &smooth_kring, py::arg("vertices"), py::arg("triangles"),
-        py::arg("values"), py::arg("points"), py::arg("k"), py::arg("sigma"),
-        py::arg("corner_angle"), py::arg("weld_tolerance"), py::arg("threads"),
-        py::arg("progress"));
+  m.def("smooth_kring", &smooth_kring, py::arg("vertices"), py::arg("triangles"), py::arg("values"),
+        py::arg("points"), py::arg("k"), py::arg("sigma"), py::arg("corner_angle"),
+        py::arg("weld_tolerance"), py::arg("threads"), py::arg("progress"));
   m.def("smooth_projected", &smooth_projected, py::arg("vertices"), py::arg("triangles"),
         py::arg("values"), py::arg("points"), py::arg("iterations"), py::arg("max_depth"),
         py::arg("min_points"), py::arg("node_size_ratio"), py::arg("branch_on"), py::arg("threads"),
@@ -363,27 +363,27 @@ void bind_smoothing(py::module_& m) {
         py::arg("engine"));
   m.def("smooth_projected_prepared", &smooth_projected_prepared, py::arg("prepared"),
         py::arg("values"), py::arg("iterations"), py::arg("max_depth"), py::arg("min_points"),
-        py::arg("node_size_ratio"), py::arg("branch_on"), py::arg("threads"),
-        py::arg("progress"), py::arg("engine"), py::arg("timings") = py::none());
+        py::arg("node_size_ratio"), py::arg("branch_on"), py::arg("threads"), py::arg("progress"),
+        py::arg("engine"), py::arg("timings") = py::none());
 #endif
   m.def("smooth_texture", &smooth_texture, py::arg("vertices"), py::arg("triangles"),
-        py::arg("values"), py::arg("points"), py::arg("uvs"), py::arg("width"),
-        py::arg("height"), py::arg("radius"), py::arg("bilateral"), py::arg("range_sigma"),
-        py::arg("margin"), py::arg("weld_tolerance"), py::arg("return_image"),
-        py::arg("threads"), py::arg("progress"), py::arg("engine") = "cpu");
+        py::arg("values"), py::arg("points"), py::arg("uvs"), py::arg("width"), py::arg("height"),
+        py::arg("radius"), py::arg("bilateral"), py::arg("range_sigma"), py::arg("margin"),
+        py::arg("weld_tolerance"), py::arg("return_image"), py::arg("threads"), py::arg("progress"),
+        py::arg("engine") = "cpu");
   py::class_<sdf::PreparedTexture, std::shared_ptr<sdf::PreparedTexture>>(
       m, "PreparedTexture",
       "Texture smoothing's mesh, UVs and UV islands made ready (prepare_texture), opaque")
-      .def_property_readonly("timings", [](const sdf::PreparedTexture& p) {
-        return sdf::timings_dict(p.timings);
-      });
+      .def_property_readonly(
+          "timings", [](const sdf::PreparedTexture& p) { return sdf::timings_dict(p.timings); });
   m.def("prepare_texture", &prepare_texture, py::arg("vertices"), py::arg("triangles"),
         py::arg("uvs"), py::arg("width"), py::arg("height"), py::arg("weld_tolerance"),
         py::arg("need_merged"), py::arg("threads"), py::arg("engine") = "cpu");
-  m.def("smooth_texture_prepared", &smooth_texture_prepared, py::arg("prepared"),
-        py::arg("values"), py::arg("points"), py::arg("radius"), py::arg("bilateral"),
-        py::arg("range_sigma"), py::arg("margin"), py::arg("return_image"), py::arg("threads"),
-        py::arg("progress"), py::arg("engine") = "cpu");
-  m.def("default_kring_k", [](std::size_t faces) { return sdf::default_kring_k(faces); },
-        py::arg("faces"));
+  m.def("smooth_texture_prepared", &smooth_texture_prepared, py::arg("prepared"), py::arg("values"),
+        py::arg("points"), py::arg("radius"), py::arg("bilateral"), py::arg("range_sigma"),
+        py::arg("margin"), py::arg("return_image"), py::arg("threads"), py::arg("progress"),
+        py::arg("engine") = "cpu");
+  m.def(
+      "default_kring_k", [](std::size_t faces) { return sdf::default_kring_k(faces); },
+      py::arg("faces"));
 }

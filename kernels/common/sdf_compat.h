@@ -55,8 +55,8 @@ typedef float sdf_wide;
 #else /* C++ */
 
 #include <cmath>
-#include <cstdint>
 #include <cstddef>
+#include <cstdint>
 #include <cstring>
 
 // Also defined for every target by CMake (sdf_core's public definitions): a file that includes
@@ -123,11 +123,11 @@ using std::cos;
 using std::exp;
 using std::fabs;
 using std::floor;
-using std::isfinite;
-using std::ldexp;
 using std::fma;
 using std::fmax;
 using std::fmin;
+using std::isfinite;
+using std::ldexp;
 using std::sin;
 using std::sqrt;
 }  // namespace kern
@@ -155,7 +155,9 @@ SDF_INLINE sdf_int32 sdf_ordered_int(float x) {
   sdf_int32 i = sdf_as_int(x);
   return i >= 0 ? i : i ^ 0x7fffffff;
 }
-SDF_INLINE float sdf_ordered_float(sdf_int32 i) { return sdf_as_float(i >= 0 ? i : i ^ 0x7fffffff); }
+SDF_INLINE float sdf_ordered_float(sdf_int32 i) {
+  return sdf_as_float(i >= 0 ? i : i ^ 0x7fffffff);
+}
 
 SDF_KERNEL_END
 

@@ -1,8 +1,8 @@
 /* SPDX-License-Identifier: GPL-3.0-or-later */
 /* Where a face's rays start and how their cone is turned: the centroid, the unit inward axis
- * and the tangent the ray set starts from in azimuth. The host's sampling (native/prepare/sampling.h)
- * and the cast kernels on a device-built tree (sdf_start_of_face in sdf_kernels.cl) both
- * compute them here, in one order of operations, so they agree bit for bit. */
+ * and the tangent the ray set starts from in azimuth. The host's sampling
+ * (native/prepare/sampling.h) and the cast kernels on a device-built tree (sdf_start_of_face in
+ * sdf_kernels.cl) both compute them here, in one order of operations, so they agree bit for bit. */
 #ifndef SDF_FACE_POINT_H
 #define SDF_FACE_POINT_H
 

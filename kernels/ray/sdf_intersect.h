@@ -72,34 +72,31 @@ SDF_INLINE void sdf_intersect_values(float3 o, float3 d, float tmin, float3 v0, 
 /* The same on a triangle in memory. */
 SDF_INLINE void sdf_intersect_triangle(float3 o, float3 d, float tmin,
                                        SDF_GLOBAL const SdfTriangle* tri, SdfHit* hit) {
-  sdf_intersect_values(o, d, tmin, sdf_tri_v0(tri), sdf_tri_e1(tri), sdf_tri_e2(tri), tri->id,
-                       hit);
+  sdf_intersect_values(o, d, tmin, sdf_tri_v0(tri), sdf_tri_e1(tri), sdf_tri_e2(tri), tri->id, hit);
 }
 
 /* The entry distance from a box's slab distances along x, y and z (either end first), or
  * INFINITY when the slabs do not overlap in [0, tmax]. */
 SDF_INLINE float sdf_slab_entry(float tx0, float tx1, float ty0, float ty1, float tz0, float tz1,
                                 float tmax) {
-  float t_near = sdf_max(sdf_max(sdf_min(tx0, tx1), sdf_min(ty0, ty1)),
-                         sdf_max(sdf_min(tz0, tz1), 0.0f));
-  float t_far = sdf_min(sdf_min(sdf_max(tx0, tx1), sdf_max(ty0, ty1)),
-                        sdf_min(sdf_max(tz0, tz1), tmax));
+  float t_near =
+      sdf_max(sdf_max(sdf_min(tx0, tx1), sdf_min(ty0, ty1)), sdf_max(sdf_min(tz0, tz1), 0.0f));
+  float t_far =
+      sdf_min(sdf_min(sdf_max(tx0, tx1), sdf_max(ty0, ty1)), sdf_min(sdf_max(tz0, tz1), tmax));
   return t_near <= t_far ? t_near : INFINITY;
 }
 
 /* Entry distance of the ray into a node's box, or INFINITY when it misses the box or enters
  * beyond tmax. inv_d holds 1/d with zero components replaced by a huge finite value. */
-SDF_INLINE float sdf_box_entry_values(float3 lo, float3 hi, float3 o, float3 inv_d,
-                                      float tmax) {
-  return sdf_slab_entry((lo.x - o.x) * inv_d.x, (hi.x - o.x) * inv_d.x,
-                        (lo.y - o.y) * inv_d.y, (hi.y - o.y) * inv_d.y,
-                        (lo.z - o.z) * inv_d.z, (hi.z - o.z) * inv_d.z, tmax);
+SDF_INLINE float sdf_box_entry_values(float3 lo, float3 hi, float3 o, float3 inv_d, float tmax) {
+  return sdf_slab_entry((lo.x - o.x) * inv_d.x, (hi.x - o.x) * inv_d.x, (lo.y - o.y) * inv_d.y,
+                        (hi.y - o.y) * inv_d.y, (lo.z - o.z) * inv_d.z, (hi.z - o.z) * inv_d.z,
+                        tmax);
 }
 
 /* The same from o * inv_d (o_inv), each slab distance one fused multiply-add: lo * inv_d - o_inv
  * rounds once where (lo - o) * inv_d rounds twice; bvh_margin.h's growth covers both. */
-SDF_INLINE float sdf_box_entry_fused(float3 lo, float3 hi, float3 o_inv, float3 inv_d,
-                                     float tmax) {
+SDF_INLINE float sdf_box_entry_fused(float3 lo, float3 hi, float3 o_inv, float3 inv_d, float tmax) {
   return sdf_slab_entry(fma(lo.x, inv_d.x, -o_inv.x), fma(hi.x, inv_d.x, -o_inv.x),
                         fma(lo.y, inv_d.y, -o_inv.y), fma(hi.y, inv_d.y, -o_inv.y),
                         fma(lo.z, inv_d.z, -o_inv.z), fma(hi.z, inv_d.z, -o_inv.z), tmax);

@@ -88,8 +88,7 @@ SDF_INLINE float sdf_reduce_cgal(float* lengths, float* scratch, int n) {
 
 /* One point's value from its n kept lengths, or -1 when no ray was kept. angles and scratch
  * are clobbered. */
-SDF_INLINE float sdf_reduce(int sampling, float* lengths, float* angles, int n,
-                            float angle_floor) {
+SDF_INLINE float sdf_reduce(int sampling, float* lengths, float* angles, int n, float angle_floor) {
   if (n == 0) return -1.0f;
   if (sampling == SDF_SAMPLING_CGAL) return sdf_reduce_cgal(lengths, angles, n);
   return sdf_reduce_paper(lengths, angles, n, angle_floor);

@@ -17,10 +17,10 @@ SDF_KERNEL_BEGIN
  * on. (`half` is an OpenCL type name, hence half_side.) */
 typedef struct SdfPointNode {
   float center[3];
-  float half_side;         /* half the side of the node's cube */
-  float mean;              /* mean value of the points inside */
-  sdf_uint32 count;        /* points inside (> 0) */
-  sdf_int32 first_child;   /* -1 for a leaf */
+  float half_side;       /* half the side of the node's cube */
+  float mean;            /* mean value of the points inside */
+  sdf_uint32 count;      /* points inside (> 0) */
+  sdf_int32 first_child; /* -1 for a leaf */
   sdf_uint32 child_count;
 } SdfPointNode;
 

@@ -169,7 +169,7 @@ typedef struct {
   SdfTexelWalk walk;
   SDF_GLOBAL const float* uv;
   int height;
-  int covered;     /* texels offered so far */
+  int covered; /* texels offered so far */
   int done;
   size_t texel;    /* the texel offered ... */
   sdf_uint32 rank; /* ... with this rank */
@@ -336,13 +336,13 @@ SDF_INLINE void sdf_dilate_texel(int x, int y, int width, int height,
 /* Texel i of a line of `count` texels `stride` apart (island, value_sum, weight_sum point at
  * the line's first texel): the sums over the taps within `radius` of the centre's island, of
  * taps[|j - i|] x value_sum and x weight_sum. In: value_sum / weight_sum per texel (for the
- * first pass, the value and a null weight_sum: 1 everywhere, with no array to fill). Bilateral (inv_range > 0): taps also weigh
- * exp(-1/2 ((v_tap - v_centre) * inv_range)^2), v = value_sum / weight_sum. An empty centre
- * (island < 0) gives 0 and 0. */
+ * first pass, the value and a null weight_sum: 1 everywhere, with no array to fill). Bilateral
+ * (inv_range > 0): taps also weigh exp(-1/2 ((v_tap - v_centre) * inv_range)^2), v = value_sum /
+ * weight_sum. An empty centre (island < 0) gives 0 and 0. */
 SDF_INLINE void sdf_blur_texel(int i, int count, size_t stride, SDF_GLOBAL const sdf_int32* island,
-                               SDF_GLOBAL const float* value_sum, SDF_GLOBAL const float* weight_sum,
-                               SDF_GLOBAL const float* taps, int radius, float inv_range,
-                               float* value_out, float* weight_out) {
+                               SDF_GLOBAL const float* value_sum,
+                               SDF_GLOBAL const float* weight_sum, SDF_GLOBAL const float* taps,
+                               int radius, float inv_range, float* value_out, float* weight_out) {
   size_t t = (size_t)i * stride;
   sdf_int32 own = island[t];
   if (own < 0) {

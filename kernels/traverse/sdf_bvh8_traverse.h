@@ -10,8 +10,8 @@
 #ifndef SDF_BVH8_TRAVERSE_H
 #define SDF_BVH8_TRAVERSE_H
 
-#include "traverse/sdf_bvh_traverse.h"
 #include "ray/sdf_intersect.h"
+#include "traverse/sdf_bvh_traverse.h"
 
 /* A visit pushes at most seven more entries than it pops; a wide node lies at least one binary
  * level below its parent, so the 8-wide tree is no deeper than the binary one
@@ -27,15 +27,15 @@
 #define SDF_BVH8_HI_Z 40
 
 /* One passing lane of a packet: the scalar test's final update, ties to the lower id. */
-#define SDF_PACKET_LANE(lane)                                                                \
-  if (pass.lane) {                                                                           \
-    float t_lane = t.lane;                                                                   \
-    sdf_int32 id_lane = id.lane;                                                             \
-    if (!(t_lane > hit->t || (t_lane == hit->t && id_lane >= hit->id))) {                    \
-      hit->t = t_lane;                                                                       \
-      hit->det = det.lane;                                                                   \
-      hit->id = id_lane;                                                                     \
-    }                                                                                        \
+#define SDF_PACKET_LANE(lane)                                             \
+  if (pass.lane) {                                                        \
+    float t_lane = t.lane;                                                \
+    sdf_int32 id_lane = id.lane;                                          \
+    if (!(t_lane > hit->t || (t_lane == hit->t && id_lane >= hit->id))) { \
+      hit->t = t_lane;                                                    \
+      hit->det = det.lane;                                                \
+      hit->id = id_lane;                                                  \
+    }                                                                     \
   }
 
 /* sdf_intersect_triangle on the four triangles of a packet (unused lanes have e1 = e2 = 0,
@@ -131,9 +131,9 @@ SDF_INLINE SdfBvh8Cursor sdf_bvh8_cursor(void) {
 
 /* One visit; 0 once the ray is done (c->hit is then final). */
 __attribute__((always_inline)) SDF_INLINE int sdf_bvh8_step(
-    __global const SdfBvh8Node* nodes, __global const SdfTrianglePacket4* packets,
-    SdfBvh8Ray r, float tmin, sdf_int32 skip_id, SdfBvh8Cursor* c, sdf_int32* stack_child,
-    sdf_int32* stack_count, float* stack_t) {
+    __global const SdfBvh8Node* nodes, __global const SdfTrianglePacket4* packets, SdfBvh8Ray r,
+    float tmin, sdf_int32 skip_id, SdfBvh8Cursor* c, sdf_int32* stack_child, sdf_int32* stack_count,
+    float* stack_t) {
   if (c->child < 0) {
     __global const SdfTrianglePacket4* packet = &packets[~c->child];
     for (sdf_int32 k = 0; k < c->count; ++k)
@@ -141,10 +141,9 @@ __attribute__((always_inline)) SDF_INLINE int sdf_bvh8_step(
   } else {
     __global const SdfBvh8Node* node = &nodes[c->child];
     __global const float* planes = (__global const float*)node;
-    float8 t_near =
-        fmax(fmax(sdf_bvh8_slab(planes, r.near_x, r.inv.x, r.o_inv.x),
-                  sdf_bvh8_slab(planes, r.near_y, r.inv.y, r.o_inv.y)),
-             fmax(sdf_bvh8_slab(planes, r.near_z, r.inv.z, r.o_inv.z), (float8)(0.0f)));
+    float8 t_near = fmax(fmax(sdf_bvh8_slab(planes, r.near_x, r.inv.x, r.o_inv.x),
+                              sdf_bvh8_slab(planes, r.near_y, r.inv.y, r.o_inv.y)),
+                         fmax(sdf_bvh8_slab(planes, r.near_z, r.inv.z, r.o_inv.z), (float8)(0.0f)));
     float8 t_far =
         fmin(fmin(sdf_bvh8_slab(planes, r.far_x, r.inv.x, r.o_inv.x),
                   sdf_bvh8_slab(planes, r.far_y, r.inv.y, r.o_inv.y)),

@@ -72,14 +72,12 @@ SDF_INLINE SdfHit sdf_bvh_closest_hit_units(SDF_GLOBAL const sdf_float4* nodes,
                                         make_float3(r_hi.x, r_hi.y, r_hi.z), o_inv, inv_d, hit.t);
     if (sdf_as_int(l_hi.w) > 0) {
       if (t_left != INFINITY)
-        sdf_bvh_leaf_hits(tris, sdf_as_int(l_lo.w), sdf_as_int(l_hi.w), o, d, tmin, skip_id,
-                          &hit);
+        sdf_bvh_leaf_hits(tris, sdf_as_int(l_lo.w), sdf_as_int(l_hi.w), o, d, tmin, skip_id, &hit);
       t_left = INFINITY;
     }
     if (sdf_as_int(r_hi.w) > 0) {
       if (t_right != INFINITY && t_right <= hit.t)
-        sdf_bvh_leaf_hits(tris, sdf_as_int(r_lo.w), sdf_as_int(r_hi.w), o, d, tmin, skip_id,
-                          &hit);
+        sdf_bvh_leaf_hits(tris, sdf_as_int(r_lo.w), sdf_as_int(r_hi.w), o, d, tmin, skip_id, &hit);
       t_right = INFINITY;
     }
     /* A leaf's hit may have put an inner child beyond reach (ties stay: see the pop). */

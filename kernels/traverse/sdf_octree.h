@@ -39,10 +39,10 @@ SDF_STATIC_ASSERT(sizeof(SdfOctreeRoot) == 16, "SdfOctreeRoot is 16 bytes in eve
 SDF_INLINE float sdf_cube_entry(float3 lo, float size, float3 o, float3 inv_d, float tmax) {
   float3 a = (lo - o) * inv_d;
   float3 b = (lo + make_float3(size, size, size) - o) * inv_d;
-  float t_near = sdf_max(sdf_max(sdf_min(a.x, b.x), sdf_min(a.y, b.y)),
-                         sdf_max(sdf_min(a.z, b.z), 0.0f));
-  float t_far = sdf_min(sdf_min(sdf_max(a.x, b.x), sdf_max(a.y, b.y)),
-                        sdf_min(sdf_max(a.z, b.z), tmax));
+  float t_near =
+      sdf_max(sdf_max(sdf_min(a.x, b.x), sdf_min(a.y, b.y)), sdf_max(sdf_min(a.z, b.z), 0.0f));
+  float t_far =
+      sdf_min(sdf_min(sdf_max(a.x, b.x), sdf_max(a.y, b.y)), sdf_min(sdf_max(a.z, b.z), tmax));
   return t_near <= t_far ? t_near : INFINITY;
 }
 
@@ -95,9 +95,9 @@ SDF_INLINE SdfHit sdf_octree_closest_hit(SDF_GLOBAL const sdf_uint32* nodes,
     sdf_uint32 next = pointer;
     for (int octant = 0; octant < 8; ++octant) {
       if (!(mask & (1u << octant))) continue;
-      float3 c_lo = lo + make_float3((octant & 1) ? half_size : 0.0f,
-                                     (octant & 2) ? half_size : 0.0f,
-                                     (octant & 4) ? half_size : 0.0f);
+      float3 c_lo =
+          lo + make_float3((octant & 1) ? half_size : 0.0f, (octant & 2) ? half_size : 0.0f,
+                           (octant & 4) ? half_size : 0.0f);
       float t = sdf_cube_entry(c_lo, half_size, o, inv_d, hit.t);
       if (t != INFINITY) {
         int j = hits++;

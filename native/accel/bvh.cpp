@@ -47,8 +47,7 @@ constexpr std::size_t kTopLevelNode = 16384;
 // 0), in face order, with the bounds of the whole, into refs; scratch (as large) is used on
 // the way and the two may be swapped. Returns how many there are. Each ref's `bins` holds the
 // piece level its triangle wants (bvh_split.h), and `wanted` counts them.
-std::size_t make_references(const Mesh& mesh, unsigned threads,
-                            UninitializedVector<PrimRef>& refs,
+std::size_t make_references(const Mesh& mesh, unsigned threads, UninitializedVector<PrimRef>& refs,
                             UninitializedVector<PrimRef>& scratch, Range& root,
                             PieceCounts& wanted) {
   const std::size_t faces = mesh.triangles.size();
@@ -65,8 +64,7 @@ std::size_t make_references(const Mesh& mesh, unsigned threads,
       bvh_build::Box4 bounds, centroids;
       for (std::size_t f = c * kChunk; f < std::min(faces, (c + 1) * kChunk); ++f) {
         const glm::uvec3 t = mesh.triangles[f];
-        const glm::vec3 v0 = mesh.vertices[t.x], v1 = mesh.vertices[t.y],
-                        v2 = mesh.vertices[t.z];
+        const glm::vec3 v0 = mesh.vertices[t.x], v1 = mesh.vertices[t.y], v2 = mesh.vertices[t.z];
         const glm::vec3 normal = glm::cross(v1 - v0, v2 - v0);  // as face_area_normal
         if (normal.x == 0.0f && normal.y == 0.0f && normal.z == 0.0f) continue;
         PrimRef& r = out[n++];
@@ -119,8 +117,8 @@ struct Subtree {
 // their children to nodes, and each child to next_level or subtrees by size.
 class TopLevels {
  public:
-  TopLevels(PrimRef* buffers[2], const BvhConfig& config, UninitializedVector<kern::SdfBvhNode>& nodes,
-            std::vector<Subtree>& subtrees)
+  TopLevels(PrimRef* buffers[2], const BvhConfig& config,
+            UninitializedVector<kern::SdfBvhNode>& nodes, std::vector<Subtree>& subtrees)
       : buffers_{buffers[0], buffers[1]}, config_(config), nodes_(nodes), subtrees_(subtrees) {}
 
   // Builds every level, starting with root in buffer 0.
@@ -201,7 +199,7 @@ class TopLevels {
         for (std::size_t i = ch.begin; i < ch.end; ++i) {
           const PrimRef& r = src[i];
           const bool left = split.kind == Split::Sah ? split.goes_left(r)
-                                                      : (split.kind == Split::Leaf || i < mid);
+                                                     : (split.kind == Split::Leaf || i < mid);
           const int side = left ? 0 : 1;
           dst[out[side]++] = r;
           const bvh_build::Float4 lo = bvh_build::lo4(r), hi = bvh_build::hi4(r), c2 = lo + hi;
@@ -222,9 +220,8 @@ class TopLevels {
         subtrees_.push_back(Subtree{parent, 1 - from});
         continue;
       }
-      const std::size_t mid = first_chunk[n] < first_chunk[n + 1]
-                                  ? right_out[first_chunk[n]]
-                                  : parent.begin;
+      const std::size_t mid =
+          first_chunk[n] < first_chunk[n + 1] ? right_out[first_chunk[n]] : parent.begin;
       Range child[2] = {Range{0, parent.begin, mid, parent.depth + 1, Box(), Box()},
                         Range{0, mid, parent.end, parent.depth + 1, Box(), Box()}};
       for (std::size_t c = first_chunk[n]; c < first_chunk[n + 1]; ++c)
@@ -284,8 +281,7 @@ void build_subtrees(const std::vector<Subtree>& subtrees, PrimRef* buffers[2],
       const Subtree& s = subtrees[largest_first[k]];
       // Leaves index buffer 0, so a subtree whose triangles are in buffer 1 moves them first.
       if (s.buffer == 1)
-        std::copy(buffers[1] + s.range.begin, buffers[1] + s.range.end,
-                  buffers[0] + s.range.begin);
+        std::copy(buffers[1] + s.range.begin, buffers[1] + s.range.end, buffers[0] + s.range.begin);
       built_count[largest_first[k]] =
           bvh_build::build_subtree(buffers[0], s.range, config.bins, config.max_leaf_size,
                                    config.morton_below, built.data() + 2 * s.range.begin);
@@ -304,8 +300,7 @@ void build_subtrees(const std::vector<Subtree>& subtrees, PrimRef* buffers[2],
         return n;
       };
       nodes[subtrees[k].range.node] = relocated(local[0]);
-      for (std::size_t j = 1; j < built_count[k]; ++j)
-        nodes[base[k] + j - 1] = relocated(local[j]);
+      for (std::size_t j = 1; j < built_count[k]; ++j) nodes[base[k] + j - 1] = relocated(local[j]);
     }
   });
 }
@@ -320,7 +315,8 @@ void write_triangles(const Mesh& mesh, unsigned threads, FaceOf face_of, Bvh& bv
       const glm::vec3 v0 = mesh.vertices[t.x];
       const glm::vec3 e1 = mesh.vertices[t.y] - v0, e2 = mesh.vertices[t.z] - v0;
       bvh.triangles[i] = kern::SdfTriangle{v0.x, v0.y, v0.z, static_cast<std::int32_t>(f),
-                                           e1.x, e1.y, e1.z, 0.0f, e2.x, e2.y, e2.z, 0.0f};
+                                           e1.x, e1.y, e1.z, 0.0f,
+                                           e2.x, e2.y, e2.z, 0.0f};
     }
   });
 }
@@ -351,14 +347,15 @@ Bvh build_bvh(const Mesh& mesh, const BvhConfig& config) {
   build_subtrees(subtrees, buffers, count, config, bvh.nodes);
 
   bvh.triangles.resize(count);
-  write_triangles(mesh, config.threads, [&](std::size_t i) { return refs[i].id; }, bvh);
+  write_triangles(
+      mesh, config.threads, [&](std::size_t i) { return refs[i].id; }, bvh);
   return bvh;
 }
 
 void rewrite_triangles(Bvh& bvh, const Mesh& mesh, unsigned threads) {
-  write_triangles(mesh, threads, [&](std::size_t i) {
-    return static_cast<std::uint32_t>(bvh.triangles[i].id);
-  }, bvh);
+  write_triangles(
+      mesh, threads, [&](std::size_t i) { return static_cast<std::uint32_t>(bvh.triangles[i].id); },
+      bvh);
 }
 
 int bvh_depth(const Bvh& bvh) {

@@ -23,9 +23,8 @@ struct BvhConfig {
   unsigned threads = 0;  // 0: every core
 };
 
-
 struct Bvh {
-  UninitializedVector<kern::SdfBvhNode> nodes;      // nodes[0] is the root
+  UninitializedVector<kern::SdfBvhNode> nodes;       // nodes[0] is the root
   UninitializedVector<kern::SdfTriangle> triangles;  // in leaf order; zero-area triangles left out
   bool empty() const { return triangles.empty(); }
 };

@@ -66,8 +66,8 @@ class Collapser {
 
   int count_triangles(std::int32_t index) {
     const kern::SdfBvhNode& n = bvh_.nodes[index];
-    const int below = n.count > 0 ? n.count
-                                  : count_triangles(n.first) + count_triangles(n.first + 1);
+    const int below =
+        n.count > 0 ? n.count : count_triangles(n.first) + count_triangles(n.first + 1);
     return triangles_below_[index] = below;
   }
 

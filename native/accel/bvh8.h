@@ -2,8 +2,8 @@
 // An 8-wide BVH for the CPU engine on AVX2 machines, collapsed from the binary BVH like the
 // 4-wide one (bvh4.h), with the leaf triangles repacked four at a time as structure-of-arrays
 // so that one SSE test covers four of them (a leaf holds up to kBvh8MergeUpTo triangles, two
-// packets, more only where the builder's depth limit left a larger leaf). A ray visits about half the
-// nodes it visits in the 4-wide tree; each visit tests eight boxes with one AVX2 instruction
+// packets, more only where the builder's depth limit left a larger leaf). A ray visits about half
+// the nodes it visits in the 4-wide tree; each visit tests eight boxes with one AVX2 instruction
 // per slab. Traversal (bvh8_traverse.h) is compiled for AVX2 alone and chosen at run time: the
 // package must still run on x86-64 CPUs without AVX2, which keep the 4-wide SSE tree.
 #pragma once

@@ -56,12 +56,22 @@ struct Float4 {
   static Float4 each(Float4 a, Float4 b, Op op) {
     return {{op(a.f[0], b.f[0]), op(a.f[1], b.f[1]), op(a.f[2], b.f[2]), op(a.f[3], b.f[3])}};
   }
-  friend Float4 operator+(Float4 a, Float4 b) { return each(a, b, [](float x, float y) { return x + y; }); }
-  friend Float4 operator-(Float4 a, Float4 b) { return each(a, b, [](float x, float y) { return x - y; }); }
-  friend Float4 operator*(Float4 a, Float4 b) { return each(a, b, [](float x, float y) { return x * y; }); }
+  friend Float4 operator+(Float4 a, Float4 b) {
+    return each(a, b, [](float x, float y) { return x + y; });
+  }
+  friend Float4 operator-(Float4 a, Float4 b) {
+    return each(a, b, [](float x, float y) { return x - y; });
+  }
+  friend Float4 operator*(Float4 a, Float4 b) {
+    return each(a, b, [](float x, float y) { return x * y; });
+  }
   // Same operand order as minps/maxps: the second operand when either is NaN.
-  friend Float4 min(Float4 a, Float4 b) { return each(a, b, [](float x, float y) { return x < y ? x : y; }); }
-  friend Float4 max(Float4 a, Float4 b) { return each(a, b, [](float x, float y) { return x > y ? x : y; }); }
+  friend Float4 min(Float4 a, Float4 b) {
+    return each(a, b, [](float x, float y) { return x < y ? x : y; });
+  }
+  friend Float4 max(Float4 a, Float4 b) {
+    return each(a, b, [](float x, float y) { return x > y ? x : y; });
+  }
   void truncate(int* out) const {
     for (int i = 0; i < 4; ++i) out[i] = static_cast<int>(f[i]);
   }

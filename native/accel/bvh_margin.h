@@ -1,9 +1,10 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
 // Grows the boxes of a binary BVH so that traversal prunes only boxes that hold no hit, making
 // every engine and tree shape (binary on OpenCL, 4- or 8-wide on the CPU) return the nearest
-// hit over all triangles, bit for bit the same (up to the limit below). Without it, two things let a box test drop
-// the true nearest hit when another hit lies within a few ulps of it (measured: one ray of
-// the teapot's 190k went to the second-nearest triangle through the binary and 4-wide trees):
+// hit over all triangles, bit for bit the same (up to the limit below). Without it, two things let
+// a box test drop the true nearest hit when another hit lies within a few ulps of it (measured: one
+// ray of the teapot's 190k went to the second-nearest triangle through the binary and 4-wide
+// trees):
 //  - the triangle test accepts points up to SDF_BARYCENTRIC_SLACK outside a triangle, so
 //    outside its box;
 //  - slab distances are rounded ((lo - o) / d, or lo / d - o / d fused or not).

@@ -8,8 +8,8 @@
 #include <cstdint>
 #include <vector>
 
-#include "common/sdf_layout.h"
 #include "accel/bvh_sah.h"
+#include "common/sdf_layout.h"
 
 namespace sdf::bvh_build {
 

@@ -11,8 +11,8 @@
 
 #include <glm/glm.hpp>
 
-#include "traverse/sdf_bvh_traverse.h"
 #include "accel/bvh_float4.h"
+#include "traverse/sdf_bvh_traverse.h"
 
 namespace sdf::bvh_build {
 
@@ -51,8 +51,8 @@ static_assert(sizeof(PrimRef) == 32, "PrimRef is meant to fill half a cache line
 struct Range {
   std::uint32_t node = 0;  // where the node is stored
   std::size_t begin = 0, end = 0;
-  int depth = 0;           // root = 0
-  Box bounds;              // of the triangles
+  int depth = 0;  // root = 0
+  Box bounds;     // of the triangles
   // Of the centroids, taken as lo + hi: twice the box centre, the same factor for every
   // triangle, so binning can use it as is and save a multiply.
   Box centroids;
@@ -182,7 +182,7 @@ inline Split finish_split(Split best, const Range& range, int max_leaf_size) {
   }
   const float leaf_cost = range.bounds.half_area() * count;
   best.kind = (fits_in_leaf && leaf_cost <= best.cost + range.bounds.half_area()) ? Split::Leaf
-                                                                                 : Split::Sah;
+                                                                                  : Split::Sah;
   return best;
 }
 

@@ -75,8 +75,8 @@ Box clipped_box(const dvec3 corners[3], const Box& box) {
   // that before the outward rounding to floats.
   double largest = 0.0;
   for (int k = 0; k < 3; ++k)
-    largest = std::max({largest, std::fabs(corners[k].x), std::fabs(corners[k].y),
-                        std::fabs(corners[k].z)});
+    largest = std::max(
+        {largest, std::fabs(corners[k].x), std::fabs(corners[k].y), std::fabs(corners[k].z)});
   const double slack = 64.0 * std::numeric_limits<double>::epsilon() * largest;
   lo -= slack;
   hi += slack;
@@ -99,8 +99,8 @@ void cut(const dvec3 corners[3], const Box& box, int pieces, std::uint32_t id, P
     return;
   }
   const glm::vec3 extent = box.hi - box.lo;
-  const int axis = extent.x >= extent.y ? (extent.x >= extent.z ? 0 : 2)
-                                        : (extent.y >= extent.z ? 1 : 2);
+  const int axis =
+      extent.x >= extent.y ? (extent.x >= extent.z ? 0 : 2) : (extent.y >= extent.z ? 1 : 2);
   const float mid = 0.5f * (box.lo[axis] + box.hi[axis]);
   Box below = box, above = box;
   below.hi[axis] = mid;
@@ -112,9 +112,9 @@ void cut(const dvec3 corners[3], const Box& box, int pieces, std::uint32_t id, P
 // The largest cap on the piece level whose added references fit the budget (and leave the
 // nodes, about two a reference, within the int32 indices of SdfBvhNode).
 int piece_cap(const PieceCounts& wanted, std::size_t count) {
-  const double budget = std::min(kBudget * static_cast<double>(count),
-                                 double(std::numeric_limits<std::int32_t>::max() / 4) -
-                                     static_cast<double>(count));
+  const double budget =
+      std::min(kBudget * static_cast<double>(count),
+               double(std::numeric_limits<std::int32_t>::max() / 4) - static_cast<double>(count));
   for (int cap = kPieceLevels - 1; cap > 0; --cap) {
     double added = 0.0;
     for (int k = 1; k < kPieceLevels; ++k)

@@ -22,8 +22,12 @@ class SubtreeBuilder {
  public:
   SubtreeBuilder(PrimRef* refs, int bins, int max_leaf_size, std::size_t morton_below,
                  kern::SdfBvhNode* nodes)
-      : refs_(refs), bins_(bins), max_leaf_size_(max_leaf_size), morton_below_(morton_below),
-        morton_(max_leaf_size), nodes_(nodes) {}
+      : refs_(refs),
+        bins_(bins),
+        max_leaf_size_(max_leaf_size),
+        morton_below_(morton_below),
+        morton_(max_leaf_size),
+        nodes_(nodes) {}
 
   std::size_t node_count() const { return used_; }
 

@@ -4,8 +4,8 @@
 
 #include <vector>
 
-#include "common/sdf_layout.h"
 #include "accel/bvh_sah.h"
+#include "common/sdf_layout.h"
 
 namespace sdf::bvh_build {
 

@@ -11,8 +11,8 @@ namespace sdf {
 // In double: the plane test's products are the cube of a length (edge x edge, then a point),
 // past float's range for a mesh ~1e13 wide (make_mesh accepts 1e30). An overflow made every
 // child reject a triangle its parent held (compute fuzzer).
-bool triangle_overlaps_box(glm::vec3 box_center, glm::vec3 box_half, glm::vec3 p0,
-                           glm::vec3 p1, glm::vec3 p2) {
+bool triangle_overlaps_box(glm::vec3 box_center, glm::vec3 box_half, glm::vec3 p0, glm::vec3 p1,
+                           glm::vec3 p2) {
   const glm::dvec3 center(box_center), half(box_half);
   const glm::dvec3 v0 = glm::dvec3(p0) - center, v1 = glm::dvec3(p1) - center,
                    v2 = glm::dvec3(p2) - center;
@@ -30,8 +30,8 @@ bool triangle_overlaps_box(glm::vec3 box_center, glm::vec3 box_half, glm::vec3 p
     for (const glm::dvec3& u : axes) {
       const glm::dvec3 axis = glm::cross(u, e);
       const double d0 = glm::dot(v0, axis), d1 = glm::dot(v1, axis), d2 = glm::dot(v2, axis);
-      const double r = half.x * std::fabs(axis.x) + half.y * std::fabs(axis.y) +
-                       half.z * std::fabs(axis.z);
+      const double r =
+          half.x * std::fabs(axis.x) + half.y * std::fabs(axis.y) + half.z * std::fabs(axis.z);
       if (std::min(d0, std::min(d1, d2)) > r || std::max(d0, std::max(d1, d2)) < -r) return false;
     }
   }
@@ -132,7 +132,8 @@ Octree build_octree(const Mesh& mesh, const OctreeConfig& config) {
     const glm::vec3 v0 = mesh.vertices[t.x], e1 = mesh.vertices[t.y] - v0,
                     e2 = mesh.vertices[t.z] - v0;
     tree.triangles[f] = kern::SdfTriangle{v0.x, v0.y, v0.z, static_cast<std::int32_t>(f),
-                                          e1.x, e1.y, e1.z, 0.0f, e2.x, e2.y, e2.z, 0.0f};
+                                          e1.x, e1.y, e1.z, 0.0f,
+                                          e2.x, e2.y, e2.z, 0.0f};
     const glm::vec3 n = glm::cross(e1, e2);
     if (n.x == 0.0f && n.y == 0.0f && n.z == 0.0f) continue;  // never hit: left out
     tris.push_back(static_cast<std::uint32_t>(f));

@@ -7,8 +7,8 @@
 #include <cstdint>
 #include <vector>
 
-#include "traverse/sdf_octree.h"
 #include "mesh/mesh.h"
+#include "traverse/sdf_octree.h"
 
 namespace sdf {
 
@@ -18,8 +18,8 @@ struct OctreeConfig {
 };
 
 struct Octree {
-  std::vector<std::uint32_t> nodes;   // child descriptors; nodes[0] is the root
-  std::vector<std::uint32_t> leaves;  // per leaf: count, then triangle indices
+  std::vector<std::uint32_t> nodes;          // child descriptors; nodes[0] is the root
+  std::vector<std::uint32_t> leaves;         // per leaf: count, then triangle indices
   std::vector<kern::SdfTriangle> triangles;  // every triangle in input order (id = index)
   kern::SdfOctreeRoot root{};
   int depth = 0;  // deepest level reached (root = 0)

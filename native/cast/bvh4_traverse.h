@@ -48,12 +48,18 @@ inline kern::SdfHit bvh4_closest_hit(const Bvh4& bvh, glm::vec3 o, glm::vec3 d, 
       continue;
     }
     const Bvh4Node& n = bvh.nodes[e.child];
-    const __m128 near_x = _mm_sub_ps(_mm_mul_ps(_mm_load_ps(neg_x ? n.hi_x : n.lo_x), inv_x), o_inv_x);
-    const __m128 near_y = _mm_sub_ps(_mm_mul_ps(_mm_load_ps(neg_y ? n.hi_y : n.lo_y), inv_y), o_inv_y);
-    const __m128 near_z = _mm_sub_ps(_mm_mul_ps(_mm_load_ps(neg_z ? n.hi_z : n.lo_z), inv_z), o_inv_z);
-    const __m128 far_x = _mm_sub_ps(_mm_mul_ps(_mm_load_ps(neg_x ? n.lo_x : n.hi_x), inv_x), o_inv_x);
-    const __m128 far_y = _mm_sub_ps(_mm_mul_ps(_mm_load_ps(neg_y ? n.lo_y : n.hi_y), inv_y), o_inv_y);
-    const __m128 far_z = _mm_sub_ps(_mm_mul_ps(_mm_load_ps(neg_z ? n.lo_z : n.hi_z), inv_z), o_inv_z);
+    const __m128 near_x =
+        _mm_sub_ps(_mm_mul_ps(_mm_load_ps(neg_x ? n.hi_x : n.lo_x), inv_x), o_inv_x);
+    const __m128 near_y =
+        _mm_sub_ps(_mm_mul_ps(_mm_load_ps(neg_y ? n.hi_y : n.lo_y), inv_y), o_inv_y);
+    const __m128 near_z =
+        _mm_sub_ps(_mm_mul_ps(_mm_load_ps(neg_z ? n.hi_z : n.lo_z), inv_z), o_inv_z);
+    const __m128 far_x =
+        _mm_sub_ps(_mm_mul_ps(_mm_load_ps(neg_x ? n.lo_x : n.hi_x), inv_x), o_inv_x);
+    const __m128 far_y =
+        _mm_sub_ps(_mm_mul_ps(_mm_load_ps(neg_y ? n.lo_y : n.hi_y), inv_y), o_inv_y);
+    const __m128 far_z =
+        _mm_sub_ps(_mm_mul_ps(_mm_load_ps(neg_z ? n.lo_z : n.hi_z), inv_z), o_inv_z);
     const __m128 t_near = _mm_max_ps(_mm_max_ps(near_x, near_y), _mm_max_ps(near_z, zero));
     const __m128 t_far =
         _mm_min_ps(_mm_min_ps(far_x, far_y), _mm_min_ps(far_z, _mm_set1_ps(hit.t)));

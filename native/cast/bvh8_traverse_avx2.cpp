@@ -19,8 +19,8 @@ namespace {
 // order on each lane, so each lane's t, det and verdict are the scalar test's, bit for bit
 // (including NaN, which passes every comparison the scalar code writes as a rejection).
 // The lanes that pass then go through the scalar update in lane order, which keeps its ties.
-SDF_AVX2 inline void intersect_packet(const TrianglePacket4& p, glm::vec3 o, glm::vec3 d, float tmin,
-                             std::int32_t skip_id, kern::SdfHit* hit) {
+SDF_AVX2 inline void intersect_packet(const TrianglePacket4& p, glm::vec3 o, glm::vec3 d,
+                                      float tmin, std::int32_t skip_id, kern::SdfHit* hit) {
   const __m128 dx = _mm_set1_ps(d.x), dy = _mm_set1_ps(d.y), dz = _mm_set1_ps(d.z);
   const __m128 e1x = _mm_load_ps(p.e1_x), e1y = _mm_load_ps(p.e1_y), e1z = _mm_load_ps(p.e1_z);
   const __m128 e2x = _mm_load_ps(p.e2_x), e2y = _mm_load_ps(p.e2_y), e2z = _mm_load_ps(p.e2_z);
@@ -36,15 +36,13 @@ SDF_AVX2 inline void intersect_packet(const TrianglePacket4& p, glm::vec3 o, glm
   const __m128 sy = _mm_sub_ps(_mm_set1_ps(o.y), _mm_load_ps(p.v0_y));
   const __m128 sz = _mm_sub_ps(_mm_set1_ps(o.z), _mm_load_ps(p.v0_z));
   const __m128 u = _mm_mul_ps(
-      _mm_add_ps(_mm_add_ps(_mm_mul_ps(sx, px), _mm_mul_ps(sy, py)), _mm_mul_ps(sz, pz)),
-      inv_det);
+      _mm_add_ps(_mm_add_ps(_mm_mul_ps(sx, px), _mm_mul_ps(sy, py)), _mm_mul_ps(sz, pz)), inv_det);
   // q = cross(s, e1); v = dot(d, q) * inv_det; t = dot(e2, q) * inv_det
   const __m128 qx = _mm_sub_ps(_mm_mul_ps(sy, e1z), _mm_mul_ps(sz, e1y));
   const __m128 qy = _mm_sub_ps(_mm_mul_ps(sz, e1x), _mm_mul_ps(sx, e1z));
   const __m128 qz = _mm_sub_ps(_mm_mul_ps(sx, e1y), _mm_mul_ps(sy, e1x));
   const __m128 v = _mm_mul_ps(
-      _mm_add_ps(_mm_add_ps(_mm_mul_ps(dx, qx), _mm_mul_ps(dy, qy)), _mm_mul_ps(dz, qz)),
-      inv_det);
+      _mm_add_ps(_mm_add_ps(_mm_mul_ps(dx, qx), _mm_mul_ps(dy, qy)), _mm_mul_ps(dz, qz)), inv_det);
   const __m128 t = _mm_mul_ps(
       _mm_add_ps(_mm_add_ps(_mm_mul_ps(e2x, qx), _mm_mul_ps(e2y, qy)), _mm_mul_ps(e2z, qz)),
       inv_det);
@@ -55,8 +53,8 @@ SDF_AVX2 inline void intersect_packet(const TrianglePacket4& p, glm::vec3 o, glm
   __m128 reject = _mm_cmpeq_ps(det, _mm_setzero_ps());
   reject = _mm_or_ps(reject, _mm_or_ps(_mm_cmplt_ps(u, lo), _mm_cmpgt_ps(u, hi)));
   reject = _mm_or_ps(reject, _mm_or_ps(_mm_cmplt_ps(v, lo), _mm_cmpgt_ps(_mm_add_ps(u, v), hi)));
-  reject = _mm_or_ps(reject, _mm_or_ps(_mm_cmpngt_ps(t, _mm_set1_ps(tmin)),
-                                       _mm_cmpgt_ps(t, _mm_set1_ps(hit->t))));
+  reject = _mm_or_ps(
+      reject, _mm_or_ps(_mm_cmpngt_ps(t, _mm_set1_ps(tmin)), _mm_cmpgt_ps(t, _mm_set1_ps(hit->t))));
   reject = _mm_or_ps(reject, _mm_castsi128_ps(_mm_cmpeq_epi32(
                                  _mm_load_si128(reinterpret_cast<const __m128i*>(p.id)),
                                  _mm_set1_epi32(skip_id))));
@@ -78,8 +76,7 @@ SDF_AVX2 inline void intersect_packet(const TrianglePacket4& p, glm::vec3 o, glm
 
 // One slab distance for eight boxes: the node's plane at `offset` (lo or hi of an axis).
 SDF_AVX2 inline __m256 slab(const char* node, std::size_t offset, __m256 inv, __m256 o_inv) {
-  return _mm256_fmsub_ps(_mm256_load_ps(reinterpret_cast<const float*>(node + offset)), inv,
-                         o_inv);
+  return _mm256_fmsub_ps(_mm256_load_ps(reinterpret_cast<const float*>(node + offset)), inv, o_inv);
 }
 
 struct Entry {
@@ -213,8 +210,8 @@ class Ray {
 
 }  // namespace
 
-SDF_AVX2 kern::SdfHit bvh8_closest_hit_avx2(const Bvh8& bvh, glm::vec3 o, glm::vec3 d,
-                                            float tmin, std::int32_t skip_id) {
+SDF_AVX2 kern::SdfHit bvh8_closest_hit_avx2(const Bvh8& bvh, glm::vec3 o, glm::vec3 d, float tmin,
+                                            std::int32_t skip_id) {
   if (bvh.empty()) return kern::SdfHit{INFINITY, 0.0f, -1};
   Ray ray(bvh, o, d, tmin, skip_id);
   while (ray.step()) {
@@ -222,9 +219,8 @@ SDF_AVX2 kern::SdfHit bvh8_closest_hit_avx2(const Bvh8& bvh, glm::vec3 o, glm::v
   return ray.hit();
 }
 
-SDF_AVX2 void bvh8_closest_hits_avx2(const Bvh8& bvh, glm::vec3 o, const glm::vec3* d,
-                                     int count, float tmin, std::int32_t skip_id,
-                                     kern::SdfHit* hits) {
+SDF_AVX2 void bvh8_closest_hits_avx2(const Bvh8& bvh, glm::vec3 o, const glm::vec3* d, int count,
+                                     float tmin, std::int32_t skip_id, kern::SdfHit* hits) {
   int r = 0;
   for (; r + 1 < count && !bvh.empty(); r += 2) {
     Ray a(bvh, o, d[r], tmin, skip_id), b(bvh, o, d[r + 1], tmin, skip_id);

@@ -74,49 +74,45 @@ void cast_cpu(const Scene& scene, const SamplePoints& points,
 #if SDF_HAVE_BVH8
   if (scene.eight()) {
     const Bvh8& bvh = scene.bvh8;
-    cast_points(points, order, cone, threads, raw, valid_rays, progress, progress_from,
-                progress_to,
-                [&](glm::vec3 o, const glm::vec3* d, int count, std::int32_t own,
-                    kern::SdfHit* hits) {
-                  bvh8_closest_hits_avx2(bvh, o, d, count, min_closeness, own, hits);
-                });
+    cast_points(
+        points, order, cone, threads, raw, valid_rays, progress, progress_from, progress_to,
+        [&](glm::vec3 o, const glm::vec3* d, int count, std::int32_t own, kern::SdfHit* hits) {
+          bvh8_closest_hits_avx2(bvh, o, d, count, min_closeness, own, hits);
+        });
     return;
   }
 #endif
 #if SDF_HAVE_BVH4_SSE
   if (scene.four()) {
     const Bvh4& bvh = scene.bvh4;
-    cast_points(points, order, cone, threads, raw, valid_rays, progress, progress_from,
-                progress_to,
-                [&](glm::vec3 o, const glm::vec3* d, int count, std::int32_t own,
-                    kern::SdfHit* hits) {
-                  for (int r = 0; r < count; ++r)
-                    hits[r] = bvh4_closest_hit(bvh, o, d[r], min_closeness, own);
-                });
+    cast_points(
+        points, order, cone, threads, raw, valid_rays, progress, progress_from, progress_to,
+        [&](glm::vec3 o, const glm::vec3* d, int count, std::int32_t own, kern::SdfHit* hits) {
+          for (int r = 0; r < count; ++r)
+            hits[r] = bvh4_closest_hit(bvh, o, d[r], min_closeness, own);
+        });
     return;
   }
 #endif
   if (scene.binary()) {
     const Bvh& bvh = scene.bvh;
-    cast_points(points, order, cone, threads, raw, valid_rays, progress, progress_from,
-                progress_to,
-                [&](glm::vec3 o, const glm::vec3* d, int count, std::int32_t own,
-                    kern::SdfHit* hits) {
-                  for (int r = 0; r < count; ++r)
-                    hits[r] = kern::sdf_bvh_closest_hit(bvh.nodes.data(), bvh.triangles.data(),
-                                                        o, d[r], min_closeness, own);
-                });
+    cast_points(
+        points, order, cone, threads, raw, valid_rays, progress, progress_from, progress_to,
+        [&](glm::vec3 o, const glm::vec3* d, int count, std::int32_t own, kern::SdfHit* hits) {
+          for (int r = 0; r < count; ++r)
+            hits[r] = kern::sdf_bvh_closest_hit(bvh.nodes.data(), bvh.triangles.data(), o, d[r],
+                                                min_closeness, own);
+        });
   } else {
     const Octree& tree = scene.octree;
-    cast_points(points, order, cone, threads, raw, valid_rays, progress, progress_from,
-                progress_to,
-                [&](glm::vec3 o, const glm::vec3* d, int count, std::int32_t own,
-                    kern::SdfHit* hits) {
-                  for (int r = 0; r < count; ++r)
-                    hits[r] = kern::sdf_octree_closest_hit(tree.nodes.data(), tree.leaves.data(),
-                                                           tree.triangles.data(), tree.root, o,
-                                                           d[r], min_closeness, own);
-                });
+    cast_points(
+        points, order, cone, threads, raw, valid_rays, progress, progress_from, progress_to,
+        [&](glm::vec3 o, const glm::vec3* d, int count, std::int32_t own, kern::SdfHit* hits) {
+          for (int r = 0; r < count; ++r)
+            hits[r] = kern::sdf_octree_closest_hit(tree.nodes.data(), tree.leaves.data(),
+                                                   tree.triangles.data(), tree.root, o, d[r],
+                                                   min_closeness, own);
+        });
   }
 }
 

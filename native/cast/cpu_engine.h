@@ -7,9 +7,9 @@
 #include <vector>
 
 #include "accel/scene.h"
-#include "util/parallel.h"
 #include "prepare/rays.h"
 #include "prepare/sampling.h"
+#include "util/parallel.h"
 
 namespace sdf {
 

@@ -10,8 +10,8 @@
 #include <string>
 #include <vector>
 
-#include "util/parallel.h"
 #include "prepare/unit_scale.h"
+#include "util/parallel.h"
 #include "util/uninitialized_vector.h"
 
 namespace sdf {
@@ -200,7 +200,8 @@ MeshValues mesh_values(const double* vertices, std::size_t vertex_count,
   });
   MeshValues out;
   out.first_not_finite = kNoItem;
-  std::int64_t lo = std::numeric_limits<std::int64_t>::max(), hi = std::numeric_limits<std::int64_t>::min();
+  std::int64_t lo = std::numeric_limits<std::int64_t>::max(),
+               hi = std::numeric_limits<std::int64_t>::min();
   for (const Part& part : parts) {
     out.not_finite += part.not_finite;
     out.first_not_finite = std::min(out.first_not_finite, part.first);
@@ -212,8 +213,8 @@ MeshValues mesh_values(const double* vertices, std::size_t vertex_count,
   return out;
 }
 
-double used_width(const double* vertices, std::size_t vertex_count,
-                  const std::int64_t* triangles, std::size_t triangle_count, unsigned threads) {
+double used_width(const double* vertices, std::size_t vertex_count, const std::int64_t* triangles,
+                  std::size_t triangle_count, unsigned threads) {
   return UsedBox(vertices, vertex_count, triangles, triangle_count, threads).width();
 }
 
@@ -245,8 +246,7 @@ Mesh make_mesh(const double* vertices, std::size_t vertex_count, const std::int6
   mesh.max_extent = box.width();
   // The engines compute in 32-bit floats on coordinates centred on the box: past ~1e30 the
   // sums and differences of a centroid or an edge leave the float range (found by fuzzing).
-  if (!(mesh.max_extent <= 1e30))
-  {
+  if (!(mesh.max_extent <= 1e30)) {
     char extent[32];
     std::snprintf(extent, sizeof extent, "%.3g", mesh.max_extent);
     throw std::invalid_argument(std::string("the mesh spans ") + extent +

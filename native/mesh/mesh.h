@@ -17,8 +17,8 @@ namespace sdf {
 struct Mesh {
   UninitializedVector<glm::vec3> vertices;    // positions minus `center`
   UninitializedVector<glm::uvec3> triangles;  // counter-clockwise seen from outside
-  glm::dvec3 center{0.0};             // bounding-box centre of the used vertices, input units
-  double max_extent = 0.0;            // largest side of that box, in input units
+  glm::dvec3 center{0.0};   // bounding-box centre of the used vertices, input units
+  double max_extent = 0.0;  // largest side of that box, in input units
 };
 
 // Copies a mesh from row-major arrays: vertices (n, 3) and triangles (m, 3), 0-based.
@@ -34,15 +34,14 @@ Mesh make_mesh(const double* vertices, std::size_t vertex_count, const std::int6
 // The largest side of the box make_mesh takes (the vertices the triangles with area use; 0
 // for no triangle), for what runs on the caller's arrays outside compute() (projected
 // smoothing's unit scaling). Throws std::invalid_argument for an index out of range.
-double used_width(const double* vertices, std::size_t vertex_count,
-                  const std::int64_t* triangles, std::size_t triangle_count,
-                  unsigned threads = 0);
+double used_width(const double* vertices, std::size_t vertex_count, const std::int64_t* triangles,
+                  std::size_t triangle_count, unsigned threads = 0);
 
 // What the caller's checks report about a mesh's values, in one parallel pass (numpy's passes
 // cost 6 ms on 1.2M faces on a 16-core host, most of the time outside compute()'s stages).
 struct MeshValues {
-  std::size_t not_finite = 0;  // vertices with a NaN or infinite coordinate
-  std::size_t first_not_finite = 0;  // the first of them (when not_finite > 0)
+  std::size_t not_finite = 0;                 // vertices with a NaN or infinite coordinate
+  std::size_t first_not_finite = 0;           // the first of them (when not_finite > 0)
   std::int64_t min_index = 0, max_index = 0;  // over every corner (0 for no triangle)
 };
 MeshValues mesh_values(const double* vertices, std::size_t vertex_count,

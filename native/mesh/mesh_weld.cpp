@@ -9,11 +9,11 @@
 #include <mutex>
 #include <utility>
 
+#include "mesh/weld_cells.h"
 #include "util/parallel.h"
 #include "util/parallel_scan.h"
 #include "util/radix_sort.h"
 #include "util/uninitialized_vector.h"
-#include "mesh/weld_cells.h"
 
 namespace sdf {
 
@@ -116,8 +116,7 @@ struct CellBuckets {
   UninitializedVector<std::uint32_t> start;    // 2^bits + 1 bucket starts in by_cell
   UninitializedVector<glm::vec3> position;     // position[e] = positions[vertex of by_cell[e]]
 
-  CellBuckets(const glm::vec3* positions, std::size_t count, const WeldGrid& grid,
-              unsigned threads)
+  CellBuckets(const glm::vec3* positions, std::size_t count, const WeldGrid& grid, unsigned threads)
       : by_cell(count), position(count) {
     while ((std::size_t(1) << bits) < count && bits < 32) ++bits;
     parallel_for(count, kWeldGrain, threads, [&](std::size_t begin, std::size_t end) {
@@ -127,8 +126,9 @@ struct CellBuckets {
     radix_sort_by_bits(by_cell, 64 - bits, bits, threads);
     const std::size_t buckets = std::size_t(1) << bits;
     start.resize(buckets + 1);
-    run_starts(count, buckets, threads, [&](std::size_t e) { return bucket(by_cell[e] >> 32); },
-               start.data());
+    run_starts(
+        count, buckets, threads, [&](std::size_t e) { return bucket(by_cell[e] >> 32); },
+        start.data());
     parallel_for(count, kWeldGrain, threads, [&](std::size_t begin, std::size_t end) {
       for (std::size_t e = begin; e < end; ++e) position[e] = positions[vertex(e)];
     });
@@ -180,8 +180,8 @@ std::vector<std::uint32_t> crowded_vertices(const glm::vec3* positions, std::siz
 
 }  // namespace
 
-Weld weld_vertices(const glm::vec3* positions, std::size_t count, float tolerance,
-                   unsigned threads, StageTimings* timings) {
+Weld weld_vertices(const glm::vec3* positions, std::size_t count, float tolerance, unsigned threads,
+                   StageTimings* timings) {
   StageClock clock(timings);
   Weld weld;
   weld.merged.resize(count);
@@ -308,10 +308,11 @@ std::size_t face_blocks(std::size_t faces, unsigned threads) {
 // A counting sort of the corners by vertex in two levels, so that both run in parallel: each
 // block of faces counts its corners per range of 4096 vertices, then copies them to its place
 // among the range's corners (ranges in order, within a range blocks in order, within a block
-// faces in order); then each range sorts its corners by vertex with counters in L1. The sorts are stable, so each list comes out in increasing face order, as
-// from the serial counting sort this replaced (tests/cpp/adjacency_reference.h).
-Adjacency faces_of_vertices(const glm::uvec3* triangles, std::size_t m,
-                            std::uint32_t vertex_count, unsigned threads) {
+// faces in order); then each range sorts its corners by vertex with counters in L1. The sorts are
+// stable, so each list comes out in increasing face order, as from the serial counting sort this
+// replaced (tests/cpp/adjacency_reference.h).
+Adjacency faces_of_vertices(const glm::uvec3* triangles, std::size_t m, std::uint32_t vertex_count,
+                            unsigned threads) {
   const std::size_t ranges = (std::size_t(vertex_count) >> kRangeBits) + 1;
   const std::size_t blocks = face_blocks(m, threads);
   auto block_begin = [&](std::size_t b) { return m * b / blocks; };
@@ -368,7 +369,8 @@ Adjacency faces_of_vertices(const glm::uvec3* triangles, std::size_t m,
         a.offsets[lo + v] = offset;
         offset += std::exchange(next[v], offset);
       }
-      for (std::uint32_t i = first; i < last; ++i) a.items[next[local_vertex[i]]++] = faces[i - first];
+      for (std::uint32_t i = first; i < last; ++i)
+        a.items[next[local_vertex[i]]++] = faces[i - first];
     }
   });
   return a;
@@ -380,14 +382,13 @@ namespace {
 // places, no branch on the data.
 inline void sort16(std::uint32_t* a) {
   static constexpr std::uint8_t kPairs[63][2] = {
-      {0, 1},   {2, 3},   {4, 5},   {6, 7},   {8, 9},   {10, 11}, {12, 13}, {14, 15},
-      {0, 2},   {1, 3},   {4, 6},   {5, 7},   {8, 10},  {9, 11},  {12, 14}, {13, 15},
-      {1, 2},   {5, 6},   {9, 10},  {13, 14}, {0, 4},   {1, 5},   {2, 6},   {3, 7},
-      {8, 12},  {9, 13},  {10, 14}, {11, 15}, {2, 4},   {3, 5},   {10, 12}, {11, 13},
-      {1, 2},   {3, 4},   {5, 6},   {9, 10},  {11, 12}, {13, 14}, {0, 8},   {1, 9},
-      {2, 10},  {3, 11},  {4, 12},  {5, 13},  {6, 14},  {7, 15},  {4, 8},   {5, 9},
-      {6, 10},  {7, 11},  {2, 4},   {3, 5},   {6, 8},   {7, 9},   {10, 12}, {11, 13},
-      {1, 2},   {3, 4},   {5, 6},   {7, 8},   {9, 10},  {11, 12}, {13, 14}};
+      {0, 1},   {2, 3},   {4, 5}, {6, 7},   {8, 9},   {10, 11}, {12, 13}, {14, 15}, {0, 2},
+      {1, 3},   {4, 6},   {5, 7}, {8, 10},  {9, 11},  {12, 14}, {13, 15}, {1, 2},   {5, 6},
+      {9, 10},  {13, 14}, {0, 4}, {1, 5},   {2, 6},   {3, 7},   {8, 12},  {9, 13},  {10, 14},
+      {11, 15}, {2, 4},   {3, 5}, {10, 12}, {11, 13}, {1, 2},   {3, 4},   {5, 6},   {9, 10},
+      {11, 12}, {13, 14}, {0, 8}, {1, 9},   {2, 10},  {3, 11},  {4, 12},  {5, 13},  {6, 14},
+      {7, 15},  {4, 8},   {5, 9}, {6, 10},  {7, 11},  {2, 4},   {3, 5},   {6, 8},   {7, 9},
+      {10, 12}, {11, 13}, {1, 2}, {3, 4},   {5, 6},   {7, 8},   {9, 10},  {11, 12}, {13, 14}};
 #pragma GCC unroll 63
   for (const auto& pair : kPairs) {
     const std::uint32_t x = a[pair[0]], y = a[pair[1]];
@@ -453,8 +454,8 @@ Adjacency vertex_neighbours(const glm::uvec3* triangles, const Adjacency& faces_
   a.offsets[0] = 0;
   parallel_for(n, kGrain, threads, [&](std::size_t begin, std::size_t end) {
     for (std::size_t v = begin; v < end; ++v)
-      a.offsets[v + 1] = list_neighbours(static_cast<std::uint32_t>(v), triangles,
-                                         faces_of_vertices, slots(v));
+      a.offsets[v + 1] =
+          list_neighbours(static_cast<std::uint32_t>(v), triangles, faces_of_vertices, slots(v));
   });
   inclusive_scan(a.offsets.data(), n + 1, threads);
   a.items.resize(a.offsets[n]);

@@ -44,11 +44,11 @@ Loaded load() {
     loaded.why = std::string("no OpenCL library could be loaded (") + (err ? err : "unknown") + ")";
     return loaded;
   }
-#define SDF_CL_RESOLVE(name)                                                        \
-  loaded.api.name = reinterpret_cast<decltype(&::name)>(dlsym(handle, #name));      \
-  if (!loaded.api.name) {                                                           \
-    loaded.why = "the OpenCL library lacks " #name;                                 \
-    return loaded;                                                                  \
+#define SDF_CL_RESOLVE(name)                                                   \
+  loaded.api.name = reinterpret_cast<decltype(&::name)>(dlsym(handle, #name)); \
+  if (!loaded.api.name) {                                                      \
+    loaded.why = "the OpenCL library lacks " #name;                            \
+    return loaded;                                                             \
   }
   SDF_CL_FUNCTIONS(SDF_CL_RESOLVE)
 #undef SDF_CL_RESOLVE
@@ -70,8 +70,7 @@ const Api* api(std::string* why) {
 std::string error_name(cl_int code) {
   switch (code) {
 #define SDF_CL_CASE(c) \
-  case c:              \
-    return #c;
+  case c: return #c;
     SDF_CL_CASE(CL_SUCCESS)
     SDF_CL_CASE(CL_DEVICE_NOT_FOUND)
     SDF_CL_CASE(CL_DEVICE_NOT_AVAILABLE)
@@ -132,10 +131,8 @@ std::string error_name(cl_int code) {
     SDF_CL_CASE(CL_INVALID_LINKER_OPTIONS)
     SDF_CL_CASE(CL_INVALID_DEVICE_PARTITION_COUNT)
 #undef SDF_CL_CASE
-    case -1001:
-      return "CL_PLATFORM_NOT_FOUND_KHR";
-    default:
-      return "CL error " + std::to_string(code);
+    case -1001: return "CL_PLATFORM_NOT_FOUND_KHR";
+    default: return "CL error " + std::to_string(code);
   }
 }
 

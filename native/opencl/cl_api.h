@@ -12,35 +12,35 @@
 
 namespace sdf::cl {
 
-#define SDF_CL_FUNCTIONS(X)   \
-  X(clGetPlatformIDs)         \
-  X(clGetPlatformInfo)        \
-  X(clGetDeviceIDs)           \
-  X(clGetDeviceInfo)          \
-  X(clCreateContext)          \
-  X(clReleaseContext)         \
-  X(clCreateCommandQueue)     \
-  X(clReleaseCommandQueue)    \
+#define SDF_CL_FUNCTIONS(X)    \
+  X(clGetPlatformIDs)          \
+  X(clGetPlatformInfo)         \
+  X(clGetDeviceIDs)            \
+  X(clGetDeviceInfo)           \
+  X(clCreateContext)           \
+  X(clReleaseContext)          \
+  X(clCreateCommandQueue)      \
+  X(clReleaseCommandQueue)     \
   X(clCreateProgramWithSource) \
   X(clCreateProgramWithBinary) \
-  X(clBuildProgram)           \
-  X(clGetProgramBuildInfo)    \
-  X(clGetProgramInfo)         \
-  X(clReleaseProgram)         \
-  X(clCreateKernel)           \
-  X(clReleaseKernel)          \
-  X(clGetKernelWorkGroupInfo) \
-  X(clSetKernelArg)           \
-  X(clCreateBuffer)           \
-  X(clReleaseMemObject)       \
-  X(clEnqueueWriteBuffer)     \
-  X(clEnqueueMapBuffer)       \
-  X(clEnqueueUnmapMemObject)  \
-  X(clWaitForEvents)          \
-  X(clGetEventProfilingInfo)  \
-  X(clReleaseEvent)           \
-  X(clEnqueueReadBuffer)      \
-  X(clEnqueueNDRangeKernel)   \
+  X(clBuildProgram)            \
+  X(clGetProgramBuildInfo)     \
+  X(clGetProgramInfo)          \
+  X(clReleaseProgram)          \
+  X(clCreateKernel)            \
+  X(clReleaseKernel)           \
+  X(clGetKernelWorkGroupInfo)  \
+  X(clSetKernelArg)            \
+  X(clCreateBuffer)            \
+  X(clReleaseMemObject)        \
+  X(clEnqueueWriteBuffer)      \
+  X(clEnqueueMapBuffer)        \
+  X(clEnqueueUnmapMemObject)   \
+  X(clWaitForEvents)           \
+  X(clGetEventProfilingInfo)   \
+  X(clReleaseEvent)            \
+  X(clEnqueueReadBuffer)       \
+  X(clEnqueueNDRangeKernel)    \
   X(clFinish)
 
 struct Api {

@@ -3,8 +3,8 @@
 
 #include <algorithm>
 #include <memory>
-#include <vector>
 #include <stdexcept>
+#include <vector>
 
 #include "program_cache.h"
 #include "util/test_overrides.h"
@@ -55,8 +55,8 @@ void write_buffer(cl_context context, cl_command_queue queue, Staging* staging, 
 void upload_new(DeviceState& s, cl_command_queue queue, Staging* staging, unsigned threads,
                 cl_mem& mem, const void* data, std::size_t bytes) {
   cl_int err = CL_SUCCESS;
-  mem = api()->clCreateBuffer(s.context, CL_MEM_READ_ONLY, std::max<std::size_t>(bytes, 4),
-                              nullptr, &err);
+  mem = api()->clCreateBuffer(s.context, CL_MEM_READ_ONLY, std::max<std::size_t>(bytes, 4), nullptr,
+                              &err);
   if (err != CL_SUCCESS) mem = nullptr;
   check(err, "clCreateBuffer");
   write_buffer(s.context, queue, staging, threads, mem, data, bytes);
@@ -84,7 +84,8 @@ std::string build_options(const Device& device, int rays) {
   std::string options = "-cl-std=CL1.2 -DSDF_MAX_RAYS=" + std::to_string(std::max(rays, 1));
   cl_device_fp_config fp = 0;
   api()->clGetDeviceInfo(device.id, CL_DEVICE_SINGLE_FP_CONFIG, sizeof fp, &fp, nullptr);
-  if (fp & CL_FP_CORRECTLY_ROUNDED_DIVIDE_SQRT) options += " -cl-fp32-correctly-rounded-divide-sqrt";
+  if (fp & CL_FP_CORRECTLY_ROUNDED_DIVIDE_SQRT)
+    options += " -cl-fp32-correctly-rounded-divide-sqrt";
   // Benchmark override: more options for the device's compiler, e.g.
   // "-cl-nv-maxrregcount=40" or "-cl-nv-verbose" (the options are part of the program cache's
   // key).
@@ -119,8 +120,8 @@ void check_fits(const Device& device, const std::vector<std::size_t>& buffers, b
     throw Error("the mesh does not fit OpenCL device " + device.name + ": it needs " +
                     (at_least ? "at least " : "") + mib(total) + " (largest buffer " +
                     mib(largest) + "), the device has " + mib(device.global_memory) +
-                    " (largest buffer " + mib(device.max_allocation) +
-                    "); use engine='cpu'" + (advice.empty() ? "" : " or " + advice),
+                    " (largest buffer " + mib(device.max_allocation) + "); use engine='cpu'" +
+                    (advice.empty() ? "" : " or " + advice),
                 CL_MEM_OBJECT_ALLOCATION_FAILURE);
 }
 

@@ -5,8 +5,8 @@
 #pragma once
 
 #include <algorithm>
-#include <cstdint>
 #include <atomic>
+#include <cstdint>
 #include <map>
 #include <mutex>
 #include <string>
@@ -27,7 +27,7 @@ struct DeviceState {
   bool stage_uploads = false;
   Staging staging;
   unsigned copy_threads = 0;  // host threads its copies may use: the computation's `threads`
-  std::mutex mutex;  // one computation at a time per device; guards all of the above
+  std::mutex mutex;           // one computation at a time per device; guards all of the above
   // A second queue, for uploads made while a computation holds `mutex` and its queue
   // (opencl_smoothing.h: upload_prepared_texture); made on first use, guarded by side_mutex.
   cl_command_queue side_queue = nullptr;
@@ -67,8 +67,8 @@ class Kernel {
   // The largest work group this kernel can run with on `device` (registers limit it).
   std::size_t max_group(cl_device_id device) const {
     std::size_t size = 0;
-    check(api()->clGetKernelWorkGroupInfo(kernel_, device, CL_KERNEL_WORK_GROUP_SIZE,
-                                          sizeof size, &size, nullptr),
+    check(api()->clGetKernelWorkGroupInfo(kernel_, device, CL_KERNEL_WORK_GROUP_SIZE, sizeof size,
+                                          &size, nullptr),
           "clGetKernelWorkGroupInfo");
     return size;
   }
@@ -90,8 +90,7 @@ void write_buffer(cl_context context, cl_command_queue queue, Staging* staging, 
                   cl_mem destination, const void* data, std::size_t bytes);
 
 // The same on the state's queue, through its staging where uploads are staged.
-inline void write_buffer(DeviceState& s, cl_mem destination, const void* data,
-                         std::size_t bytes) {
+inline void write_buffer(DeviceState& s, cl_mem destination, const void* data, std::size_t bytes) {
   write_buffer(s.context, s.queue, s.stage_uploads ? &s.staging : nullptr, s.copy_threads,
                destination, data, bytes);
 }

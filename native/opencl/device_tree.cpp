@@ -7,8 +7,8 @@
 #include <string>
 #include <vector>
 
-#include "common/sdf_layout.h"
 #include "accel/bvh_margin.h"
+#include "common/sdf_layout.h"
 #include "util/stopwatch.h"
 
 namespace sdf::cl {
@@ -21,8 +21,7 @@ void launch_items(const Device& device, DeviceState& s, const Kernel& kernel, st
                   std::size_t local = 64, bool exact = false) {
   const std::size_t global = (std::max<std::size_t>(count, 1) + local - 1) / local * local;
   check(api()->clEnqueueNDRangeKernel(s.queue, kernel.get(), 1, nullptr, &global,
-                                      device.gpu || exact ? &local : nullptr, 0, nullptr,
-                                      nullptr),
+                                      device.gpu || exact ? &local : nullptr, 0, nullptr, nullptr),
         "clEnqueueNDRangeKernel");
 }
 
@@ -87,12 +86,11 @@ void sort_faces_on_device(const Device& device, DeviceState& s, cl_program progr
   read_buffer(s, extent.get(), found, sizeof found);
   using kern::sdf_ordered_float;
   *with_area = static_cast<std::size_t>(found[7]);
-  *margin = tree_margin(
-      glm::vec3(sdf_ordered_float(found[0]), sdf_ordered_float(found[1]),
-                sdf_ordered_float(found[2])),
-      glm::vec3(sdf_ordered_float(found[3]), sdf_ordered_float(found[4]),
-                sdf_ordered_float(found[5])),
-      sdf_ordered_float(found[6]));  // a length >= 0: its bits as they are
+  *margin = tree_margin(glm::vec3(sdf_ordered_float(found[0]), sdf_ordered_float(found[1]),
+                                  sdf_ordered_float(found[2])),
+                        glm::vec3(sdf_ordered_float(found[3]), sdf_ordered_float(found[4]),
+                                  sdf_ordered_float(found[5])),
+                        sdf_ordered_float(found[6]));  // a length >= 0: its bits as they are
 }
 
 // The triangles' records of the faces with area, in the cast order (SdfTriangle units, as
@@ -125,7 +123,8 @@ DeviceTree build_device_tree(const Device& device, DeviceState& s, const std::st
   // make_plan asks only such devices for a tree; a test override may ask any.
   if (!makes_trees(device))
     throw Error("OpenCL device '" + device.name + "' cannot run work groups of " +
-                    std::to_string(kSortGroup) + " items, which its tree's sort needs: "
+                    std::to_string(kSortGroup) +
+                    " items, which its tree's sort needs: "
                     "let the host build the tree",
                 CL_INVALID_WORK_GROUP_SIZE);
   const std::size_t faces = mesh.triangles.size();
@@ -141,8 +140,7 @@ DeviceTree build_device_tree(const Device& device, DeviceState& s, const std::st
                     record_bytes = faces * sizeof(kern::SdfTriangle);
   const std::vector<std::vector<std::size_t>> phases = {
       {mesh_bytes, 4 * faces * 4, (faces / kSortGroup + 1) * 64},
-      {mesh_bytes, faces * 4, faces * 4, node_bytes, slots * 4, most_inner * 16,
-       most_inner * 4},
+      {mesh_bytes, faces * 4, faces * 4, node_bytes, slots * 4, most_inner * 16, most_inner * 4},
       {mesh_bytes, faces * 4, node_bytes, record_bytes, faces * 8}};
   DeviceTree tree;
   for (const auto& sizes : phases) {

@@ -11,9 +11,9 @@
 #include <memory>
 #include <string>
 
+#include "device_state.h"
 #include "mesh/mesh.h"
 #include "util/uninitialized_vector.h"
-#include "device_state.h"
 
 namespace sdf::cl {
 
@@ -25,7 +25,7 @@ struct DeviceTree {
   // The SdfBvhNode and SdfTriangle arrays.
   std::unique_ptr<Buffer> nodes, triangles;
   UninitializedVector<std::uint32_t> host_order;  // `order`, read back: results go to faces
-  std::size_t with_area = 0;  // faces with area: 0 leaves nothing to cast (and no tree)
+  std::size_t with_area = 0;     // faces with area: 0 leaves nothing to cast (and no tree)
   std::uint64_t peak_bytes = 0;  // the most device memory held at once while making them
   // Seconds for the mesh's upload, then for the rest.
   double upload_seconds = 0.0, build_seconds = 0.0;

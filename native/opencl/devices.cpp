@@ -67,8 +67,8 @@ Found enumerate() {
   // for other programs, and to test the out-of-memory refusal on a small mesh. A value that
   // is no count of bytes makes OpenCL unavailable, saying why ('auto' then runs on the CPU).
   std::uint64_t cap = UINT64_MAX;
-  if (const char* text = std::getenv("SDF_OPENCL_MAX_MEMORY"); text && *text &&
-      !read_memory_cap(text, &cap)) {
+  if (const char* text = std::getenv("SDF_OPENCL_MAX_MEMORY");
+      text && *text && !read_memory_cap(text, &cap)) {
     found.why = std::string("SDF_OPENCL_MAX_MEMORY='") + text +
                 "' is not a number of bytes (digits only, e.g. 2000000000)";
     return found;
@@ -114,7 +114,8 @@ Found enumerate() {
       found.devices.push_back(d);
     }
   }
-  if (found.devices.empty()) found.why = "OpenCL platforms are installed but offer no usable device";
+  if (found.devices.empty())
+    found.why = "OpenCL platforms are installed but offer no usable device";
   for (const Device& d : found.devices) found_a_gpu = found_a_gpu || d.gpu;
   return found;
 }
@@ -132,7 +133,8 @@ std::string lower(std::string s) {
 std::string listing() {
   std::string s;
   for (const Device& d : devices())
-    s += (s.empty() ? "" : ", ") + std::string("opencl:") + std::to_string(d.index) + " (" + d.name + ")";
+    s += (s.empty() ? "" : ", ") + std::string("opencl:") + std::to_string(d.index) + " (" +
+         d.name + ")";
   return s.empty() ? "none (" + unavailable_reason() + ")" : s;
 }
 
@@ -157,13 +159,14 @@ std::vector<const Device*> select_devices(const std::string& engine) {
   if (all.empty()) throw std::invalid_argument("OpenCL is not available: " + unavailable_reason());
   std::vector<const Device*> chosen;
   if (engine == "opencl") {
-    chosen.push_back(&*std::max_element(all.begin(), all.end(), [](const Device& a, const Device& b) {
-      return a.score() < b.score();
-    }));
+    chosen.push_back(
+        &*std::max_element(all.begin(), all.end(),
+                           [](const Device& a, const Device& b) { return a.score() < b.score(); }));
     return chosen;
   }
   if (engine.size() < prefix.size() + 2 || engine[prefix.size()] != ':')
-    throw std::invalid_argument("unknown engine '" + engine + "'; OpenCL devices here: " + listing());
+    throw std::invalid_argument("unknown engine '" + engine +
+                                "'; OpenCL devices here: " + listing());
   const std::string what = engine.substr(prefix.size() + 1);
   if (what == "all") {
     for (const Device& d : all)
@@ -184,7 +187,8 @@ std::vector<const Device*> select_devices(const std::string& engine) {
       chosen.push_back(&d);
       return chosen;
     }
-  throw std::invalid_argument("no OpenCL device matches '" + what + "'; devices here: " + listing());
+  throw std::invalid_argument("no OpenCL device matches '" + what +
+                              "'; devices here: " + listing());
 }
 
 }  // namespace sdf::cl

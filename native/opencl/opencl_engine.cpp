@@ -131,11 +131,8 @@ BvhWidths wanted_bvhs(const std::vector<const Device*>& devices) {
   BvhWidths wanted;
   for (const Device* d : devices) {
     switch (cast_kernel_for(*d)) {
-      case CastKernel::Bvh8PerPoint:
-        wanted.eight = true;
-        break;
-      default:
-        wanted.binary = true;
+      case CastKernel::Bvh8PerPoint: wanted.eight = true; break;
+      default: wanted.binary = true;
     }
   }
   return wanted;
@@ -160,8 +157,8 @@ class SharedScene {
       }
     }
     if (failure_) std::rethrow_exception(failure_);
-    const bool empty = (scene_->binary() && scene_->bvh.empty()) ||
-                       (scene_->eight() && scene_->bvh8.empty());
+    const bool empty =
+        (scene_->binary() && scene_->bvh.empty()) || (scene_->eight() && scene_->bvh8.empty());
     return empty ? nullptr : scene_;
   }
 
@@ -174,12 +171,10 @@ class SharedScene {
 };
 
 void run_device(const Device& device, std::size_t slot, SharedScene& shared_scene,
-                const CastInput& input,
-                const Cone& cone, float min_closeness,
-                unsigned host_threads,
-                UninitializedVector<float>& raw_ordered,
-                UninitializedVector<std::int32_t>& valid_ordered,
-                WorkQueue& work, std::mutex& done_mutex, std::condition_variable& done_changed,
+                const CastInput& input, const Cone& cone, float min_closeness,
+                unsigned host_threads, UninitializedVector<float>& raw_ordered,
+                UninitializedVector<std::int32_t>& valid_ordered, WorkQueue& work,
+                std::mutex& done_mutex, std::condition_variable& done_changed,
                 DeviceResult& result) {
   const Api& cl = *api();
   DeviceState& s = state_of(device);
@@ -193,8 +188,8 @@ void run_device(const Device& device, std::size_t slot, SharedScene& shared_scen
   cl_mem accel[3] = {nullptr, nullptr, nullptr}, order = nullptr;
   cl_mem points_in[4] = {nullptr, nullptr, nullptr, nullptr};
   const kern::SdfOctreeRoot* accel_root = nullptr;  // the octree's kernel takes it by value
-  DeviceTree tree;                                   // CastInput::mesh: the device's own
-  std::unique_ptr<Buffer> owned[8];                  // otherwise: the host's uploads
+  DeviceTree tree;                                  // CastInput::mesh: the device's own
+  std::unique_ptr<Buffer> owned[8];                 // otherwise: the host's uploads
   std::unique_ptr<Kernel> kernel;
   cl_program program = nullptr;
   std::size_t points_per_group = 0;
@@ -277,9 +272,9 @@ void run_device(const Device& device, std::size_t slot, SharedScene& shared_scen
     const SamplePoints& points = *input.points;
     // The points and their order first: they go to the device (and the program is compiled
     // or loaded) while the scene may still be building on the host.
-    std::vector<std::size_t> sizes = {3 * n * sizeof(float),        3 * n * sizeof(float),
-                                      n * sizeof(std::int32_t),       n * sizeof(std::uint32_t),
-                                      n * sizeof(float),              n * sizeof(std::int32_t),
+    std::vector<std::size_t> sizes = {3 * n * sizeof(float),    3 * n * sizeof(float),
+                                      n * sizeof(std::int32_t), n * sizeof(std::uint32_t),
+                                      n * sizeof(float),        n * sizeof(std::int32_t),
                                       3 * n * sizeof(float)};
     check_fits(device, sizes, true);
     program = program_for(device, s, options);
@@ -326,8 +321,7 @@ void run_device(const Device& device, std::size_t slot, SharedScene& shared_scen
       sizes.push_back(bytes_of(scene.octree.nodes));
       sizes.push_back(bytes_of(scene.octree.leaves));
       sizes.push_back(bytes_of(scene.octree.triangles));
-      data = {scene.octree.nodes.data(), scene.octree.leaves.data(),
-              scene.octree.triangles.data()};
+      data = {scene.octree.nodes.data(), scene.octree.leaves.data(), scene.octree.triangles.data()};
       kernel = std::make_unique<Kernel>(program, "sdf_cast_octree");
     }
     check_fits(device, sizes);
@@ -406,12 +400,14 @@ void run_device(const Device& device, std::size_t slot, SharedScene& shared_scen
       group = points_per_group * cone.rays;
       global = (count + points_per_group - 1) / points_per_group * group;
     }
-    check(cl.clEnqueueNDRangeKernel(s.queue, kernel->get(), 1, nullptr, &global, &group, 0,
-                                    nullptr, nullptr),
+    check(cl.clEnqueueNDRangeKernel(s.queue, kernel->get(), 1, nullptr, &global, &group, 0, nullptr,
+                                    nullptr),
           "clEnqueueNDRangeKernel");
     if (lose_after >= 0 && launches++ >= lose_after)
-      throw Error("OpenCL clFinish (cast) failed: CL_DEVICE_NOT_AVAILABLE (acted out by a "
-                  "test override)", CL_DEVICE_NOT_AVAILABLE);
+      throw Error(
+          "OpenCL clFinish (cast) failed: CL_DEVICE_NOT_AVAILABLE (acted out by a "
+          "test override)",
+          CL_DEVICE_NOT_AVAILABLE);
     check(cl.clFinish(s.queue), "clFinish (cast)");
     const double took = seconds_since(launch);
     result.timings.cast += took;
@@ -459,9 +455,8 @@ bool tree_on_device(bool preferred) {
 
 CastTimings cast_opencl(const std::vector<const Device*>& devices, const CastInput& input,
                         const Cone& cone, float min_closeness, unsigned host_threads, float* raw,
-                        std::int32_t* valid_rays, const ProgressFn& progress,
-                        double progress_from, double progress_to,
-                        const std::function<void()>& beside_cast) {
+                        std::int32_t* valid_rays, const ProgressFn& progress, double progress_from,
+                        double progress_to, const std::function<void()>& beside_cast) {
   const std::size_t n = input.size;
   SharedScene shared_scene(input.scene);
   // The kernels write results in cast order (contiguous per launch); scattered back below.

@@ -13,11 +13,11 @@
 
 #include "accel/bvh.h"
 #include "accel/scene.h"
+#include "devices.h"
 #include "mesh/mesh.h"
-#include "util/parallel.h"
 #include "prepare/rays.h"
 #include "prepare/sampling.h"
-#include "devices.h"
+#include "util/parallel.h"
 
 namespace sdf::cl {
 
@@ -38,9 +38,9 @@ using SceneSource = std::function<const Scene&()>;
 
 struct CastTimings {
   double upload = 0.0, cast = 0.0, download = 0.0;
-  double wait = 0.0;  // for the scene, once the points were uploaded
-  double build = 0.0;  // of a tree made on the device (the faces' sort and the tree)
-  bool rewound = false;  // that tree was a kept one, rewound (CastInput::rewind_trees)
+  double wait = 0.0;               // for the scene, once the points were uploaded
+  double build = 0.0;              // of a tree made on the device (the faces' sort and the tree)
+  bool rewound = false;            // that tree was a kept one, rewound (CastInput::rewind_trees)
   std::uint64_t device_bytes = 0;  // buffers on the device (the largest of several devices)
 };
 
@@ -91,9 +91,8 @@ struct CastInput {
 // (with input.mesh: once the mesh is on every device, its staging copies done).
 CastTimings cast_opencl(const std::vector<const Device*>& devices, const CastInput& input,
                         const Cone& cone, float min_closeness, unsigned host_threads, float* raw,
-                        std::int32_t* valid_rays, const ProgressFn& progress,
-                        double progress_from, double progress_to,
-                        const std::function<void()>& beside_cast = nullptr);
+                        std::int32_t* valid_rays, const ProgressFn& progress, double progress_from,
+                        double progress_to, const std::function<void()>& beside_cast = nullptr);
 
 // Whether the tree is made on the device: `preferred`, unless a test override
 // (util/test_overrides.h) forces the host or the device.

@@ -8,10 +8,10 @@
 #include <utility>
 #include <vector>
 
-#include "util/parallel.h"
-#include "util/uninitialized_vector.h"
 #include "device_state.h"
 #include "smoothing_launch.h"
+#include "util/parallel.h"
+#include "util/uninitialized_vector.h"
 
 namespace sdf::cl {
 
@@ -116,7 +116,7 @@ void smooth_on_device(const Device& device, DeviceState& s, cl_mem origins, cl_m
   std::uint32_t box_bits[6];
   ProjectedBin root_bin;
   std::vector<ProjectedBin> level_bins;
-  std::vector<cl_int> slot_of_bin, next_slot_of_bin;  // the level above's bins: slot or -1
+  std::vector<cl_int> slot_of_bin, next_slot_of_bin;       // the level above's bins: slot or -1
   std::vector<std::uint32_t> slot_nodes, next_slot_nodes;  // a level's branching nodes
   std::vector<PointOctreeNode> nodes;
   const FinishOnUnwind finish_on_unwind(s.queue);
@@ -137,8 +137,8 @@ void smooth_on_device(const Device& device, DeviceState& s, cl_mem origins, cl_m
     project.arg(a++, box.get());
     project.arg(a++, root.get());
     launch(s, project, 1, &global, &local);
-    check(api()->clEnqueueReadBuffer(s.queue, box.get(), CL_FALSE, 0, sizeof box_bits, box_bits,
-                                      0, nullptr, nullptr),
+    check(api()->clEnqueueReadBuffer(s.queue, box.get(), CL_FALSE, 0, sizeof box_bits, box_bits, 0,
+                                     nullptr, nullptr),
           "clEnqueueReadBuffer");
     read(s, root, sizeof root_bin, &root_bin);
     add_time(timings, "device: points", clock.lap());
@@ -148,15 +148,13 @@ void smooth_on_device(const Device& device, DeviceState& s, cl_mem origins, cl_m
     }
 
     // The octree, level by level, breadth first as the host builder makes it.
-    const PointCube cube(
-        glm::vec3(from_ordered_bits(box_bits[0]), from_ordered_bits(box_bits[1]),
-                  from_ordered_bits(box_bits[2])),
-        glm::vec3(from_ordered_bits(box_bits[3]), from_ordered_bits(box_bits[4]),
-                  from_ordered_bits(box_bits[5])),
-        options.max_depth);
+    const PointCube cube(glm::vec3(from_ordered_bits(box_bits[0]), from_ordered_bits(box_bits[1]),
+                                   from_ordered_bits(box_bits[2])),
+                         glm::vec3(from_ordered_bits(box_bits[3]), from_ordered_bits(box_bits[4]),
+                                   from_ordered_bits(box_bits[5])),
+                         options.max_depth);
     const double branch_above = options.min_points * static_cast<double>(root_bin.count);
-    nodes = {make_point_node(cube.center, 0.5f * cube.side, root_bin.count, root_bin.sum(),
-                             shift)};
+    nodes = {make_point_node(cube.center, 0.5f * cube.side, root_bin.count, root_bin.sum(), shift)};
     slot_nodes.clear();
     slot_of_bin.assign(1, -1);
     if (point_node_branches(nodes[0], 0, root_bin.min(), options, branch_above)) {
@@ -297,8 +295,10 @@ void smooth_projected_opencl(const Device& device, const PreparedProjected& prep
   // Checked under the lock: made for this state, which no failed run has replaced since.
   const auto* frames = static_cast<const FramesOnDevice*>(prepared.on_device.get());
   if (!frames || frames->state != &s || s.broken)
-    throw Error("the points' frames are not on this device (not uploaded, or the device "
-                "failed since)", CL_INVALID_MEM_OBJECT);
+    throw Error(
+        "the points' frames are not on this device (not uploaded, or the device "
+        "failed since)",
+        CL_INVALID_MEM_OBJECT);
   s.copy_threads = options.threads;
   smooth_on_device(device, s, frames->origins, frames->axes, n, values, range, options, out,
                    progress, timings);
@@ -338,8 +338,8 @@ void smooth_projected_opencl(const Device& device, const Mesh& mesh, PointKind k
   FramesOnDevice frames;  // non-blocking uploads: the arrays live past the blocking reads
   upload_frames(s, s.queue, s.stage_uploads ? &s.staging : nullptr, options.threads, origin_data,
                 axis_data, n, frames);
-  smooth_on_device(device, s, frames.origins, frames.axes, n, values, range, options, out,
-                   progress, timings);
+  smooth_on_device(device, s, frames.origins, frames.axes, n, values, range, options, out, progress,
+                   timings);
 }
 
 }  // namespace sdf::cl

@@ -10,11 +10,11 @@
 #include <cstddef>
 #include <memory>
 
-#include "mesh/mesh.h"
-#include "prepare/sampling.h"
-#include "post/smoothing_projected.h"
-#include "util/stopwatch.h"
 #include "devices.h"
+#include "mesh/mesh.h"
+#include "post/smoothing_projected.h"
+#include "prepare/sampling.h"
+#include "util/stopwatch.h"
 
 namespace sdf::cl {
 

@@ -9,9 +9,9 @@
 #include <string>
 #include <vector>
 
-#include "util/stopwatch.h"
 #include "device_state.h"
 #include "smoothing_launch.h"
+#include "util/stopwatch.h"
 
 namespace sdf::cl {
 
@@ -83,9 +83,9 @@ void filter_on_device(const Device& device, DeviceState& s, cl_program program,
 // item, in double, which consumer GPUs run at 1/32 to 1/64 of float speed.)
 
 // A prepared texture's UVs and face islands on a device (for vertex values also its
-// triangles, corner groups and merged vertices), uploaded on its side queue while it cast. Released with the
-// prepared texture, unless the device failed since (its driver objects may be dead: set aside
-// like its state).
+// triangles, corner groups and merged vertices), uploaded on its side queue while it cast. Released
+// with the prepared texture, unless the device failed since (its driver objects may be dead: set
+// aside like its state).
 struct TextureUploads {
   DeviceState* state = nullptr;
   cl_mem uvs = nullptr, face_island = nullptr;
@@ -118,9 +118,15 @@ TextureDeviceFn texture_on_device(const Device& device, const PreparedTexture* p
     // uvs, values, face islands, read-back values; owner, island, value and their dilation
     // copies; the blur's two sums and taps; vertex values: triangles, corner samples, groups,
     // merged vertices.
-    std::vector<std::size_t> sizes = {6 * m * sizeof(float), n * sizeof(float),
-                                      m * sizeof(std::int32_t), n * sizeof(float),
-                                      image, image, image, image, image};
+    std::vector<std::size_t> sizes = {6 * m * sizeof(float),
+                                      n * sizeof(float),
+                                      m * sizeof(std::int32_t),
+                                      n * sizeof(float),
+                                      image,
+                                      image,
+                                      image,
+                                      image,
+                                      image};
     if (f.taps >= 1) sizes.insert(sizes.end(), {image, image, bytes_of(f.kernel)});
     if (!faces)
       sizes.insert(sizes.end(), {bytes_of(job.mesh->triangles), 3 * m * sizeof(float),
@@ -155,12 +161,15 @@ TextureDeviceFn texture_on_device(const Device& device, const PreparedTexture* p
         corners = uploads->corners;
         merged = uploads->merged;
       } else {
-        own_triangles = std::make_unique<Buffer>(s, bytes_of(job.mesh->triangles),
-                                                 job.mesh->triangles.data());
-        own_first = std::make_unique<Buffer>(s, bytes_of(job.groups->first), job.groups->first.data());
-        own_corners = std::make_unique<Buffer>(s, bytes_of(job.groups->corners), job.groups->corners.data());
+        own_triangles =
+            std::make_unique<Buffer>(s, bytes_of(job.mesh->triangles), job.mesh->triangles.data());
+        own_first =
+            std::make_unique<Buffer>(s, bytes_of(job.groups->first), job.groups->first.data());
+        own_corners =
+            std::make_unique<Buffer>(s, bytes_of(job.groups->corners), job.groups->corners.data());
         if (!job.islands->merged.empty())
-          own_merged = std::make_unique<Buffer>(s, bytes_of(job.islands->merged), job.islands->merged.data());
+          own_merged = std::make_unique<Buffer>(s, bytes_of(job.islands->merged),
+                                                job.islands->merged.data());
         triangles = own_triangles->get();
         group_first = own_first->get();
         corners = own_corners->get();
@@ -249,11 +258,11 @@ TextureDeviceFn texture_on_device(const Device& device, const PreparedTexture* p
     if (images) {
       island.resize(texels);
       blurred.resize(texels);
-      check(api()->clEnqueueReadBuffer(s.queue, island_a->get(), CL_FALSE, 0, image,
-                                       island.data(), 0, nullptr, nullptr),
+      check(api()->clEnqueueReadBuffer(s.queue, island_a->get(), CL_FALSE, 0, image, island.data(),
+                                       0, nullptr, nullptr),
             "clEnqueueReadBuffer");
-      check(api()->clEnqueueReadBuffer(s.queue, value_a->get(), CL_FALSE, 0, image,
-                                       blurred.data(), 0, nullptr, nullptr),
+      check(api()->clEnqueueReadBuffer(s.queue, value_a->get(), CL_FALSE, 0, image, blurred.data(),
+                                       0, nullptr, nullptr),
             "clEnqueueReadBuffer");
     }
     if (n > 0) read_buffer(s, read_values.get(), out, n * sizeof(float));
@@ -287,10 +296,10 @@ bool upload_prepared_texture(const Device& device, PreparedTexture& prepared, un
   const CornerGroups& groups = prepared.groups;
   const std::vector<std::uint32_t>& merged = prepared.islands.merged;
   const bool vertex_values = !groups.first.empty();
-  const std::size_t group_bytes =
-      vertex_values ? bytes_of(prepared.mesh.triangles) + bytes_of(groups.first) +
-                          bytes_of(groups.corners) + bytes_of(merged)
-                    : 0;
+  const std::size_t group_bytes = vertex_values
+                                      ? bytes_of(prepared.mesh.triangles) + bytes_of(groups.first) +
+                                            bytes_of(groups.corners) + bytes_of(merged)
+                                      : 0;
   // Counted as the buffers are made (upload_new: at least 4 bytes each).
   if (std::max<std::size_t>(uv_bytes, 4) + std::max<std::size_t>(island_bytes, 4) + group_bytes >
       device.global_memory / 4)

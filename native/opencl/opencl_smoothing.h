@@ -10,8 +10,8 @@
 
 #include <vector>
 
-#include "post/smoothing_texture.h"
 #include "devices.h"
+#include "post/smoothing_texture.h"
 
 namespace sdf::cl {
 
@@ -20,16 +20,14 @@ namespace sdf::cl {
 TextureSmoothing smooth_texture_opencl(const Device& device, const Mesh& mesh, PointKind kind,
                                        const float* values, const float* uvs,
                                        const TextureOptions& options, bool keep_image,
-                                       const ProgressFn& progress = nullptr,
-                                       float* into = nullptr);
+                                       const ProgressFn& progress = nullptr, float* into = nullptr);
 
 // The same on a prepared texture, reading its UVs and islands on the device where
 // upload_prepared_texture put them there.
 TextureSmoothing smooth_texture_opencl(const Device& device, const PreparedTexture& prepared,
                                        PointKind kind, const float* values,
                                        const TextureOptions& options, bool keep_image,
-                                       const ProgressFn& progress = nullptr,
-                                       float* into = nullptr);
+                                       const ProgressFn& progress = nullptr, float* into = nullptr);
 
 // Uploads the prepared UVs and face islands to `device` on a queue of the device's own beside
 // the one that casts (compute() calls it while the device casts), and keeps them in
@@ -37,7 +35,6 @@ TextureSmoothing smooth_texture_opencl(const Device& device, const PreparedTextu
 // the device (no double precision, faces spanning more than 2^16 texels) or they would take
 // more than a quarter of its memory. threads: the host threads that may copy into pinned
 // memory (0: every core, at most 8). Throws Error for OpenCL failures.
-bool upload_prepared_texture(const Device& device, PreparedTexture& prepared,
-                             unsigned threads = 0);
+bool upload_prepared_texture(const Device& device, PreparedTexture& prepared, unsigned threads = 0);
 
 }  // namespace sdf::cl

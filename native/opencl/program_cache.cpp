@@ -25,13 +25,16 @@ std::uint64_t fnv1a(const void* data, std::size_t size, std::uint64_t h = 146959
   for (std::size_t i = 0; i < size; ++i) h = (h ^ p[i]) * 1099511628211ull;
   return h;
 }
-std::uint64_t fnv1a(const std::string& s, std::uint64_t h) { return fnv1a(s.data(), s.size() + 1, h); }
+std::uint64_t fnv1a(const std::string& s, std::uint64_t h) {
+  return fnv1a(s.data(), s.size() + 1, h);
+}
 
 std::string build_log(const Api& cl, cl_program program, cl_device_id device) {
   std::size_t size = 0;
   cl.clGetProgramBuildInfo(program, device, CL_PROGRAM_BUILD_LOG, 0, nullptr, &size);
   std::string log(size, '\0');
-  if (size) cl.clGetProgramBuildInfo(program, device, CL_PROGRAM_BUILD_LOG, size, log.data(), nullptr);
+  if (size)
+    cl.clGetProgramBuildInfo(program, device, CL_PROGRAM_BUILD_LOG, size, log.data(), nullptr);
   log.resize(std::strlen(log.c_str()));
   return log;
 }
@@ -85,7 +88,8 @@ cl_program build_from_binary(const Api& cl, const Device& device, cl_context con
   const unsigned char* data = binary.data();
   const std::size_t size = binary.size();
   cl_int status = CL_SUCCESS, err = CL_SUCCESS;
-  cl_program program = cl.clCreateProgramWithBinary(context, 1, &device.id, &size, &data, &status, &err);
+  cl_program program =
+      cl.clCreateProgramWithBinary(context, 1, &device.id, &size, &data, &status, &err);
   if (err != CL_SUCCESS || status != CL_SUCCESS) {
     if (program) cl.clReleaseProgram(program);
     return nullptr;

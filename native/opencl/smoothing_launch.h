@@ -21,8 +21,8 @@ inline cl_program smoothing_program(const Device& device, DeviceState& s) {
   return program_for(device, s, build_options(device, 30));
 }
 
-inline void launch(DeviceState& s, const Kernel& kernel, cl_uint dims,
-                   const std::size_t* global, const std::size_t* local) {
+inline void launch(DeviceState& s, const Kernel& kernel, cl_uint dims, const std::size_t* global,
+                   const std::size_t* local) {
   check(api()->clEnqueueNDRangeKernel(s.queue, kernel.get(), dims, nullptr, global, local, 0,
                                       nullptr, nullptr),
         "clEnqueueNDRangeKernel");
@@ -38,8 +38,8 @@ inline void read(DeviceState& s, const Buffer& buffer, std::size_t bytes, void* 
 // `chunk` items (short ones: display watchdogs), with arguments 0 and 1 set to each launch's
 // first item and size. Work-group size as for casting: 64 on GPUs, 1 on CPUs (PoCL
 // vectorises a group as a loop, which divergent loops defeat).
-inline void launch_chunks(const Device& device, DeviceState& s, Kernel& kernel,
-                          std::size_t count, std::size_t chunk) {
+inline void launch_chunks(const Device& device, DeviceState& s, Kernel& kernel, std::size_t count,
+                          std::size_t chunk) {
   const std::size_t local = device.gpu ? 64 : 1;
   for (std::size_t first = 0; first < count; first += chunk) {
     const std::size_t n = std::min(chunk, count - first);
@@ -51,8 +51,8 @@ inline void launch_chunks(const Device& device, DeviceState& s, Kernel& kernel,
 }
 
 // 2-D global size rounded up to the local size (8 x 8 on GPUs; the driver's choice on CPUs).
-inline void image_launch(const Device& device, DeviceState& s, const Kernel& kernel,
-                         int width, int height) {
+inline void image_launch(const Device& device, DeviceState& s, const Kernel& kernel, int width,
+                         int height) {
   if (device.gpu) {
     const std::size_t local[2] = {8, 8};
     const std::size_t global[2] = {(static_cast<std::size_t>(width) + 7) / 8 * 8,

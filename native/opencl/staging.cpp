@@ -19,8 +19,8 @@ constexpr std::size_t kCopyGrain = std::size_t{1} << 20;
 void copy(void* to, const void* from, std::size_t bytes, unsigned threads) {
   parallel_for(bytes, kCopyGrain, std::min(kCopyThreads, resolve_threads(threads)),
                [&](std::size_t begin, std::size_t end) {
-                 std::memcpy(static_cast<char*>(to) + begin,
-                             static_cast<const char*>(from) + begin, end - begin);
+                 std::memcpy(static_cast<char*>(to) + begin, static_cast<const char*>(from) + begin,
+                             end - begin);
                });
 }
 

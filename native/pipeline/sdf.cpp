@@ -15,8 +15,8 @@
 #include "accel/scene.h"
 #include "cast/cpu_engine.h"
 #include "prepare/orientation.h"
-#include "util/stopwatch.h"
 #include "prepare/unit_scale.h"
+#include "util/stopwatch.h"
 #ifdef SDF_HAVE_OPENCL
 #include "opencl/device_tree.h"
 #include "opencl/opencl_engine.h"
@@ -198,10 +198,9 @@ void cast_on_opencl(const Options& options, const Plan& plan, const cl::CastInpu
                     const Mesh& mesh, const Cone& cone, Output& out, const ProgressFn& progress,
                     const std::function<void()>& beside_cast) {
   Stopwatch clock;
-  const cl::CastTimings t = cl::cast_opencl(
-      plan.devices, input, cone, minimum_closeness(mesh),
-      options.threads, out.raw.data(), out.valid_rays.data(), progress, 0.05, 0.99,
-      beside_cast);
+  const cl::CastTimings t =
+      cl::cast_opencl(plan.devices, input, cone, minimum_closeness(mesh), options.threads,
+                      out.raw.data(), out.valid_rays.data(), progress, 0.05, 0.99, beside_cast);
   const double total = clock.lap();
   // Compile (or cache load) and set-up are what the device stages and the wait for the
   // structure leave of the total.
@@ -235,8 +234,8 @@ struct TwinsFound {};
 // that cast. Twins: the devices stop at their next launch and out.twins says which (the
 // search takes less than a first launch: launches need not be short for it). Otherwise the
 // cast stands: it is the cast of the oriented mesh.
-void cast_speculatively(const Options& options, const Plan& plan, cl::CastInput input,
-                        Mesh& mesh, const Cone& cone, Output& out, const ProgressFn& progress,
+void cast_speculatively(const Options& options, const Plan& plan, cl::CastInput input, Mesh& mesh,
+                        const Cone& cone, Output& out, const ProgressFn& progress,
                         const std::function<void()>& beside_cast) {
   StageTimings orientation_steps;
   double orientation_seconds = 0.0, twins_seconds = 0.0;
@@ -256,8 +255,8 @@ void cast_speculatively(const Options& options, const Plan& plan, cl::CastInput 
   auto decide_beside = [&] {
     if (orienting) {
       Stopwatch clock;
-      out.orientation = decide_orientation(mesh, Orientation::Auto, options.threads,
-                                           &orientation_steps);
+      out.orientation =
+          decide_orientation(mesh, Orientation::Auto, options.threads, &orientation_steps);
       orientation_seconds = clock.lap();
       if (out.orientation.flipped_faces > 0) throw ReverseFacesFirst{};
       deciding = false;
@@ -271,8 +270,7 @@ void cast_speculatively(const Options& options, const Plan& plan, cl::CastInput 
     recorded = true;
     if (orienting) {
       out.timings.emplace_back("orientation (beside cast)", orientation_seconds);
-      for (const auto& [name, seconds] : orientation_steps)
-        out.timings.emplace_back(name, seconds);
+      for (const auto& [name, seconds] : orientation_steps) out.timings.emplace_back(name, seconds);
     }
   };
   auto record_twins = [&] {

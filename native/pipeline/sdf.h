@@ -8,14 +8,14 @@
 #include <utility>
 #include <vector>
 
-#include "post/fill.h"
+#include "accel/octree.h"
 #include "mesh/mesh.h"
 #include "mesh/mesh_twins.h"
-#include "accel/octree.h"
+#include "post/fill.h"
 #include "prepare/orientation.h"
-#include "util/parallel.h"
 #include "prepare/rays.h"
 #include "prepare/sampling.h"
+#include "util/parallel.h"
 #include "util/stopwatch.h"
 
 namespace sdf {
@@ -31,13 +31,13 @@ enum class Accel { Bvh, Octree };
 enum class BvhQuality { Auto, High, Fast };
 
 struct Options {
-  int rays = 30;               // per point (Shapira et al. and the paper: 30)
-  double cone_angle = 120.0;   // full apex angle in degrees (paper: 120)
+  int rays = 30;              // per point (Shapira et al. and the paper: 30)
+  double cone_angle = 120.0;  // full apex angle in degrees (paper: 120)
   Sampling sampling = Sampling::Fibonacci;
-  std::uint32_t seed = 0;      // for Sampling::Random
+  std::uint32_t seed = 0;  // for Sampling::Random
   PointKind points = PointKind::Faces;
-  unsigned threads = 0;        // CPU threads; 0: every core (and the BVH builds beside
-                               // orientation and sampling, each on every core)
+  unsigned threads = 0;  // CPU threads; 0: every core (and the BVH builds beside
+                         // orientation and sampling, each on every core)
   // "cpu", or an OpenCL selection: "opencl", "opencl:N", "opencl:all", "opencl:<name part>".
   std::string engine = "cpu";
   Accel accel = Accel::Bvh;
@@ -50,14 +50,14 @@ struct Options {
 };
 
 struct Output {
-  std::vector<float> raw;                  // per point, input units, filled
-  std::vector<std::int32_t> valid_rays;    // rays kept per point; 0 = value was filled
-  StageTimings timings;  // stage -> seconds
+  std::vector<float> raw;                // per point, input units, filled
+  std::vector<std::int32_t> valid_rays;  // rays kept per point; 0 = value was filled
+  StageTimings timings;                  // stage -> seconds
   FillResult fill = FillResult::NothingToFill;
-  std::string engine;                      // what ran, e.g. "cpu (2 threads, bvh, 8-wide)"
-  std::uint64_t device_bytes = 0;          // OpenCL buffers on the device (0 on the CPU)
-  float near_cutoff = 0.0f;                // hits nearer than this are ignored (input units)
-  OrientationReport orientation;           // faces the computation reversed
+  std::string engine;              // what ran, e.g. "cpu (2 threads, bvh, 8-wide)"
+  std::uint64_t device_bytes = 0;  // OpenCL buffers on the device (0 on the CPU)
+  float near_cutoff = 0.0f;        // hits nearer than this are ignored (input units)
+  OrientationReport orientation;   // faces the computation reversed
   // Faces with a reversed twin, in the caller's winding (Options::find_twins). When there are
   // any, the computation stopped on finding them: raw and valid_rays are empty.
   ReversedTwins twins;

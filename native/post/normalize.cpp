@@ -21,8 +21,7 @@ constexpr std::size_t kGrain = 1 << 16;
 }  // namespace
 
 template <class T>
-void normalize(const T* values, std::size_t n, Normalization method, unsigned threads,
-               float* out) {
+void normalize(const T* values, std::size_t n, Normalization method, unsigned threads, float* out) {
   double lo = std::numeric_limits<double>::infinity(), hi = -lo;
   bool nan = false;
   std::mutex merge;

@@ -13,7 +13,6 @@ enum class Normalization { Linear, Log };
 // constant field, or one holding a NaN, maps to 0 (as numpy's min and max would make it).
 // T is float or double. Parallel over `threads` (0 = every core).
 template <class T>
-void normalize(const T* values, std::size_t n, Normalization method, unsigned threads,
-               float* out);
+void normalize(const T* values, std::size_t n, Normalization method, unsigned threads, float* out);
 
 }  // namespace sdf

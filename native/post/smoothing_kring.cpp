@@ -12,12 +12,12 @@
 #include <string>
 
 #include "mesh/mesh_weld.h"
+#include "post/smoothing_kring_sums.h"
+#include "post/value_range.h"
 #include "util/morton.h"
 #include "util/parallel_scan.h"
 #include "util/radix_sort.h"
-#include "post/smoothing_kring_sums.h"
 #include "util/uninitialized_vector.h"
-#include "post/value_range.h"
 
 namespace sdf {
 
@@ -147,8 +147,8 @@ void clear_masks(BatchScratch& s, std::size_t region) {
 
 // Vertex rings for the batch points[0 .. count).
 void kring_vertex_batch(const std::uint32_t* points, int count, int k, const float* ring_weight,
-                        const Adjacency& vv, const float* values, BatchScratch& s,
-                        double* sum, double* weight) {
+                        const Adjacency& vv, const float* values, BatchScratch& s, double* sum,
+                        double* weight) {
   const std::uint32_t epoch = s.next_epoch();
   s.region_vertices.clear();
   for (int b = 0; b < count; ++b) {
@@ -173,9 +173,8 @@ void kring_vertex_batch(const std::uint32_t* points, int count, int k, const flo
 
 // Face rings for the batch points[0 .. count).
 void kring_face_batch(const std::uint32_t* points, int count, int k, const float* ring_weight,
-                      const glm::uvec3* triangles, const Adjacency& vf,
-                      const Adjacency& vv, const float* values, BatchScratch& s, double* sum,
-                      double* weight) {
+                      const glm::uvec3* triangles, const Adjacency& vf, const Adjacency& vv,
+                      const float* values, BatchScratch& s, double* sum, double* weight) {
   const std::uint32_t epoch = s.next_epoch();
   s.region_vertices.clear();
   for (int b = 0; b < count; ++b)
@@ -230,7 +229,8 @@ void kring_face_batch(const std::uint32_t* points, int count, int k, const float
     const std::uint32_t end = s.face_level_end[d];
     for (std::uint32_t f = 0; f < end; ++f) {
       const std::uint32_t* corner = &s.face_corners[3 * f];
-      const std::uint64_t fresh = (reach[corner[0]] | reach[corner[1]] | reach[corner[2]]) & ~s.seen[f];
+      const std::uint64_t fresh =
+          (reach[corner[0]] | reach[corner[1]] | reach[corner[2]]) & ~s.seen[f];
       if (!fresh) continue;
       s.seen[f] |= fresh;
       ring_item(s, fresh, values[s.region_faces[f]], w, sum, weight);
@@ -346,8 +346,8 @@ struct RingMesh {
 };
 
 // Faces are ordered only for face values; for vertex values they only link vertices.
-RingMesh ring_mesh(const Mesh& mesh, bool faces, double weld_tolerance_relative,
-                   unsigned threads, StageClock& clock, StageTimings* timings) {
+RingMesh ring_mesh(const Mesh& mesh, bool faces, double weld_tolerance_relative, unsigned threads,
+                   StageClock& clock, StageTimings* timings) {
   RingMesh r;
   r.weld = weld_tolerance_relative >= 0.0
                ? weld_vertices(mesh.vertices.data(), mesh.vertices.size(),
@@ -365,7 +365,8 @@ RingMesh ring_mesh(const Mesh& mesh, bool faces, double weld_tolerance_relative,
   });
   clock.lap("vertex order");
   const std::size_t m = mesh.triangles.size();
-  r.face_order = faces ? morton_order(centroids(mesh, threads), threads) : identity_order(m, threads);
+  r.face_order =
+      faces ? morton_order(centroids(mesh, threads), threads) : identity_order(m, threads);
   clock.lap("face order");
   r.triangles.resize(m);
   parallel_for(m, kGrain, threads, [&](std::size_t begin, std::size_t end) {
@@ -403,8 +404,8 @@ std::unique_ptr<std::atomic<std::uint8_t>[]> used_vertices(const Mesh& mesh, uns
 // vertex of unused ones only takes its first one's value.
 UninitializedVector<float> merged_values(const float* values, std::size_t n, const Weld& weld,
                                          const UninitializedVector<std::uint32_t>& new_vertex,
-                                         const std::atomic<std::uint8_t>* used, float lo,
-                                         float hi, unsigned threads) {
+                                         const std::atomic<std::uint8_t>* used, float lo, float hi,
+                                         unsigned threads) {
   UninitializedVector<double> sum(weld.count);
   UninitializedVector<std::uint32_t> count(weld.count);
   auto is_used = [&](std::uint32_t v) { return used[v].load(std::memory_order_relaxed) != 0; };
@@ -455,7 +456,7 @@ struct CornerWalk {
   const std::uint32_t* triangles;  // faces only: welded corners, 3 per face
   const std::uint32_t* offsets;    // vertices: edge neighbours; faces: faces around a vertex
   const std::uint32_t* items;
-  const glm::vec3* normals;        // unit, per item (zero = undefined)
+  const glm::vec3* normals;  // unit, per item (zero = undefined)
   bool faces;
 };
 
@@ -567,12 +568,13 @@ glm::vec3 unit_or_zero(glm::vec3 v) {
 // replaced, so the same sums).
 UninitializedVector<glm::vec3> unit_normals(const Mesh& mesh,
                                             const UninitializedVector<std::uint32_t>& face_order,
-                                            const glm::uvec3* tris, const Adjacency& vf,
-                                            bool faces, unsigned threads) {
+                                            const glm::uvec3* tris, const Adjacency& vf, bool faces,
+                                            unsigned threads) {
   const std::size_t m = mesh.triangles.size();
   UninitializedVector<glm::vec3> face_normal(m);
   parallel_for(m, kGrain, threads, [&](std::size_t begin, std::size_t end) {
-    for (std::size_t f = begin; f < end; ++f) face_normal[f] = face_area_normal(mesh, face_order[f]);
+    for (std::size_t f = begin; f < end; ++f)
+      face_normal[f] = face_area_normal(mesh, face_order[f]);
   });
   if (faces) {
     parallel_for(m, kGrain, threads, [&](std::size_t begin, std::size_t end) {
@@ -643,16 +645,18 @@ void smooth_kring_into(const Mesh& mesh, PointKind kind, const float* values,
       for (std::size_t f = begin; f < end; ++f) point_values[f] = values[face_order[f]];
     });
   } else {
-    point_values = merged_values(values, n, weld, new_vertex,
-                                 used_vertices(mesh, threads).get(), lo, hi, threads);
+    point_values = merged_values(values, n, weld, new_vertex, used_vertices(mesh, threads).get(),
+                                 lo, hi, threads);
   }
 
   const double sigma = options.sigma > 0.0 ? options.sigma : 0.5 * k;
   std::vector<float> ring_weight(k + 1);
-  for (int r = 0; r <= k; ++r) ring_weight[r] = static_cast<float>(std::exp(-0.5 * (r / sigma) * (r / sigma)));
+  for (int r = 0; r <= k; ++r)
+    ring_weight[r] = static_cast<float>(std::exp(-0.5 * (r / sigma) * (r / sigma)));
 
   const bool corner = options.corner_angle > 0.0;
-  const float inv_corner = corner ? static_cast<float>(180.0 / (options.corner_angle * 3.14159265358979323846)) : 0.0f;
+  const float inv_corner =
+      corner ? static_cast<float>(180.0 / (options.corner_angle * 3.14159265358979323846)) : 0.0f;
   const UninitializedVector<glm::vec3> normals =
       corner ? unit_normals(mesh, face_order, tris.data(), vf, faces, threads)
              : UninitializedVector<glm::vec3>();
@@ -717,7 +721,8 @@ void smooth_kring_into(const Mesh& mesh, PointKind kind, const float* values,
             // Sums in double, then one rounding to float: a constant region gives back its
             // value exactly; the clamp only guards the input's range.
             for (int i = 0; i < count; ++i)
-              smoothed[batch[i]] = std::min(hi, std::max(lo, static_cast<float>(sum[i] / weight[i])));
+              smoothed[batch[i]] =
+                  std::min(hi, std::max(lo, static_cast<float>(sum[i] / weight[i])));
           }
           pool.release(std::move(s));
         },
@@ -742,8 +747,7 @@ std::vector<float> smooth_kring(const Mesh& mesh, PointKind kind, const float* v
                                 const KringOptions& options, const ProgressFn& progress,
                                 double progress_from, double progress_to) {
   std::vector<float> out(kind == PointKind::Faces ? mesh.triangles.size() : mesh.vertices.size());
-  smooth_kring_into(mesh, kind, values, options, out.data(), progress, progress_from,
-                    progress_to);
+  smooth_kring_into(mesh, kind, values, options, out.data(), progress, progress_from, progress_to);
   return out;
 }
 

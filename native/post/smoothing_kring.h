@@ -20,17 +20,17 @@
 #include <vector>
 
 #include "mesh/mesh.h"
-#include "util/parallel.h"
 #include "prepare/sampling.h"
+#include "util/parallel.h"
 #include "util/stopwatch.h"
 
 namespace sdf {
 
 struct KringOptions {
-  int k = -1;                 // rings around each point; -1: default_kring_k(face count)
-  double sigma = 0.0;         // Gaussian deviation over the ring index; 0: k / 2 (CGAL's
-                              // Bilateral_filtering uses window / 2)
-  double corner_angle = 0.0;  // degrees; 0: no corner preservation
+  int k = -1;                    // rings around each point; -1: default_kring_k(face count)
+  double sigma = 0.0;            // Gaussian deviation over the ring index; 0: k / 2 (CGAL's
+                                 // Bilateral_filtering uses window / 2)
+  double corner_angle = 0.0;     // degrees; 0: no corner preservation
   double weld_tolerance = 1e-6;  // relative to the largest bounding-box side; < 0: no merging
   unsigned threads = 0;          // 0: every core
 };

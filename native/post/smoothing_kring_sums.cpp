@@ -18,16 +18,13 @@ void add_ring_scalar(const RingItem* items, std::size_t count, double w, double*
 
 #if SDF_X86_SIMD
 
-bool add_ring_avx512_supported() {
-  return cpu_features().avx512f;
-}
+bool add_ring_avx512_supported() { return cpu_features().avx512f; }
 
 // 64 sums and 64 weights in 16 registers of 8 doubles; an item's mask, 8 bits at a time,
 // selects the lanes of each register that add (w x, w). Masked-off lanes keep their value,
 // so each lane sees exactly the scalar loop's additions.
-__attribute__((target("avx512f"))) void add_ring_avx512(const RingItem* items,
-                                                        std::size_t count, double w,
-                                                        double* sum, double* weight) {
+__attribute__((target("avx512f"))) void add_ring_avx512(const RingItem* items, std::size_t count,
+                                                        double w, double* sum, double* weight) {
   __m512d s[8], t[8];
   for (int j = 0; j < 8; ++j) {
     s[j] = _mm512_loadu_pd(sum + 8 * j);

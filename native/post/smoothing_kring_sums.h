@@ -28,8 +28,9 @@ inline void add_item(const RingItem& item, double w, double* sum, double* weight
 }
 
 // add_item on each item in order; sum and weight hold 64 entries (the AVX-512 version reads
-// and writes all of them, whatever the batch's size). Both versions make the same additions in the same order on every point, so they agree
-// bit for bit. add_ring_avx512 only where add_ring_avx512_supported().
+// and writes all of them, whatever the batch's size). Both versions make the same additions in the
+// same order on every point, so they agree bit for bit. add_ring_avx512 only where
+// add_ring_avx512_supported().
 void add_ring_scalar(const RingItem* items, std::size_t count, double w, double* sum,
                      double* weight);
 bool add_ring_avx512_supported();

@@ -7,13 +7,13 @@
 #include <stdexcept>
 #include <string>
 
+#include "post/smoothing_projected_avx2.h"
+#include "post/value_range.h"
 #include "util/morton.h"
 #include "util/parallel_scan.h"
 #include "util/prefetch.h"
 #include "util/radix_sort.h"
-#include "post/smoothing_projected_avx2.h"
 #include "util/uninitialized_vector.h"
-#include "post/value_range.h"
 
 namespace sdf {
 
@@ -88,9 +88,9 @@ glm::vec3 point_child_center(const PointOctreeNode& parent, unsigned octant) {
 
 bool point_node_branches(const PointOctreeNode& node, int level, float min_value,
                          const ProjectedOptions& options, double branch_above) {
-  if (level >= options.max_depth || !(static_cast<double>(node.count) > branch_above))
-    return false;
-  const float test_value = options.branch_on == ProjectedOptions::Branch::Min ? min_value : node.mean;
+  if (level >= options.max_depth || !(static_cast<double>(node.count) > branch_above)) return false;
+  const float test_value =
+      options.branch_on == ProjectedOptions::Branch::Min ? min_value : node.mean;
   return test_value <= options.node_size_ratio * 2.0 * node.half_side;
 }
 
@@ -137,7 +137,9 @@ struct MortonOrder {
   UninitializedVector<std::uint64_t> items;      // (key << 32) | index, or index alone
   UninitializedVector<std::uint64_t> deep_keys;  // depth > 10 only
   std::uint32_t index(std::size_t k) const { return static_cast<std::uint32_t>(items[k]); }
-  std::uint64_t key(std::size_t k) const { return deep_keys.empty() ? items[k] >> 32 : deep_keys[k]; }
+  std::uint64_t key(std::size_t k) const {
+    return deep_keys.empty() ? items[k] >> 32 : deep_keys[k];
+  }
 };
 
 template <class Points>
@@ -266,8 +268,10 @@ std::vector<PointOctreeNode> grow_nodes(const MortonOrder& order, const RunValue
       std::uint32_t low = begin, high = t.end;
       while (low < high) {
         const std::uint32_t mid = low + (high - low) / 2;
-        if (((order.key(mid) >> shift_bits) & 7u) <= octant) low = mid + 1;
-        else high = mid;
+        if (((order.key(mid) >> shift_bits) & 7u) <= octant)
+          low = mid + 1;
+        else
+          high = mid;
       }
       const std::uint32_t end = low;
       if (end == begin) continue;
@@ -330,9 +334,8 @@ ChunkSummary summarize(const Points& points, unsigned threads) {
 // The range of values that must be lengths (finite, >= 0); throws std::invalid_argument naming
 // the first that is not.
 ValueRange length_range(const float* values, std::size_t n, unsigned threads) {
-  const ValueRange range = value_range(values, n, threads, [](float x) {
-    return !std::isfinite(x) || x < 0.0f;
-  });
+  const ValueRange range =
+      value_range(values, n, threads, [](float x) { return !std::isfinite(x) || x < 0.0f; });
   if (range.first_bad < n)
     throw std::invalid_argument("value " + std::to_string(range.first_bad) +
                                 " is negative or not finite (projected smoothing needs the "
@@ -368,9 +371,9 @@ PointOctree build_octree(const Points& points, const ChunkSummary& summary, int 
   tree.order = morton_order(points, cube, 3 * options.max_depth, summary.first_member, members,
                             options.threads);
   add_time(timings, "octree: Morton order", clock.lap());
-  const RunValues runs = run_values(points, tree.order, shift,
-                                    options.branch_on == ProjectedOptions::Branch::Min,
-                                    options.threads);
+  const RunValues runs =
+      run_values(points, tree.order, shift, options.branch_on == ProjectedOptions::Branch::Min,
+                 options.threads);
   add_time(timings, "octree: sums", clock.lap());
   tree.nodes = grow_nodes(tree.order, runs, cube, shift, options);
   add_time(timings, "octree: nodes", clock.lap());
@@ -417,8 +420,8 @@ std::vector<PointOctreeNode> build_point_octree(const glm::vec3* points, const f
   check_projected_options(options);
   const ValueRange range = length_range(values, count, options.threads);
   const ArrayPoints input{points, values, count};
-  return build_octree(input, summarize(input, options.threads),
-                      point_fixed_shift(range.hi, count), options)
+  return build_octree(input, summarize(input, options.threads), point_fixed_shift(range.hi, count),
+                      options)
       .nodes;
 }
 
@@ -442,9 +445,8 @@ ValueRange checked_projected_input(const float* values, std::size_t n,
 }
 
 void smooth_projected_into(const Mesh& mesh, PointKind kind, const float* values,
-                           const ProjectedOptions& options, float* out,
-                           const ProgressFn& progress, double progress_from, double progress_to,
-                           StageTimings* timings) {
+                           const ProjectedOptions& options, float* out, const ProgressFn& progress,
+                           double progress_from, double progress_to, StageTimings* timings) {
   Stopwatch clock;
   const std::size_t n = point_count(mesh, kind);
   const ValueRange range = checked_projected_input(values, n, options);
@@ -486,7 +488,7 @@ void smooth_projected_into(const Mesh& mesh, PointKind kind, const float* values
     const PointOctree tree = build_octree(PackedPoints{points.data(), member.data(), n}, summary,
                                           point_fixed_shift(range.hi, n), options, timings);
     const std::vector<PointOctreeNode>& nodes = tree.nodes;
-    clock.lap();  // the octree's stages were added by build_octree
+    clock.lap();                            // the octree's stages were added by build_octree
     if (nodes.empty()) return unchanged();  // no point has an axis (then on the first iteration)
     auto smooth_point = [&](std::size_t i) {
       out[i] = kern::sdf_smooth_projected_point(nodes.data(), glm::vec3(points[i]), points[i].w,

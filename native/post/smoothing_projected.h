@@ -16,10 +16,10 @@
 #include "smooth/sdf_smooth_projected.h"
 
 #include "mesh/mesh.h"
-#include "util/parallel.h"
-#include "prepare/sampling.h"
-#include "util/stopwatch.h"
 #include "post/value_range.h"
+#include "prepare/sampling.h"
+#include "util/parallel.h"
+#include "util/stopwatch.h"
 
 namespace sdf {
 

@@ -30,7 +30,8 @@ SDF_AVX2 inline __m256d low_half(__m256 mask) {
   return _mm256_castsi256_pd(_mm256_cvtepi32_epi64(_mm_castps_si128(_mm256_castps256_ps128(mask))));
 }
 SDF_AVX2 inline __m256d high_half(__m256 mask) {
-  return _mm256_castsi256_pd(_mm256_cvtepi32_epi64(_mm_castps_si128(_mm256_extractf128_ps(mask, 1))));
+  return _mm256_castsi256_pd(
+      _mm256_cvtepi32_epi64(_mm_castps_si128(_mm256_extractf128_ps(mask, 1))));
 }
 
 // kern::sdf_cube_fraction_in_sphere per lane: every branch computed, the scalar code's choice
@@ -40,17 +41,18 @@ SDF_AVX2 inline __m256 cube_fraction(__m256 side, __m256 d, __m256 r) {
   const __m256 sign = _mm256_set1_ps(-0.0f);
   const __m256 rho = _mm256_mul_ps(_mm256_set1_ps(0.62035049f), side);
   const __m256 r_plus = _mm256_add_ps(r, rho), r_minus = _mm256_sub_ps(r, rho);
-  const __m256 none = _mm256_or_ps(_mm256_cmp_ps(r, zero, _CMP_NGT_UQ),
-                                   _mm256_cmp_ps(d, r_plus, _CMP_GE_OQ));
+  const __m256 none =
+      _mm256_or_ps(_mm256_cmp_ps(r, zero, _CMP_NGT_UQ), _mm256_cmp_ps(d, r_plus, _CMP_GE_OQ));
   const __m256 ball = _mm256_mul_ps(_mm256_mul_ps(rho, rho), rho);
   const __m256 nested = _mm256_cmp_ps(d, _mm256_andnot_ps(sign, r_minus), _CMP_LE_OQ);
   const __m256 r3 = _mm256_mul_ps(_mm256_mul_ps(r, r), r);
   const __m256 nested_value = _mm256_blendv_ps(_mm256_min_ps(one, _mm256_div_ps(r3, ball)), one,
                                                _mm256_cmp_ps(r, rho, _CMP_GE_OQ));
   const __m256 s = _mm256_sub_ps(r_plus, d);
-  const __m256 inner = _mm256_sub_ps(
-      _mm256_add_ps(_mm256_mul_ps(d, d), _mm256_mul_ps(_mm256_mul_ps(_mm256_set1_ps(2.0f), d), r_plus)),
-      _mm256_mul_ps(_mm256_mul_ps(_mm256_set1_ps(3.0f), r_minus), r_minus));
+  const __m256 inner =
+      _mm256_sub_ps(_mm256_add_ps(_mm256_mul_ps(d, d),
+                                  _mm256_mul_ps(_mm256_mul_ps(_mm256_set1_ps(2.0f), d), r_plus)),
+                    _mm256_mul_ps(_mm256_mul_ps(_mm256_set1_ps(3.0f), r_minus), r_minus));
   const __m256 lens = _mm256_div_ps(_mm256_mul_ps(_mm256_mul_ps(s, s), inner),
                                     _mm256_mul_ps(_mm256_set1_ps(16.0f), d));
   const __m256 lens_value = _mm256_min_ps(one, _mm256_max_ps(zero, _mm256_div_ps(lens, ball)));
@@ -109,8 +111,8 @@ SDF_AVX2 void smooth_packet_avx2(const PointOctreeNode* nodes, const glm::vec4* 
     if (!near_bits) continue;
     const __m256 d = _mm256_sqrt_ps(_mm256_add_ps(
         _mm256_add_ps(_mm256_mul_ps(ox, ox), _mm256_mul_ps(oy, oy)), _mm256_mul_ps(oz, oz)));
-    const __m256 whole =
-        _mm256_and_ps(near, _mm256_cmp_ps(_mm256_add_ps(d, _mm256_mul_ps(sqrt3, h)), r, _CMP_LE_OQ));
+    const __m256 whole = _mm256_and_ps(
+        near, _mm256_cmp_ps(_mm256_add_ps(d, _mm256_mul_ps(sqrt3, h)), r, _CMP_LE_OQ));
     const unsigned whole_bits = static_cast<unsigned>(_mm256_movemask_ps(whole));
     __m256 fraction = one, take = whole;
     if (node.first_child >= 0) {

@@ -10,11 +10,11 @@
 #include <stdexcept>
 #include <string>
 
+#include "post/value_range.h"
 #include "smooth/sdf_smooth_texture.h"
 #include "util/radix_sort.h"
 #include "util/stopwatch.h"
 #include "util/uninitialized_vector.h"
-#include "post/value_range.h"
 
 namespace sdf {
 
@@ -22,7 +22,8 @@ namespace {
 
 constexpr int kMaxSize = 16384;
 
-// ---- Per-face and per-texel work: loops over kernels/smooth/sdf_smooth_texture.h (kernel style). ----
+// ---- Per-face and per-texel work: loops over kernels/smooth/sdf_smooth_texture.h (kernel style).
+// ----
 
 constexpr std::size_t kFaceGrain = 1 << 12;
 constexpr std::size_t kTexelGrain = 1 << 16;
@@ -117,7 +118,8 @@ void rasterise(const Mesh& mesh, PointKind kind, const float* values, const floa
     }
   };
   const std::uint32_t* corners =
-      kind == PointKind::Faces ? nullptr : reinterpret_cast<const std::uint32_t*>(mesh.triangles.data());
+      kind == PointKind::Faces ? nullptr
+                               : reinterpret_cast<const std::uint32_t*>(mesh.triangles.data());
   parallel_for(m, kFaceGrain, threads, [&](std::size_t begin, std::size_t end) {
     for (std::uint32_t f = static_cast<std::uint32_t>(begin); f < end; ++f) {
       const kern::SdfFaceDraw d = kern::sdf_face_draw(f, values, corners);
@@ -154,7 +156,9 @@ std::vector<float> filter_cpu(const TextureFilter& f, std::vector<std::int32_t>&
                               double progress_to) {
   const int width = f.width, height = f.height, taps = f.taps;
   const std::size_t texels = static_cast<std::size_t>(width) * height;
-  auto at = [&](double fraction) { return progress_from + (progress_to - progress_from) * fraction; };
+  auto at = [&](double fraction) {
+    return progress_from + (progress_to - progress_from) * fraction;
+  };
   // Dilate: one ring a pass, each pass reading the last.
   if (f.margin > 0) {
     std::vector<std::int32_t> island2(texels);
@@ -183,8 +187,8 @@ std::vector<float> filter_cpu(const TextureFilter& f, std::vector<std::int32_t>&
         for (std::size_t y = begin; y < end; ++y) {
           const std::size_t o = y * width;
           for (int x = 0; x < width; ++x)
-            kern::sdf_blur_texel(x, width, 1, island.data() + o, value.data() + o, nullptr,
-                                 kernel, taps, f.inv_range, &row_value[o + x], &row_weight[o + x]);
+            kern::sdf_blur_texel(x, width, 1, island.data() + o, value.data() + o, nullptr, kernel,
+                                 taps, f.inv_range, &row_value[o + x], &row_weight[o + x]);
         }
       },
       progress, at(0.15), at(0.5));
@@ -235,7 +239,8 @@ void read_back_vertices(const Mesh& mesh, const float* uvs, const UvIslands& isl
   });
   parallel_for(mesh.vertices.size(), kFaceGrain, threads, [&](std::size_t begin, std::size_t end) {
     for (std::size_t v = begin; v < end; ++v) {
-      const std::uint32_t k = islands.merged.empty() ? static_cast<std::uint32_t>(v) : islands.merged[v];
+      const std::uint32_t k =
+          islands.merged.empty() ? static_cast<std::uint32_t>(v) : islands.merged[v];
       out[v] = kern::sdf_texture_vertex_mean(groups.first[k], groups.first[k + 1],
                                              groups.corners.data(), samples.data(), lo, hi, out[v]);
     }
@@ -264,7 +269,8 @@ TextureSmoothing smooth_checked(const Mesh& mesh, PointKind kind, const float* v
   if (range.first_bad < n)
     throw std::invalid_argument("value " + std::to_string(range.first_bad) + " is not finite");
   const float lo = range.lo, hi = range.hi;
-  const double radius = options.radius < 0.0 ? 2.0 * std::max(width, height) / 256.0 : options.radius;
+  const double radius =
+      options.radius < 0.0 ? 2.0 * std::max(width, height) / 256.0 : options.radius;
   auto report = [&](double fraction) {
     if (progress && !progress(progress_from + (progress_to - progress_from) * fraction))
       throw Cancelled();
@@ -299,8 +305,9 @@ TextureSmoothing smooth_checked(const Mesh& mesh, PointKind kind, const float* v
     f.kernel.resize(f.taps + 1);
     for (int j = 0; j <= f.taps; ++j)
       f.kernel[j] = static_cast<float>(std::exp(-0.5 * (j / sigma) * (j / sigma)));
-    f.inv_range =
-        options.bilateral && hi > lo ? static_cast<float>(1.0 / (options.range_sigma * (hi - lo))) : 0.0f;
+    f.inv_range = options.bilateral && hi > lo
+                      ? static_cast<float>(1.0 / (options.range_sigma * (hi - lo)))
+                      : 0.0f;
   }
 
   TextureSmoothing out;
@@ -394,10 +401,11 @@ CornerGroups group_corners(const Mesh& mesh, const UvIslands& islands, unsigned 
   const std::size_t blocks = std::size_t{1} << block_bits;
   parallel_for(blocks, 1, threads, [&](std::size_t b0, std::size_t b1) {
     auto first_of = [&](std::size_t block) {
-      return static_cast<std::size_t>(
-          std::lower_bound(items.begin(), items.end(), block,
-                           [&](std::uint64_t item, std::size_t b) { return (item >> (32 + shift)) < b; }) -
-          items.begin());
+      return static_cast<std::size_t>(std::lower_bound(items.begin(), items.end(), block,
+                                                       [&](std::uint64_t item, std::size_t b) {
+                                                         return (item >> (32 + shift)) < b;
+                                                       }) -
+                                      items.begin());
     };
     std::vector<std::uint32_t> at;
     for (std::size_t b = b0; b < b1; ++b) {
@@ -425,13 +433,12 @@ TextureSmoothing smooth_texture(const Mesh& mesh, PointKind kind, const float* v
   StageTimings timings;
   check_size(options);
   check_face_count(mesh.triangles.size());
-  const UvCheck uv = check_uvs(uvs, mesh.triangles.size(), options.width, options.height,
-                               options.threads);
+  const UvCheck uv =
+      check_uvs(uvs, mesh.triangles.size(), options.width, options.height, options.threads);
   const bool on_device = device && uv.largest_face_texels <= kMostTexelsPerDeviceFace;
   TextureSmoothing out = smooth_checked(mesh, kind, values, uvs, options, keep_image, progress,
-                                        progress_from, progress_to,
-                                        on_device ? device : nullptr, nullptr, nullptr, into,
-                                        clock, timings);
+                                        progress_from, progress_to, on_device ? device : nullptr,
+                                        nullptr, nullptr, into, clock, timings);
   out.faces_outside = uv.faces_outside;
   out.kept_off_device = device && !on_device;
   return out;
@@ -463,8 +470,8 @@ PreparedTexture prepare_texture(Mesh mesh, const float* uvs, const TextureOption
 }
 
 TextureSmoothing smooth_texture(const PreparedTexture& prepared, PointKind kind,
-                                const float* values, const TextureOptions& options,
-                                bool keep_image, const ProgressFn& progress, double progress_from,
+                                const float* values, const TextureOptions& options, bool keep_image,
+                                const ProgressFn& progress, double progress_from,
                                 double progress_to, const TextureDeviceFn& device, float* into) {
   Stopwatch clock;
   StageTimings timings;
@@ -475,10 +482,9 @@ TextureSmoothing smooth_texture(const PreparedTexture& prepared, PointKind kind,
     throw std::invalid_argument(
         "the texture was prepared for other options (size, weld tolerance, vertex values)");
   const bool on_device = device && prepared.largest_face_texels <= kMostTexelsPerDeviceFace;
-  TextureSmoothing out = smooth_checked(prepared.mesh, kind, values, prepared.uvs, options,
-                                        keep_image, progress, progress_from, progress_to,
-                                        on_device ? device : nullptr, &islands,
-                                        &prepared.groups, into, clock, timings);
+  TextureSmoothing out = smooth_checked(
+      prepared.mesh, kind, values, prepared.uvs, options, keep_image, progress, progress_from,
+      progress_to, on_device ? device : nullptr, &islands, &prepared.groups, into, clock, timings);
   out.faces_outside = prepared.faces_outside;
   out.kept_off_device = device && !on_device;
   return out;

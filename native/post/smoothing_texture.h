@@ -26,16 +26,16 @@
 
 #include <cstdint>
 #include <functional>
-#include <string>
 #include <memory>
+#include <string>
 #include <utility>
 #include <vector>
 
 #include "mesh/mesh.h"
-#include "util/parallel.h"
-#include "prepare/sampling.h"
-#include "util/stopwatch.h"
 #include "post/uv_islands.h"
+#include "prepare/sampling.h"
+#include "util/parallel.h"
+#include "util/stopwatch.h"
 
 namespace sdf {
 
@@ -46,8 +46,8 @@ struct TextureOptions {
   // 2 for a 256x256 texture and multiply as necessary"), 8 at 1024. 0: no blur.
   double radius = -1.0;
   bool bilateral = false;
-  double range_sigma = 0.1;  // bilateral: deviation of the value weight, times (max - min)
-  int margin = 2;            // texels of dilation around each island
+  double range_sigma = 0.1;      // bilateral: deviation of the value weight, times (max - min)
+  int margin = 2;                // texels of dilation around each island
   double weld_tolerance = 1e-6;  // relative to the largest bounding-box side; < 0: no merging
   unsigned threads = 0;          // 0: every core
 };
@@ -94,24 +94,23 @@ struct TextureFilter {
 struct TextureJob {
   const Mesh* mesh = nullptr;
   PointKind kind = PointKind::Faces;
-  const float* values = nullptr;       // per face or vertex, as given to smooth_texture
-  const float* uvs = nullptr;          // 6 floats a face
+  const float* values = nullptr;  // per face or vertex, as given to smooth_texture
+  const float* uvs = nullptr;     // 6 floats a face
   const std::int32_t* face_island = nullptr;
-  const UvIslands* islands = nullptr;  // vertex values: their merged vertices ...
+  const UvIslands* islands = nullptr;    // vertex values: their merged vertices ...
   const CornerGroups* groups = nullptr;  // ... and corners grouped by them
-  TextureFilter filter;                // sizes, dilation, blur, the values' range
-  unsigned threads = 0;                // host threads the device's uploads may copy on
+  TextureFilter filter;                  // sizes, dilation, blur, the values' range
+  unsigned threads = 0;                  // host threads the device's uploads may copy on
 };
 // Draws, dilates, blurs and reads back into `values` (n floats, each written; the input is
-// job.values), with the CPU's code (kernels/smooth/sdf_smooth_texture.h) and bits. Where `images` is
-// true it also fills `island` (dilated) and `blurred`, row-major: the kept image. Appends its
+// job.values), with the CPU's code (kernels/smooth/sdf_smooth_texture.h) and bits. Where `images`
+// is true it also fills `island` (dilated) and `blurred`, row-major: the kept image. Appends its
 // stages' seconds to `timings`. A device walks each face in one work item, so smooth_texture runs
 // it only where no face's UV box covers more than kMostTexelsPerDeviceFace texels (a low-poly
 // mesh on a large texture stays on the CPU threads, with the same values).
-using TextureDeviceFn = std::function<void(
-    const TextureJob& job, bool images, float* values,
-    std::vector<std::int32_t>& island, std::vector<float>& blurred,
-    StageTimings& timings)>;
+using TextureDeviceFn = std::function<void(const TextureJob& job, bool images, float* values,
+                                           std::vector<std::int32_t>& island,
+                                           std::vector<float>& blurred, StageTimings& timings)>;
 constexpr double kMostTexelsPerDeviceFace = 65536.0;
 
 // uvs: per face corner, (u, v) for corners 0, 1, 2 of face 0, then face 1, ... (6 floats a
@@ -155,9 +154,9 @@ PreparedTexture prepare_texture(Mesh mesh, const float* uvs, const TextureOption
 // another size or weld tolerance than `prepared` was made for, or for vertex values when it
 // was not made for them.
 TextureSmoothing smooth_texture(const PreparedTexture& prepared, PointKind kind,
-                                const float* values, const TextureOptions& options,
-                                bool keep_image, const ProgressFn& progress = nullptr,
-                                double progress_from = 0.0, double progress_to = 1.0,
-                                const TextureDeviceFn& device = nullptr, float* into = nullptr);
+                                const float* values, const TextureOptions& options, bool keep_image,
+                                const ProgressFn& progress = nullptr, double progress_from = 0.0,
+                                double progress_to = 1.0, const TextureDeviceFn& device = nullptr,
+                                float* into = nullptr);
 
 }  // namespace sdf

@@ -128,9 +128,11 @@ void join_corners(const Mesh& mesh, const float* uvs, const std::uint32_t* key,
   if (!pairs) return;
   pairs->clear();
   for (std::uint32_t k = 0; k < key_count; ++k)
-    if (rep[k].load(std::memory_order_relaxed) != kNone) pairs->push_back({k, rep_uv[2 * k], rep_uv[2 * k + 1]});
+    if (rep[k].load(std::memory_order_relaxed) != kNone)
+      pairs->push_back({k, rep_uv[2 * k], rep_uv[2 * k + 1]});
   for (std::size_t i = 0; i < seams.size(); ++i)
-    if (i == 0 || !same(seams[i], seams[i - 1])) pairs->push_back({seams[i].key, seams[i].u, seams[i].v});
+    if (i == 0 || !same(seams[i], seams[i - 1]))
+      pairs->push_back({seams[i].key, seams[i].u, seams[i].v});
 }
 
 bool within(const Mesh& mesh, std::uint32_t a, std::uint32_t b, double reach2) {
@@ -178,7 +180,8 @@ bool weld_can_join(const Mesh& mesh, const std::vector<KeyUv>& pairs, float tole
       while (j < items.size() && items[j] >> 32 == hash) ++j;
       if (j - i == 1) continue;
       run.clear();
-      for (std::size_t r = i; r < j; ++r) run.push_back(pairs[static_cast<std::uint32_t>(items[r])]);
+      for (std::size_t r = i; r < j; ++r)
+        run.push_back(pairs[static_cast<std::uint32_t>(items[r])]);
       std::sort(run.begin(), run.end(), [](const KeyUv& a, const KeyUv& b) {
         return a.u < b.u || (a.u == b.u && a.v < b.v);
       });

@@ -37,8 +37,8 @@ struct EdgeUse {
 
 struct UseBuckets {
   UninitializedVector<EdgeUse> uses;  // every element written by the scatter
-  std::vector<std::size_t> offsets;  // bucket b: uses[offsets[b] .. offsets[b + 1])
-  int shift = 0;                     // bucket of vertex v: v >> shift
+  std::vector<std::size_t> offsets;   // bucket b: uses[offsets[b] .. offsets[b + 1])
+  int shift = 0;                      // bucket of vertex v: v >> shift
 };
 
 // Level one: parallel over blocks of faces, each writing its own ranges (bucket-major,
@@ -102,8 +102,7 @@ template <class Visit>
 void for_each_edge(const EdgeUse* first, const EdgeUse* last, Visit&& visit) {
   for (const EdgeUse* edge = first; edge != last;) {
     const EdgeUse* edge_end = edge;
-    while (edge_end != last && edge_end->low() == edge->low() &&
-           edge_end->high == edge->high)
+    while (edge_end != last && edge_end->low() == edge->low() && edge_end->high == edge->high)
       ++edge_end;
     visit(edge, edge_end);
     edge = edge_end;
@@ -132,8 +131,7 @@ void match_uses(const EdgeUse* edge, const EdgeUse* edge_end, Link&& link) {
 // vertex's uses once sorted, while they are in cache (no edge spans two lower vertices).
 template <class Visit>
 void sort_bucket(EdgeUse* first, EdgeUse* last, std::size_t vertices,
-                 std::vector<std::uint32_t>& counts, std::vector<EdgeUse>& scratch,
-                 Visit&& visit) {
+                 std::vector<std::uint32_t>& counts, std::vector<EdgeUse>& scratch, Visit&& visit) {
   counts.assign(vertices + 1, 0);
   for (EdgeUse* u = first; u != last; ++u) ++counts[u->low() + 1];
   for (std::size_t v = 0; v < vertices; ++v) counts[v + 1] += counts[v];

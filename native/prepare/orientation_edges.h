@@ -6,8 +6,8 @@
 #include <memory>
 #include <vector>
 
-#include "util/concurrent_parity_union_find.h"
 #include "mesh/mesh.h"
+#include "util/concurrent_parity_union_find.h"
 
 namespace sdf {
 

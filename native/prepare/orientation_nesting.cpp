@@ -89,7 +89,8 @@ class BoxGrid {
  private:
   glm::ivec3 cell(glm::dvec3 p) const {
     const glm::dvec3 f = glm::floor((p - lo_) * scale_);
-    return glm::clamp(glm::ivec3(glm::max(f, glm::dvec3(-1.0))), glm::ivec3(0), glm::ivec3(cells_ - 1));
+    return glm::clamp(glm::ivec3(glm::max(f, glm::dvec3(-1.0))), glm::ivec3(0),
+                      glm::ivec3(cells_ - 1));
   }
   std::size_t index(int x, int y, int z) const {
     return (static_cast<std::size_t>(z) * cells_ + y) * cells_ + x;
@@ -107,8 +108,7 @@ class BoxGrid {
 // probes (a thousand bubbles in a sphere of 82k faces: 1.08 s -> ms).
 std::vector<std::uint32_t> odd_crossings(const Mesh& mesh, const std::uint32_t* faces,
                                          std::size_t face_count,
-                                         const std::vector<glm::dvec3>& probes,
-                                         unsigned threads) {
+                                         const std::vector<glm::dvec3>& probes, unsigned threads) {
   const std::size_t count = probes.size();
   std::vector<std::uint32_t> odd(count, 0);
   const int side = std::max(1, static_cast<int>(std::ceil(std::sqrt(static_cast<double>(count)))));
@@ -217,7 +217,8 @@ std::vector<std::uint32_t> enclosing_parts(const Mesh& mesh, const Parts& parts,
   std::vector<std::uint32_t> faces(n);
   {
     std::vector<std::size_t> at(first.begin(), first.end() - 1);
-    for (std::size_t f = 0; f < n; ++f) faces[at[parts.part_of[f]]++] = static_cast<std::uint32_t>(f);
+    for (std::size_t f = 0; f < n; ++f)
+      faces[at[parts.part_of[f]]++] = static_cast<std::uint32_t>(f);
   }
   // Grouped by encloser: one pass over its faces counts the crossings of every probe.
   std::stable_sort(pairs.begin(), pairs.end(),
@@ -231,10 +232,11 @@ std::vector<std::uint32_t> enclosing_parts(const Mesh& mesh, const Parts& parts,
     for (std::size_t k = g; k < g_end; ++k) {  // the centroid of each inner part's first face
       const glm::uvec3 t = mesh.triangles[faces[first[pairs[k].first]]];
       probes.push_back((glm::dvec3(mesh.vertices[t.x]) + glm::dvec3(mesh.vertices[t.y]) +
-                        glm::dvec3(mesh.vertices[t.z])) / 3.0);
+                        glm::dvec3(mesh.vertices[t.z])) /
+                       3.0);
     }
-    const std::vector<std::uint32_t> odd = odd_crossings(
-        mesh, faces.data() + first[q], first[q + 1] - first[q], probes, threads);
+    const std::vector<std::uint32_t> odd =
+        odd_crossings(mesh, faces.data() + first[q], first[q + 1] - first[q], probes, threads);
     for (std::size_t k = g; k < g_end; ++k) {
       const std::uint32_t p = pairs[k].first;
       // The innermost: the encloser of least volume (ranks_above orders them strictly).

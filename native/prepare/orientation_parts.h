@@ -37,8 +37,7 @@ bool any_shared_place(const UninitializedVector<std::uint32_t>& same_place, unsi
 // Linear expected time, parallel over `threads` (0 = every core); the result does not depend
 // on the thread count. same_place: weld_exact(mesh), when made already.
 Parts find_parts(const Mesh& mesh, unsigned threads);
-Parts find_parts(const Mesh& mesh, UninitializedVector<std::uint32_t> same_place,
-                 unsigned threads);
+Parts find_parts(const Mesh& mesh, UninitializedVector<std::uint32_t> same_place, unsigned threads);
 
 struct PartBox {
   glm::dvec3 lo{1e300}, hi{-1e300};

@@ -33,7 +33,8 @@ std::vector<char> patch_flips_serial(const Mesh& mesh, const EdgeNeighbours& edg
       patch.push_back(f);
       for (int k = 0; k < 3; ++k) {
         const std::uint32_t g = edges.face[3 * std::size_t{f} + k];
-        if (g == kNoNeighbour || seen[g]) continue;  // a non-orientable patch keeps its first choice
+        if (g == kNoNeighbour || seen[g])
+          continue;  // a non-orientable patch keeps its first choice
         seen[g] = 1;
         flip[g] = flip[f] ^ edges.same[3 * std::size_t{f} + k];
         queue.push_back(g);
@@ -46,7 +47,8 @@ std::vector<char> patch_flips_serial(const Mesh& mesh, const EdgeNeighbours& edg
     // order the parallel version sums in.
     std::sort(patch.begin(), patch.end());
     double kept = 0.0, reversed = 0.0;
-    for (std::uint32_t f : patch) (flip[f] ? reversed : kept) += glm::length(face_area_normal(mesh, f));
+    for (std::uint32_t f : patch)
+      (flip[f] ? reversed : kept) += glm::length(face_area_normal(mesh, f));
     if (reversed > kept)
       for (std::uint32_t f : patch) flip[f] ^= 1;
   }

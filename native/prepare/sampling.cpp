@@ -1,10 +1,10 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
 #include "prepare/sampling.h"
 
+#include "prepare/rays.h"
 #include "util/morton.h"
 #include "util/parallel.h"
 #include "util/radix_sort.h"
-#include "prepare/rays.h"
 
 #include <algorithm>
 #include <cmath>
@@ -49,7 +49,8 @@ SamplePoints sample_points(const Mesh& mesh, PointKind kind, unsigned threads) {
       const glm::uvec3 t = mesh.triangles[f];
       for (int k = 0; k < 3; ++k) {
         normal_sum[t[k]] += an;
-        if (next_corner[t[k]] == kNone && t[(k + 1) % 3] != t[k]) next_corner[t[k]] = t[(k + 1) % 3];
+        if (next_corner[t[k]] == kNone && t[(k + 1) % 3] != t[k])
+          next_corner[t[k]] = t[(k + 1) % 3];
       }
     }
     points.origins.assign(mesh.vertices.begin(), mesh.vertices.end());
@@ -100,8 +101,7 @@ std::vector<std::uint32_t> spatial_order(const SamplePoints& points, unsigned th
   parallel_for(n, kGrain, threads, [&](std::size_t begin, std::size_t end) {
     for (std::size_t i = begin; i < end; ++i) {
       // Clamped: points that cast nothing may lie outside the box.
-      const glm::uvec3 c =
-          glm::uvec3(glm::clamp((points.origins[i] - lo) * scale, 0.0f, 1023.0f));
+      const glm::uvec3 c = glm::uvec3(glm::clamp((points.origins[i] - lo) * scale, 0.0f, 1023.0f));
       const std::uint64_t code = morton_30(c);
       keyed[i] = (code << 32) | i;
     }

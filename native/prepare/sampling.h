@@ -7,8 +7,8 @@
 #include <cstdint>
 #include <vector>
 
-#include "ray/sdf_face_point.h"
 #include "mesh/mesh.h"
+#include "ray/sdf_face_point.h"
 #include "util/uninitialized_vector.h"
 
 namespace sdf {
@@ -38,9 +38,9 @@ struct SamplePoints {
 SamplePoints sample_points(const Mesh& mesh, PointKind kind, unsigned threads = 0);
 
 // One face's point as sample_points() makes it (both from kernels/ray/sdf_face_point.h): the
-// centroid, and the unit inward axis (zero for a zero-area face). For callers that need no tangent and no stored
-// arrays (projected smoothing recomputes them on the fly each iteration). Inline: called once
-// per face, a call cost as much as the arithmetic (measured at 1.5M faces).
+// centroid, and the unit inward axis (zero for a zero-area face). For callers that need no tangent
+// and no stored arrays (projected smoothing recomputes them on the fly each iteration). Inline:
+// called once per face, a call cost as much as the arithmetic (measured at 1.5M faces).
 inline void face_point(const Mesh& mesh, std::size_t face, glm::vec3* origin, glm::vec3* axis) {
   const glm::uvec3 t = mesh.triangles[face];
   kern::sdf_face_origin_axis(mesh.vertices[t.x], mesh.vertices[t.y], mesh.vertices[t.z], origin,

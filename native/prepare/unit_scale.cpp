@@ -38,7 +38,8 @@ void scale_lengths(float* values, std::size_t count, int exponent) {
 SamplePoints scaled_points(const SamplePoints& points, int exponent) {
   SamplePoints out;
   out.origins.resize(points.size());
-  for (std::size_t i = 0; i < points.size(); ++i) out.origins[i] = ldexp3(points.origins[i], exponent);
+  for (std::size_t i = 0; i < points.size(); ++i)
+    out.origins[i] = ldexp3(points.origins[i], exponent);
   out.axes = points.axes;
   out.tangents = points.tangents;
   out.own_face = points.own_face;

@@ -5,8 +5,8 @@
 #include <cstdint>
 #include <limits>
 
-#include "util/parallel.h"
 #include "segment/max_flow.h"
+#include "util/parallel.h"
 
 namespace sdf::segment {
 
@@ -41,8 +41,8 @@ namespace {
 // keeps and q moves); one of them alpha, w when the other keeps.
 class ExpansionNetwork {
  public:
-  void build(const FaceGraph& graph, const double* weights, const double* costs,
-             std::size_t k, const int* labels, std::size_t n, int alpha) {
+  void build(const FaceGraph& graph, const double* weights, const double* costs, std::size_t k,
+             const int* labels, std::size_t n, int alpha) {
     node_.assign(n, -1);
     std::size_t nodes = 0;
     for (std::size_t f = 0; f < n; ++f)
@@ -63,12 +63,12 @@ class ExpansionNetwork {
       if (u < 0 || v < 0) {
         keep_[u < 0 ? v : u] += w;
       } else if (labels[f] == labels[g]) {
-        edges_.push_back(FlowEdge{static_cast<std::uint32_t>(u), static_cast<std::uint32_t>(v),
-                                  w, w});
+        edges_.push_back(
+            FlowEdge{static_cast<std::uint32_t>(u), static_cast<std::uint32_t>(v), w, w});
       } else {
         keep_[v] += w;
-        edges_.push_back(FlowEdge{static_cast<std::uint32_t>(u), static_cast<std::uint32_t>(v),
-                                  w, 0.0});
+        edges_.push_back(
+            FlowEdge{static_cast<std::uint32_t>(u), static_cast<std::uint32_t>(v), w, 0.0});
       }
     }
     // Source side = keep: a node pays keep_ by cutting its arc to the sink, move_ by cutting
@@ -120,8 +120,7 @@ double alpha_expansion(const FaceGraph& graph, const double* weights, const doub
       network.build(graph, weights, costs, k, labels, n, a);
       std::copy(labels, labels + n, candidate.begin());
       network.move(a, rules.ties_move, n, candidate.data());
-      const double energy = potts_energy(graph, weights, costs, k, candidate.data(), n,
-                                         threads);
+      const double energy = potts_energy(graph, weights, costs, k, candidate.data(), n, threads);
       if (best - energy <= energy * 1e-10) continue;
       best = energy;
       improved = true;

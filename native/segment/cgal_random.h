@@ -13,8 +13,7 @@ namespace sdf::segment {
 
 class CgalRandom {
  public:
-  explicit CgalRandom(std::uint32_t seed)
-      : state_((std::uint64_t{seed} << 16 | 0x330e) & kMask) {
+  explicit CgalRandom(std::uint32_t seed) : state_((std::uint64_t{seed} << 16 | 0x330e) & kMask) {
     uniform_index(1u << 15);  // CGAL's Random fills a 15-bit value at construction
   }
 
@@ -32,9 +31,9 @@ class CgalRandom {
   // A real in [lower, upper).
   double uniform_real(double lower, double upper) {
     for (;;) {
-      const double x = static_cast<double>(next()) / (static_cast<double>(kMaxOutput) + 1.0) *
-                           (upper - lower) +
-                       lower;
+      const double x =
+          static_cast<double>(next()) / (static_cast<double>(kMaxOutput) + 1.0) * (upper - lower) +
+          lower;
       if (x < upper) return x;
     }
   }

@@ -17,9 +17,9 @@ struct EdgeEntry {
 
 // Edges bucketed by their smaller vertex (a counting sort), each bucket sorted by the larger
 // vertex then the face: equal edges end up adjacent, in an order no thread count changes.
-void bucket_edges(const std::int64_t* triangles, std::size_t face_count,
-                  std::size_t vertex_count, unsigned threads,
-                  std::vector<std::uint32_t>& starts, std::vector<EdgeEntry>& entries) {
+void bucket_edges(const std::int64_t* triangles, std::size_t face_count, std::size_t vertex_count,
+                  unsigned threads, std::vector<std::uint32_t>& starts,
+                  std::vector<EdgeEntry>& entries) {
   starts.assign(vertex_count + 1, 0);
   auto for_each_edge = [&](auto&& visit) {
     for (std::size_t f = 0; f < face_count; ++f)
@@ -29,9 +29,8 @@ void bucket_edges(const std::int64_t* triangles, std::size_t face_count,
         if (u != v) visit(std::min(u, v), std::max(u, v), static_cast<std::uint32_t>(f), c);
       }
   };
-  for_each_edge([&](std::uint32_t lo, std::uint32_t, std::uint32_t, std::uint8_t) {
-    ++starts[lo + 1];
-  });
+  for_each_edge(
+      [&](std::uint32_t lo, std::uint32_t, std::uint32_t, std::uint8_t) { ++starts[lo + 1]; });
   for (std::size_t v = 0; v < vertex_count; ++v) starts[v + 1] += starts[v];
   entries.resize(starts[vertex_count]);
   std::vector<std::uint32_t> fill(starts.begin(), starts.end() - 1);

@@ -17,8 +17,8 @@ struct FacePair {
 };
 
 struct FaceGraph {
-  std::vector<FacePair> pairs;           // each pair once, first < second
-  std::vector<std::uint32_t> offsets;    // face f's neighbours: neighbours[offsets[f]..[f+1])
+  std::vector<FacePair> pairs;            // each pair once, first < second
+  std::vector<std::uint32_t> offsets;     // face f's neighbours: neighbours[offsets[f]..[f+1])
   std::vector<std::uint32_t> neighbours;  // one entry per pair and direction
 };
 

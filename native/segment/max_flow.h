@@ -53,8 +53,8 @@ class MaxFlow {
   };
   // What the search reads of a node together, in one cache line's share.
   struct Node {
-    double terminal;        // > 0: residual from the source; < 0: residual to the sink
-    std::int32_t parent;    // the arc to the parent (node -> parent), or a kind
+    double terminal;      // > 0: residual from the source; < 0: residual to the sink
+    std::int32_t parent;  // the arc to the parent (node -> parent), or a kind
     std::uint32_t stamp, distance;
     std::uint8_t tree, active;
   };

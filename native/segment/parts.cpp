@@ -16,8 +16,7 @@ struct VertexFaces {
   std::vector<std::uint32_t> offsets, faces;
 };
 
-VertexFaces vertex_faces(const std::int64_t* triangles, std::size_t n,
-                         std::size_t vertex_count) {
+VertexFaces vertex_faces(const std::int64_t* triangles, std::size_t n, std::size_t vertex_count) {
   VertexFaces vf;
   vf.offsets.assign(vertex_count + 1, 0);
   for (std::size_t i = 0; i < 3 * n; ++i) ++vf.offsets[triangles[i] + 1];
@@ -165,9 +164,9 @@ namespace {
 
 // The loops among one pair of segments' edges (pair indices into graph.pairs), appended to
 // `loops`: edges sharing a vertex join one loop (a union-find over their vertices).
-void split_into_loops(const FaceGraph& graph, const double* vertices,
-                      const std::int64_t* triangles, int a, int b,
-                      const std::vector<std::uint32_t>& edges, std::vector<Boundary>& loops) {
+void split_into_loops(const FaceGraph& graph, const double* vertices, const std::int64_t* triangles,
+                      int a, int b, const std::vector<std::uint32_t>& edges,
+                      std::vector<Boundary>& loops) {
   auto end_of = [&](std::uint32_t e, int which) {
     const FacePair& p = graph.pairs[e];
     return triangles[3 * p.first + (p.first_corner + which) % 3];
@@ -177,8 +176,7 @@ void split_into_loops(const FaceGraph& graph, const double* vertices,
   std::sort(ends.begin(), ends.end());
   ends.erase(std::unique(ends.begin(), ends.end()), ends.end());
   auto index = [&](std::int64_t v) {
-    return static_cast<std::size_t>(std::lower_bound(ends.begin(), ends.end(), v) -
-                                    ends.begin());
+    return static_cast<std::size_t>(std::lower_bound(ends.begin(), ends.end(), v) - ends.begin());
   };
   std::vector<std::size_t> up(ends.size());
   std::iota(up.begin(), up.end(), 0);
@@ -209,9 +207,8 @@ void split_into_loops(const FaceGraph& graph, const double* vertices,
 
 }  // namespace
 
-std::vector<Boundary> boundaries(const FaceGraph& graph, const double* vertices,
-                                 std::size_t, const std::int64_t* triangles,
-                                 const int* segments) {
+std::vector<Boundary> boundaries(const FaceGraph& graph, const double* vertices, std::size_t,
+                                 const std::int64_t* triangles, const int* segments) {
   // Edges between segments, grouped by the pair of segments, in pair order within a group.
   std::vector<std::tuple<int, int, std::uint32_t>> cut;
   for (std::size_t p = 0; p < graph.pairs.size(); ++p) {

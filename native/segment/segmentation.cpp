@@ -12,19 +12,18 @@ namespace sdf::segment {
 namespace {
 
 // CGAL's constants (Surface_mesh_segmentation.h, Expectation_maximization.h).
-constexpr double kLogAlpha = 5.0;          // log(5 x + 1) / log(6)
+constexpr double kLogAlpha = 5.0;           // log(5 x + 1) / log(6)
 constexpr std::size_t kMaxIterations = 10;  // k-means and EM
 constexpr double kLikelihoodGain = 1e-3;    // EM stops below this relative gain
 
 // Filled, optionally filtered, rescaled to [0, 1].
-std::vector<double> prepare_values(const FaceGraph& graph, const double* values,
-                                   std::size_t n, const SegmentOptions& options) {
+std::vector<double> prepare_values(const FaceGraph& graph, const double* values, std::size_t n,
+                                   const SegmentOptions& options) {
   std::vector<double> out(values, values + n);
   fill_missing_from_edge_neighbours(graph, out.data(), n);
   if (options.filter) {
     std::vector<double> filtered(n);
-    bilateral_filter(graph, out.data(), n, bilateral_window(n), options.threads,
-                     filtered.data());
+    bilateral_filter(graph, out.data(), n, bilateral_window(n), options.threads, filtered.data());
     out.swap(filtered);
   }
   rescale_to_unit(out.data(), n);
@@ -42,8 +41,7 @@ std::size_t soft_clusters(const std::vector<double>& values, const SegmentOption
   const std::size_t k = std::min(options.clusters, n);
   const std::vector<double> centres =
       kmeans_centres(logs.data(), n, k, kMaxIterations, options.threads);
-  mixture = fit_mixture(logs.data(), n, centres, kMaxIterations, kLikelihoodGain,
-                        options.threads);
+  mixture = fit_mixture(logs.data(), n, centres, kMaxIterations, kLikelihoodGain, options.threads);
   costs.resize(n * mixture.size());
   labels.resize(n);
   cluster_costs(logs.data(), n, mixture, options.threads, costs.data(), labels.data());
@@ -58,8 +56,8 @@ void check(std::size_t face_count, const SegmentOptions& options) {
 }  // namespace
 
 Segmentation segment_mesh(const double* vertices, std::size_t vertex_count,
-                          const std::int64_t* triangles, std::size_t n,
-                          const double* values, const SegmentOptions& options) {
+                          const std::int64_t* triangles, std::size_t n, const double* values,
+                          const SegmentOptions& options) {
   check(n, options);
   Segmentation out;
   StageClock clock(&out.timings);
@@ -81,22 +79,19 @@ Segmentation segment_mesh(const double* vertices, std::size_t vertex_count,
       number_segments(graph, out.clusters.data(), out.values.data(), n, out.segments.data());
   clock.lap("segments");
   const std::vector<double> areas = face_areas(vertices, triangles, n, options.threads);
-  out.stats = segment_stats(areas.data(), out.values.data(), out.segments.data(), n,
-                            out.segment_count);
-  out.vertex_labels =
-      vertex_labels(vertex_count, triangles, areas.data(), out.segments.data(), n);
-  out.vertex_weights = vertex_weights(vertex_count, triangles, areas.data(),
-                                      out.segments.data(), n, options.weight_rings,
-                                      options.threads);
+  out.stats =
+      segment_stats(areas.data(), out.values.data(), out.segments.data(), n, out.segment_count);
+  out.vertex_labels = vertex_labels(vertex_count, triangles, areas.data(), out.segments.data(), n);
+  out.vertex_weights = vertex_weights(vertex_count, triangles, areas.data(), out.segments.data(), n,
+                                      options.weight_rings, options.threads);
   out.boundaries = boundaries(graph, vertices, vertex_count, triangles, out.segments.data());
   clock.lap("parts");
   return out;
 }
 
 double segmentation_energy(const double* vertices, std::size_t vertex_count,
-                           const std::int64_t* triangles, std::size_t n,
-                           const double* values, const SegmentOptions& options,
-                           const int* clusters) {
+                           const std::int64_t* triangles, std::size_t n, const double* values,
+                           const SegmentOptions& options, const int* clusters) {
   check(n, options);
   const FaceGraph graph = build_face_graph(triangles, n, vertex_count, options.threads);
   const std::vector<double> prepared = prepare_values(graph, values, n, options);

@@ -18,21 +18,21 @@
 namespace sdf::segment {
 
 struct SegmentOptions {
-  std::size_t clusters = 5;   // k, at least 1 (fewer when the mesh has fewer faces)
-  double smoothness = 0.26;   // lambda: weight of the cut cost against the cluster costs
-  bool filter = false;        // CGAL's post-processing filter before clustering (bilateral)
-  ExpansionRules expansion;   // CGAL's rules by default (ties move, first move only)
+  std::size_t clusters = 5;      // k, at least 1 (fewer when the mesh has fewer faces)
+  double smoothness = 0.26;      // lambda: weight of the cut cost against the cluster costs
+  bool filter = false;           // CGAL's post-processing filter before clustering (bilateral)
+  ExpansionRules expansion;      // CGAL's rules by default (ties move, first move only)
   std::size_t weight_rings = 2;  // rings the soft vertex weights fall off over
-  unsigned threads = 0;       // 0 = every core; results do not depend on it
+  unsigned threads = 0;          // 0 = every core; results do not depend on it
 };
 
 struct Segmentation {
-  std::vector<double> values;  // the values clustered: filled, (filtered,) rescaled to [0, 1]
-  std::vector<Gaussian> mixture;      // the fitted components, by ascending mean
-  std::vector<int> clusters;          // per face, in [0, k): 0 the thinnest
-  std::vector<int> segments;          // per face, in [0, segment_count): by ascending mean
+  std::vector<double> values;     // the values clustered: filled, (filtered,) rescaled to [0, 1]
+  std::vector<Gaussian> mixture;  // the fitted components, by ascending mean
+  std::vector<int> clusters;      // per face, in [0, k): 0 the thinnest
+  std::vector<int> segments;      // per face, in [0, segment_count): by ascending mean
   std::size_t segment_count = 0;
-  double energy = 0.0;                // of `clusters`
+  double energy = 0.0;  // of `clusters`
   SegmentStats stats;
   std::vector<int> vertex_labels;
   VertexWeights vertex_weights;

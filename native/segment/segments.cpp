@@ -57,8 +57,8 @@ double face_area(const double* vertices, const std::int64_t* triangles, std::siz
 
 }  // namespace
 
-std::vector<double> face_areas(const double* vertices, const std::int64_t* triangles,
-                               std::size_t n, unsigned threads) {
+std::vector<double> face_areas(const double* vertices, const std::int64_t* triangles, std::size_t n,
+                               unsigned threads) {
   std::vector<double> areas(n);
   parallel_for(n, 16384, threads, [&](std::size_t begin, std::size_t end) {
     for (std::size_t f = begin; f < end; ++f) areas[f] = face_area(vertices, triangles, f);

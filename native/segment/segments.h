@@ -25,7 +25,7 @@ SegmentStats segment_stats(const double* areas, const double* values, const int*
                            std::size_t n, std::size_t segment_count);
 
 // Per face, its area.
-std::vector<double> face_areas(const double* vertices, const std::int64_t* triangles,
-                               std::size_t n, unsigned threads);
+std::vector<double> face_areas(const double* vertices, const std::int64_t* triangles, std::size_t n,
+                               unsigned threads);
 
 }  // namespace sdf::segment

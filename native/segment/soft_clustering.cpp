@@ -6,8 +6,8 @@
 #include <cstdint>
 #include <limits>
 
-#include "util/parallel.h"
 #include "segment/cgal_random.h"
+#include "util/parallel.h"
 
 namespace sdf::segment {
 namespace {
@@ -131,8 +131,8 @@ double expectation(const double* points, std::size_t n, const std::vector<Gaussi
     for (std::size_t j = begin; j < end; ++j) {
       double* p = &posterior[j * k];
       double total = 0.0;
-      for (std::size_t c = 0; c < k; ++c) total += p[c] = density(mixture[c], points[j]) *
-                                                          mixture[c].weight;
+      for (std::size_t c = 0; c < k; ++c)
+        total += p[c] = density(mixture[c], points[j]) * mixture[c].weight;
       if (total > 0.0 && std::isfinite(total)) {
         for (std::size_t c = 0; c < k; ++c) p[c] /= total;
         sum += std::log(total);
@@ -205,17 +205,16 @@ std::vector<Gaussian> initial_mixture(const double* points, std::size_t n,
     mixture[c].deviation += d * d;
   }
   for (std::size_t c = 0; c < centres.size(); ++c)
-    if (members[c]) mixture[c].deviation =
-        std::sqrt(mixture[c].deviation / static_cast<double>(members[c]));
+    if (members[c])
+      mixture[c].deviation = std::sqrt(mixture[c].deviation / static_cast<double>(members[c]));
   return mixture;
 }
 
 }  // namespace
 
 std::vector<Gaussian> fit_mixture(const double* points, std::size_t n,
-                                  const std::vector<double>& centres,
-                                  std::size_t max_iterations, double threshold,
-                                  unsigned threads) {
+                                  const std::vector<double>& centres, std::size_t max_iterations,
+                                  double threshold, unsigned threads) {
   std::vector<Gaussian> mixture = initial_mixture(points, n, centres);
   std::vector<double> posterior(n * mixture.size());
   double likelihood = -std::numeric_limits<double>::max();

@@ -31,9 +31,8 @@ struct Gaussian {
 // `threshold` times its magnitude. Components sorted by mean. Densities are CGAL's:
 // exp(-z^2 / 2) / deviation, without the 1/sqrt(2 pi) that cancels everywhere it is used.
 std::vector<Gaussian> fit_mixture(const double* points, std::size_t n,
-                                  const std::vector<double>& centres,
-                                  std::size_t max_iterations, double threshold,
-                                  unsigned threads);
+                                  const std::vector<double>& centres, std::size_t max_iterations,
+                                  double threshold, unsigned threads);
 
 // Per point and component (row-major n x k): the cost -log(max(p, 5e-6)) (at least machine
 // epsilon) of the component's posterior probability p; and per point the component of

@@ -3,9 +3,9 @@
 
 #include <algorithm>
 #include <atomic>
+#include <cfenv>
 #include <chrono>
 #include <condition_variable>
-#include <cfenv>
 #include <exception>
 #include <mutex>
 #include <system_error>

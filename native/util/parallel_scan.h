@@ -70,7 +70,8 @@ std::vector<std::uint32_t> indices_where(std::size_t n, unsigned threads, Keep&&
   parallel_for(blocks, 1, threads, [&](std::size_t b0, std::size_t b1) {
     for (std::size_t b = b0; b < b1; ++b) {
       std::uint32_t kept = 0;
-      for (std::size_t i = b * kScanBlock; i < std::min(n, (b + 1) * kScanBlock); ++i) kept += keep(i);
+      for (std::size_t i = b * kScanBlock; i < std::min(n, (b + 1) * kScanBlock); ++i)
+        kept += keep(i);
       first[b + 1] = kept;
     }
   });

@@ -26,7 +26,8 @@ inline Adjacency reference_faces_of_vertices(const std::vector<glm::uvec3>& tria
   std::vector<std::uint32_t> cursor(a.offsets.begin(), a.offsets.end() - 1);
   for (std::size_t f = 0; f < triangles.size(); ++f)
     for (int k = 0; k < 3; ++k)
-      if (distinct(triangles[f], k)) a.items[cursor[triangles[f][k]]++] = static_cast<std::uint32_t>(f);
+      if (distinct(triangles[f], k))
+        a.items[cursor[triangles[f][k]]++] = static_cast<std::uint32_t>(f);
   return a;
 }
 
@@ -38,7 +39,8 @@ inline Adjacency reference_vertex_neighbours(const std::vector<glm::uvec3>& tria
   std::vector<std::uint32_t> items;
   for (std::size_t v = 0; v < n; ++v) {
     const std::size_t begin = items.size();
-    for (std::uint32_t i = faces_of_vertices.offsets[v]; i < faces_of_vertices.offsets[v + 1]; ++i) {
+    for (std::uint32_t i = faces_of_vertices.offsets[v]; i < faces_of_vertices.offsets[v + 1];
+         ++i) {
       const glm::uvec3 t = triangles[faces_of_vertices.items[i]];
       for (int k = 0; k < 3; ++k)
         if (t[k] != v) items.push_back(t[k]);

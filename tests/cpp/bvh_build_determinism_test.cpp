@@ -6,19 +6,18 @@
 #include <cstring>
 #include <utility>
 
-#include "traverse/sdf_bvh_traverse.h"
 #include "accel/bvh.h"
 #include "accel/bvh_stats.h"
 #include "mesh/mesh.h"
 #include "test_meshes.h"
+#include "traverse/sdf_bvh_traverse.h"
 
 namespace sdf {
 namespace {
 
 template <typename Array>
 bool same_bytes(const Array& a, const Array& b) {
-  return a.size() == b.size() &&
-         std::memcmp(a.data(), b.data(), a.size() * sizeof(a[0])) == 0;
+  return a.size() == b.size() && std::memcmp(a.data(), b.data(), a.size() * sizeof(a[0])) == 0;
 }
 
 Bvh build_with_threads(const Mesh& mesh, unsigned threads) {

@@ -7,12 +7,12 @@
 #include <tuple>
 #include <vector>
 
-#include "traverse/sdf_bvh_traverse.h"
 #include "accel/bvh.h"
 #include "accel/bvh_margin.h"
 #include "cast/bvh4_traverse.h"
 #include "cast/bvh8_traverse.h"
 #include "test_meshes.h"
+#include "traverse/sdf_bvh_traverse.h"
 
 namespace sdf {
 namespace {
@@ -51,8 +51,8 @@ TEST_P(BvhOnSoup, ClosestHitEqualsBruteForce) {
     const glm::vec3 o(u(rng), u(rng), u(rng));
     const glm::vec3 d = glm::normalize(glm::vec3(u(rng), u(rng), u(rng)));
     const int skip = r % 7 == 0 ? r % size : -1;
-    const kern::SdfHit a = kern::sdf_bvh_closest_hit(bvh.nodes.data(), bvh.triangles.data(), o, d,
-                                                     1e-4f, skip);
+    const kern::SdfHit a =
+        kern::sdf_bvh_closest_hit(bvh.nodes.data(), bvh.triangles.data(), o, d, 1e-4f, skip);
     const kern::SdfHit b = brute_force(bvh, o, d, 1e-4f, skip);
     ASSERT_EQ(a.t, b.t) << "ray " << r;
 #if SDF_HAVE_BVH4_SSE
@@ -96,8 +96,7 @@ TEST(Bvh8, TiesOnSharedEdgesAndLargeLeavesMatchBruteForceBitForBit) {
         const glm::vec3 o(0.1f * (i % 3), 0.2f * (i / 3 % 3), -0.3f * (i / 9));
         std::vector<glm::vec3> directions;
         for (int k = 0; k < 125; ++k) {
-          const glm::vec3 target((k % 5 - 2) * 0.5f, (k / 5 % 5 - 2) * 0.75f,
-                                 (k / 25 - 2) * 1.0f);
+          const glm::vec3 target((k % 5 - 2) * 0.5f, (k / 5 % 5 - 2) * 0.75f, (k / 25 - 2) * 1.0f);
           if (target != o) directions.push_back(glm::normalize(target - o));  // else none
         }
         const int skip = i % 12;
@@ -286,7 +285,7 @@ TEST(Bvh, RaysAlongAnAxisAreNotLostFarFromTheCentre) {
 // ordered comparison lets a NaN through; the test must still turn the hit away, or engines
 // whose min/max treat NaN differently would disagree.
 TEST(Intersect, ATriangleWhoseInverseDeterminantOverflowsIsNeverHit) {
-  const sdf::kern::SdfTriangle tiny{-1.0f, 0.0f, 0.0f, 7,     0.0f, 1e-20f,
+  const sdf::kern::SdfTriangle tiny{-1.0f, 0.0f, 0.0f,   7,    0.0f, 1e-20f,
                                     0.0f,  0.0f, 1e-20f, 0.0f, 0.0f, 0.0f};
   const glm::vec3 origin(0.0f, 0.0f, 0.0f), direction(0.0f, 0.0f, 1.0f);
   sdf::kern::SdfHit hit{INFINITY, 0.0f, -1};

@@ -9,11 +9,11 @@
 #include <random>
 #include <vector>
 
-#include "traverse/sdf_bvh_traverse.h"
 #include "accel/bvh.h"
 #include "accel/bvh_margin.h"
 #include "smoothing_test_meshes.h"
 #include "test_meshes.h"
+#include "traverse/sdf_bvh_traverse.h"
 #include "util/test_overrides.h"
 
 namespace sdf {
@@ -42,7 +42,8 @@ kern::SdfTriangle record_of(const Mesh& mesh, std::size_t f) {
   const glm::vec3 v0 = mesh.vertices[t.x];
   const glm::vec3 e1 = mesh.vertices[t.y] - v0, e2 = mesh.vertices[t.z] - v0;
   return kern::SdfTriangle{v0.x, v0.y, v0.z, static_cast<std::int32_t>(f),
-                           e1.x, e1.y, e1.z, 0.0f, e2.x, e2.y, e2.z, 0.0f};
+                           e1.x, e1.y, e1.z, 0.0f,
+                           e2.x, e2.y, e2.z, 0.0f};
 }
 
 // Every face of the mesh, in order: independent of the tree and of its records.
@@ -154,19 +155,23 @@ TEST(BvhSplit, TheCutIgnoresThreadsAndWinding) {
   const Bvh first = build_bvh(mesh, one), second = build_bvh(mesh, many);
   ASSERT_EQ(first.nodes.size(), second.nodes.size());
   EXPECT_EQ(std::memcmp(first.nodes.data(), second.nodes.data(),
-                        first.nodes.size() * sizeof first.nodes[0]), 0);
+                        first.nodes.size() * sizeof first.nodes[0]),
+            0);
   // Every face reversed as orientation does (two corners swapped): the same tree, and the
   // records rewritten from the reversed mesh equal those built from it.
-  for (std::size_t f = 0; f < a.triangles.size(); f += 3) std::swap(a.triangles[f + 1], a.triangles[f + 2]);
+  for (std::size_t f = 0; f < a.triangles.size(); f += 3)
+    std::swap(a.triangles[f + 1], a.triangles[f + 2]);
   const Mesh turned = a.mesh();
   Bvh rewritten = build_bvh(mesh);
   const Bvh built = build_bvh(turned);
   ASSERT_EQ(rewritten.nodes.size(), built.nodes.size());
   EXPECT_EQ(std::memcmp(rewritten.nodes.data(), built.nodes.data(),
-                        built.nodes.size() * sizeof built.nodes[0]), 0);
+                        built.nodes.size() * sizeof built.nodes[0]),
+            0);
   rewrite_triangles(rewritten, turned);
   EXPECT_EQ(std::memcmp(rewritten.triangles.data(), built.triangles.data(),
-                        built.triangles.size() * sizeof built.triangles[0]), 0);
+                        built.triangles.size() * sizeof built.triangles[0]),
+            0);
 }
 
 }  // namespace

@@ -25,10 +25,9 @@ test::Arrays grid_box(int n) {
     return static_cast<std::int64_t>(a.vertices.size() / 3 - 1);
   };
   // Each side: an origin corner and two edge directions whose cross product points outward.
-  const double sides[6][9] = {
-      {-1, -1, 1, 1, 0, 0, 0, 1, 0},   {-1, -1, -1, 0, 1, 0, 1, 0, 0},
-      {-1, -1, -1, 0, 0, 1, 0, 1, 0},  {1, -1, -1, 0, 1, 0, 0, 0, 1},
-      {-1, -1, -1, 1, 0, 0, 0, 0, 1},  {-1, 1, -1, 0, 0, 1, 1, 0, 0}};
+  const double sides[6][9] = {{-1, -1, 1, 1, 0, 0, 0, 1, 0},  {-1, -1, -1, 0, 1, 0, 1, 0, 0},
+                              {-1, -1, -1, 0, 0, 1, 0, 1, 0}, {1, -1, -1, 0, 1, 0, 0, 0, 1},
+                              {-1, -1, -1, 1, 0, 0, 0, 0, 1}, {-1, 1, -1, 0, 0, 1, 1, 0, 0}};
   for (const auto& s : sides) {
     std::vector<std::int64_t> index((n + 1) * (n + 1));
     for (int j = 0; j <= n; ++j)
@@ -106,9 +105,9 @@ TEST(ComputePipeline, ReversedTwinsStopTheRunAndSayWhich) {
   test::Arrays both = single;
   const std::size_t faces = single.triangles.size() / 3;
   for (std::size_t f = 0; f < faces; ++f)
-    both.triangles.insert(both.triangles.end(), {single.triangles[3 * f],
-                                                 single.triangles[3 * f + 2],
-                                                 single.triangles[3 * f + 1]});
+    both.triangles.insert(
+        both.triangles.end(),
+        {single.triangles[3 * f], single.triangles[3 * f + 2], single.triangles[3 * f + 1]});
   for (Orientation orientation : {Orientation::Auto, Orientation::AsIs, Orientation::Flip}) {
     const Output out = compute(both.mesh(), options_for(orientation, 2));
     ASSERT_EQ(out.twins.dropped.size(), faces);
@@ -137,8 +136,7 @@ TEST(ComputePipeline, ARunCancelledDuringTheBackgroundBuildEndsCleanly) {
   int calls = 0;
   const ProgressFn stop_at_second = [&](double) { return ++calls < 2; };
   const test::Arrays box = grid_box(60);
-  EXPECT_THROW(compute(box.mesh(), options_for(Orientation::Auto, 0), stop_at_second),
-               Cancelled);
+  EXPECT_THROW(compute(box.mesh(), options_for(Orientation::Auto, 0), stop_at_second), Cancelled);
   EXPECT_EQ(calls, 2);
   EXPECT_FALSE(compute(box.mesh(), options_for(Orientation::Auto, 0)).raw.empty());
 }

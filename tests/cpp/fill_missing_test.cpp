@@ -12,7 +12,8 @@ namespace {
 // A strip of n triangles, each sharing an edge with the next.
 test::Arrays strip(int n) {
   test::Arrays a;
-  for (int i = 0; i < n + 2; ++i) a.vertices.insert(a.vertices.end(), {double(i / 2), double(i % 2), 0.0});
+  for (int i = 0; i < n + 2; ++i)
+    a.vertices.insert(a.vertices.end(), {double(i / 2), double(i % 2), 0.0});
   for (int t = 0; t < n; ++t) a.triangles.insert(a.triangles.end(), {t, t + 1, t + 2});
   return a;
 }

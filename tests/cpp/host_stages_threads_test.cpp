@@ -10,9 +10,9 @@
 #include <utility>
 #include <vector>
 
-#include "util/radix_sort.h"
 #include "prepare/sampling.h"
 #include "test_meshes.h"
+#include "util/radix_sort.h"
 
 namespace sdf {
 namespace {

@@ -37,8 +37,8 @@ Cast cast_points(const std::vector<double>& speeds, bool shared = true) {
     if (took[d] > 0.0) {
       rates[d] = size[d] / took[d];
       const double share = shared ? sdf::cl::launch_share(rates.data(), n, d) : 1.0;
-      size[d] = sdf::cl::next_launch_points(size[d], took[d], 0.1, floor, kPoints - next,
-                                            devices, share);
+      size[d] =
+          sdf::cl::next_launch_points(size[d], took[d], 0.1, floor, kPoints - next, devices, share);
     }
     const std::size_t take = std::min(size[d], kPoints - next);
     next += take;

@@ -41,7 +41,9 @@ Found brute_force(const Mesh& mesh) {
   auto same = [&](std::size_t f, std::size_t g) {
     return distinct(f) && distinct(g) && at(f, 0, g) >= 0 && at(f, 1, g) >= 0 && at(f, 2, g) >= 0;
   };
-  auto reversed = [&](std::size_t f, std::size_t g) { return at(f, 1, g) == (at(f, 0, g) + 2) % 3; };
+  auto reversed = [&](std::size_t f, std::size_t g) {
+    return at(f, 1, g) == (at(f, 0, g) + 2) % 3;
+  };
   Found pairs;
   std::vector<char> paired(m, 0);
   for (std::size_t f = 0; f < m; ++f) {
@@ -128,9 +130,9 @@ TEST(ReversedTwins, AgreesWithEveryPairComparedOnPlantedMeshes) {
         return c;
       };
       switch (kind(rng)) {
-        case 0: a.triangles.insert(a.triangles.end(), {t0, t2, t1}); break;        // reversed
-        case 1: a.triangles.insert(a.triangles.end(), {t1, t0, t2}); break;        // reversed
-        case 2: a.triangles.insert(a.triangles.end(), {t1, t2, t0}); break;        // same way
+        case 0: a.triangles.insert(a.triangles.end(), {t0, t2, t1}); break;  // reversed
+        case 1: a.triangles.insert(a.triangles.end(), {t1, t0, t2}); break;  // reversed
+        case 2: a.triangles.insert(a.triangles.end(), {t1, t2, t0}); break;  // same way
         case 3: a.triangles.insert(a.triangles.end(), {copy(t2), copy(t1), copy(t0)}); break;
         case 4: a.triangles.insert(a.triangles.end(), {copy(t0), copy(t1), copy(t2)}); break;
         default: a.triangles.insert(a.triangles.end(), {t0, t0, t1}); break;  // degenerate
@@ -198,7 +200,7 @@ TEST(ReversedTwins, SolidsMeetingAtAWallAreNotDoubleSided) {
 // -0 and +0 are one place: a mesh centred on the origin keeps the sign of a zero.
 TEST(ReversedTwins, ReadsMinusZeroAsZero) {
   test::Arrays a;
-  a.vertices = {0.0,  0.0,  0.0, 1.0,  0.0,  0.0,  0.0,  1.0,  0.0,  -0.0, -0.0,
+  a.vertices = {0.0,  0.0,  0.0,  1.0,  0.0,  0.0,  0.0,  1.0,  0.0,  -0.0, -0.0,
                 -0.0, -1.0, -1.0, -1.0, -1.0, -0.9, -1.0, -0.9, -1.0, -1.0};
   a.triangles = {0, 1, 2, 3, 2, 1, 4, 5, 6};  // the last, apart, centres the box on 0
   const ReversedTwins t = find(a, 0);

@@ -4,9 +4,9 @@
 #include <random>
 #include <stdexcept>
 
-#include "traverse/sdf_octree.h"
 #include "accel/octree.h"
 #include "test_meshes.h"
+#include "traverse/sdf_octree.h"
 
 namespace sdf {
 namespace {
@@ -20,8 +20,10 @@ TEST(TriangleBoxOverlap, SeparatingAxes) {
   // edge cross product or the plane separates).
   EXPECT_FALSE(triangle_overlaps_box(c, h, {0.6f, 0, 0}, {2, 0, 0}, {2, 0.2f, 0}));
   EXPECT_FALSE(triangle_overlaps_box(c, h, {0.45f, 0.8f, 0}, {0.8f, 0.45f, 0}, {0.8f, 0.8f, 0}));
-  EXPECT_FALSE(triangle_overlaps_box(c, h, {1.0f, 0.6f, 0.6f}, {0.6f, 1.0f, 0.6f}, {0.6f, 0.6f, 1.0f}));
-  EXPECT_TRUE(triangle_overlaps_box(c, h, {0.9f, 0.2f, 0.2f}, {0.2f, 0.9f, 0.2f}, {0.2f, 0.2f, 0.9f}));
+  EXPECT_FALSE(
+      triangle_overlaps_box(c, h, {1.0f, 0.6f, 0.6f}, {0.6f, 1.0f, 0.6f}, {0.6f, 0.6f, 1.0f}));
+  EXPECT_TRUE(
+      triangle_overlaps_box(c, h, {0.9f, 0.2f, 0.2f}, {0.2f, 0.9f, 0.2f}, {0.2f, 0.2f, 0.9f}));
 }
 
 TEST(TriangleBoxOverlap, SameAnswersAtAnyScale) {
@@ -36,9 +38,9 @@ TEST(TriangleBoxOverlap, SameAnswersAtAnyScale) {
   for (const auto& t : cases) {
     const bool unscaled = triangle_overlaps_box(c, h, t[0], t[1], t[2]);
     for (const float scale : {0x1p-60f, 0x1p30f, 0x1p60f, 0x1p100f})
-      EXPECT_EQ(triangle_overlaps_box(c * scale, h * scale, t[0] * scale, t[1] * scale,
-                                      t[2] * scale),
-                unscaled)
+      EXPECT_EQ(
+          triangle_overlaps_box(c * scale, h * scale, t[0] * scale, t[1] * scale, t[2] * scale),
+          unscaled)
           << "scale " << scale << ", triangle " << t[0].x << " " << t[0].y;
   }
 }
@@ -66,8 +68,7 @@ TEST(OctreeEncoding, MeshOf1e18UnitsIsWellFormed) {
   // words behind it (a wild triangle index in the cast).
   const double s = 5.0440315826549555e17;
   test::Arrays a;
-  a.vertices = {-s, -s, -s, s, -s, -s, -s, 9007199254740992.0, -3.5578437056226918e17,
-                -s, -s, s};
+  a.vertices = {-s, -s, -s, s, -s, -s, -s, 9007199254740992.0, -3.5578437056226918e17, -s, -s, s};
   a.triangles = {0, 2, 1, 2, 1, 3, 0, 2, 2, 1, 2, 3};
   OctreeConfig config;
   config.max_depth = 4;
@@ -87,8 +88,8 @@ TEST(OctreeEncoding, TrianglesOnlyInACellsMarginMakeItALeaf) {
   for (const auto& c : corners) {
     const std::int64_t v = static_cast<std::int64_t>(a.vertices.size() / 3);
     const double in[3] = {c[0] > 0 ? -0.1 : 0.1, c[1] > 0 ? -0.1 : 0.1, c[2] > 0 ? -0.1 : 0.1};
-    a.vertices.insert(a.vertices.end(), {c[0], c[1], c[2], c[0] + in[0], c[1], c[2], c[0],
-                                         c[1] + in[1], c[2]});
+    a.vertices.insert(a.vertices.end(),
+                      {c[0], c[1], c[2], c[0] + in[0], c[1], c[2], c[0], c[1] + in[1], c[2]});
     a.triangles.insert(a.triangles.end(), {v, v + 1, v + 2});
   }
   for (const double y : {-0.5, -0.2}) {
@@ -145,7 +146,8 @@ TEST(OctreeEncoding, SharedTriangleGoesIntoEveryCellItOverlaps) {
   EXPECT_EQ(tree.nodes[0] & 0xffu, 0x01u | 0x02u | 0x10u | 0x80u);
   // Leaves in octant order: 0, 1, 4 hold triangle 0; 7 holds triangle 1.
   EXPECT_EQ(tree.leaves, (std::vector<std::uint32_t>{1, 0, 1, 0, 1, 0, 1, 1}));
-  for (int i = 1; i <= 4; ++i) EXPECT_EQ(tree.nodes[i], static_cast<std::uint32_t>(2 * (i - 1)) << 8);
+  for (int i = 1; i <= 4; ++i)
+    EXPECT_EQ(tree.nodes[i], static_cast<std::uint32_t>(2 * (i - 1)) << 8);
 }
 
 TEST(OctreeEncoding, RejectsBadConfigs) {
@@ -205,9 +207,8 @@ TEST_P(OctreeOnSoup, ClosestHitEqualsBruteForce) {
     const glm::vec3 o(u(rng), u(rng), u(rng));
     const glm::vec3 d = glm::normalize(glm::vec3(u(rng), u(rng), u(rng)));
     const int skip = r % 5 == 0 ? r % GetParam() : -1;
-    const kern::SdfHit a = kern::sdf_octree_closest_hit(tree.nodes.data(), tree.leaves.data(),
-                                                        tree.triangles.data(), tree.root, o, d,
-                                                        1e-4f, skip);
+    const kern::SdfHit a = kern::sdf_octree_closest_hit(
+        tree.nodes.data(), tree.leaves.data(), tree.triangles.data(), tree.root, o, d, 1e-4f, skip);
     kern::SdfHit b{INFINITY, 0.0f, -1};
     for (const kern::SdfTriangle& t : tree.triangles)
       if (t.id != skip) kern::sdf_intersect_triangle(o, d, 1e-4f, &t, &b);

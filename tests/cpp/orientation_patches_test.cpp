@@ -7,18 +7,19 @@
 
 #include <vector>
 
+#include "orientation_reference.h"
+#include "orientation_test_meshes.h"
 #include "prepare/orientation_edges.h"
 #include "prepare/orientation_parts.h"
 #include "prepare/orientation_patches.h"
-#include "orientation_reference.h"
-#include "orientation_test_meshes.h"
 
 namespace sdf {
 namespace {
 
 std::size_t count_differing(const std::vector<char>& a, const std::vector<char>& b) {
   std::size_t differing = a.size() == b.size() ? 0 : a.size() + b.size();
-  for (std::size_t f = 0; f < a.size() && f < b.size(); ++f) differing += (a[f] != 0) != (b[f] != 0);
+  for (std::size_t f = 0; f < a.size() && f < b.size(); ++f)
+    differing += (a[f] != 0) != (b[f] != 0);
   return differing;
 }
 

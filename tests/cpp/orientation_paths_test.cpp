@@ -11,10 +11,10 @@
 #include <random>
 #include <vector>
 
-#include "prepare/orientation.h"
-#include "prepare/orientation_edges.h"
 #include "orientation_reference.h"
 #include "orientation_test_meshes.h"
+#include "prepare/orientation.h"
+#include "prepare/orientation_edges.h"
 #include "test_meshes.h"
 
 namespace sdf {
@@ -59,9 +59,7 @@ void expect_all_paths_agree(const test::Arrays& a) {
   }
 }
 
-bool some_edge_disagrees(const test::Arrays& a) {
-  return EdgeUses(a.mesh(), 2).any_same();
-}
+bool some_edge_disagrees(const test::Arrays& a) { return EdgeUses(a.mesh(), 2).any_same(); }
 
 TEST(OrientationPaths, ConsistentMeshTakesTheFastPathAndAgrees) {
   const test::Arrays a = torus(300, 200, 0.0, 11);  // 120k faces, shuffled

@@ -31,7 +31,8 @@ inline std::vector<std::uint32_t> reference_weld_exact(const Mesh& mesh) {
   std::sort(keyed.begin(), keyed.end());
   std::vector<std::uint32_t> rep(mesh.vertices.size());
   for (std::size_t i = 0; i < keyed.size(); ++i)
-    rep[keyed[i].v] = (i > 0 && keyed[i].same_place(keyed[i - 1])) ? rep[keyed[i - 1].v] : keyed[i].v;
+    rep[keyed[i].v] =
+        (i > 0 && keyed[i].same_place(keyed[i - 1])) ? rep[keyed[i - 1].v] : keyed[i].v;
   return rep;
 }
 
@@ -55,7 +56,8 @@ inline std::vector<char> reference_consistent_flips(const Mesh& mesh,
     std::vector<std::uint32_t> cursor(offsets.begin(), offsets.end() - 1);
     for (std::uint32_t f = 0; f < n; ++f) {
       const glm::uvec3 t = welded(f);
-      for (int k = 0; k < 3; ++k) around[cursor[t[k]]++] = Corner{f, t[(k + 1) % 3], t[(k + 2) % 3]};
+      for (int k = 0; k < 3; ++k)
+        around[cursor[t[k]]++] = Corner{f, t[(k + 1) % 3], t[(k + 2) % 3]};
     }
   }
   constexpr std::uint32_t kNone = 0xffffffffu;
@@ -104,7 +106,8 @@ inline std::vector<char> reference_consistent_flips(const Mesh& mesh,
     for (std::uint32_t f : patch) any_reversed |= flip[f] != 0;
     if (!any_reversed) continue;
     std::sort(patch.begin(), patch.end());  // areas summed in face order
-    for (std::uint32_t f : patch) (flip[f] ? reversed : kept) += glm::length(face_area_normal(mesh, f));
+    for (std::uint32_t f : patch)
+      (flip[f] ? reversed : kept) += glm::length(face_area_normal(mesh, f));
     if (reversed > kept)
       for (std::uint32_t f : patch) flip[f] ^= 1;
   }
@@ -129,7 +132,8 @@ inline OrientationReport reference_orient_auto(Mesh& mesh) {
   std::vector<std::uint32_t> part_index(mesh.vertices.size(), 0xffffffffu);
   for (std::size_t f = 0; f < mesh.triangles.size(); ++f) {
     const std::uint32_t root = find(rep[mesh.triangles[f].x]);
-    if (part_index[root] == 0xffffffffu) part_index[root] = static_cast<std::uint32_t>(report.parts++);
+    if (part_index[root] == 0xffffffffu)
+      part_index[root] = static_cast<std::uint32_t>(report.parts++);
     part_of[f] = part_index[root];
   }
   std::vector<glm::dvec3> lo(report.parts, glm::dvec3(1e300)), hi(report.parts, glm::dvec3(-1e300));
@@ -144,7 +148,8 @@ inline OrientationReport reference_orient_auto(Mesh& mesh) {
     const std::uint32_t part = part_of[f];
     const glm::dvec3 c = 0.5 * (lo[part] + hi[part]);
     const glm::uvec3 t = mesh.triangles[f];
-    const glm::dvec3 p0 = glm::dvec3(mesh.vertices[t.x]) - c, p1 = glm::dvec3(mesh.vertices[t.y]) - c,
+    const glm::dvec3 p0 = glm::dvec3(mesh.vertices[t.x]) - c,
+                     p1 = glm::dvec3(mesh.vertices[t.y]) - c,
                      p2 = glm::dvec3(mesh.vertices[t.z]) - c;
     const double v = glm::dot(p0, glm::cross(p1, p2)) / 6.0;
     volume[part] += flip[f] ? -v : v;
@@ -168,7 +173,9 @@ inline OrientationReport reference_orient_auto(Mesh& mesh) {
   const glm::dvec3 rays[3] = {glm::normalize(glm::dvec3(0.5377, 0.8271, -0.1642)),
                               glm::normalize(glm::dvec3(-0.7311, 0.2893, 0.6179)),
                               glm::normalize(glm::dvec3(0.1937, -0.5861, -0.7868))};
-  auto corner = [&](std::size_t f, int k) { return glm::dvec3(mesh.vertices[mesh.triangles[f][k]]); };
+  auto corner = [&](std::size_t f, int k) {
+    return glm::dvec3(mesh.vertices[mesh.triangles[f][k]]);
+  };
   std::vector<std::size_t> inside(parts, parts);
   for (std::size_t p = 0; p < parts; ++p) {
     const std::size_t pf = first_face[p];
@@ -191,7 +198,8 @@ inline OrientationReport reference_orient_auto(Mesh& mesh) {
           if (det == 0.0) continue;
           const glm::dvec3 s = o - a, qv = glm::cross(s, e1);
           const double u = glm::dot(s, pv) / det, v = glm::dot(d, qv) / det;
-          crossings += u >= 0.0 && u <= 1.0 && v >= 0.0 && u + v <= 1.0 && glm::dot(e2, qv) / det > 0.0;
+          crossings +=
+              u >= 0.0 && u <= 1.0 && v >= 0.0 && u + v <= 1.0 && glm::dot(e2, qv) / det > 0.0;
         }
         odd = odd && crossings % 2 == 1;
       }

@@ -127,9 +127,8 @@ TEST(ParallelFor, WorksInAForkedChild) {
   ASSERT_GE(child, 0);
   if (child == 0) {
     std::atomic<long> in_child{0};
-    parallel_for(1000, 10, 4, [&](std::size_t b, std::size_t e) {
-      in_child += static_cast<long>(e - b);
-    });
+    parallel_for(1000, 10, 4,
+                 [&](std::size_t b, std::size_t e) { in_child += static_cast<long>(e - b); });
     _exit(in_child.load() == 1000 ? 0 : 1);
   }
   // The child is given 20 s; a child stuck waiting for workers is killed and fails the test.

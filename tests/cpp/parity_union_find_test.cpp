@@ -37,8 +37,8 @@ TEST(ConcurrentParityUnionFind, RandomTreeJoinedByManyThreads) {
     }
     std::shuffle(edges.begin(), edges.end(), rng);
     std::vector<std::uint32_t> expected(n);  // per label, its bit relative to label 0's
-    const std::uint32_t zero = static_cast<std::uint32_t>(
-        std::find(label.begin(), label.end(), 0u) - label.begin());
+    const std::uint32_t zero =
+        static_cast<std::uint32_t>(std::find(label.begin(), label.end(), 0u) - label.begin());
     for (std::uint32_t i = 0; i < n; ++i) expected[label[i]] = bit_of[i] ^ bit_of[zero];
 
     ConcurrentParityUnionFind sets(n, 8);

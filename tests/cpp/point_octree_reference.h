@@ -12,8 +12,8 @@
 #include <limits>
 #include <vector>
 
-#include "util/morton.h"
 #include "post/smoothing_projected.h"
+#include "util/morton.h"
 
 namespace sdf::test {
 
@@ -44,8 +44,7 @@ inline void radix_sort(std::vector<std::uint64_t>& keys, std::vector<std::uint32
 // largest value and `count` (build_point_octree), or from `scale_top` and `scale_count` where
 // given (smooth_projected: the input's largest value and all points, members or not).
 inline std::vector<PointOctreeNode> reference_point_octree(const glm::vec3* points,
-                                                           const float* values,
-                                                           std::size_t count,
+                                                           const float* values, std::size_t count,
                                                            const ProjectedOptions& options,
                                                            float scale_top = -1.0f,
                                                            std::size_t scale_count = 0) {
@@ -82,7 +81,8 @@ inline std::vector<PointOctreeNode> reference_point_octree(const glm::vec3* poin
     std::uint64_t key = 0;
     for (int a = 0; a < 3; ++a) {
       const float c = std::floor((points[i][a] - corner[a]) * scale);
-      const std::uint64_t cell = c > 0.0f ? std::min<std::uint64_t>(cells - 1, static_cast<std::uint64_t>(c)) : 0;
+      const std::uint64_t cell =
+          c > 0.0f ? std::min<std::uint64_t>(cells - 1, static_cast<std::uint64_t>(c)) : 0;
       key |= spread_bits_21(cell) << a;
     }
     keys[i] = key;
@@ -91,7 +91,8 @@ inline std::vector<PointOctreeNode> reference_point_octree(const glm::vec3* poin
   radix_sort(keys, order, 3 * depth);
   std::vector<std::uint64_t> prefix(count + 1, 0);
   for (std::size_t i = 0; i < count; ++i)
-    prefix[i + 1] = prefix[i] + static_cast<std::uint64_t>(std::ldexp(values[order[i]], fixed_shift));
+    prefix[i + 1] =
+        prefix[i] + static_cast<std::uint64_t>(std::ldexp(values[order[i]], fixed_shift));
 
   const bool by_min = options.branch_on == ProjectedOptions::Branch::Min;
   std::vector<float> sorted_values;
@@ -128,7 +129,8 @@ inline std::vector<PointOctreeNode> reference_point_octree(const glm::vec3* poin
     if (t.level >= depth || !(static_cast<double>(node.count) > branch_above)) continue;
     float test_value = node.mean;
     if (by_min)
-      test_value = *std::min_element(sorted_values.begin() + t.begin, sorted_values.begin() + t.end);
+      test_value =
+          *std::min_element(sorted_values.begin() + t.begin, sorted_values.begin() + t.end);
     const bool branch = test_value <= options.node_size_ratio * 2.0 * node.half_side;
     if (!branch) continue;
     const int shift = 3 * (depth - t.level - 1);
@@ -175,14 +177,15 @@ inline std::vector<float> reference_smooth_projected(const Mesh& mesh, PointKind
   std::vector<glm::vec3> projected(n), tree_points(members.size());
   std::vector<float> tree_values(members.size()), next(n);
   for (int it = 0; it < options.iterations; ++it) {
-    for (std::size_t i = 0; i < n; ++i) projected[i] = sp.origins[i] + sp.axes[i] * (0.5f * current[i]);
+    for (std::size_t i = 0; i < n; ++i)
+      projected[i] = sp.origins[i] + sp.axes[i] * (0.5f * current[i]);
     for (std::size_t j = 0; j < members.size(); ++j) {
       tree_points[j] = projected[members[j]];
       tree_values[j] = current[members[j]];
     }
     const std::vector<PointOctreeNode> nodes =
-        reference_point_octree(tree_points.data(), tree_values.data(), members.size(), options,
-                               hi, n);  // the input's largest value: later iterations stay below it
+        reference_point_octree(tree_points.data(), tree_values.data(), members.size(), options, hi,
+                               n);  // the input's largest value: later iterations stay below it
     for (std::size_t i = 0; i < n; ++i)
       next[i] = kern::sdf_smooth_projected_point(nodes.data(), projected[i], current[i], lo, hi);
     current.swap(next);

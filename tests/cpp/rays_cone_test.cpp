@@ -15,7 +15,10 @@ constexpr float kPi = 3.14159265f;
 class ConeRays : public ::testing::TestWithParam<Sampling> {};
 
 TEST_P(ConeRays, UnitDirectionsInsideTheCone) {
-  const std::vector<glm::vec3> axes = {{0, 0, 1}, {0, 0, -1}, {1, 0, 0}, {0, -1, 0},
+  const std::vector<glm::vec3> axes = {{0, 0, 1},
+                                       {0, 0, -1},
+                                       {1, 0, 0},
+                                       {0, -1, 0},
                                        glm::normalize(glm::vec3(1, 2, 3)),
                                        glm::normalize(glm::vec3(-1e-4f, 1e-4f, -1))};
   for (double cone_deg : {10.0, 120.0, 170.0}) {
@@ -59,7 +62,8 @@ TEST(ConeRays, CgalSampleZeroIsTheAxisAndRadiiGrowLinearly) {
 }
 
 TEST(ConeRays, RandomDependsOnSeedAndPointOnly) {
-  const Cone a = make_cone(16, 120.0, Sampling::Random, 1), b = make_cone(16, 120.0, Sampling::Random, 2);
+  const Cone a = make_cone(16, 120.0, Sampling::Random, 1),
+             b = make_cone(16, 120.0, Sampling::Random, 2);
   std::vector<glm::vec3> d1(16), d2(16), d3(16);
   std::vector<float> ang(16);
   const glm::vec3 axis(0, 0, 1);

@@ -43,11 +43,11 @@ TEST(SegmentAlphaExpansion, NeverAboveTheStartingEnergy) {
     for (bool first_only : {true, false})
       for (bool ties_move : {true, false}) {
         Problem p = random_problem(mesh, 2 + seed % 5, seed);
-        const double start = potts_energy(p.graph, p.weights.data(), p.costs.data(), p.k,
-                                          p.labels.data(), p.n, 1);
-        const double end = alpha_expansion(p.graph, p.weights.data(), p.costs.data(), p.k,
-                                           ExpansionRules{ties_move, first_only},
-                                           p.labels.data(), p.n, 2);
+        const double start =
+            potts_energy(p.graph, p.weights.data(), p.costs.data(), p.k, p.labels.data(), p.n, 1);
+        const double end =
+            alpha_expansion(p.graph, p.weights.data(), p.costs.data(), p.k,
+                            ExpansionRules{ties_move, first_only}, p.labels.data(), p.n, 2);
         EXPECT_LE(end, start * (1 + 1e-12));
         EXPECT_DOUBLE_EQ(end, potts_energy(p.graph, p.weights.data(), p.costs.data(), p.k,
                                            p.labels.data(), p.n, 1));

@@ -36,8 +36,8 @@ double cut_value(const Network& net, unsigned sink) {
   double value = 0.0;
   for (std::size_t i = 0; i < net.nodes; ++i) {
     const bool t = (sink >> i) & 1u;
-    if (t && net.terminal[i] > 0) value += net.terminal[i];    // source -> i cut
-    if (!t && net.terminal[i] < 0) value -= net.terminal[i];   // i -> sink cut
+    if (t && net.terminal[i] > 0) value += net.terminal[i];   // source -> i cut
+    if (!t && net.terminal[i] < 0) value -= net.terminal[i];  // i -> sink cut
   }
   for (const FlowEdge& e : net.edges) {
     const bool tf = (sink >> e.from) & 1u, tt = (sink >> e.to) & 1u;

@@ -15,8 +15,8 @@ namespace {
 
 using namespace sdf::segment;
 
-Segmentation run(const sdf::test::Arrays& a, const std::vector<double>& values,
-                 std::size_t k, bool cgal, unsigned threads = 0) {
+Segmentation run(const sdf::test::Arrays& a, const std::vector<double>& values, std::size_t k,
+                 bool cgal, unsigned threads = 0) {
   SegmentOptions o;
   o.clusters = k;
   o.expansion = ExpansionRules{cgal, cgal};

@@ -42,7 +42,8 @@ TEST(KringSmoothing, FaceRingsByHand) {
   // A strip of triangles: face t has vertices t, t + 1, t + 2, so faces share a vertex with
   // the faces up to two away.
   test::Arrays a;
-  for (int i = 0; i < 10; ++i) a.vertices.insert(a.vertices.end(), {double(i / 2), double(i % 2), 0.0});
+  for (int i = 0; i < 10; ++i)
+    a.vertices.insert(a.vertices.end(), {double(i / 2), double(i % 2), 0.0});
   for (std::int64_t t = 0; t < 8; ++t) a.triangles.insert(a.triangles.end(), {t, t + 1, t + 2});
   const Mesh mesh = a.mesh();
   std::vector<float> v(8, 0.0f);
@@ -54,7 +55,7 @@ TEST(KringSmoothing, FaceRingsByHand) {
   EXPECT_FLOAT_EQ(s[0], 1.0 / (1.0 + 2.0 * w1));  // ring 1 of face 0: faces 1, 2
   EXPECT_FLOAT_EQ(s[1], w1 / (1.0 + 3.0 * w1));   // faces 0, 2, 3
   EXPECT_FLOAT_EQ(s[2], w1 / (1.0 + 4.0 * w1));   // faces 0, 1, 3, 4
-  EXPECT_EQ(s[3], 0.0f);                           // face 0 is in ring 2 of face 3
+  EXPECT_EQ(s[3], 0.0f);                          // face 0 is in ring 2 of face 3
   // k = 2 reaches face 0 from face 4 (ring 2: 0, 1, 5, 6 beyond ring 1: 2, 3, 5, 6).
   o = with_k(2);
   o.sigma = 1.0;
@@ -115,7 +116,8 @@ TEST(KringSmoothing, SplitSeamsSmoothLikeTheWeldedMesh) {
   std::map<std::array<double, 3>, std::int64_t> index;
   std::vector<std::int64_t> remap;
   for (std::size_t v = 0; v < split.vertices.size() / 3; ++v) {
-    const std::array<double, 3> p = {split.vertices[3 * v], split.vertices[3 * v + 1], split.vertices[3 * v + 2]};
+    const std::array<double, 3> p = {split.vertices[3 * v], split.vertices[3 * v + 1],
+                                     split.vertices[3 * v + 2]};
     auto it = index.find(p);
     if (it == index.end()) {
       it = index.emplace(p, static_cast<std::int64_t>(welded.vertices.size() / 3)).first;
@@ -133,7 +135,8 @@ TEST(KringSmoothing, SplitSeamsSmoothLikeTheWeldedMesh) {
   const std::vector<float> wv = test::noisy(welded_mesh.vertices.size(), 1.0f, 0.5f, 6);
   std::vector<float> sv(split_mesh.vertices.size());
   for (std::size_t v = 0; v < sv.size(); ++v) sv[v] = wv[remap[v]];
-  const std::vector<float> ws = smooth_kring(welded_mesh, PointKind::Vertices, wv.data(), with_k(2));
+  const std::vector<float> ws =
+      smooth_kring(welded_mesh, PointKind::Vertices, wv.data(), with_k(2));
   const std::vector<float> ss = smooth_kring(split_mesh, PointKind::Vertices, sv.data(), with_k(2));
   for (std::size_t v = 0; v < sv.size(); ++v) ASSERT_EQ(ss[v], ws[remap[v]]);
   // Without merging, the sides are separate sheets and smooth differently.
@@ -176,8 +179,8 @@ TEST(KringSmoothing, SplitCopiesSmoothAsTheirSeriallySummedMeans) {
       const std::vector<float> ss = smooth_kring(split_mesh, PointKind::Vertices, sv.data(), o);
       const std::vector<float> ws = smooth_kring(welded_mesh, PointKind::Vertices, wv.data(), o);
       for (std::size_t v = 0; v < sv.size(); ++v)
-        ASSERT_EQ(ss[v], ws[weld.merged[v]]) << "vertex " << v << ", corner " << corner
-                                             << ", threads " << threads;
+        ASSERT_EQ(ss[v], ws[weld.merged[v]])
+            << "vertex " << v << ", corner " << corner << ", threads " << threads;
     }
 }
 

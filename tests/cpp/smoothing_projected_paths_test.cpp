@@ -13,8 +13,8 @@
 
 #include "point_octree_reference.h"
 #include "post/smoothing_projected.h"
-#include "util/test_overrides.h"
 #include "smoothing_test_meshes.h"
+#include "util/test_overrides.h"
 
 namespace sdf {
 namespace {
@@ -44,8 +44,8 @@ void clustered_cloud(std::size_t n, unsigned seed, bool huge, std::vector<glm::v
   }
 }
 
-void expect_same_nodes(const std::vector<PointOctreeNode>& a,
-                       const std::vector<PointOctreeNode>& b, const char* what) {
+void expect_same_nodes(const std::vector<PointOctreeNode>& a, const std::vector<PointOctreeNode>& b,
+                       const char* what) {
   ASSERT_EQ(a.size(), b.size()) << what;
   for (std::size_t i = 0; i < a.size(); ++i)
     ASSERT_EQ(std::memcmp(&a[i], &b[i], sizeof(PointOctreeNode)), 0)
@@ -151,7 +151,8 @@ TEST(ProjectedSmoothingPaths, SameValuesAsTheSerialVersion) {
       for (int iterations : {1, 2}) {
         ProjectedOptions o = options_of(c, 1);
         o.iterations = iterations;
-        const std::vector<float> expected = test::reference_smooth_projected(mesh, kind, v.data(), o);
+        const std::vector<float> expected =
+            test::reference_smooth_projected(mesh, kind, v.data(), o);
         // The gather eight points at a time (AVX2), and the scalar one (as without AVX2).
         for (bool without_avx2 : {false, true})
           for (unsigned threads : {1u, 2u}) {

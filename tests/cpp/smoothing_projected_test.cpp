@@ -135,8 +135,8 @@ TEST(PointOctree, FixedPointSumsKeepMeansExactForAnyScaleAndCount) {
 
 TEST(CubeFraction, LimitsAndShape) {
   const float side = 1.0f, rho = 0.62035049f;
-  EXPECT_EQ(cube_fraction_in_sphere(side, 5.0f, 1.0f), 0.0f);        // far apart
-  EXPECT_EQ(cube_fraction_in_sphere(side, 0.1f, 3.0f), 1.0f);        // the sphere holds it
+  EXPECT_EQ(cube_fraction_in_sphere(side, 5.0f, 1.0f), 0.0f);  // far apart
+  EXPECT_EQ(cube_fraction_in_sphere(side, 0.1f, 3.0f), 1.0f);  // the sphere holds it
   EXPECT_NEAR(cube_fraction_in_sphere(side, 0.0f, 0.1f), std::pow(0.1f / rho, 3.0f), 1e-6);
   EXPECT_EQ(cube_fraction_in_sphere(side, 0.0f, 0.0f), 0.0f);
   // Falls from 1 to 0 as the centres move apart, continuously at both ends of the lens.

@@ -19,7 +19,8 @@ namespace sdf::test {
 inline Arrays grid(int nx, int ny, double h = 1.0, double x0 = 0.0, double y0 = 0.0) {
   Arrays a;
   for (int j = 0; j <= ny; ++j)
-    for (int i = 0; i <= nx; ++i) a.vertices.insert(a.vertices.end(), {x0 + i * h, y0 + j * h, 0.0});
+    for (int i = 0; i <= nx; ++i)
+      a.vertices.insert(a.vertices.end(), {x0 + i * h, y0 + j * h, 0.0});
   for (int j = 0; j < ny; ++j)
     for (int i = 0; i < nx; ++i) {
       const std::int64_t v = j * (nx + 1) + i, r = v + nx + 1;
@@ -34,9 +35,9 @@ inline Arrays split_cube(int n) {
   Arrays a;
   // Each side: a point of it is o + s * u + t * v, (s, t) in [0, 2]^2, u x v = outward normal.
   const double sides[6][9] = {
-      {-1, -1, 1, 1, 0, 0, 0, 1, 0},   {-1, 1, -1, 1, 0, 0, 0, -1, 0},  // +z, -z
-      {-1, 1, -1, 0, 0, 1, 1, 0, 0},   {-1, -1, -1, 1, 0, 0, 0, 0, 1},  // +y, -y
-      {1, -1, -1, 0, 1, 0, 0, 0, 1},   {-1, -1, -1, 0, 0, 1, 0, 1, 0}}; // +x, -x
+      {-1, -1, 1, 1, 0, 0, 0, 1, 0}, {-1, 1, -1, 1, 0, 0, 0, -1, 0},   // +z, -z
+      {-1, 1, -1, 0, 0, 1, 1, 0, 0}, {-1, -1, -1, 1, 0, 0, 0, 0, 1},   // +y, -y
+      {1, -1, -1, 0, 1, 0, 0, 0, 1}, {-1, -1, -1, 0, 0, 1, 0, 1, 0}};  // +x, -x
   for (const auto& s : sides) {
     const std::int64_t base = static_cast<std::int64_t>(a.vertices.size() / 3);
     for (int j = 0; j <= n; ++j)
@@ -57,13 +58,13 @@ inline Arrays split_cube(int n) {
 // outside.
 inline Arrays icosphere(int level, double r = 1.0) {
   const double t = (1.0 + std::sqrt(5.0)) / 2.0;
-  std::vector<std::array<double, 3>> v = {{-1, t, 0}, {1, t, 0},  {-1, -t, 0}, {1, -t, 0},
-                                          {0, -1, t}, {0, 1, t},  {0, -1, -t}, {0, 1, -t},
-                                          {t, 0, -1}, {t, 0, 1},  {-t, 0, -1}, {-t, 0, 1}};
+  std::vector<std::array<double, 3>> v = {{-1, t, 0}, {1, t, 0}, {-1, -t, 0}, {1, -t, 0},
+                                          {0, -1, t}, {0, 1, t}, {0, -1, -t}, {0, 1, -t},
+                                          {t, 0, -1}, {t, 0, 1}, {-t, 0, -1}, {-t, 0, 1}};
   std::vector<std::array<std::int64_t, 3>> f = {
-      {0, 11, 5}, {0, 5, 1},  {0, 1, 7},   {0, 7, 10}, {0, 10, 11}, {1, 5, 9}, {5, 11, 4},
+      {0, 11, 5},  {0, 5, 1},  {0, 1, 7},  {0, 7, 10}, {0, 10, 11}, {1, 5, 9}, {5, 11, 4},
       {11, 10, 2}, {10, 7, 6}, {7, 1, 8},  {3, 9, 4},  {3, 4, 2},   {3, 2, 6}, {3, 6, 8},
-      {3, 8, 9},  {4, 9, 5},  {2, 4, 11},  {6, 2, 10}, {8, 6, 7},   {9, 8, 1}};
+      {3, 8, 9},   {4, 9, 5},  {2, 4, 11}, {6, 2, 10}, {8, 6, 7},   {9, 8, 1}};
   auto unit = [](std::array<double, 3> p) {
     const double l = std::sqrt(p[0] * p[0] + p[1] * p[1] + p[2] * p[2]);
     return std::array<double, 3>{p[0] / l, p[1] / l, p[2] / l};

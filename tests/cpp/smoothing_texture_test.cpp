@@ -8,8 +8,8 @@
 
 #include "mesh/mesh_weld.h"
 #include "post/smoothing_texture.h"
-#include "smoothing_test_meshes.h"
 #include "post/uv_islands.h"
+#include "smoothing_test_meshes.h"
 
 namespace sdf {
 namespace {
@@ -69,7 +69,8 @@ TEST(UvIslands, SharedCornersJoinAndSeparateSheetsDoNot) {
       uvs.push_back(0.03f * (v / 4));
     }
   const std::vector<std::int32_t> sides = uv_islands(cube, uvs.data(), 1e-6);
-  for (std::size_t f = 0; f < sides.size(); ++f) ASSERT_EQ(sides[f], static_cast<std::int32_t>(f / per_side));
+  for (std::size_t f = 0; f < sides.size(); ++f)
+    ASSERT_EQ(sides[f], static_cast<std::int32_t>(f / per_side));
 }
 
 // The islands as the first, serial version labelled them: weld every vertex, then around each
@@ -78,7 +79,8 @@ std::vector<std::int32_t> reference_islands(const Mesh& mesh, const float* uvs, 
   const std::size_t m = mesh.triangles.size();
   Weld weld;
   if (tolerance >= 0.0) {
-    weld = weld_vertices(mesh.vertices.data(), mesh.vertices.size(), weld_tolerance(mesh, tolerance));
+    weld =
+        weld_vertices(mesh.vertices.data(), mesh.vertices.size(), weld_tolerance(mesh, tolerance));
   } else {
     for (std::uint32_t v = 0; v < mesh.vertices.size(); ++v) weld.merged.push_back(v);
     weld.count = static_cast<std::uint32_t>(mesh.vertices.size());
@@ -96,7 +98,8 @@ std::vector<std::int32_t> reference_islands(const Mesh& mesh, const float* uvs, 
       for (std::uint32_t j = vf.offsets[v]; j < i; ++j) {
         auto uv = [&](std::uint32_t f) {
           for (int c = 0; c < 3; ++c)
-            if (tris[f][c] == v) return std::make_pair(uvs[6 * f + 2 * c] + 0.0f, uvs[6 * f + 2 * c + 1] + 0.0f);
+            if (tris[f][c] == v)
+              return std::make_pair(uvs[6 * f + 2 * c] + 0.0f, uvs[6 * f + 2 * c + 1] + 0.0f);
           return std::make_pair(0.0f, 0.0f);
         };
         if (uv(vf.items[i]) != uv(vf.items[j])) continue;
@@ -126,7 +129,8 @@ SplitGrid split_grid(int n) {
   const int half = n / 2;
   for (int j = 0; j <= n; ++j) {
     const std::int64_t v = j * (n + 1) + half;
-    a.vertices.insert(a.vertices.end(), {a.vertices[3 * v], a.vertices[3 * v + 1], a.vertices[3 * v + 2]});
+    a.vertices.insert(a.vertices.end(),
+                      {a.vertices[3 * v], a.vertices[3 * v + 1], a.vertices[3 * v + 2]});
   }
   for (std::size_t f = 0; f < a.triangles.size() / 3; ++f) {
     std::int64_t* t = &a.triangles[3 * f];
@@ -191,7 +195,8 @@ TEST(UvIslands, SameAsTheSerialLabellingOnAMessyMesh) {
   for (int v = 0; v < base; ++v) a.vertices.insert(a.vertices.end(), {x(rng), x(rng), x(rng)});
   for (int v = 0; v < base / 3; ++v) {
     const int of = v * 3;
-    a.vertices.insert(a.vertices.end(), {a.vertices[3 * of], a.vertices[3 * of + 1], a.vertices[3 * of + 2]});
+    a.vertices.insert(a.vertices.end(),
+                      {a.vertices[3 * of], a.vertices[3 * of + 1], a.vertices[3 * of + 2]});
   }
   const std::int64_t near = static_cast<std::int64_t>(a.vertices.size() / 3);
   a.vertices.insert(a.vertices.end(), {a.vertices[0] + 1e-8, a.vertices[1], a.vertices[2]});
@@ -286,8 +291,9 @@ TEST(TextureSmoothing, LaterFacesWinOverlapsAndCentroidsFillOnlyEmptyTexels) {
   o.margin = 0;
   for (unsigned threads : {1u, 3u}) {
     o.threads = threads;
-    const TextureSmoothing out = smooth_texture(mesh, PointKind::Faces, v.data(), uvs.data(), o, true);
-    EXPECT_EQ(out.image[3 * 16 + 3], 3.0f);  // inside the big triangle
+    const TextureSmoothing out =
+        smooth_texture(mesh, PointKind::Faces, v.data(), uvs.data(), o, true);
+    EXPECT_EQ(out.image[3 * 16 + 3], 3.0f);    // inside the big triangle
     EXPECT_EQ(out.image[12 * 16 + 12], 6.0f);  // the centroid of faces 5 and 6
     int drawn = 0;
     for (std::size_t t = 0; t < out.image.size(); ++t) {
@@ -333,7 +339,8 @@ TEST(TextureSmoothing, NothingCrossesBetweenIslands) {
   TextureOptions o;
   o.width = o.height = 64;
   o.radius = 8.0;  // four times the gap
-  const TextureSmoothing out = smooth_texture(s.mesh, PointKind::Faces, v.data(), s.uvs.data(), o, true);
+  const TextureSmoothing out =
+      smooth_texture(s.mesh, PointKind::Faces, v.data(), s.uvs.data(), o, true);
   for (std::size_t f = 0; f < v.size(); ++f) ASSERT_NEAR(out.values[f], v[f], 1e-5f) << f;
   // The image: each island holds its own value, margins included.
   ASSERT_EQ(out.image.size(), 64u * 64u);
@@ -359,7 +366,8 @@ TEST(TextureSmoothing, ConstantExactRadiusZeroIdentityAndInRange) {
   EXPECT_EQ(smooth_texture(s.mesh, PointKind::Faces, v.data(), s.uvs.data(), o, false).values, v);
   o.radius = 6.0;
   const auto [lo, hi] = std::minmax_element(v.begin(), v.end());
-  const std::vector<float> b = smooth_texture(s.mesh, PointKind::Faces, v.data(), s.uvs.data(), o, false).values;
+  const std::vector<float> b =
+      smooth_texture(s.mesh, PointKind::Faces, v.data(), s.uvs.data(), o, false).values;
   EXPECT_LT(test::variance(b), 0.3 * test::variance(v));
   for (float x : b) {
     ASSERT_GE(x, *lo);
@@ -379,7 +387,8 @@ TEST(TextureSmoothing, EdgesAndCornersOnTexelCentresBelongToOneFace) {
   o.width = o.height = 64;
   o.radius = 0.0;
   o.margin = 0;
-  const TextureSmoothing out = smooth_texture(mesh, PointKind::Faces, v.data(), uvs.data(), o, true);
+  const TextureSmoothing out =
+      smooth_texture(mesh, PointKind::Faces, v.data(), uvs.data(), o, true);
   EXPECT_EQ(out.values, v);
   for (int y = 9; y < 40; ++y)
     for (int x = 9; x < 40; ++x) ASSERT_TRUE(out.mask[y * 64 + x]) << x << " " << y;
@@ -395,7 +404,8 @@ TEST(TextureSmoothing, VertexValues) {
   o.width = o.height = 128;
   o.radius = 8.0;  // a grid square is 7 texels wide
   EXPECT_EQ(smooth_texture(mesh, PointKind::Vertices, c.data(), uvs.data(), o, false).values, c);
-  const std::vector<float> s = smooth_texture(mesh, PointKind::Vertices, v.data(), uvs.data(), o, false).values;
+  const std::vector<float> s =
+      smooth_texture(mesh, PointKind::Vertices, v.data(), uvs.data(), o, false).values;
   const auto [lo, hi] = std::minmax_element(v.begin(), v.end());
   EXPECT_LT(test::variance(s), 0.3 * test::variance(v));
   for (float x : s) {
@@ -421,7 +431,8 @@ TEST(TextureSmoothing, BilateralKeepsAStep) {
   o.radius = 16.0;
   const auto gauss = smooth_texture(mesh, PointKind::Faces, v.data(), uvs.data(), o, false).values;
   o.bilateral = true;
-  const auto bilateral = smooth_texture(mesh, PointKind::Faces, v.data(), uvs.data(), o, false).values;
+  const auto bilateral =
+      smooth_texture(mesh, PointKind::Faces, v.data(), uvs.data(), o, false).values;
   double gauss_error = 0.0, bilateral_error = 0.0;
   for (std::size_t f = 0; f < v.size(); ++f) {
     const float step = v[f] > 0.5f ? 1.0f : 0.0f;
@@ -462,11 +473,13 @@ TEST(TextureSmoothing, RejectsBadInput) {
   std::vector<float> v(s.mesh.triangles.size(), 1.0f);
   TextureOptions o;
   o.width = 0;
-  EXPECT_THROW(smooth_texture(s.mesh, PointKind::Faces, v.data(), s.uvs.data(), o, false), std::invalid_argument);
+  EXPECT_THROW(smooth_texture(s.mesh, PointKind::Faces, v.data(), s.uvs.data(), o, false),
+               std::invalid_argument);
   std::vector<float> uvs = s.uvs;
   uvs[7] = NAN;
-  EXPECT_THROW(smooth_texture(s.mesh, PointKind::Faces, v.data(), uvs.data(), TextureOptions(), false),
-               std::invalid_argument);
+  EXPECT_THROW(
+      smooth_texture(s.mesh, PointKind::Faces, v.data(), uvs.data(), TextureOptions(), false),
+      std::invalid_argument);
 }
 
 }  // namespace

@@ -130,7 +130,8 @@ std::vector<glm::uvec3> shuffled_fan(std::uint32_t faces, unsigned seed) {
 TEST(Adjacency, SameAsTheSerialListsForAnyThreadCount) {
   std::vector<std::pair<std::vector<glm::uvec3>, std::uint32_t>> cases;
   for (const Mesh& mesh : {test::split_cube(20).mesh(), test::icosphere(6).mesh()}) {
-    const Weld weld = weld_vertices(mesh.vertices.data(), mesh.vertices.size(), weld_tolerance(mesh));
+    const Weld weld =
+        weld_vertices(mesh.vertices.data(), mesh.vertices.size(), weld_tolerance(mesh));
     cases.emplace_back(welded_triangles(mesh, weld), weld.count);
   }
   cases.emplace_back(scattered_triangles(300000, 120000, 5), 120000);
@@ -184,7 +185,8 @@ TEST(WeldVertices, SameAsTheSerialGreedyForAnyThreadCount) {
     for (unsigned threads : {1u, 3u}) {
       const Weld got = weld_vertices(p.data(), p.size(), tolerance, threads);
       ASSERT_EQ(got.count, expected.count) << "tolerance " << tolerance << ", threads " << threads;
-      ASSERT_EQ(got.merged, expected.merged) << "tolerance " << tolerance << ", threads " << threads;
+      ASSERT_EQ(got.merged, expected.merged)
+          << "tolerance " << tolerance << ", threads " << threads;
     }
   }
 }

@@ -19,7 +19,8 @@ using weld_cells::CellKey;
 using weld_cells::CellTable;
 using weld_cells::float_bits;
 
-inline Weld reference_weld_vertices(const glm::vec3* positions, std::size_t count, float tolerance) {
+inline Weld reference_weld_vertices(const glm::vec3* positions, std::size_t count,
+                                    float tolerance) {
   Weld weld;
   weld.merged.resize(count);
   if (count == 0) return weld;

@@ -100,9 +100,9 @@ double coordinate(Reader& in, double scale, double offset) {
     case 0xF2: return -std::numeric_limits<double>::infinity();
     case 0xF3: return 1e300;
     case 0xF4: return -1e300;
-    case 0xF5: return 3.5e38;  // just past the largest float
+    case 0xF5: return 3.5e38;    // just past the largest float
     case 0xF6: return 4.9e-324;  // the smallest double denormal
-    case 0xF7: return 1e-40;  // a float denormal
+    case 0xF7: return 1e-40;     // a float denormal
     case 0xF8: return -0.0;
     case 0xF9: return 1e-30;
     case 0xFA: return 1e30;
@@ -140,7 +140,7 @@ void describe(const sdf::Options& o, int cancel_at, const std::vector<double>& v
                o.octree.leaf_size, cancel_at,
                o.orientation == sdf::Orientation::Auto   ? "auto"
                : o.orientation == sdf::Orientation::AsIs ? "as_is"
-                                                          : "flip");
+                                                         : "flip");
   std::fprintf(stderr, "vertices (%zu):\n", vertices.size() / 3);
   for (std::size_t i = 0; i < vertices.size(); i += 3)
     std::fprintf(stderr, "  %.17g %.17g %.17g\n", vertices[i], vertices[i + 1], vertices[i + 2]);

@@ -133,9 +133,10 @@ int main(int argc, char** argv) {
   }
   if (std::fclose(fo) != 0) fail("error writing " + pos[2]);
 
-  std::fprintf(stderr,
-               "cgal_sdf: sdf_values took %.6f s (faces=%zu rays=%ld postprocess=%d, %.3f Mrays/s)\n",
-               seconds, static_cast<size_t>(mesh.number_of_faces()), rays, postprocess ? 1 : 0,
-               seconds > 0 ? mesh.number_of_faces() * static_cast<double>(rays) / seconds / 1e6 : 0.0);
+  std::fprintf(
+      stderr,
+      "cgal_sdf: sdf_values took %.6f s (faces=%zu rays=%ld postprocess=%d, %.3f Mrays/s)\n",
+      seconds, static_cast<size_t>(mesh.number_of_faces()), rays, postprocess ? 1 : 0,
+      seconds > 0 ? mesh.number_of_faces() * static_cast<double>(rays) / seconds / 1e6 : 0.0);
   return 0;
 }

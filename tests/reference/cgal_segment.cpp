@@ -52,10 +52,10 @@
 
 #include <chrono>
 #include <cmath>
-#include <ctime>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <ctime>
 #include <exception>
 #include <fstream>
 #include <iostream>
@@ -177,8 +177,7 @@ int main(int argc, char** argv) {
   if (faces == 0) fail(opt.input + " has no faces");
   for (size_t i = 0; i < faces; ++i)
     if (built.face_of[i] != Face_index(static_cast<Mesh::size_type>(i)))
-      fail("face order: file face " + std::to_string(i) + " is not mesh face " +
-           std::to_string(i));
+      fail("face order: file face " + std::to_string(i) + " is not mesh face " + std::to_string(i));
   if (built.split)
     std::cerr << "cgal_segment: " << built.split << " of " << faces
               << " faces were non-manifold and were added as detached triangles\n";
@@ -199,7 +198,8 @@ int main(int argc, char** argv) {
       sdf_seconds = seconds_since(t0);
     } else {
       const std::vector<double> given = read_values(opt.values, faces);
-      for (size_t i = 0; i < faces; ++i) sdf[Face_index(static_cast<Mesh::size_type>(i))] = given[i];
+      for (size_t i = 0; i < faces; ++i)
+        sdf[Face_index(static_cast<Mesh::size_type>(i))] = given[i];
       if (opt.postprocess) {
         const auto t0 = std::chrono::steady_clock::now();
         CGAL::sdf_values_postprocessing(mesh, sdf);
