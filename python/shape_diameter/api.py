@@ -224,9 +224,7 @@ def compute(
     told = None if progress is None else _Monotone(progress)
     result = _run_whole_mesh(settings, v, t, smoothing_resolved, told)
     if result.valid_rays.any():  # (none anywhere has its own warning)
-        _warn_if_few_rays_kept(
-            result.valid_rays, int(rays), orientation, t if points == "vertices" else None
-        )
+        _warn_if_few_rays_kept(result.valid_rays, int(rays), orientation, v, t, points)
         for message in part_warnings(v, t, result, int(threads)):
             warn(message)
     clock = time.perf_counter()
@@ -500,23 +498,40 @@ def _poorly_measured_below(rays):
     return -(-rays // POORLY_MEASURED)  # rounded up: 5 of 30, 2 of 8, 1 of 1
 
 
-def _warn_if_few_rays_kept(valid_rays, rays, orientation, triangles=None):
-    """Warns as few_rays_kept says, or else as poorly_measured says; with per-vertex values,
-    the triangles: vertices no face uses cast nothing and do not count."""
+def _warn_if_few_rays_kept(valid_rays, rays, orientation, vertices, triangles, points):
+    """Warns as few_rays_kept says, or else as poorly_measured says. Vertices no face uses
+    cast nothing and do not count; for poorly_measured, neither do faces without area (nor
+    vertices only they use), which cast no ray on any mesh."""
     few_on_average = not valid_rays.size or valid_rays.mean() < FEW_RAYS_KEPT * rays
     if not few_on_average and (
         np.count_nonzero(valid_rays < _poorly_measured_below(rays)) < POORLY_MEASURED_POINTS
     ):
-        return  # the common case, without the count below (unused vertices only add to it)
-    if triangles is not None:
+        return  # the common case, without the counts below (they only leave points out)
+    used = slice(None)
+    if points == "vertices":
         used = np.zeros(len(valid_rays), dtype=bool)
         used[triangles.ravel()] = True
-        valid_rays = valid_rays[used]
-    message = few_rays_kept(valid_rays, rays, orientation) or poorly_measured(
-        valid_rays, rays, "faces" if triangles is None else "vertices", orientation
+    casting = _points_with_an_axis(vertices, triangles, points)
+    message = few_rays_kept(valid_rays[used], rays, orientation) or poorly_measured(
+        valid_rays[casting], rays, points, orientation
     )
     if message:
         warn(message)
+
+
+def _points_with_an_axis(vertices, triangles, points):
+    """Which points cast rays at all: faces with area (exact cross product), and vertices that
+    such a face uses. A zero-area face has no inward axis, and keeps no ray however closed
+    the mesh is."""
+    corners = vertices[triangles]
+    with_area = np.any(
+        np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0]) != 0, axis=1
+    )
+    if points == "faces":
+        return with_area
+    casting = np.zeros(len(vertices), dtype=bool)
+    casting[triangles[with_area].ravel()] = True
+    return casting
 
 
 class _Twins:

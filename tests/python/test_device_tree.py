@@ -117,6 +117,9 @@ def test_device_tree_gives_the_cpu_engines_bits(engine, kernel, mesh):
 
 
 @pytest.mark.parametrize("engine", OPENCL)
+# The collapsed faces leave holes beside them, through which some neighbours' rays escape: the
+# warning about poorly measured points is right there, and not what this test is about.
+@pytest.mark.filterwarnings("ignore:.*kept fewer than:RuntimeWarning")
 def test_zero_area_and_clustered_faces(engine):
     v, f = clustered_mesh()
     f = f.copy()
