@@ -41,7 +41,7 @@ if cmake -S . -B build/asan "${SANITIZED[@]}" -DSDF_BUILD_TESTS=ON \
   end "asan build"
   stage_start=$SECONDS
   if ctest --test-dir build/asan --output-on-failure -j2 >build/asan/ctest.log 2>&1; then
-    tail -n 3 build/asan/ctest.log
+    grep -E "tests passed, [0-9]+ tests failed out of|did not run|Skipped" build/asan/ctest.log
   else
     tail -n 80 build/asan/ctest.log
     failed+=("ctest under ASan + UBSan: build/asan/ctest.log")

@@ -5,15 +5,26 @@ mesh where the cut distance is known."""
 
 from __future__ import annotations
 
-import sys
+import importlib.util
 from itertools import combinations
 from pathlib import Path
 
 import numpy as np
 import pytest
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "bench"))
-import segmentation_measures as m  # noqa: E402
+
+def _load_measures():
+    """bench/segmentation_measures.py by its path: bench/ is not put on sys.path, where its
+    distributed.py would hide dask's package from every later import (spawned Dask workers
+    take the test process's path and then failed to start)."""
+    path = Path(__file__).resolve().parents[2] / "bench" / "segmentation_measures.py"
+    spec = importlib.util.spec_from_file_location("segmentation_measures", path)
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+m = _load_measures()
 
 
 def _random_labelings(seed: int, n: int = 40):
