@@ -50,26 +50,28 @@ double cut_value(const Network& net, unsigned sink) {
 TEST(SegmentMaxFlow, MatchesEveryCutOfSmallNetworks) {
   std::mt19937 rng(7);
   MaxFlow flow;
-  for (int trial = 0; trial < 400; ++trial) {
-    const std::size_t nodes = 1 + trial % 10;
-    const Network net = random_network(rng, nodes, trial % 3 == 0 ? 0.8 : 0.35);
+  for (int network_index = 0; network_index < 400; ++network_index) {
+    const std::size_t nodes = 1 + network_index % 10;
+    const Network net = random_network(rng, nodes, network_index % 3 == 0 ? 0.8 : 0.35);
     double best = INFINITY;
     for (unsigned s = 0; s < (1u << nodes); ++s) best = std::min(best, cut_value(net, s));
     flow.reset(net.nodes, net.terminal, net.edges);
     const double value = flow.solve();
-    EXPECT_NEAR(value, best, 1e-9 * (1 + best)) << "trial " << trial;
+    EXPECT_NEAR(value, best, 1e-9 * (1 + best)) << "network_index " << network_index;
     unsigned smallest = 0, largest = 0;
     for (std::size_t i = 0; i < nodes; ++i) {
       smallest |= flow.in_smallest_sink_side(i) ? 1u << i : 0u;
       largest |= flow.in_largest_sink_side(i) ? 1u << i : 0u;
     }
-    EXPECT_NEAR(cut_value(net, smallest), best, 1e-9 * (1 + best)) << "trial " << trial;
-    EXPECT_NEAR(cut_value(net, largest), best, 1e-9 * (1 + best)) << "trial " << trial;
+    EXPECT_NEAR(cut_value(net, smallest), best, 1e-9 * (1 + best))
+        << "network_index " << network_index;
+    EXPECT_NEAR(cut_value(net, largest), best, 1e-9 * (1 + best))
+        << "network_index " << network_index;
     // Every optimal cut's sink side holds the smallest and lies within the largest.
     for (unsigned s = 0; s < (1u << nodes); ++s)
       if (cut_value(net, s) <= best + 1e-9 * (1 + best)) {
-        EXPECT_EQ(smallest & ~s, 0u) << "trial " << trial;
-        EXPECT_EQ(s & ~largest, 0u) << "trial " << trial;
+        EXPECT_EQ(smallest & ~s, 0u) << "network_index " << network_index;
+        EXPECT_EQ(s & ~largest, 0u) << "network_index " << network_index;
       }
   }
 }
