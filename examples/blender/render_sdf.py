@@ -89,20 +89,33 @@ def load(path, up):
 
 
 def frame(scene, ob, direction, aspect):
-    """A camera looking at the object's bounding box from `direction`, filling the frame."""
-    corners = [ob.matrix_world @ Vector(c) for c in ob.bound_box]
-    centre = sum(corners, Vector()) / 8.0
-    radius = max((c - centre).length for c in corners)
+    """A camera looking at the object from `direction`, as near as lets every vertex into the
+    frame, with a small margin: a compact mesh fills it, a tall figure keeps its head."""
+    points = np.empty(3 * len(ob.data.vertices))
+    ob.data.vertices.foreach_get("co", points)
+    matrix = np.array(ob.matrix_world)
+    points = points.reshape(-1, 3) @ matrix[:3, :3].T + matrix[:3, 3]
+    centre = (points.min(axis=0) + points.max(axis=0)) / 2.0
     camera = bpy.data.objects.new("camera", bpy.data.cameras.new("camera"))
     scene.collection.objects.link(camera)
     camera.data.lens = 50.0
-    # The narrower of the two fields of view must hold the bounding sphere.
-    half_wide = camera.data.angle / 2.0
-    half_narrow = math.atan(math.tan(half_wide) / max(aspect, 1.0 / aspect))
-    distance = radius / math.sin(half_narrow) * 0.8
     direction = Vector(direction).normalized()
-    camera.location = centre + direction * distance
-    camera.rotation_euler = (-direction).to_track_quat("-Z", "Y").to_euler()
+    rotation = (-direction).to_track_quat("-Z", "Y")
+    right, up = rotation @ Vector((1.0, 0.0, 0.0)), rotation @ Vector((0.0, 1.0, 0.0))
+    # The lens's angle spans the wider side of the image (sensor fit 'AUTO').
+    tan_wide = math.tan(camera.data.angle / 2.0)
+    tan_x, tan_y = (tan_wide, tan_wide / aspect) if aspect >= 1 else (tan_wide * aspect, tan_wide)
+    # A point r (from the centre) is in the frame when its sideways offsets over its depth,
+    # distance - r.direction, stay within the half-angles' tangents.
+    offsets = points - centre
+    distance = np.max(
+        offsets @ np.array(direction)
+        + np.maximum(
+            np.abs(offsets @ np.array(right)) / tan_x, np.abs(offsets @ np.array(up)) / tan_y
+        )
+    )
+    camera.location = Vector(centre) + direction * float(distance) * 1.04
+    camera.rotation_euler = rotation.to_euler()
     scene.camera = camera
 
 
