@@ -98,17 +98,7 @@ def compute_objects(objects, *, depsgraph=None, write=True, progress=None, **opt
     tasks, run_warnings = process.prepare(depsgraph, objects, opts, for_writing=write)
     for warning in run_warnings:
         warnings.warn(warning, RuntimeWarning, stacklevel=2)
-    stopped = []
-
-    def report(fraction):
-        if progress(fraction) is False:
-            stopped.append(True)
-
-    process.compute(
-        tasks, opts, progress=report if progress else None, cancelled=lambda: bool(stopped)
-    )
-    if stopped:  # a False from the last callback, after which nothing checked
-        raise Cancelled()
+    _run_cancellable(process.compute, tasks, opts, progress)
     if write:
         process.write(bpy.data, tasks, opts)
     domain = "POINT" if opts.points == "vertices" else "FACE"
@@ -130,6 +120,20 @@ def compute_objects(objects, *, depsgraph=None, write=True, progress=None, **opt
         )
         for t in tasks
     ]
+
+
+def _run_cancellable(compute, work, opts, progress):
+    """compute(work, opts, ...) with the caller's `progress`, where a False from it stops the
+    run: Cancelled, also when the last callback said so after which nothing checked."""
+    stopped = []
+
+    def report(fraction):
+        if progress(fraction) is False:
+            stopped.append(True)
+
+    compute(work, opts, progress=report if progress else None, cancelled=lambda: bool(stopped))
+    if stopped:
+        raise Cancelled()
 
 
 def compute_object(obj, *, depsgraph=None, write=True, **options):
@@ -186,17 +190,7 @@ def segment_objects(objects, *, depsgraph=None, write=True, progress=None, **opt
     parts, run_warnings = segmenting.prepare(depsgraph, objects, opts)
     for warning in run_warnings:
         warnings.warn(warning, RuntimeWarning, stacklevel=2)
-    stopped = []
-
-    def report(fraction):
-        if progress(fraction) is False:
-            stopped.append(True)
-
-    segmenting.compute(
-        parts, opts, progress=report if progress else None, cancelled=lambda: bool(stopped)
-    )
-    if stopped:
-        raise Cancelled()
+    _run_cancellable(segmenting.compute, parts, opts, progress)
     written = part_writing.write(context, parts, opts) if write else [None] * len(parts)
     return [_parts_result(part, out, run_warnings) for part, out in zip(parts, written)]
 

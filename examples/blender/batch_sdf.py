@@ -79,8 +79,10 @@ def process(api, path, args):
                 bpy.data.meshes.remove(data)
 
 
-def main():
-    args = arguments()
+def run_folder(args, process):
+    """process(api, path, args) on every mesh of args.meshes, into args.out; a mesh that fails
+    is reported and the others go on, then the run exits non-zero naming the failed ones.
+    Returns the meshes' paths."""
     paths = sorted(p for p in args.meshes.iterdir() if p.suffix.lower() in IMPORTERS)
     if not paths:
         raise SystemExit(f"no meshes ({', '.join(IMPORTERS)}) in {args.meshes}")
@@ -95,6 +97,12 @@ def main():
             failed.append(path.name)
     if failed:
         raise SystemExit(f"failed: {', '.join(failed)}")
+    return paths
+
+
+def main():
+    args = arguments()
+    paths = run_folder(args, process)
     print(f"done: {len(paths)} meshes -> {args.out}")
 
 

@@ -13,22 +13,14 @@ failure ends Blender with exit status 1 (--python-exit-code 1), after the other 
 """
 
 import argparse
-import importlib
 import sys
-import traceback
 from pathlib import Path
 
 import bpy
 import numpy as np
 
-EXTENSION = "bl_ext.user_default.shape_diameter"
-IMPORTERS = {
-    ".obj": lambda path: bpy.ops.wm.obj_import(filepath=path),
-    ".ply": lambda path: bpy.ops.wm.ply_import(filepath=path),
-    ".stl": lambda path: bpy.ops.wm.stl_import(filepath=path),
-    ".glb": lambda path: bpy.ops.import_scene.gltf(filepath=path),
-    ".gltf": lambda path: bpy.ops.import_scene.gltf(filepath=path),
-}
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from batch_sdf import IMPORTERS, run_folder  # noqa: E402
 
 
 def arguments():
@@ -40,15 +32,6 @@ def arguments():
     parser.add_argument("--smoothness", type=float, default=0.26)
     parser.add_argument("--no-armature", dest="armature", action="store_false")
     return parser.parse_args(argv)
-
-
-def extension_api():
-    """The extension's scripting API, enabling the extension if Blender has not."""
-    if EXTENSION not in bpy.context.preferences.addons:
-        import addon_utils  # Blender's own module: importable once bpy is
-
-        addon_utils.enable(EXTENSION, default_set=True, handle_error=None)
-    return importlib.import_module(EXTENSION + ".api")
 
 
 def process(api, path, args):
@@ -83,22 +66,7 @@ def process(api, path, args):
 
 
 def main():
-    args = arguments()
-    paths = sorted(p for p in args.meshes.iterdir() if p.suffix.lower() in IMPORTERS)
-    if not paths:
-        raise SystemExit(f"no meshes ({', '.join(IMPORTERS)}) in {args.meshes}")
-    args.out.mkdir(parents=True, exist_ok=True)
-    api = extension_api()
-    failed = []
-    for path in paths:
-        try:
-            process(api, path, args)
-        except Exception:
-            traceback.print_exc()
-            failed.append(path.name)
-    if failed:
-        raise SystemExit(f"failed: {', '.join(failed)}")
-    print(f"done: {len(paths)} meshes -> {args.out}")
+    run_folder(arguments(), process)
 
 
 if __name__ == "__main__":
