@@ -31,14 +31,20 @@ class CgalSegmentation:
 
 def reference_binary() -> str:
     """Path of cgal_segment, or skip (fail under CI) with the reason."""
-    path = os.environ.get("SDF_CGAL_SEGMENT", "")
+    return cgal_binary("SDF_CGAL_SEGMENT", "cgal_segment")
+
+
+def cgal_binary(variable: str, target: str) -> str:
+    """Path of the CGAL reference program the environment variable names (tests/reference's
+    `target`), or skip (fail under CI, where the comparison must run) with the reason."""
+    path = os.environ.get(variable, "")
     if not path:
         problem = (
-            "SDF_CGAL_SEGMENT is not set; build tests/reference (target cgal_segment, needs "
-            "libcgal-dev) and point SDF_CGAL_SEGMENT at the binary"
+            f"{variable} is not set; build tests/reference (target {target}, needs "
+            f"libcgal-dev) and point {variable} at the binary"
         )
     elif not (os.path.isfile(path) and os.access(path, os.X_OK)):
-        problem = f"SDF_CGAL_SEGMENT={path!r} is not an executable file"
+        problem = f"{variable}={path!r} is not an executable file"
     else:
         return path
     import pytest  # only here: the benchmark imports this module too, with the path set

@@ -23,7 +23,6 @@ sdf_values wall time is recorded as the user property ``cgal_seconds``.
 from __future__ import annotations
 
 import io
-import os
 import re
 import subprocess
 import time
@@ -33,6 +32,7 @@ import numpy as np
 import pytest
 import shape_diameter
 import trimesh
+from cgal_segment_reference import cgal_binary
 
 DATA = Path(__file__).resolve().parents[1] / "data"
 
@@ -47,29 +47,12 @@ MIN_R_CGAL_RULE = 0.999
 MIN_R_OUR_RULE = 0.93
 MAX_MEDIAN_REL_OUR_RULE = 0.08
 
-_NOT_CI = {"", "0", "false", "no", "off"}
-
-
 # --------------------------------------------------------------------------- helpers
 
 
 def _reference_binary() -> str:
     """Path of cgal_sdf, or skip (fail under CI) with the reason."""
-    path = os.environ.get("SDF_CGAL_REFERENCE", "")
-    if not path:
-        problem = (
-            "SDF_CGAL_REFERENCE is not set; build tests/reference (target cgal_sdf, needs "
-            "libcgal-dev) and point SDF_CGAL_REFERENCE at the binary"
-        )
-    elif not (os.path.isfile(path) and os.access(path, os.X_OK)):
-        problem = f"SDF_CGAL_REFERENCE={path!r} is not an executable file"
-    else:
-        return path
-    if os.environ.get("CI", "").strip().lower() not in _NOT_CI:
-        pytest.fail(
-            f"{problem} (CI is set, so the CGAL comparison may not be skipped)", pytrace=False
-        )
-    pytest.skip(problem)
+    return cgal_binary("SDF_CGAL_REFERENCE", "cgal_sdf")
 
 
 def _plain_obj(path: Path) -> bytes:
