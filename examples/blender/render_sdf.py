@@ -119,25 +119,13 @@ def frame(scene, ob, direction, aspect):
     scene.camera = camera
 
 
-def main():
-    args = arguments()
-    bpy.ops.wm.read_homefile(use_empty=True)
-    if EXTENSION not in bpy.context.preferences.addons:
-        import addon_utils  # Blender's own module: importable once bpy is
-
-        addon_utils.enable(EXTENSION, default_set=True, handle_error=None)
-    api = importlib.import_module(EXTENSION + ".api")
-
-    scene = bpy.context.scene
-    ob = load(args.mesh, args.up)
-    result = api.compute_object(ob, rays=args.rays)
-    print(f"{ob.name}: {len(result.values)} values, {result.engine}")
-    ob.data.polygons.foreach_set("use_smooth", np.ones(len(ob.data.polygons), dtype=bool))
-
+def render(scene, ob, args):
+    """Workbench, studio light and cavity, the objects' active colour attributes on white,
+    framed from (args.view_x, view_y, view_z), written as an RGB PNG to args.out."""
     scene.render.engine = "BLENDER_WORKBENCH"
     shading = scene.display.shading
     shading.light = "STUDIO"
-    shading.color_type = "VERTEX"  # labelled "Attribute": the active color attribute
+    shading.color_type = "VERTEX"  # labelled "Attribute": each object's active color attribute
     shading.show_cavity = True
     shading.cavity_type = "WORLD"
     scene.view_settings.view_transform = "Standard"
@@ -156,6 +144,24 @@ def main():
     args.out.parent.mkdir(parents=True, exist_ok=True)
     bpy.ops.render.render(write_still=True)
     print(f"wrote {args.out}")
+
+
+def main():
+    args = arguments()
+    bpy.ops.wm.read_homefile(use_empty=True)
+    if EXTENSION not in bpy.context.preferences.addons:
+        import addon_utils  # Blender's own module: importable once bpy is
+
+        addon_utils.enable(EXTENSION, default_set=True, handle_error=None)
+    api = importlib.import_module(EXTENSION + ".api")
+
+    scene = bpy.context.scene
+    ob = load(args.mesh, args.up)
+    result = api.compute_object(ob, rays=args.rays)
+    print(f"{ob.name}: {len(result.values)} values, {result.engine}")
+    ob.data.polygons.foreach_set("use_smooth", np.ones(len(ob.data.polygons), dtype=bool))
+
+    render(scene, ob, args)
 
 
 if __name__ == "__main__":

@@ -19,7 +19,7 @@ import bpy
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from render_sdf import EXTENSION, frame, load  # noqa: E402
+from render_sdf import EXTENSION, load, render  # noqa: E402
 
 BONE_COLOR = (0.08, 0.08, 0.08, 1.0)
 
@@ -94,26 +94,7 @@ def main():
     size = max(ob.dimensions)
     bone_mesh(bpy.data.objects[result.armature], 0.015 * size)
 
-    scene.render.engine = "BLENDER_WORKBENCH"
-    shading = scene.display.shading
-    shading.light = "STUDIO"
-    shading.color_type = "VERTEX"  # labelled "Attribute": each object's active color attribute
-    shading.show_cavity = True
-    shading.cavity_type = "WORLD"
-    scene.view_settings.view_transform = "Standard"
-    scene.render.resolution_x = args.size
-    scene.render.resolution_y = args.size * 3 // 4
-    scene.render.resolution_percentage = 100
-    scene.render.image_settings.file_format = "PNG"
-    scene.render.image_settings.color_mode = "RGB"
-    world = bpy.data.worlds.new("world")
-    world.color = (1.0, 1.0, 1.0)
-    scene.world = world
-    frame(scene, ob, (args.view_x, args.view_y, args.view_z), 4 / 3)
-    scene.render.filepath = str(args.out.resolve())
-    args.out.parent.mkdir(parents=True, exist_ok=True)
-    bpy.ops.render.render(write_still=True)
-    print(f"wrote {args.out}")
+    render(scene, ob, args)
 
 
 if __name__ == "__main__":
