@@ -68,7 +68,7 @@ total_passed=0
 total_failed=0
 for line in "${summary[@]}"; do
   p=$(echo "$line" | grep -oE '[0-9]+ passed' | grep -oE '[0-9]+' || echo 0)
-  f=$(echo "$line" | grep -oE '[0-9]+ (failed|errors?)' | awk '{s += $1} END {print s + 0}')
+  f=$(echo "$line" | { grep -oE '[0-9]+ (failed|errors?)' || true; } | awk '{s += $1} END {print s + 0}')
   total_passed=$((total_passed + ${p:-0}))
   total_failed=$((total_failed + ${f:-0}))
   case $line in *FAILED*) total_failed=$((total_failed + 1)) ;; esac
