@@ -13,7 +13,7 @@ field is the distance of each face's centre (or each vertex) from the mesh's cen
 of the method does not depend on the values. --k -1 is the default k of the mesh's size.
 
 One process: prints a JSON line per mesh, thread count and k: smooth()'s wall time, the wall
-time of shape_diameter._core.smooth_kring and its stages ("mesh" is the conversion of the
+time of shape_diameter._testing.smooth_kring and its stages ("mesh" is the conversion of the
 arrays; "weld: ..." are parts of "weld"), each the best of --repeat calls, and a hash of the
 values. --compare runs this script under each PYTHONPATH in turn, alternating old and new
 --rounds times, and prints per stage the best of each: on a shared machine only a comparison
@@ -40,7 +40,7 @@ def field(v, t, points):
 
 def measure_one(v, t, values, points, k, threads, repeat):
     import shape_diameter as sd
-    from shape_diameter import _core
+    from shape_diameter import _testing
 
     wall, core, stages, digest = float("inf"), float("inf"), {}, None
     for _ in range(repeat):
@@ -48,7 +48,7 @@ def measure_one(v, t, values, points, k, threads, repeat):
         sd.smooth(v, t, values, "kring", points=points, threads=threads, k=None if k < 0 else k)
         wall = min(wall, time.perf_counter() - start)
         start = time.perf_counter()
-        out = _core.smooth_kring(v, t, values, points, k, 0.0, 0.0, 1e-6, threads, None)
+        out = _testing.smooth_kring(v, t, values, points, k, 0.0, 0.0, 1e-6, threads, None)
         core = min(core, time.perf_counter() - start)
         # Each stage's best over the calls: the stages of one call are each disturbed at random.
         for stage, seconds in out["timings"].items():

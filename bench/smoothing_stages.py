@@ -10,7 +10,7 @@ MESH: a name under build/bench-meshes (spot-x64, spot-x256: made by smoothing_be
 with UVs). The field smoothed is the mesh's SDF (compute() on the same engine, 30 rays).
 
 One process: prints, per mesh, one JSON line: smooth()'s wall time (best of --repeat), the
-stages of the fastest call into shape_diameter._core (its timings), and compute(smoothing=
+stages of the fastest call into shape_diameter._testing (its timings), and compute(smoothing=
 method)'s cast and smoothing times (best of --repeat each) with smoothing as a percentage of
 the cast (the target: at most 10%). Inside compute() the texture method's UV islands
 are found while a device casts ('beside cast'). --compare runs this script under each
@@ -44,7 +44,7 @@ def best_of(repeat, fn):
 
 def measure(args):
     import shape_diameter as sd
-    from shape_diameter import _core
+    from shape_diameter import _testing
 
     for name in args.meshes:
         z = np.load(CACHE / f"{name}.npz")
@@ -66,7 +66,7 @@ def measure(args):
 
         def core():
             if args.method == "texture":
-                return _core.smooth_texture(
+                return _testing.smooth_texture(
                     v,
                     t,
                     field,
@@ -88,9 +88,9 @@ def measure(args):
             arguments = (v, t, field, args.points, 1, 8, 0.002, 1.0, "mean", args.threads, None,
                          args.engine)  # fmt: skip
             try:
-                _core.smooth_projected(*arguments, timings)
+                _testing.smooth_projected(*arguments, timings)
             except TypeError:  # a build from before projected smoothing reported its stages
-                _core.smooth_projected(*arguments)
+                _testing.smooth_projected(*arguments)
             return timings
 
         def inside_compute():
@@ -156,7 +156,7 @@ def compare(args):
             steps = " | ".join(
                 f"{k} {x:.2f}" for k, x in row.get("compute_smooth_steps_ms", {}).items()
             )
-            print(f"  {label}: _core {row['core_ms']:.1f}" + (f": {stages}" if stages else "") +
+            print(f"  {label}: _testing {row['core_ms']:.1f}" + (f": {stages}" if stages else "") +
                   f"; in compute(): smooth {row['compute_smooth_ms']:.1f} = "
                   f"{row['smooth_percent_of_cast']:.1f}% of the cast" +
                   (f" ({steps})" if steps else ""))  # fmt: skip

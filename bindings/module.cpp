@@ -14,16 +14,15 @@
 #include <cstddef>
 
 #include "accel/bvh.h"
-#include "cast_points.h"
+#include "arrays.h"
+#include "options.h"
 #include "pipeline/sdf.h"
 #include "post/normalize.h"
+#include "post/smoothing_kring.h"
 #include "prepare/orientation_parts.h"
-#include "prepare/unit_scale.h"
-#include "progress.h"
 #include "ray/sdf_reduce.h"
 #include "smooth/sdf_smooth_projected.h"
 #include "test_bridge.h"
-#include "timings.h"
 #include "traverse/sdf_octree.h"
 #include "util/parallel.h"
 #ifdef SDF_HAVE_OPENCL
@@ -34,163 +33,19 @@
 
 namespace py = pybind11;
 
-void bind_smoothing(py::module_& m);     // smoothing.cpp
+void bind_field(py::module_& m);         // field.cpp
 void bind_segmentation(py::module_& m);  // segmentation.cpp
 
 namespace {
 
-using Doubles = py::array_t<double, py::array::c_style | py::array::forcecast>;
-using Int64s = py::array_t<std::int64_t, py::array::c_style | py::array::forcecast>;
-using Floats = py::array_t<float, py::array::c_style | py::array::forcecast>;
-
-sdf::Sampling parse_sampling(const std::string& name) {
-  if (name == "fibonacci") return sdf::Sampling::Fibonacci;
-  if (name == "random") return sdf::Sampling::Random;
-  if (name == "cgal") return sdf::Sampling::Cgal;
-  throw std::invalid_argument("sampling must be 'fibonacci', 'random' or 'cgal', got '" + name +
-                              "'");
-}
-
-sdf::PointKind parse_points(const std::string& name) {
-  if (name == "faces") return sdf::PointKind::Faces;
-  if (name == "vertices") return sdf::PointKind::Vertices;
-  throw std::invalid_argument("points must be 'faces' or 'vertices', got '" + name + "'");
-}
-
-void require_rows_of_3(const py::array& a, const char* what) {
-  if (a.ndim() != 2 || a.shape(1) != 3)
-    throw std::invalid_argument(std::string(what) + " must have shape (n, 3)");
-}
-
-// The caller's mesh arrays as the core's functions take them, their shapes checked.
-struct MeshArrays {
-  const double* vertices;
-  std::size_t vertex_count;
-  const std::int64_t* triangles;
-  std::size_t triangle_count;
-};
-
-MeshArrays mesh_arrays(const Doubles& vertices, const Int64s& triangles) {
-  require_rows_of_3(vertices, "vertices");
-  require_rows_of_3(triangles, "triangles");
-  return {vertices.data(), static_cast<std::size_t>(vertices.shape(0)), triangles.data(),
-          static_cast<std::size_t>(triangles.shape(0))};
-}
-
-sdf::Mesh to_mesh(const Doubles& vertices, const Int64s& triangles, unsigned threads = 0) {
-  const MeshArrays a = mesh_arrays(vertices, triangles);
-  return sdf::make_mesh(a.vertices, a.vertex_count, a.triangles, a.triangle_count, threads);
-}
-
-const char* fill_name(sdf::FillResult r) {
-  switch (r) {
-    case sdf::FillResult::NothingToFill: return "none";
-    case sdf::FillResult::Filled: return "filled";
-    case sdf::FillResult::NoValueAnywhere: return "no-value-anywhere";
-  }
-  return "?";
-}
-
-sdf::BvhQuality parse_bvh_quality(const std::string& name) {
-  if (name == "auto") return sdf::BvhQuality::Auto;
-  if (name == "high") return sdf::BvhQuality::High;
-  if (name == "fast") return sdf::BvhQuality::Fast;
-  throw std::invalid_argument("bvh_quality must be 'auto', 'high' or 'fast', got '" + name + "'");
-}
-
-sdf::Orientation parse_orientation(const std::string& name) {
-  if (name == "auto") return sdf::Orientation::Auto;
-  if (name == "as_is") return sdf::Orientation::AsIs;
-  if (name == "flip") return sdf::Orientation::Flip;
-  throw std::invalid_argument("orientation must be 'auto', 'as_is' or 'flip', got '" + name + "'");
-}
-
-sdf::Accel parse_accel(const std::string& name) {
-  if (name == "bvh") return sdf::Accel::Bvh;
-  if (name == "octree") return sdf::Accel::Octree;
-  throw std::invalid_argument("accel must be 'bvh' or 'octree', got '" + name + "'");
-}
-
-// A vector as a new numpy array of its element type.
-template <typename T>
-py::array_t<T> to_array(const std::vector<T>& items) {
-  py::array_t<T> out(static_cast<py::ssize_t>(items.size()));
-  std::copy(items.begin(), items.end(), out.mutable_data());
-  return out;
-}
-
-py::dict compute(const Doubles& vertices, const Int64s& triangles, int rays, double cone_angle,
-                 const std::string& sampling, std::uint32_t seed, const std::string& points,
-                 unsigned threads, const py::object& progress, const std::string& engine,
-                 const std::string& accel, int octree_max_depth, int octree_leaf_size,
-                 const std::string& orientation, const std::string& bvh_quality,
-                 const py::object& beside_cast, bool find_twins) {
-  sdf::Options options;
-  options.rays = rays;
-  options.cone_angle = cone_angle;
-  options.sampling = parse_sampling(sampling);
-  options.seed = seed;
-  options.points = parse_points(points);
-  options.threads = threads;
-  options.engine = engine;
-  options.accel = parse_accel(accel);
-  options.octree.max_depth = octree_max_depth;
-  options.octree.leaf_size = octree_leaf_size;
-  options.orientation = parse_orientation(orientation);
-  options.bvh_quality = parse_bvh_quality(bvh_quality);
-  options.find_twins = find_twins;
-
-  const sdf::ProgressFn report = sdf::python_progress(progress);
-  // Also on the calling thread, taking the GIL for its Python code; it gets the cast's points
-  // (sdf::CastPoints) for the length of the call.
-  sdf::BesideCast beside;
-  if (!beside_cast.is_none()) {
-    beside = [&beside_cast](const sdf::SamplePoints& points) {
-      py::gil_scoped_acquire gil;
-      auto lent = std::make_shared<sdf::CastPoints>(sdf::CastPoints{&points});
-      struct Return {
-        sdf::CastPoints& lent;
-        ~Return() { lent.points = nullptr; }
-      } give_back{*lent};
-      beside_cast(lent);
-    };
-  }
-  sdf::Output out;
-  {
-    sdf::Mesh mesh = to_mesh(vertices, triangles, threads);
-    py::gil_scoped_release release;
-    out = sdf::compute(std::move(mesh), options, report, beside);  // moved: no copy of a large mesh
-  }
-  py::dict result;
-  result["raw"] = py::array_t<float>(out.raw.size(), out.raw.data());
-  result["valid_rays"] = py::array_t<std::int32_t>(out.valid_rays.size(), out.valid_rays.data());
-  result["timings"] = sdf::timings_dict(out.timings);
-  result["fill"] = fill_name(out.fill);
-  result["engine"] = out.engine;
-  result["device_bytes"] = out.device_bytes;
-  result["near_cutoff"] = out.near_cutoff;
-  result["flipped_faces"] = out.orientation.flipped_faces;
-  result["parts"] = out.orientation.parts;
-  // Which faces were reversed (None when none was): what runs on the caller's arrays after
-  // the cast and depends on the winding (projected smoothing) reverses them too.
-  if (out.orientation.reversed.empty()) {
-    result["reversed"] = py::none();
-  } else {
-    py::array_t<bool> reversed(static_cast<py::ssize_t>(out.orientation.reversed.size()));
-    std::copy(out.orientation.reversed.begin(), out.orientation.reversed.end(),
-              reversed.mutable_data());
-    result["reversed"] = reversed;
-  }
-  // Faces with a reversed twin (the computation stopped on finding them): (dropped, twin,
-  // corner) as mesh_twins.h describes them; None when there are none.
-  if (out.twins.empty()) {
-    result["twins"] = py::none();
-  } else {
-    result["twins"] = py::make_tuple(to_array(out.twins.dropped), to_array(out.twins.twin),
-                                     to_array(out.twins.corner));
-  }
-  return result;
-}
+using sdf::Doubles;
+using sdf::Floats;
+using sdf::Int64s;
+using sdf::mesh_arrays;
+using sdf::MeshArrays;
+using sdf::parse_points;
+using sdf::parse_sampling;
+using sdf::to_mesh;
 
 // Every OpenCL device as a dict, in the order "opencl:N" counts them.
 py::list opencl_devices() {
@@ -290,14 +145,7 @@ py::tuple sample_points(const Doubles& vertices, const Int64s& triangles,
 template <class T>
 py::array_t<float> normalize(const py::array_t<T, py::array::c_style>& values,
                              const std::string& method, unsigned threads) {
-  sdf::Normalization how;
-  if (method == "linear") {
-    how = sdf::Normalization::Linear;
-  } else if (method == "log") {
-    how = sdf::Normalization::Log;
-  } else {
-    throw std::invalid_argument("normalize must be 'linear' or 'log', got '" + method + "'");
-  }
+  const sdf::Normalization how = sdf::parse_normalization(method);
   py::array_t<float> out(std::vector<py::ssize_t>(values.shape(), values.shape() + values.ndim()));
   const T* in = values.data();
   float* to = out.mutable_data();
@@ -323,12 +171,6 @@ void core_program_stats(std::uint64_t* compiled, std::uint64_t* from_cache) {
 PYBIND11_MODULE(_core, m) {
   m.doc() = "Shape Diameter native core (private; use the shape_diameter package)";
   py::register_exception<sdf::Cancelled>(m, "Cancelled");
-  m.def("compute", &compute, py::arg("vertices"), py::arg("triangles"), py::arg("rays"),
-        py::arg("cone_angle"), py::arg("sampling"), py::arg("seed"), py::arg("points"),
-        py::arg("threads"), py::arg("progress"), py::arg("engine") = "cpu",
-        py::arg("accel") = "bvh", py::arg("octree_max_depth") = 10, py::arg("octree_leaf_size") = 8,
-        py::arg("orientation") = "auto", py::arg("bvh_quality") = "auto",
-        py::arg("beside_cast") = py::none(), py::arg("find_twins") = true);
   m.def("opencl_devices", &opencl_devices);
   m.def("normalize", &normalize<float>, py::arg("values"), py::arg("method"),
         py::arg("threads") = 0);
@@ -369,16 +211,6 @@ PYBIND11_MODULE(_core, m) {
   m.def("sample_points", &sample_points, py::arg("vertices"), py::arg("triangles"),
         py::arg("points"));
   m.def("hardware_threads", [] { return sdf::resolve_threads(0); });
-  // compute()'s rule for meshes far from unit size, for the smoothing that runs outside it.
-  m.def("unit_scale_exponent", &sdf::unit_scale_exponent, py::arg("max_extent"));
-  m.def(
-      "used_width",
-      [](const Doubles& vertices, const Int64s& triangles) {
-        const MeshArrays a = mesh_arrays(vertices, triangles);
-        py::gil_scoped_release release;
-        return sdf::used_width(a.vertices, a.vertex_count, a.triangles, a.triangle_count);
-      },
-      py::arg("vertices"), py::arg("triangles"));
   m.def(
       "mesh_values",
       [](const Doubles& vertices, const Int64s& triangles, unsigned threads) {
@@ -415,9 +247,12 @@ PYBIND11_MODULE(_core, m) {
             py::array_t<double>(extents.size(), extents.data()));
       },
       py::arg("vertices"), py::arg("triangles"), py::arg("threads") = 0);
+  m.def(
+      "default_kring_k", [](std::size_t faces) { return sdf::default_kring_k(faces); },
+      py::arg("faces"));
   m.attr("MAX_RAYS") = sdf::kMaxRays;
   m.attr("NEAR_CUTOFF_SHARE") = sdf::kNearCutoffShare;
-  bind_smoothing(m);
+  bind_field(m);
   bind_segmentation(m);
   // For the test-only module shape_diameter._testing alone (test_bridge.h).
   static sdf::TestBridge bridge{

@@ -17,6 +17,7 @@
 #include "accel/bvh.h"
 #include "accel/bvh_stats.h"
 #include "accel/octree.h"
+#include "arrays.h"
 #include "common/sdf_layout.h"
 #include "mesh/mesh_weld.h"
 #include "post/uv_islands.h"
@@ -30,19 +31,17 @@
 
 namespace py = pybind11;
 
+void bind_cast(py::module_& m);       // testing_cast.cpp
+void bind_smoothing(py::module_& m);  // testing_smoothing.cpp
+
 namespace {
 
-using Doubles = py::array_t<double, py::array::c_style | py::array::forcecast>;
-using Int64s = py::array_t<std::int64_t, py::array::c_style | py::array::forcecast>;
-using Floats = py::array_t<float, py::array::c_style | py::array::forcecast>;
+using sdf::Doubles;
+using sdf::Floats;
+using sdf::Int64s;
 
 sdf::Mesh to_mesh(const Doubles& vertices, const Int64s& triangles) {
-  if (vertices.ndim() != 2 || vertices.shape(1) != 3)
-    throw std::invalid_argument("vertices must have shape (n, 3)");
-  if (triangles.ndim() != 2 || triangles.shape(1) != 3)
-    throw std::invalid_argument("triangles must have shape (m, 3)");
-  return sdf::make_mesh(vertices.data(), static_cast<std::size_t>(vertices.shape(0)),
-                        triangles.data(), static_cast<std::size_t>(triangles.shape(0)), 0);
+  return sdf::to_mesh(vertices, triangles, 0);
 }
 
 // ---- The overrides ----
@@ -341,4 +340,6 @@ PYBIND11_MODULE(_testing, m) {
   m.def("uv_islands", &uv_islands, py::arg("vertices"), py::arg("triangles"), py::arg("uvs"),
         py::arg("weld_tolerance"));
   bind_opencl(m);
+  bind_cast(m);
+  bind_smoothing(m);
 }

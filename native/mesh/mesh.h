@@ -21,6 +21,15 @@ struct Mesh {
   double max_extent = 0.0;  // largest side of that box, in input units
 };
 
+// A mesh as the caller holds it: row-major vertices (vertex_count, 3) and 0-based triangles
+// (triangle_count, 3), not owned.
+struct MeshArrays {
+  const double* vertices = nullptr;
+  std::size_t vertex_count = 0;
+  const std::int64_t* triangles = nullptr;
+  std::size_t triangle_count = 0;
+};
+
 // Copies a mesh from row-major arrays: vertices (n, 3) and triangles (m, 3), 0-based.
 // Throws std::invalid_argument naming the problem for an empty mesh, an index out of range, a
 // coordinate that is not finite, a bounding box wider than 1e30 on an axis, or a vertex more
@@ -30,6 +39,10 @@ struct Mesh {
 // problem an error names (the first), do not depend on it.
 Mesh make_mesh(const double* vertices, std::size_t vertex_count, const std::int64_t* triangles,
                std::size_t triangle_count, unsigned threads = 0);
+
+inline Mesh make_mesh(const MeshArrays& mesh, unsigned threads = 0) {
+  return make_mesh(mesh.vertices, mesh.vertex_count, mesh.triangles, mesh.triangle_count, threads);
+}
 
 // The largest side of the box make_mesh takes (the vertices the triangles with area use; 0
 // for no triangle), for what runs on the caller's arrays outside compute() (projected

@@ -4,7 +4,8 @@
 // reaches such a wall meets two coincident faces, one facing it and one not, and which one it
 // keeps is chance: values come out degraded (measured: up to 12.7x off), and
 // the normals of shared vertices cancel. compute() finds such faces and stops (sdf.h); the
-// caller casts the mesh without them and gives each its twin's values (api.py).
+// caller casts the mesh without them and gives each its twin's values
+// (pipeline/twins_step.h).
 #pragma once
 
 #include <cstddef>

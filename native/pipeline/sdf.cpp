@@ -439,6 +439,10 @@ Output compute(Mesh mesh, const Options& options, const ProgressFn& progress,
   out.fill = fill_missing(mesh, options.points, out.raw.data(), out.valid_rays.data());
   if (exponent != 0) scale_lengths(out.raw.data(), out.raw.size(), -exponent);
   out.timings.emplace_back("fill", clock.lap());
+  if (options.keep_mesh) {
+    if (exponent != 0) scale_mesh(mesh, -exponent, options.threads);  // exact: a power of two
+    out.mesh = std::move(mesh);
+  }
   report(progress, 1.0);
   return out;
 }

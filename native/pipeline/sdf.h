@@ -47,6 +47,8 @@ struct Options {
   // Look for faces with a reversed twin (mesh_twins.h) and, where there are any, stop there
   // and return them (Output::twins): the caller casts the mesh without them.
   bool find_twins = true;
+  // Output::mesh: the mesh as cast (wound outward), for what runs on it afterwards.
+  bool keep_mesh = false;
 };
 
 struct Output {
@@ -61,6 +63,7 @@ struct Output {
   // Faces with a reversed twin, in the caller's winding (Options::find_twins). When there are
   // any, the computation stopped on finding them: raw and valid_rays are empty.
   ReversedTwins twins;
+  Mesh mesh;  // Options::keep_mesh: the computation's mesh, oriented, in the caller's units
 };
 
 // Host work that needs no result of the computation, run once on the calling thread: while

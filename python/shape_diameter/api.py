@@ -3,7 +3,6 @@
 
 from __future__ import annotations
 
-import functools
 import time
 from dataclasses import dataclass, field
 from typing import Callable, Optional
@@ -18,20 +17,11 @@ from .checks import check_mesh as _check_mesh
 from .checks import check_progress
 from .engine_choice import check_engine as _check_engine
 from .engine_choice import engines as engines  # the API lists them here too
-from .engine_choice import fallback_line as _fallback_line
 from .engine_choice import resolve_engine as _resolve_engine
-from .engine_choice import run_with_fallback
 from .engine_choice import unwritable_program_cache as _unwritable_program_cache
 from .normalization import NORMALIZATIONS
 from .part_warnings import part_warnings
-from .smoothing import (
-    check_bilateral_points,
-    check_smoothing,
-    prepare_projected_for,
-    prepare_texture_for,
-    run_checked,
-    unit_scale_exponent,
-)
+from .smoothing import check_bilateral_points, check_smoothing, warn_of_texture_limits
 from .warning_log import recorded, warn
 
 SAMPLINGS = ("fibonacci", "random", "cgal")
@@ -216,24 +206,63 @@ def compute(
     if smoothing == "bilateral":
         check_bilateral_points(points)
     chosen, choosing = _choose_engine(engine)
-    settings = _Settings(
-        int(rays), float(cone_angle), sampling, int(seed), points, int(threads), accel,
-        int(octree_depth), int(octree_leaf_size), orientation, bvh_quality, smoothing,
-        engine, chosen, choosing,
+    cast = {
+        "rays": int(rays), "cone_angle": float(cone_angle), "sampling": sampling,
+        "seed": int(seed), "points": points, "threads": int(threads), "engine": chosen,
+        "accel": accel, "octree_depth": int(octree_depth),
+        "octree_leaf_size": int(octree_leaf_size), "orientation": orientation,
+        "bvh_quality": bvh_quality,
+    }  # fmt: skip
+    uv_corners = smoothing_resolved.pop("uvs", None)
+    # The whole pipeline runs in the core (pipeline/field.h): the cast, the second cast of a
+    # double-sided mesh without its twin faces, smoothing, the twins' values, normalisation,
+    # and engine='auto''s fallback from a failed OpenCL device to the CPU.
+    out = _core.compute_field(
+        v, t, cast, engine == "auto" and chosen != "cpu", smoothing, smoothing_resolved,
+        uv_corners, normalize, progress,
     )  # fmt: skip
-    told = None if progress is None else _Monotone(progress)
-    result = _run_whole_mesh(settings, v, t, smoothing_resolved, told)
+    result = _result_of(out, points, int(rays))
+    if engine == "auto":
+        result.timings["devices"] = result.timings.get("devices", 0.0) + choosing
+    _warn_of_the_field(out, smoothing, smoothing_resolved, chosen)
     if result.valid_rays.any():  # (none anywhere has its own warning)
         _warn_if_few_rays_kept(result.valid_rays, int(rays), orientation, v, t, points)
         for message in part_warnings(v, t, result, int(threads)):
             warn(message)
-    clock = time.perf_counter()
-    # The core's own values (finite, >= 0, float32): normalize_values' checks would only cost
-    # time (1 ms a million values).
-    result.normalized = _core.normalize(result.values, normalize, int(threads))
-    result.timings["normalize"] = time.perf_counter() - clock
     result.timings["total"] = time.perf_counter() - start
     return result
+
+
+def _result_of(out, points, rays) -> Result:
+    """The core's whole call (_core.compute_field's dict) as a Result."""
+    fallback = out["fallback"]
+    return Result(
+        raw=out["raw"],
+        values=out["values"],
+        normalized=out["normalized"],
+        valid_rays=out["valid_rays"],
+        timings=dict(out["timings"]),
+        engine=out["engine"] + (f" [fell back: {fallback}]" if fallback else ""),
+        points=points,
+        rays=rays,
+        device_memory=int(out["device_bytes"]),
+        near_cutoff=float(out["near_cutoff"]),
+        flipped_faces=int(out["flipped_faces"]),
+        reversed_faces=out["reversed"],
+        twin_faces=int(out["twin_faces"]),
+    )
+
+
+def _warn_of_the_field(out, smoothing, smoothing_options, engine) -> None:
+    """What the core reports of the field in words: no value anywhere; texture smoothing's
+    faces outside its image, or its run kept off the device."""
+    if out["fill"] == "no-value-anywhere":
+        warn(
+            "no ray of any point found the other side of the mesh (is it open, flat or "
+            "inside out?); every value is 0 and valid_rays is 0 everywhere"
+        )
+    if smoothing == "texture":
+        warn_of_texture_limits(out, out["smoothed_faces"], smoothing_options, engine)
 
 
 def _choose_engine(engine):
@@ -248,186 +277,6 @@ def _choose_engine(engine):
             "folder"
         )
     return chosen, time.perf_counter() - clock
-
-
-@dataclass(frozen=True)
-class _Settings:
-    """compute()'s checked options, as the core takes them."""
-
-    rays: int
-    cone_angle: float
-    sampling: str
-    seed: int
-    points: str
-    threads: int
-    accel: str
-    octree_depth: int
-    octree_leaf_size: int
-    orientation: str
-    bvh_quality: str
-    smoothing: str
-    engine: str  # as the caller asked ('auto' falls back to the CPU)
-    chosen: str  # what it resolved to
-    choosing: float  # seconds the choice took
-
-
-def _run_whole_mesh(settings, v, t, smoothing_options, progress) -> Result:
-    """The cast and smoothing of the mesh (v, t); where the core finds faces with a reversed
-    twin, they are cast and smoothed without, and given their twins' values (_Twins)."""
-    clock = time.perf_counter()
-    result = _Run(settings, v, t, smoothing_options, True, progress).result()
-    if isinstance(result, Result):
-        return result
-    found, first_timings = result
-    first_run = time.perf_counter() - clock
-    twins = _Twins(v, t, *found)
-    resolved = dict(smoothing_options)
-    if "uvs" in resolved:
-        resolved["uvs"] = resolved["uvs"][twins.kept]
-    result = _Run(settings, twins.v, twins.t_cast, resolved, False, progress).result()
-    clock = time.perf_counter()
-    twins.fill(result)
-    # The run that found them, until it stopped (the search's own time within it), and the
-    # values given to the faces left out.
-    result.timings["twins (first run)"] = first_run
-    for name in ("twins", "twins (beside cast)"):
-        if name in first_timings:
-            result.timings[name] = first_timings[name]
-    result.timings["twins: values given"] = time.perf_counter() - clock
-    return result
-
-
-class _Run:
-    """One run of the pipeline on the mesh (v, t): the core's cast (with smoothing's
-    preparation beside it), then the smoothing; each falls back from a failed OpenCL device
-    to the CPU where engine='auto'."""
-
-    def __init__(self, settings, v, t, smoothing_options, find_twins, progress):
-        self.s, self.v, self.t = settings, v, t
-        self.smoothing_options, self.find_twins, self.progress = (
-            smoothing_options,
-            find_twins,
-            progress,
-        )
-        # With smoothing, casting reports [0, 0.9] of the progress and smoothing the rest.
-        self.cast_progress = progress
-        if progress is not None and settings.smoothing != "none":
-            self.cast_progress = lambda fraction: progress(0.9 * fraction)
-        # Smoothing's work that needs no SDF, done while a device casts, when the host would
-        # only wait (for the CPU engine, after its cast): texture smoothing's UV islands (on a
-        # device, the UVs and islands uploaded); on a device, projected smoothing's point
-        # frames uploaded from the cast's own points (oriented as the cast saw the mesh).
-        self.prepared, self.prepare_failure = [], []
-        self.far_from_unit_size = (
-            settings.smoothing == "projected" and unit_scale_exponent(v, t) != 0
-        )
-
-    def result(self):
-        """A Result, or, where find_twins found faces with a reversed twin, the core's
-        (dropped, twin, corner) and its timings."""
-        s = self.s
-        out, failure = run_with_fallback(self.cast, s.chosen, s.engine)
-        if out["twins"] is not None:
-            return out["twins"], out["timings"]
-        fallback = _fallback_line(s.chosen, failure)
-        if self.prepare_failure:
-            raise self.prepare_failure[0]
-        if out["fill"] == "no-value-anywhere":
-            warn(
-                "no ray of any point found the other side of the mesh (is it open, flat or "
-                "inside out?); every value is 0 and valid_rays is 0 everywhere"
-            )
-        timings = dict(out["timings"])
-        if s.engine == "auto":
-            timings["devices"] = timings.get("devices", 0.0) + s.choosing
-        if self.prepared and self.prepared[0] is not None:  # what 'beside cast' spent its time on
-            timings.update({f"beside cast: {k}": x for k, x in self.prepared[0].timings.items()})
-        values = out["raw"].copy()
-        if s.smoothing != "none":
-            values, fallback = self.smooth(out, fallback, timings)
-        return Result(
-            raw=out["raw"],
-            values=values,
-            normalized=values,  # normalised by compute(), once the twins have their values
-            valid_rays=out["valid_rays"],
-            timings=timings,
-            engine=out["engine"] + (f" [fell back: {fallback}]" if fallback else ""),
-            points=s.points,
-            rays=s.rays,
-            device_memory=int(out["device_bytes"]),
-            near_cutoff=float(out["near_cutoff"]),
-            flipped_faces=int(out["flipped_faces"]),
-            reversed_faces=out["reversed"],
-        )
-
-    def cast(self, engine_name):
-        """The core's pipeline on `engine_name`: its output dict."""
-        self.prepared.clear()
-        self.prepare_failure.clear()
-        s = self.s
-        beside = None
-        if s.smoothing == "texture" or (
-            s.smoothing == "projected" and engine_name != "cpu" and not self.far_from_unit_size
-        ):
-            # (projected far from unit size runs scaled: smoothing.py)
-            beside = functools.partial(self.prepare, engine_name)
-        return _core.compute(
-            self.v, self.t, s.rays, s.cone_angle, s.sampling, s.seed, s.points, s.threads,
-            self.cast_progress, engine_name, s.accel, s.octree_depth, s.octree_leaf_size,
-            s.orientation, s.bvh_quality, beside, self.find_twins,
-        )  # fmt: skip
-
-    def prepare(self, engine_name, cast_points):
-        """Smoothing's preparation, beside the cast (see __init__)."""
-        s = self.s
-        try:
-            if s.smoothing == "texture":
-                self.prepared.append(
-                    prepare_texture_for(
-                        self.v, self.t, s.points, self.smoothing_options, s.threads, engine_name
-                    )
-                )
-            else:
-                self.prepared.append(prepare_projected_for(cast_points, s.threads, engine_name))
-        except Exception as error:  # raised after the cast: not a device failure
-            self.prepare_failure.append(error)
-
-    def smooth(self, out, fallback, timings):
-        """The cast's SDF smoothed, on the engine that cast (the CPU after a fallback), and
-        the fallback line; adds 'smooth' and its stages to timings."""
-        clock = time.perf_counter()
-        smooth_engine = "cpu" if fallback else self.s.chosen
-        stages = {}  # of the smoothing, as 'smooth: <stage>'
-        values, failure = run_with_fallback(
-            functools.partial(self.smooth_on, out, stages), smooth_engine, self.s.engine
-        )
-        fallback = _fallback_line(f"smoothing on {smooth_engine}", failure) or fallback
-        timings["smooth"] = time.perf_counter() - clock
-        timings.update({f"smooth: {k}": x for k, x in stages.items()})
-        return values, fallback
-
-    def smooth_on(self, out, stages, engine_name):
-        s = self.s
-        stages.clear()  # a failed device's partial stages
-        ready = self.prepared[0] if self.prepared else None
-        if s.smoothing == "projected" and engine_name == "cpu":
-            ready = None  # the frames on a device that failed: the CPU works from the mesh
-        # Projected smoothing moves points along their inward axes, and the k-ring's corner
-        # weights compare face normals: both on the mesh as the cast oriented it (prepared
-        # frames come from the cast's points, oriented already). Texture smoothing does not
-        # depend on the winding, and its UVs follow the caller's corners.
-        smooth_t = self.t
-        if s.smoothing in ("projected", "kring") and ready is None and out["reversed"] is not None:
-            smooth_t = self.t.copy()
-            smooth_t[out["reversed"]] = smooth_t[out["reversed"]][:, [0, 2, 1]]
-        progress = self.progress
-        # compute()'s own checked mesh, options and SDF (raw: finite, >= 0): no second round
-        # of checks.
-        return run_checked(
-            self.v, smooth_t, out["raw"], s.points, s.smoothing, self.smoothing_options,
-            s.threads, None if progress is None else lambda f: progress(0.9 + 0.1 * f),
-            engine_name, ready, stages,
-        )  # fmt: skip
 
 
 # A closed mesh wound outward keeps nearly every ray (29-30 of 30 on the test meshes; open ones
@@ -532,69 +381,6 @@ def _points_with_an_axis(vertices, triangles, points):
     casting = np.zeros(len(vertices), dtype=bool)
     casting[triangles[with_area].ravel()] = True
     return casting
-
-
-class _Twins:
-    """Faces with a reversed twin (a double-sided mesh), left out of the cast: their values,
-    and those of vertices only they use, are their twins' (core's mesh_twins.h). Those
-    vertices are left out of the cast too (v, t_cast): k-ring smoothing merges vertices at
-    one position, and would average their stand-in values into the front's."""
-
-    def __init__(self, v, t, dropped, twin, corner):
-        self.t, self.dropped, self.twin = t, dropped.astype(np.int64), twin.astype(np.int64)
-        self.corner = corner.astype(np.int64)
-        self.kept = np.ones(len(t), dtype=bool)
-        self.kept[self.dropped] = False
-        self.vertex_count = len(v)
-        used = np.zeros(len(v), dtype=bool)
-        used[t[self.kept].ravel()] = True
-        self.lonely = np.zeros(len(v), dtype=bool)
-        self.lonely[t[self.dropped].ravel()] = True
-        self.lonely &= ~used
-        self.v, self.t_cast = v, t[self.kept]
-        if self.lonely.any():
-            number = np.cumsum(~self.lonely) - 1  # the kept vertices, renumbered in order
-            self.v, self.t_cast = v[~self.lonely], number[self.t_cast]
-
-    def fill(self, result: Result) -> None:
-        """Result of the mesh without the twins -> Result of the whole mesh, in place."""
-        names = ("raw", "values", "valid_rays")
-        if result.points == "faces":
-            for name in names:
-                part = getattr(result, name)
-                whole = np.empty(len(self.t), dtype=part.dtype)
-                whole[self.kept] = part
-                whole[self.dropped] = whole[self.twin]
-                setattr(result, name, whole)
-        else:
-            # A vertex only faces left out use (the back of a double-sided mesh on vertices of
-            # its own) takes the value of the twin's corner at its position.
-            own = self.t[self.dropped]  # (k, 3)
-            theirs = self.t[self.twin[:, None], (self.corner[:, None] - np.arange(3)) % 3]
-            lonely = self.lonely[own]
-            for name in names:
-                part = getattr(result, name)
-                whole = np.empty(self.vertex_count, dtype=part.dtype)
-                whole[~self.lonely] = part
-                whole[own[lonely]] = whole[theirs[lonely]]
-                setattr(result, name, whole)
-        if result.reversed_faces is not None:
-            whole = np.zeros(len(self.t), dtype=bool)
-            whole[self.kept] = result.reversed_faces
-            result.reversed_faces = whole
-        result.twin_faces = len(self.dropped)
-
-
-class _Monotone:
-    """The caller's progress, never told less than it was told already: the run cast again
-    without twin faces reports from 0 again."""
-
-    def __init__(self, progress):
-        self.progress, self.high = progress, 0.0
-
-    def __call__(self, fraction):
-        self.high = max(self.high, fraction)
-        self.progress(self.high)
 
 
 def cone_rays(

@@ -1,7 +1,7 @@
 # SPDX-License-Identifier: GPL-3.0-or-later
-"""Where the work runs: the engines found here, the check of an `engine=` argument, what
-'auto' picks, and its fallback from a failed OpenCL device to the CPU. compute() and smooth()
-share these rules."""
+"""Where the work runs: the engines found here, the check of an `engine=` argument and what
+'auto' picks (its fallback from a failed OpenCL device to the CPU is the core's:
+pipeline/fallback.h). compute() and smooth() share these rules."""
 
 from __future__ import annotations
 
@@ -59,27 +59,9 @@ def resolve_engine(engine: str) -> str:
     return "cpu"
 
 
-# What engine='auto' takes for a failed device (and then runs on the CPU): the OpenCL
-# engine's own errors, including a device too small for the work. Any other exception, a
-# progress callback's cancel above all, propagates.
+# The OpenCL engine's own errors, including a device too small for the work: what
+# engine='auto' runs past on the CPU, and what a batch reports as the device's fault.
 DEVICE_ERRORS = (_core.OpenCLError,) if hasattr(_core, "OpenCLError") else ()
-
-
-def run_with_fallback(run, chosen, engine):
-    """run(chosen); with engine='auto', a device failure (DEVICE_ERRORS) runs it again on the
-    CPU. Returns the result and that failure (None when there was none)."""
-    try:
-        return run(chosen), None
-    except DEVICE_ERRORS as error:
-        if engine != "auto" or chosen == "cpu":
-            raise
-        return run("cpu"), error
-
-
-def fallback_line(failed, failure):
-    """A device failure that engine='auto' ran past (run_with_fallback), told in one line
-    ('<failed> failed: ...'), or None when there was none."""
-    return None if failure is None else f"{failed} failed: {failure}".splitlines()[0]
 
 
 _PROGRAM_CACHES_CHECKED = set()

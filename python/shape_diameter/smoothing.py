@@ -13,7 +13,6 @@ rounding). Options are checked before any work and a wrong one raises ValueError
 from __future__ import annotations
 
 import math
-import time
 from typing import Callable, NamedTuple, Optional
 
 import numpy as np
@@ -23,7 +22,6 @@ from .checks import check_mesh as _check_mesh
 from .checks import check_progress
 from .engine_choice import check_engine as _check_engine
 from .engine_choice import resolve_engine as _resolve_engine
-from .engine_choice import run_with_fallback
 from .normalization import check_finite_float32, check_threads
 from .warning_log import warn
 
@@ -178,14 +176,20 @@ def smooth(
             f"{int((values < 0).sum())} values are negative"
         )
     chosen = _resolve_engine(engine) if method in ("projected", "texture") else "cpu"
-    out, failure = run_with_fallback(
-        lambda engine_name: run_checked(v, t, values, points, method, resolved, threads,
-                                        progress, engine_name),
-        chosen, engine,
+    uv_corners = resolved.pop("uvs", None)
+    # The core's smoothing stage (pipeline/smoothing_step.h), as compute() runs it; with
+    # engine='auto', a device's failure runs it on the CPU.
+    out = _core.smooth_field(
+        v, t, values, points, method, resolved, uv_corners, threads, progress, chosen,
+        engine == "auto" and chosen != "cpu",
     )  # fmt: skip
-    if failure is not None:
-        warn(f"smoothing on {chosen} failed ({str(failure).splitlines()[0]}); ran on the CPU")
-    return out
+    if out["failure"]:
+        warn(f"smoothing on {chosen} failed ({out['failure']}); ran on the CPU")
+    if method == "texture":
+        warn_of_texture_limits(out, len(t), resolved, "cpu" if out["failure"] else chosen)
+        if resolved["return_image"]:
+            return TextureResult(out["values"], out["image"], out["mask"])
+    return out["values"]
 
 
 def check_bilateral_points(points) -> None:
@@ -263,36 +267,6 @@ def check_smoothing(
     return o
 
 
-def prepare_texture_for(v, t, points, o, threads, engine="cpu"):
-    """Texture smoothing's work on the mesh and UVs alone (their UV islands; on an OpenCL
-    engine the UVs and islands uploaded to its device), for run_checked(prepared=...):
-    v, t and the options `o` as check_smoothing returns them (with 'uvs')."""
-    width, height = o["texture_size"]
-    return _core.prepare_texture(
-        v,
-        t,
-        o["uvs"],
-        width,
-        height,
-        _weld_argument(o),
-        points == "vertices",
-        threads,
-        engine,
-    )
-
-
-def prepare_projected_for(cast_points, threads, engine):
-    """Projected smoothing's point frames (origins, inward axes) uploaded to the device of
-    `engine` (an OpenCL one) from compute()'s cast points, for run_checked(prepared=...); None
-    where they were not uploaded (run_checked then works from the mesh)."""
-    return _core.prepare_projected(cast_points, threads, engine)
-
-
-def _weld_argument(o):
-    """The native weld tolerance: < 0 for none."""
-    return -1.0 if o["weld_tolerance"] is None else o["weld_tolerance"]
-
-
 # Bytes a texel that texture smoothing's CPU path holds at its peak (smoothing_texture.cpp):
 # drawing, a 64-bit owner key and the island (int32) and value (float32) drawn, 16 bytes (the
 # keys are freed after); dilating, a second island and value, 16; blurring, the island and
@@ -351,167 +325,7 @@ def texture_cost(texture_size=1024, radius=None, uvs=None) -> TextureCost:
     return TextureCost(texels, texels * covered * window, texels * TEXTURE_BYTES_PER_TEXEL)
 
 
-def mesh_width(v, t) -> float:
-    """The largest side of the bounding box of the vertices the triangles t use (0 for
-    none): the core's own measure (make_mesh's box), which a vertex no triangle uses takes no
-    part in. (In numpy it took 39 ms at 1.2M faces, measured twice by compute().)"""
-    return _core.used_width(v, t)
-
-
-def unit_scale_exponent(v, t) -> int:
-    """The power of two that brings a mesh far from unit size to a width in [1, 2); 0 for
-    other meshes: compute()'s own rule (unit_scale.h)."""
-    return _core.unit_scale_exponent(mesh_width(v, t))
-
-
-def run_checked(
-    v, t, values, points, method, o, threads, progress, engine="cpu", prepared=None, timings=None
-):
-    """smooth()'s work on arguments checked already (by smooth(), or by compute() on its own
-    mesh and SDF), with the options `o` as check_smoothing returns them; prepared: from
-    prepare_texture_for or prepare_projected_for on this mesh and these options (projected: on
-    an OpenCL engine only), or None; timings: a dict the method's stages (seconds) are added
-    to, or None."""
-    if timings is None:
-        timings = {}
-    if method == "none":
-        return values.copy()
-    if method == "bilateral":
-        check_bilateral_points(points)
-        start = time.perf_counter()
-        out = _core.bilateral_filter(
-            t,
-            len(v),
-            np.asarray(values, dtype=np.float64),
-            0 if o["window"] is None else o["window"],
-            threads,
-        )
-        timings["bilateral"] = time.perf_counter() - start
-        return out.astype(np.float32)
-    if method == "kring":
-        return _run_kring(v, t, values, points, o, threads, progress, timings)
-    if method == "projected":
-        return _run_projected(v, t, values, points, o, threads, progress, engine, prepared,
-                              timings)  # fmt: skip
-    return _run_texture(v, t, values, points, o, threads, progress, engine, prepared, timings)
-
-
-def _run_kring(v, t, values, points, o, threads, progress, timings):
-    out = _core.smooth_kring(
-        v,
-        t,
-        values,
-        points,
-        -1 if o["k"] is None else o["k"],
-        0.0 if o["sigma"] is None else o["sigma"],
-        0.0 if o["corner_angle"] is None else o["corner_angle"],
-        _weld_argument(o),
-        threads,
-        progress,
-    )
-    timings.update(out["timings"])
-    return out["values"]
-
-
-def _run_projected(v, t, values, points, o, threads, progress, engine, prepared, timings):
-    if prepared is not None:
-        return _core.smooth_projected_prepared(
-            prepared,
-            values,
-            o["iterations"],
-            o["max_depth"],
-            o["min_points"],
-            o["node_size_ratio"],
-            o["branch_on"],
-            threads,
-            progress,
-            engine,
-            timings,
-        )
-    # It moves points along the mesh in 32-bit floats: far from unit size (7% off at 1e10
-    # units) it runs on the mesh and values scaled by a power of two, as compute()'s cast
-    # does, and scales back (exact).
-    width = mesh_width(v, t)
-    exponent = _core.unit_scale_exponent(width)
-    if width > 1e30:  # the core's limit, which the scaled mesh would no longer meet
-        raise ValueError(
-            f"the mesh spans {width:.3g} units on an axis, more than the 1e30 that 32-bit "
-            "floats leave room for; scale it down"
-        )
-    if exponent:
-        scaled = _run_projected(
-            np.ldexp(v, exponent),
-            t,
-            np.ldexp(values, exponent),
-            points,
-            o,
-            threads,
-            progress,
-            engine,
-            None,
-            timings,
-        )
-        return np.ldexp(scaled, -exponent)
-    return _core.smooth_projected(
-        v,
-        t,
-        values,
-        points,
-        o["iterations"],
-        o["max_depth"],
-        o["min_points"],
-        o["node_size_ratio"],
-        o["branch_on"],
-        threads,
-        progress,
-        engine,
-        timings,
-    )
-
-
-def _run_texture(v, t, values, points, o, threads, progress, engine, prepared, timings):
-    if prepared is not None:
-        out = _core.smooth_texture_prepared(
-            prepared,
-            values,
-            points,
-            o["radius"],
-            o["bilateral"],
-            o["range_sigma"],
-            o["margin"],
-            o["return_image"],
-            threads,
-            progress,
-            engine,
-        )
-    else:
-        width, height = o["texture_size"]
-        out = _core.smooth_texture(
-            v,
-            t,
-            values,
-            points,
-            o["uvs"],
-            width,
-            height,
-            o["radius"],
-            o["bilateral"],
-            o["range_sigma"],
-            o["margin"],
-            _weld_argument(o),
-            o["return_image"],
-            threads,
-            progress,
-            engine,
-        )
-    timings.update(out["timings"])
-    _warn_of_texture_limits(out, len(t), o, engine)
-    if o["return_image"]:
-        return TextureResult(out["values"], out["image"], out["mask"])
-    return out["values"]
-
-
-def _warn_of_texture_limits(out, face_count, o, engine):
+def warn_of_texture_limits(out, face_count, o, engine):
     """Texture smoothing's words on faces its image leaves out and on a run kept off the
     device."""
     # A few faces just over the square's edge are common (spot.obj's layout: 0.05% at 1.5M

@@ -199,10 +199,10 @@ def test_compute_smooths_on_the_engine_that_cast(spot, method):
 
 @pytest.mark.parametrize("engine", ["cpu", DEVICE])
 def test_work_beside_the_cast_runs_once_and_its_error_ends_the_computation(spot, engine):
-    """compute() finds texture smoothing's UV islands while a device casts (_core.compute's
+    """compute() finds texture smoothing's UV islands while a device casts (_testing.compute's
     beside_cast hook): it runs once; an exception raised there stops the devices and
     propagates, and the next computation runs normally."""
-    from shape_diameter import _core
+    from shape_diameter import _testing
 
     v, t, _, _, _ = spot
     calls = []
@@ -211,77 +211,77 @@ def test_work_beside_the_cast_runs_once_and_its_error_ends_the_computation(spot,
         return (v.astype(np.float64), t.astype(np.int64), 30, 120.0, "fibonacci", 0, "faces",
                 0, None, engine, "bvh", 10, 8, "auto", "auto", hook)  # fmt: skip
 
-    out = _core.compute(*args(lambda points: calls.append(points)))
+    out = _testing.compute(*args(lambda points: calls.append(points)))
     assert len(calls) == 1 and "beside cast" in out["timings"]
     # The cast's points are lent for the call only: kept past it, they refer to nothing.
     if engine != "cpu":
         with pytest.raises(ValueError, match="only during"):
-            _core.prepare_projected(calls[0], 0, engine)
+            _testing.prepare_projected(calls[0], 0, engine)
 
     def fail(points):
         raise KeyError("beside the cast")
 
     with pytest.raises(KeyError, match="beside the cast"):
-        _core.compute(*args(fail))
-    again = _core.compute(*args(None))
+        _testing.compute(*args(fail))
+    again = _testing.compute(*args(None))
     np.testing.assert_array_equal(again["raw"], out["raw"])
 
 
 def test_work_beside_the_cast_runs_on_a_mesh_with_nothing_to_cast():
     """Every face of zero area: no tree to cast against, and the hook still runs once."""
-    from shape_diameter import _core
+    from shape_diameter import _testing
 
     calls = []
     v = np.array([[0.0, 0, 0], [1, 0, 0], [2, 0, 0]])
     t = np.array([[0, 1, 2]])
-    _core.compute(v, t, 30, 120.0, "fibonacci", 0, "faces", 0, None, DEVICE, "bvh", 10, 8,
+    _testing.compute(v, t, 30, 120.0, "fibonacci", 0, "faces", 0, None, DEVICE, "bvh", 10, 8,
                   "auto", "auto", lambda points: calls.append(1))  # fmt: skip
     assert calls == [1]
 
 
-def test_a_failure_finding_uv_islands_is_not_taken_for_a_device_failure(spot, monkeypatch):
+def test_a_failure_finding_uv_islands_is_not_taken_for_a_device_failure(spot):
     """With engine='auto', an OpenCL failure casts again on the CPU; an error while finding the
-    UV islands beside the cast is not one: it propagates, after one cast."""
-    import shape_diameter.api as api
+    UV islands beside the cast is not one: it propagates as raised. (UVs that are not finite,
+    which compute() refuses before any work, passed to the core directly.)"""
+    from shape_diameter import _core
+    from shape_diameter.smoothing import check_smoothing
 
     v, t, uvs, _, _ = spot
-    casts = []
-    compute = api._core.compute
-
-    def counting(*args, **kwargs):
-        casts.append(args[9])
-        return compute(*args, **kwargs)
-
-    def failing(*args):
-        raise RuntimeError("no islands today")
-
-    monkeypatch.setattr(api._core, "compute", counting)
-    monkeypatch.setattr(api, "prepare_texture_for", failing)
-    with pytest.raises(RuntimeError, match="no islands today"):
-        sd.compute(v, t, engine="auto", smoothing="texture", uvs=uvs,
-                   smoothing_options={"texture_size": 64})  # fmt: skip
-    assert len(casts) == 1
+    corners = np.ascontiguousarray(uvs, dtype=np.float32).copy()
+    corners[0, 0, 0] = np.nan
+    cast = {
+        "rays": 30, "cone_angle": 120.0, "sampling": "fibonacci", "seed": 0,
+        "points": "faces", "threads": 0, "engine": DEVICE, "accel": "bvh",
+        "octree_depth": 10, "octree_leaf_size": 8, "orientation": "auto",
+        "bvh_quality": "auto",
+    }  # fmt: skip
+    options = check_smoothing("texture", {"texture_size": 64}, uvs=uvs, face_count=len(t),
+                              vertex_count=len(v), triangles=t)  # fmt: skip
+    del options["uvs"]  # the checked ones; the core gets the broken ones
+    with pytest.raises(ValueError, match="finite"):
+        _core.compute_field(v.astype(np.float64), t.astype(np.int64), cast, True, "texture",
+                            options, corners, "linear", None)  # fmt: skip
 
 
 def test_a_prepared_texture_gives_the_same_values_and_refuses_other_options(spot):
     # compute() prepares the mesh, UVs and islands while the device casts (and uploads the UVs
     # and islands on the device's side queue); smoothing them must give smooth()'s values.
-    from shape_diameter import _core
+    from shape_diameter import _testing
 
     v, t, uvs, faces, vertices = spot
     corner_uvs = np.ascontiguousarray(uvs, dtype=np.float32)
     v64, t64 = v.astype(np.float64), t.astype(np.int64)
 
     def prepare(need_merged, engine=DEVICE, size=64):
-        return _core.prepare_texture(v64, t64, corner_uvs, size, size, 1e-6, need_merged, 0,
+        return _testing.prepare_texture(v64, t64, corner_uvs, size, size, 1e-6, need_merged, 0,
                                      engine)  # fmt: skip
 
     def prepared(values, points, ready, engine=DEVICE):
-        return _core.smooth_texture_prepared(ready, values, points, 2.0, False, 0.1, 2, False,
+        return _testing.smooth_texture_prepared(ready, values, points, 2.0, False, 0.1, 2, False,
                                              0, None, engine)["values"]  # fmt: skip
 
     def plain(values, points):
-        return _core.smooth_texture(v64, t64, values, points, corner_uvs, 64, 64, 2.0, False,
+        return _testing.smooth_texture(v64, t64, values, points, corner_uvs, 64, 64, 2.0, False,
                                     0.1, 2, 1e-6, False, 0, None, DEVICE)["values"]  # fmt: skip
 
     for_faces, for_vertices = prepare(False), prepare(True)
@@ -300,7 +300,7 @@ def test_a_prepared_texture_gives_the_same_values_and_refuses_other_options(spot
     with pytest.raises(ValueError, match="not finite"):
         bad = corner_uvs.copy()
         bad[3, 1, 0] = np.nan
-        _core.prepare_texture(v64, t64, bad, 64, 64, 1e-6, False, 0, DEVICE)
+        _testing.prepare_texture(v64, t64, bad, 64, 64, 1e-6, False, 0, DEVICE)
 
 
 def test_a_prepared_texture_keeps_its_uvs_alive(spot):
@@ -308,12 +308,12 @@ def test_a_prepared_texture_keeps_its_uvs_alive(spot):
     # float64 one) must outlive the caller's, whatever reuses the freed memory.
     import gc
 
-    from shape_diameter import _core
+    from shape_diameter import _testing
 
     v, t, uvs, faces, _ = spot
     v64, t64 = v.astype(np.float64), t.astype(np.int64)
     corner_uvs = np.array(uvs, dtype=np.float64)
-    expected = _core.smooth_texture(
+    expected = _testing.smooth_texture(
         v64,
         t64,
         faces,
@@ -331,12 +331,12 @@ def test_a_prepared_texture_keeps_its_uvs_alive(spot):
         None,
         DEVICE,
     )
-    ready = _core.prepare_texture(v64, t64, corner_uvs, 64, 64, 1e-6, False, 0, DEVICE)
+    ready = _testing.prepare_texture(v64, t64, corner_uvs, 64, 64, 1e-6, False, 0, DEVICE)
     del corner_uvs
     gc.collect()
     noise = [np.random.default_rng(k).random(uvs.size).astype(np.float32) for k in range(8)]
     for engine in (DEVICE, "cpu"):
-        out = _core.smooth_texture_prepared(ready, faces, "faces", 2.0, False, 0.1, 2, False, 0,
+        out = _testing.smooth_texture_prepared(ready, faces, "faces", 2.0, False, 0.1, 2, False, 0,
                                             None, engine)  # fmt: skip
         np.testing.assert_array_equal(out["values"], expected["values"])
     assert len(noise) == 8
@@ -346,7 +346,7 @@ def test_a_prepared_texture_keeps_its_uvs_alive(spot):
 def test_faces_spanning_many_texels_are_drawn_on_the_cpu():
     """A device walks each face in one work item: a face spanning more than 2^16 texels (two
     triangles over a 512 x 512 texture) leaves the method to the CPU threads, same values."""
-    from shape_diameter import _core
+    from shape_diameter import _testing
 
     v = np.array([[0.0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0]])
     t = np.array([[0, 1, 2], [0, 2, 3]])
@@ -354,7 +354,7 @@ def test_faces_spanning_many_texels_are_drawn_on_the_cpu():
     values = np.array([1.0, 2.0], dtype=np.float32)
 
     def stages(size):
-        out = _core.smooth_texture(v, t, values, "faces", uvs, size, size, 4.0, False, 0.1, 2,
+        out = _testing.smooth_texture(v, t, values, "faces", uvs, size, size, 4.0, False, 0.1, 2,
                                    1e-6, False, 0, None, DEVICE)  # fmt: skip
         return set(out["timings"])
 

@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
-// The smoothing functions of shape_diameter._core. The Python layer (smoothing.py) validates
-// and documents; this file converts arrays and releases the GIL around native work.
+// Each smoothing method alone, and its preparation apart from its run, for the tests and
+// benchmarks (shape_diameter._testing): shape_diameter.smooth() and compute() run them
+// through the core's smoothing stage (field.cpp). Converts arrays, releases the GIL.
 #include <pybind11/numpy.h>
 #include <pybind11/pybind11.h>
 
@@ -8,6 +9,7 @@
 #include <stdexcept>
 #include <string>
 
+#include "arrays.h"
 #include "cast_points.h"
 #include "mesh/mesh_weld.h"
 #include "post/smoothing_kring.h"
@@ -26,18 +28,12 @@ namespace py = pybind11;
 
 namespace {
 
-using Doubles = py::array_t<double, py::array::c_style | py::array::forcecast>;
-using Int64s = py::array_t<std::int64_t, py::array::c_style | py::array::forcecast>;
-using Floats = py::array_t<float, py::array::c_style | py::array::forcecast>;
+using sdf::Doubles;
+using sdf::Floats;
+using sdf::Int64s;
 
-// Converted on `threads` workers (0 = every core): the smoothing calls pass theirs.
 sdf::Mesh mesh_from(const Doubles& vertices, const Int64s& triangles, unsigned threads = 0) {
-  if (vertices.ndim() != 2 || vertices.shape(1) != 3)
-    throw std::invalid_argument("vertices must have shape (n, 3)");
-  if (triangles.ndim() != 2 || triangles.shape(1) != 3)
-    throw std::invalid_argument("triangles must have shape (m, 3)");
-  return sdf::make_mesh(vertices.data(), static_cast<std::size_t>(vertices.shape(0)),
-                        triangles.data(), static_cast<std::size_t>(triangles.shape(0)), threads);
+  return sdf::to_mesh(vertices, triangles, threads);
 }
 
 sdf::PointKind kind_from(const std::string& points) {
@@ -383,7 +379,4 @@ void bind_smoothing(py::module_& m) {
         py::arg("points"), py::arg("radius"), py::arg("bilateral"), py::arg("range_sigma"),
         py::arg("margin"), py::arg("return_image"), py::arg("threads"), py::arg("progress"),
         py::arg("engine") = "cpu");
-  m.def(
-      "default_kring_k", [](std::size_t faces) { return sdf::default_kring_k(faces); },
-      py::arg("faces"));
 }
