@@ -32,6 +32,7 @@ class SegmentOptions:
     clusters: int = 5
     smoothness: float = 0.26
     mode: str = "auto"
+    min_part_area: float = 0.0
     reuse_values: bool = True
     face_sets: bool = True
     label_name: str = "segment"
@@ -60,6 +61,7 @@ class SegmentOptions:
             "clusters": self.clusters,
             "smoothness": self.smoothness,
             "mode": self.mode,
+            "min_part_area": self.min_part_area,
             "postprocess": self.sdf.smoothing == "none",
         }
 
@@ -80,6 +82,9 @@ class SegmentOptions:
             raise UserError(f"smoothness must be a number >= 0, got {self.smoothness!r}")
         if self.mode not in MODES:
             raise UserError(f"mode must be one of {MODES}, got {self.mode!r}")
+        share = self.min_part_area
+        if isinstance(share, bool) or not isinstance(share, (int, float)) or not 0 <= share < 1:
+            raise UserError(f"min_part_area must be a share in [0, 1) (0.01: 1%), got {share!r}")
         names = [name for name, _, _ in self.attribute_outputs()]
         for name in names[1:] if self.face_sets else names:
             if name.startswith("."):

@@ -51,6 +51,8 @@ std::size_t soft_clusters(const std::vector<double>& values, const SegmentOption
 void check(std::size_t face_count, const SegmentOptions& options) {
   if (face_count == 0) throw std::invalid_argument("segmentation needs at least one face");
   if (options.clusters < 1) throw std::invalid_argument("clusters must be at least 1");
+  if (!(options.min_segment_area >= 0.0 && options.min_segment_area < 1.0))
+    throw std::invalid_argument("min_segment_area must be in [0, 1)");
 }
 
 }  // namespace
@@ -77,8 +79,11 @@ Segmentation segment_mesh(const double* vertices, std::size_t vertex_count,
   out.segments.resize(n);
   out.segment_count =
       number_segments(graph, out.clusters.data(), out.values.data(), n, out.segments.data());
-  clock.lap("segments");
   const std::vector<double> areas = face_areas(vertices, triangles, n, options.threads);
+  out.segment_count =
+      join_small_segments(graph, vertices, triangles, areas.data(), out.values.data(), n,
+                          options.min_segment_area, out.segments.data(), out.segment_count);
+  clock.lap("segments");
   out.stats =
       segment_stats(areas.data(), out.values.data(), out.segments.data(), n, out.segment_count);
   out.vertex_labels = vertex_labels(vertex_count, triangles, areas.data(), out.segments.data(), n);

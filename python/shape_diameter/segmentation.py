@@ -93,6 +93,16 @@ def _check_number(name, value, lo):
         raise ValueError(f"{name} must be a finite number >= {lo}, got {value!r}")
 
 
+def _check_share(name, value):
+    """A share of a whole: a real number in [0, 1)."""
+    if (
+        isinstance(value, bool)
+        or not isinstance(value, (int, float, np.integer, np.floating))
+        or not 0.0 <= float(value) < 1.0
+    ):
+        raise ValueError(f"{name} must be a share in [0, 1) (0.01: 1%), got {value!r}")
+
+
 def _check_values(values, faces):
     """Per-face values as float64; NaN marks a missing value. ValueError naming the problem."""
     v = np.asarray(values)
@@ -120,6 +130,7 @@ def segment(
     mode: str = "auto",
     postprocess=None,
     weight_rings: int = 2,
+    min_part_area: float = 0.0,
     threads: int = 0,
     **compute_options,
 ) -> Segmentation:
@@ -139,6 +150,11 @@ def segment(
     postprocess: CGAL's bilateral filter of the values before clustering (sdf_values'
         postprocess). None (default): on for values computed here, off for values given.
     weight_rings: rings of faces the soft vertex weights fall off over, 0..16.
+    min_part_area: a minimum part size, as a share of the mesh's total area in [0, 1) (0.01:
+        1%); 0 (default) is off. A segment below it joins the adjacent segment it shares the
+        longest boundary with, smallest first, until none is below; a separate solid (no
+        shared edge with the rest) below it stays a segment of its own. `clusters` keeps the
+        graph cut's labels, so a joined segment may hold faces of several clusters.
     threads: CPU threads, 0 for every core. The result is the same for any count.
     """
     _check_integer("clusters", clusters, 1, MAX_CLUSTERS)
@@ -147,6 +163,7 @@ def segment(
     if postprocess is not None and not isinstance(postprocess, bool):
         raise ValueError(f"postprocess must be None, True or False, got {postprocess!r}")
     _check_integer("weight_rings", weight_rings, 0, 16)
+    _check_share("min_part_area", min_part_area)
     check_threads(threads)
     if values is not None and compute_options:
         names = ", ".join(sorted(compute_options))
@@ -175,6 +192,7 @@ def segment(
         first_move_only=cgal,
         weight_rings=int(weight_rings),
         threads=threads,
+        min_segment_area=float(min_part_area),
     )
     timings.update(out["timings"])
     timings["total"] = time.perf_counter() - start

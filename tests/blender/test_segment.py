@@ -239,6 +239,24 @@ def test_values_on_the_mesh_are_reused():
     assert not api.segment_object(ob, clusters=2).reused_values  # other geometry
 
 
+def test_minimum_part_size_joins_the_neck_to_a_ball():
+    """The neck is 7% of the dumbbell's area: a minimum part size of 10% joins it to a ball,
+    as the package does on the same triangles."""
+    api = addon_module("api")
+    ob = dumbbell()
+    result = api.segment_object(ob, clusters=2, min_part_area=0.1)
+    labels, seg = reference(ob, clusters=2, min_part_area=0.1)
+    assert result.segment_count == seg.segment_count == 2
+    np.testing.assert_array_equal(result.labels, labels)
+    assert [g.name for g in ob.vertex_groups] == ["part_01", "part_02"]
+    assert bpy.ops.object.shape_diameter_segment(clusters=2, min_part_area=0.1) == {"FINISHED"}
+    np.testing.assert_array_equal(face_ints(ob.data, "segment"), labels)
+    before = state()
+    with pytest.raises(api.UserError, match=r"min_part_area must be a share in \[0, 1\)"):
+        api.segment_object(ob, min_part_area=1.0)
+    assert state() == before
+
+
 def test_a_second_run_replaces_its_own_outputs():
     api = addon_module("api")
     ob = dumbbell()
@@ -440,7 +458,15 @@ def test_segment_panel_and_operator_draw():
     assert panel.poll(bpy.context)
     drawn = draw(panel, bpy.context)
     assert ("operator", "object.shape_diameter_segment") in drawn
-    for name in ("clusters", "smoothness", "mode", "face_sets", "group_prefix", "armature"):
+    for name in (
+        "clusters",
+        "smoothness",
+        "mode",
+        "min_part_area",
+        "face_sets",
+        "group_prefix",
+        "armature",
+    ):
         assert ("prop", name) in drawn, name
     operator = addon_module("segment_operator").OBJECT_OT_shape_diameter_segment
     names = bpy.ops.object.shape_diameter_segment.get_rna_type().properties.keys()
