@@ -19,10 +19,13 @@ import numpy as np
 
 from . import _core
 from .api import _check_choice, _check_integer, _check_mesh, compute
+from .checks import check_progress
 from .normalization import check_threads
 
 MODES = ("auto", "cgal")
 MAX_CLUSTERS = 256
+# With values=None, the share of the progress the SDF takes; the segmentation takes the rest.
+SDF_SHARE = 0.8
 
 
 class VertexWeights(NamedTuple):
@@ -103,6 +106,13 @@ def _check_share(name, value):
         raise ValueError(f"{name} must be a share in [0, 1) (0.01: 1%), got {value!r}")
 
 
+def _scaled(progress, start, end):
+    """`progress` told [start, end] for a step's [0, 1]; None for None."""
+    if progress is None:
+        return None
+    return lambda fraction: progress(start + (end - start) * fraction)
+
+
 def _check_values(values, faces):
     """Per-face values as float64; NaN marks a missing value. ValueError naming the problem."""
     v = np.asarray(values)
@@ -132,6 +142,7 @@ def segment(
     weight_rings: int = 2,
     min_part_area: float = 0.0,
     threads: int = 0,
+    progress=None,
     **compute_options,
 ) -> Segmentation:
     """Segments a triangle mesh into parts by thickness.
@@ -156,6 +167,11 @@ def segment(
         shared edge with the rest) below it stays a segment of its own. `clusters` keeps the
         graph cut's labels, so a joined segment may hold faces of several clusters.
     threads: CPU threads, 0 for every core. The result is the same for any count.
+    progress: called with the fraction done in [0, 1] from the calling thread, as compute()'s
+        (with values=None the SDF reports [0, 0.8] and the segmentation [0.8, 1]): between
+        the steps and at most every 20 ms inside the long ones (the graph cut's moves and
+        their max-flow). If it raises, the work stops and the exception propagates; nothing
+        is returned.
     """
     _check_integer("clusters", clusters, 1, MAX_CLUSTERS)
     _check_number("smoothness", smoothness, 0.0)
@@ -165,6 +181,7 @@ def segment(
     _check_integer("weight_rings", weight_rings, 0, 16)
     _check_share("min_part_area", min_part_area)
     check_threads(threads)
+    check_progress(progress)
     if values is not None and compute_options:
         names = ", ".join(sorted(compute_options))
         raise ValueError(f"compute() options ({names}) apply only with values=None")
@@ -173,8 +190,11 @@ def segment(
     v, t = _check_mesh(vertices, triangles, threads)
     start = time.perf_counter()
     timings = {}
+    told = progress
     if values is None:
-        result = compute(v, t, threads=threads, **compute_options)
+        told = _scaled(progress, SDF_SHARE, 1.0)
+        sdf_progress = _scaled(progress, 0.0, SDF_SHARE)
+        result = compute(v, t, threads=threads, progress=sdf_progress, **compute_options)
         values = result.values
         timings["sdf"] = time.perf_counter() - start
         if postprocess is None:
@@ -193,6 +213,7 @@ def segment(
         weight_rings=int(weight_rings),
         threads=threads,
         min_segment_area=float(min_part_area),
+        progress=told,
     )
     timings.update(out["timings"])
     timings["total"] = time.perf_counter() - start
