@@ -484,3 +484,72 @@ def test_unregister_removes_the_segment_operator_and_panel():
     finally:
         addon_utils.enable("bl_ext.user_default.shape_diameter", default_set=True)
     assert bpy.types.OBJECT_OT_shape_diameter_segment.is_registered
+
+
+def segment_spy(monkeypatch):
+    """What each call of the core's segment() did ('returned', or the exception's name), and
+    the fractions it reported of its own work."""
+    core = addon_module("core")
+    original = core.segment
+    outcomes, fractions = [], []
+
+    def spy(vertices, triangles, values, options, progress=None):
+        def told(fraction):
+            fractions.append(fraction)
+            progress(fraction)
+
+        try:
+            result = original(vertices, triangles, values, options, told)
+        except BaseException as ex:
+            outcomes.append(type(ex).__name__)
+            raise
+        outcomes.append("returned")
+        return result
+
+    monkeypatch.setattr(core, "segment", spy)
+    return outcomes, fractions
+
+
+def big_dumbbell_with_values():
+    """200k triangles with the SDF already on them: a run that is all segmentation, long
+    enough to be stopped half way."""
+    api = addon_module("api")
+    ob = dumbbell(sides=256, rings=400)
+    api.compute_object(ob, rays=8)
+    return ob
+
+
+def test_a_stop_from_progress_stops_the_segmentation_itself(monkeypatch):
+    api = addon_module("api")
+    ob = big_dumbbell_with_values()
+    before = state()
+    outcomes, fractions = segment_spy(monkeypatch)
+
+    def progress(fraction):
+        return not (fractions and fractions[-1] >= 0.3)
+
+    with pytest.raises(api.Cancelled):
+        api.segment_object(ob, rays=8, progress=progress)
+    assert outcomes == ["Cancelled"]  # raised inside the core's segment(), not after it
+    assert 0.3 <= fractions[-1] < 0.9  # the graph cut's second move
+    assert state() == before
+
+
+def test_escape_during_the_segmentation_stops_it_and_changes_nothing(monkeypatch):
+    import time
+
+    operators = addon_module("operators")
+    ob = big_dumbbell_with_values()
+    before = state()
+    outcomes, fractions = segment_spy(monkeypatch)
+    op, context, reports = modal_segment(monkeypatch, rays=8)
+    assert op.invoke(context, event("LEFTMOUSE")) == {"RUNNING_MODAL"}
+    job = operators.running
+    while not (fractions and fractions[-1] >= 0.3) and not job.done:
+        time.sleep(0.001)
+    assert not job.done
+    assert op.modal(context, event("ESC", "PRESS")) == {"CANCELLED"}
+    assert outcomes == ["Cancelled"] and fractions[-1] < 0.9
+    assert job.tasks[0].segmentation is None
+    assert state() == before and ob.name in bpy.data.objects
+    assert reports == [({"WARNING"}, "Segment cancelled: nothing was changed")]
