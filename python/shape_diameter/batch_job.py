@@ -20,7 +20,7 @@ from .cli_jobs import EXIT_ENVIRONMENT, EXIT_USAGE, CommandError
 from .colormap import colormap, segment_colors
 from .engine_choice import DEVICE_ERRORS
 from .output_files import written_whole
-from .segmentation import segment
+from .segmentation import SDF_SHARE, _scaled, segment
 from .smoothing import texture_cost
 
 # Texture smoothing estimated past this on the CPU threads is announced before it starts (a
@@ -101,15 +101,20 @@ def run_job(
     with _warnings_to(warn):
         if uvs is not None and (notice := long_texture_work(options, uvs)):
             warn(notice)  # now, not once the work is done
-        result = compute(vertices, triangles, progress=progress, uvs=uvs, **options)
+        # With segmentation, the SDF reports [0, 0.8] and the segmentation the rest, as
+        # segment(values=None) does.
+        segmenting = segment_options is not None
+        sdf_progress = _scaled(progress, 0.0, SDF_SHARE) if segmenting else progress
+        result = compute(vertices, triangles, progress=sdf_progress, uvs=uvs, **options)
         parts = None
-        if segment_options is not None:
+        if segmenting:
             parts = segment(
                 vertices,
                 triangles,
                 result.values,
                 postprocess=True,
                 threads=options.get("threads", 0),
+                progress=_scaled(progress, SDF_SHARE, 1.0),
                 **segment_options,
             )
     computed = time.perf_counter()

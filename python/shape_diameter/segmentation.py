@@ -106,7 +106,7 @@ def _check_share(name, value):
         raise ValueError(f"{name} must be a share in [0, 1) (0.01: 1%), got {value!r}")
 
 
-def _scaled(progress, start, end):
+def _scaled(progress, start: float, end: float):
     """`progress` told [start, end] for a step's [0, 1]; None for None."""
     if progress is None:
         return None
