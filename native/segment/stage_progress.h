@@ -48,8 +48,6 @@ class StageProgress {
     return [this, from, to](double done) { poll(from + (to - from) * done); };
   }
 
-  const ProgressFn& callback() const { return progress_; }
-
  private:
   using Clock = std::chrono::steady_clock;
   static constexpr std::chrono::milliseconds kEvery{20};
