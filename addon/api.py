@@ -172,7 +172,9 @@ class PartsResult:
 def segment_objects(objects, *, depsgraph=None, write=True, progress=None, **options):
     """Segments every mesh object in `objects` into parts by thickness and writes the
     outputs (all or none), as the operator object.shape_diameter_segment does. Options:
-    clusters=5, smoothness=0.26, mode='auto' ('cgal'), reuse_values=True (the SDF attribute
+    clusters=5, smoothness=0.26, mode='auto' ('cgal'), min_part_area=0.0 (a minimum part
+    size, a share of the mesh's area in [0, 1): smaller parts join the neighbour they share
+    the longest boundary with; 0: off), reuse_values=True (the SDF attribute
     Compute wrote per face with the same settings on the same geometry is segmented as it
     is), face_sets=True, label_name='segment', segment_color_name='segment_color' (empty:
     not written), vertex_groups=True, group_prefix='part_', soft_weights=True,

@@ -162,10 +162,11 @@ def bake(
     return rgba
 
 
-def segment(vertices, triangles, values, options):
+def segment(vertices, triangles, values, options, progress=None):
     """shape_diameter.segment on one triangle mesh from per-triangle values; `options` holds
-    segment()'s keywords (clusters, smoothness, mode, ...)."""
-    return load().segment(vertices, triangles, values, **options)
+    segment()'s keywords (clusters, smoothness, mode, ...); `progress` is called with the
+    fraction done and may raise to stop the segmentation itself."""
+    return load().segment(vertices, triangles, values, progress=progress, **options)
 
 
 def segment_colors(labels):

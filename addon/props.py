@@ -317,6 +317,19 @@ def segment_options():
         "mode": EnumProperty(
             name="Mode", description="The graph cut", items=SEGMENT_MODE_ITEMS, default="auto"
         ),
+        "min_part_area": FloatProperty(
+            name="Minimum Part Size",
+            description="Parts smaller than this share of the mesh's area join the neighbour "
+            "they share the longest boundary with (0: off); a separate piece of the mesh stays "
+            "a part of its own",
+            default=0.0,
+            min=0.0,
+            max=0.99,
+            soft_max=0.1,
+            step=0.1,
+            precision=3,
+            subtype="FACTOR",
+        ),
         "reuse_values": BoolProperty(
             name="Reuse SDF Values",
             description="Segment the SDF attribute already on a mesh when Compute wrote it per "

@@ -21,6 +21,9 @@ from . import armature, core, mesh_data, part_outputs, process
 UserError = process.UserError
 Cancelled = process.Cancelled
 MODES = ("auto", "cgal")
+# Each mesh's share of the progress: the SDF (where it is computed), then the segmentation
+# (which polls for a cancel as it goes), then the parts' outputs.
+SDF_END, SEGMENT_END = 0.8, 0.95
 
 
 @dataclass
@@ -32,6 +35,7 @@ class SegmentOptions:
     clusters: int = 5
     smoothness: float = 0.26
     mode: str = "auto"
+    min_part_area: float = 0.0
     reuse_values: bool = True
     face_sets: bool = True
     label_name: str = "segment"
@@ -60,6 +64,7 @@ class SegmentOptions:
             "clusters": self.clusters,
             "smoothness": self.smoothness,
             "mode": self.mode,
+            "min_part_area": self.min_part_area,
             "postprocess": self.sdf.smoothing == "none",
         }
 
@@ -80,6 +85,9 @@ class SegmentOptions:
             raise UserError(f"smoothness must be a number >= 0, got {self.smoothness!r}")
         if self.mode not in MODES:
             raise UserError(f"mode must be one of {MODES}, got {self.mode!r}")
+        share = self.min_part_area
+        if isinstance(share, bool) or not isinstance(share, (int, float)) or not 0 <= share < 1:
+            raise UserError(f"min_part_area must be a share in [0, 1) (0.01: 1%), got {share!r}")
         names = [name for name, _, _ in self.attribute_outputs()]
         for name in names[1:] if self.face_sets else names:
             if name.startswith("."):
@@ -242,6 +250,7 @@ def compute(parts, options, progress=None, cancelled=None):
         step(0.0)
         started = time.perf_counter()
         values = part.values
+        segment_start = 0.0 if values is not None else SDF_END
         if values is None:
             try:
                 with core.collect_warnings() as caught:
@@ -249,18 +258,24 @@ def compute(parts, options, progress=None, cancelled=None):
                         mesh.vertices,
                         mesh.triangles,
                         options.sdf.compute_options(),
-                        lambda f: step(0.9 * f),
+                        lambda f: step(SDF_END * f),
                     )
             except ValueError as ex:
                 raise UserError(f"{part.object_name}: {ex}") from ex
             part.warnings.extend(f"{part.object_name}: {m}" for m in caught)
             values = result.values
             part.timings["sdf"] = time.perf_counter() - started
-        step(0.9)
+        step(segment_start)
         with core.collect_warnings() as caught:
-            seg = core.segment(mesh.vertices, mesh.triangles, values, options.segment_options())
+            seg = core.segment(
+                mesh.vertices,
+                mesh.triangles,
+                values,
+                options.segment_options(),
+                lambda f, start=segment_start: step(start + (SEGMENT_END - start) * f),
+            )
         part.warnings.extend(f"{part.object_name}: {m}" for m in caught)
-        step(0.95)
+        step(SEGMENT_END)
         part.segmentation = seg
         areas = rig.triangle_areas(mesh.vertices, mesh.triangles)
         part.polygon_labels = rig.polygon_labels(

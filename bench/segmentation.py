@@ -16,7 +16,8 @@ Quality: each mesh is segmented with the defaults (5 clusters, lambda 0.26) by
 - CGAL: cgal_segment, CGAL's own sdf_values (25 rays, 120 degrees, post-processed) and
   segmentation_from_sdf_values;
 - ours: shape_diameter.segment(vertices, triangles), the SDF computed with compute()'s defaults,
-  mode "auto"; and again with mode="cgal";
+  mode "auto"; and again with mode="cgal"; and in mode "auto" with a minimum part size
+  (min_part_area 0.5%, 1% and 2% of the area: "ours, min part 1%");
 - ours, mode="cgal" on CGAL's post-processed SDF: the same input as CGAL's segmentation, so its
   labels should equal CGAL's ("same labels" gives the share of faces that do), and its
   graph-cut energy CGAL's; the energies of CGAL's labels and of ours (both modes) on those
@@ -79,6 +80,9 @@ CATEGORIES = {
     381: "fourleg",
 }
 MEASURES = ("1-RI", "CD", "HD", "GCE", "LCE")
+# The minimum part sizes tried beside the default (segment(min_part_area=...), shares of the
+# mesh's area).
+MIN_PART_AREAS = (0.005, 0.01, 0.02)
 HAVE_SEGMENT = hasattr(sd, "segment")
 if HAVE_SEGMENT:
     from shape_diameter.segmentation import segmentation_energy
@@ -154,8 +158,14 @@ def segmentations(off: Path, vertices, triangles, cgal: str, tmp: Path) -> dict:
         out["CGAL"] = ref.labels
     if not HAVE_SEGMENT:
         return out
-    for name, kwargs in (("ours", {}), ('ours, mode="cgal"', {"mode": "cgal"})):
-        out[name] = np.asarray(sd.segment(vertices, triangles, **kwargs).labels)
+    # One SDF for every variant: segment(values=None) computes it the same way (compute()'s
+    # defaults, then CGAL's post-processing filter).
+    values = sd.compute(vertices, triangles).values
+    variants = [("ours", {}), ('ours, mode="cgal"', {"mode": "cgal"})]
+    variants += [(f"ours, min part {100 * s:g}%", {"min_part_area": s}) for s in MIN_PART_AREAS]
+    for name, kwargs in variants:
+        seg = sd.segment(vertices, triangles, values, postprocess=True, **kwargs)
+        out[name] = np.asarray(seg.labels)
     if ref is not None:
         same = sd.segment(vertices, triangles, ref.sdf, mode="cgal")
         out['ours, mode="cgal", CGAL\'s SDF'] = np.asarray(same.labels)

@@ -8,6 +8,7 @@
 #include <stdexcept>
 #include <string>
 
+#include "progress.h"
 #include "segment/postprocess.h"
 #include "segment/segmentation.h"
 #include "timings.h"
@@ -43,7 +44,8 @@ py::array_t<T> array_of(const std::vector<T>& v) {
 
 sdf::segment::SegmentOptions options_of(std::size_t clusters, double smoothness, bool filter,
                                         bool ties_move, bool first_move_only,
-                                        std::size_t weight_rings, unsigned threads) {
+                                        std::size_t weight_rings, unsigned threads,
+                                        double min_segment_area = 0.0) {
   sdf::segment::SegmentOptions o;
   o.clusters = clusters;
   o.smoothness = smoothness;
@@ -52,6 +54,7 @@ sdf::segment::SegmentOptions options_of(std::size_t clusters, double smoothness,
   o.expansion.first_move_only = first_move_only;
   o.weight_rings = weight_rings;
   o.threads = threads;
+  o.min_segment_area = min_segment_area;
   return o;
 }
 
@@ -105,16 +108,20 @@ py::dict to_dict(const sdf::segment::Segmentation& s) {
 
 py::dict segment(const Doubles& vertices, const Int64s& triangles, const Doubles& values,
                  std::size_t clusters, double smoothness, bool filter, bool ties_move,
-                 bool first_move_only, std::size_t weight_rings, unsigned threads) {
+                 bool first_move_only, std::size_t weight_rings, unsigned threads,
+                 double min_segment_area, const py::object& progress) {
   check_mesh(vertices, triangles, values);
-  const auto o =
-      options_of(clusters, smoothness, filter, ties_move, first_move_only, weight_rings, threads);
+  const auto o = options_of(clusters, smoothness, filter, ties_move, first_move_only, weight_rings,
+                            threads, min_segment_area);
+  // Called on this thread with the GIL taken (python_progress): Ctrl-C, or an exception the
+  // callback raises, stops the segmentation and comes back to Python.
+  const sdf::ProgressFn report = sdf::python_progress(progress);
   sdf::segment::Segmentation s;
   {
     py::gil_scoped_release release;
     s = sdf::segment::segment_mesh(vertices.data(), static_cast<std::size_t>(vertices.shape(0)),
                                    triangles.data(), static_cast<std::size_t>(triangles.shape(0)),
-                                   values.data(), o);
+                                   values.data(), o, report);
   }
   return to_dict(s);
 }
@@ -159,7 +166,8 @@ py::array_t<double> bilateral_filter(const Int64s& triangles, std::size_t vertex
 void bind_segmentation(py::module_& m) {
   m.def("segment", &segment, py::arg("vertices"), py::arg("triangles"), py::arg("values"),
         py::arg("clusters"), py::arg("smoothness"), py::arg("filter"), py::arg("ties_move"),
-        py::arg("first_move_only"), py::arg("weight_rings"), py::arg("threads"));
+        py::arg("first_move_only"), py::arg("weight_rings"), py::arg("threads"),
+        py::arg("min_segment_area") = 0.0, py::arg("progress") = py::none());
   m.def("segmentation_energy", &segmentation_energy, py::arg("vertices"), py::arg("triangles"),
         py::arg("values"), py::arg("labels"), py::arg("clusters"), py::arg("smoothness"),
         py::arg("filter"), py::arg("threads"));

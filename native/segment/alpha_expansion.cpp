@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cstdint>
+#include <functional>
 #include <limits>
 
 #include "segment/max_flow.h"
@@ -41,8 +42,9 @@ namespace {
 // keeps and q moves); one of them alpha, w when the other keeps.
 class ExpansionNetwork {
  public:
+  // `check` (may be empty) between the passes, each over every face or pair.
   void build(const FaceGraph& graph, const double* weights, const double* costs, std::size_t k,
-             const int* labels, std::size_t n, int alpha) {
+             const int* labels, std::size_t n, int alpha, const std::function<void()>& check) {
     node_.assign(n, -1);
     std::size_t nodes = 0;
     for (std::size_t f = 0; f < n; ++f)
@@ -54,6 +56,7 @@ class ExpansionNetwork {
       keep_[node_[f]] = costs[f * k + static_cast<std::size_t>(labels[f])];
       move_[node_[f]] = costs[f * k + static_cast<std::size_t>(alpha)];
     }
+    if (check) check();
     edges_.clear();
     for (std::size_t p = 0; p < graph.pairs.size(); ++p) {
       const std::uint32_t f = graph.pairs[p].first, g = graph.pairs[p].second;
@@ -75,12 +78,14 @@ class ExpansionNetwork {
     // the source's arc to it. Only the difference matters to the cut.
     terminal_.resize(nodes);
     for (std::size_t i = 0; i < nodes; ++i) terminal_[i] = move_[i] - keep_[i];
+    if (check) check();
     flow_.reset(nodes, terminal_, edges_);
   }
 
   // Solves the cut and writes the moved labels into `out` (a copy of the current labels).
-  void move(int alpha, bool ties_move, std::size_t n, int* out) {
-    flow_.solve();
+  void move(int alpha, bool ties_move, std::size_t n, int* out,
+            const std::function<void()>& check) {
+    flow_.solve(check);
     for (std::size_t f = 0; f < n; ++f) {
       if (node_[f] < 0) continue;
       const auto i = static_cast<std::size_t>(node_[f]);
@@ -100,7 +105,7 @@ class ExpansionNetwork {
 
 double alpha_expansion(const FaceGraph& graph, const double* weights, const double* costs,
                        std::size_t k, const ExpansionRules& rules, int* labels, std::size_t n,
-                       unsigned threads) {
+                       unsigned threads, StageProgress* progress, double from, double to) {
   ExpansionNetwork network;
   std::vector<int> candidate(n);
   double best = std::numeric_limits<double>::max();
@@ -115,11 +120,18 @@ double alpha_expansion(const FaceGraph& graph, const double* weights, const doub
     improved = false;
     for (std::size_t alpha = 0; alpha < k; ++alpha) {
       if (tried[alpha] >= last_kept) continue;
+      const double done =
+          from + (to - from) * static_cast<double>(moves) / static_cast<double>(moves + k);
+      std::function<void()> inside;
+      if (progress) {
+        progress->report(done);
+        inside = [progress, done] { progress->poll(done); };
+      }
       tried[alpha] = ++moves;
       const int a = static_cast<int>(alpha);
-      network.build(graph, weights, costs, k, labels, n, a);
+      network.build(graph, weights, costs, k, labels, n, a, inside);
       std::copy(labels, labels + n, candidate.begin());
-      network.move(a, rules.ties_move, n, candidate.data());
+      network.move(a, rules.ties_move, n, candidate.data(), inside);
       const double energy = potts_energy(graph, weights, costs, k, candidate.data(), n, threads);
       if (best - energy <= energy * 1e-10) continue;
       best = energy;

@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "segment/face_graph.h"
+#include "segment/stage_progress.h"
 
 namespace sdf::segment {
 
@@ -34,9 +35,12 @@ struct ExpansionRules {
 // the set of faces that lowers the energy most (a minimum cut), keeping a move only if it
 // lowers the energy found so far by more than a relative 1e-10 (the first move is always
 // kept); stops after a sweep that keeps none. Returns the final energy, which is never above
-// that of the starting labels.
+// that of the starting labels. `progress`, when given, is told at each move, and polled
+// inside each cut, the share of the moves made, mapped to [from, to] (m / (m + k) after m
+// moves: the number of sweeps is not known); if it throws, `labels` hold the last move kept.
 double alpha_expansion(const FaceGraph& graph, const double* weights, const double* costs,
                        std::size_t k, const ExpansionRules& rules, int* labels, std::size_t n,
-                       unsigned threads);
+                       unsigned threads, StageProgress* progress = nullptr, double from = 0.0,
+                       double to = 1.0);
 
 }  // namespace sdf::segment

@@ -19,7 +19,7 @@ struct EdgeEntry {
 // vertex then the face: equal edges end up adjacent, in an order no thread count changes.
 void bucket_edges(const std::int64_t* triangles, std::size_t face_count, std::size_t vertex_count,
                   unsigned threads, std::vector<std::uint32_t>& starts,
-                  std::vector<EdgeEntry>& entries) {
+                  std::vector<EdgeEntry>& entries, const WorkCheck& check) {
   starts.assign(vertex_count + 1, 0);
   auto for_each_edge = [&](auto&& visit) {
     for (std::size_t f = 0; f < face_count; ++f)
@@ -32,18 +32,23 @@ void bucket_edges(const std::int64_t* triangles, std::size_t face_count, std::si
   for_each_edge(
       [&](std::uint32_t lo, std::uint32_t, std::uint32_t, std::uint8_t) { ++starts[lo + 1]; });
   for (std::size_t v = 0; v < vertex_count; ++v) starts[v + 1] += starts[v];
+  if (check) check(0.15);
   entries.resize(starts[vertex_count]);
   std::vector<std::uint32_t> fill(starts.begin(), starts.end() - 1);
   for_each_edge([&](std::uint32_t lo, std::uint32_t hi, std::uint32_t f, std::uint8_t c) {
     entries[fill[lo]++] = EdgeEntry{hi, f, c};
   });
-  parallel_for(vertex_count, 4096, threads, [&](std::size_t begin, std::size_t end) {
-    for (std::size_t v = begin; v < end; ++v)
-      std::sort(entries.begin() + starts[v], entries.begin() + starts[v + 1],
-                [](const EdgeEntry& a, const EdgeEntry& b) {
-                  return a.other != b.other ? a.other < b.other : a.face < b.face;
-                });
-  });
+  if (check) check(0.3);
+  parallel_for(
+      vertex_count, 4096, threads,
+      [&](std::size_t begin, std::size_t end) {
+        for (std::size_t v = begin; v < end; ++v)
+          std::sort(entries.begin() + starts[v], entries.begin() + starts[v + 1],
+                    [](const EdgeEntry& a, const EdgeEntry& b) {
+                      return a.other != b.other ? a.other < b.other : a.face < b.face;
+                    });
+      },
+      as_progress(check), 0.3, 0.5);
 }
 
 // Pairs for one edge's run of faces [begin, end), sorted by face: first < second.
@@ -64,10 +69,10 @@ void pair_run(const EdgeEntry* begin, const EdgeEntry* end, std::vector<FacePair
 }  // namespace
 
 FaceGraph build_face_graph(const std::int64_t* triangles, std::size_t face_count,
-                           std::size_t vertex_count, unsigned threads) {
+                           std::size_t vertex_count, unsigned threads, const WorkCheck& check) {
   std::vector<std::uint32_t> starts;
   std::vector<EdgeEntry> entries;
-  bucket_edges(triangles, face_count, vertex_count, threads, starts, entries);
+  bucket_edges(triangles, face_count, vertex_count, threads, starts, entries, check);
 
   FaceGraph graph;
   graph.pairs.reserve(entries.size() / 2);
@@ -79,6 +84,7 @@ FaceGraph build_face_graph(const std::int64_t* triangles, std::size_t face_count
       i = j;
     }
   }
+  if (check) check(0.75);
 
   graph.offsets.assign(face_count + 1, 0);
   for (const FacePair& p : graph.pairs) {

@@ -6,6 +6,8 @@
 #include <cstdint>
 #include <vector>
 
+#include "segment/stage_progress.h"
+
 namespace sdf::segment {
 
 // Two faces meeting at an edge. In `first`, the shared edge runs from corner `first_corner`
@@ -27,8 +29,10 @@ struct FaceGraph {
 // them when there are at most eight, else each face to the next around the list, so a fan of
 // many faces on one edge costs linear time. Edges of a degenerate face that repeat a vertex
 // join nothing; open edges join nothing. Faces sharing no edge (separate parts, parts joined
-// at a vertex) are never neighbours. The result does not depend on `threads`.
+// at a vertex) are never neighbours. The result does not depend on `threads`. `check` is
+// called between the steps and may throw to stop.
 FaceGraph build_face_graph(const std::int64_t* triangles, std::size_t face_count,
-                           std::size_t vertex_count, unsigned threads);
+                           std::size_t vertex_count, unsigned threads,
+                           const WorkCheck& check = nullptr);
 
 }  // namespace sdf::segment

@@ -184,9 +184,15 @@ void MaxFlow::adopt(std::uint32_t o) {
   node_[o].parent = kNone;
 }
 
-double MaxFlow::solve() {
+double MaxFlow::solve(const std::function<void()>& check) {
+  constexpr std::uint32_t kCheckEvery = 4096;
+  std::uint32_t steps = 0;
   std::int64_t current = -1;
   for (;;) {
+    if (check && ++steps == kCheckEvery) {
+      steps = 0;
+      check();
+    }
     std::uint32_t i;
     if (current >= 0 && node_[current].tree != kFree) {
       i = static_cast<std::uint32_t>(current);

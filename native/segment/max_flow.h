@@ -7,6 +7,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <functional>
 #include <vector>
 
 namespace sdf::segment {
@@ -26,8 +27,10 @@ class MaxFlow {
   void reset(std::size_t nodes, const std::vector<double>& terminal,
              const std::vector<FlowEdge>& edges);
 
-  // The maximum flow (not counting what `terminal`'s differences took out).
-  double solve();
+  // The maximum flow (not counting what `terminal`'s differences took out). `check`, when
+  // given, is called every few thousand steps of the search (about a millisecond on a mesh
+  // graph) and may throw to stop it, leaving the network unusable until the next reset().
+  double solve(const std::function<void()>& check = nullptr);
 
   // After solve(): whether node i is on the sink's side of the minimum cut whose sink side is
   // smallest (the nodes with a residual path to the sink), or of the one whose sink side is

@@ -91,63 +91,68 @@ std::vector<std::uint8_t> near_boundary(const VertexFaces& vf, const std::int64_
 
 VertexWeights vertex_weights(std::size_t vertex_count, const std::int64_t* triangles,
                              const double* face_areas, const int* segments, std::size_t n,
-                             std::size_t rings, unsigned threads) {
+                             std::size_t rings, unsigned threads, const WorkCheck& check) {
   const VertexFaces vf = vertex_faces(triangles, n, vertex_count);
+  if (check) check(0.1);
   // A vertex's window reaches faces within rings + 1 edge steps of it.
   const std::vector<std::uint8_t> near =
       near_boundary(vf, triangles, segments, vertex_count, rings + 1);
+  if (check) check(0.2);
   constexpr std::size_t kBlock = 4096;
   const std::size_t blocks = (vertex_count + kBlock - 1) / kBlock;
   std::vector<std::vector<std::pair<int, double>>> block_entries(blocks);
   std::vector<std::vector<std::uint32_t>> block_counts(blocks);
-  parallel_for(blocks, 1, threads, [&](std::size_t b0, std::size_t b1) {
-    thread_local std::vector<std::uint8_t> seen;
-    if (seen.size() < n) seen.resize(n, 0);
-    std::vector<std::uint32_t> ring, next, visited;
-    std::vector<std::pair<int, double>> sums;
-    for (std::size_t b = b0; b < b1; ++b) {
-      for (std::size_t v = b * kBlock; v < std::min(vertex_count, (b + 1) * kBlock); ++v) {
-        if (!near[v]) {  // one segment all around (or no face at all)
-          const bool used = vf.offsets[v + 1] > vf.offsets[v];
-          if (used) block_entries[b].emplace_back(segments[vf.faces[vf.offsets[v]]], 1.0);
-          block_counts[b].push_back(used ? 1 : 0);
-          continue;
-        }
-        sums.clear();
-        ring.assign(vf.faces.begin() + vf.offsets[v], vf.faces.begin() + vf.offsets[v + 1]);
-        for (std::uint32_t f : ring) seen[f] = 1;
-        visited = ring;
-        for (std::size_t r = 0; r <= rings && !ring.empty(); ++r) {
-          const double falloff =
-              static_cast<double>(rings + 1 - r) / static_cast<double>(rings + 1);
-          next.clear();
-          for (std::uint32_t f : ring) {
-            accumulate(sums, segments[f], falloff * face_areas[f]);
-            if (r == rings) continue;
-            for (int c = 0; c < 3; ++c) {
-              const auto u = static_cast<std::size_t>(triangles[3 * f + c]);
-              for (std::uint32_t i = vf.offsets[u]; i < vf.offsets[u + 1]; ++i)
-                if (!seen[vf.faces[i]]) seen[vf.faces[i]] = 1, next.push_back(vf.faces[i]);
+  parallel_for(
+      blocks, 1, threads,
+      [&](std::size_t b0, std::size_t b1) {
+        thread_local std::vector<std::uint8_t> seen;
+        if (seen.size() < n) seen.resize(n, 0);
+        std::vector<std::uint32_t> ring, next, visited;
+        std::vector<std::pair<int, double>> sums;
+        for (std::size_t b = b0; b < b1; ++b) {
+          for (std::size_t v = b * kBlock; v < std::min(vertex_count, (b + 1) * kBlock); ++v) {
+            if (!near[v]) {  // one segment all around (or no face at all)
+              const bool used = vf.offsets[v + 1] > vf.offsets[v];
+              if (used) block_entries[b].emplace_back(segments[vf.faces[vf.offsets[v]]], 1.0);
+              block_counts[b].push_back(used ? 1 : 0);
+              continue;
             }
+            sums.clear();
+            ring.assign(vf.faces.begin() + vf.offsets[v], vf.faces.begin() + vf.offsets[v + 1]);
+            for (std::uint32_t f : ring) seen[f] = 1;
+            visited = ring;
+            for (std::size_t r = 0; r <= rings && !ring.empty(); ++r) {
+              const double falloff =
+                  static_cast<double>(rings + 1 - r) / static_cast<double>(rings + 1);
+              next.clear();
+              for (std::uint32_t f : ring) {
+                accumulate(sums, segments[f], falloff * face_areas[f]);
+                if (r == rings) continue;
+                for (int c = 0; c < 3; ++c) {
+                  const auto u = static_cast<std::size_t>(triangles[3 * f + c]);
+                  for (std::uint32_t i = vf.offsets[u]; i < vf.offsets[u + 1]; ++i)
+                    if (!seen[vf.faces[i]]) seen[vf.faces[i]] = 1, next.push_back(vf.faces[i]);
+                }
+              }
+              visited.insert(visited.end(), next.begin(), next.end());
+              ring.swap(next);
+            }
+            for (std::uint32_t f : visited) seen[f] = 0;
+            std::sort(sums.begin(), sums.end());
+            double total = 0.0;
+            for (const auto& entry : sums) total += entry.second;
+            std::uint32_t count = 0;
+            for (const auto& [s, w] : sums) {
+              // Faces without area: equal shares.
+              const double share = total > 0.0 ? w / total : 1.0 / static_cast<double>(sums.size());
+              block_entries[b].emplace_back(s, share);
+              ++count;
+            }
+            block_counts[b].push_back(count);
           }
-          visited.insert(visited.end(), next.begin(), next.end());
-          ring.swap(next);
         }
-        for (std::uint32_t f : visited) seen[f] = 0;
-        std::sort(sums.begin(), sums.end());
-        double total = 0.0;
-        for (const auto& entry : sums) total += entry.second;
-        std::uint32_t count = 0;
-        for (const auto& [s, w] : sums) {
-          // Faces without area: equal shares.
-          const double share = total > 0.0 ? w / total : 1.0 / static_cast<double>(sums.size());
-          block_entries[b].emplace_back(s, share);
-          ++count;
-        }
-        block_counts[b].push_back(count);
-      }
-    }
-  });
+      },
+      as_progress(check), 0.2, 0.9);
   VertexWeights out;
   out.offsets.assign(1, 0);
   for (std::size_t b = 0; b < blocks; ++b) {

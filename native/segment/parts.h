@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "segment/face_graph.h"
+#include "segment/stage_progress.h"
 
 namespace sdf::segment {
 
@@ -27,9 +28,10 @@ struct VertexWeights {
   std::vector<std::int32_t> segment;
   std::vector<float> weight;
 };
+// `check` is called between the steps (on this thread) and may throw to stop.
 VertexWeights vertex_weights(std::size_t vertex_count, const std::int64_t* triangles,
                              const double* areas, const int* segments, std::size_t n,
-                             std::size_t rings, unsigned threads);
+                             std::size_t rings, unsigned threads, const WorkCheck& check = nullptr);
 
 // A boundary loop: a connected run of edges between faces of segments a < b.
 struct Boundary {

@@ -6,6 +6,7 @@
 #include <cstddef>
 
 #include "segment/face_graph.h"
+#include "util/parallel.h"
 
 namespace sdf::segment {
 
@@ -22,9 +23,12 @@ std::size_t bilateral_window(std::size_t face_count);
 // distance d, s = window / 2, times exp(-dv^2 / (2 r^2)) for the value difference dv, where r
 // is 1.5 times the RMS difference to the face's value over the window (a face whose window is
 // flat keeps its value). Reads `values`, writes `out` (may not alias). Parallel over faces;
-// the result does not depend on `threads`.
+// the result does not depend on `threads`. Progress as parallel_for's: it covers
+// [progress_from, progress_to] and may cancel.
 void bilateral_filter(const FaceGraph& graph, const double* values, std::size_t n,
-                      std::size_t window, unsigned threads, double* out);
+                      std::size_t window, unsigned threads, double* out,
+                      const ProgressFn& progress = nullptr, double progress_from = 0.0,
+                      double progress_to = 1.0);
 
 // (x - min) / (max - min); a constant field becomes all 0. Returns false for a constant one.
 bool rescale_to_unit(double* values, std::size_t n);

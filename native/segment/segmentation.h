@@ -12,7 +12,9 @@
 #include "segment/face_graph.h"
 #include "segment/parts.h"
 #include "segment/segments.h"
+#include "segment/small_segments.h"
 #include "segment/soft_clustering.h"
+#include "util/parallel.h"
 #include "util/stopwatch.h"
 
 namespace sdf::segment {
@@ -23,7 +25,11 @@ struct SegmentOptions {
   bool filter = false;           // CGAL's post-processing filter before clustering (bilateral)
   ExpansionRules expansion;      // CGAL's rules by default (ties move, first move only)
   std::size_t weight_rings = 2;  // rings the soft vertex weights fall off over
-  unsigned threads = 0;          // 0 = every core; results do not depend on it
+  // A minimum part size, as a share of the mesh's area in [0, 1): a segment below it joins
+  // the neighbour it shares the longest boundary with (join_small_segments). 0: off.
+  // Clusters stay the graph cut's, so a joined segment may hold faces of several clusters.
+  double min_segment_area = 0.0;
+  unsigned threads = 0;  // 0 = every core; results do not depend on it
 };
 
 struct Segmentation {
@@ -41,10 +47,16 @@ struct Segmentation {
 };
 
 // vertices (vertex_count, 3) and triangles (face_count, 3, 0-based, checked by the caller),
-// values per face (NaN where missing). Throws std::invalid_argument for no face or k < 1.
+// values per face (NaN where missing). Throws std::invalid_argument for no face, k < 1 or a
+// min_segment_area outside [0, 1).
+// `progress` is called on the calling thread with the fraction done: between the steps, and
+// at most every 20 ms inside the long ones (the filter, the mixture's iterations, each move
+// of the graph cut and inside its max-flow). Returning false stops the work (Cancelled); an
+// exception it throws stops the work and comes out of segment_mesh.
 Segmentation segment_mesh(const double* vertices, std::size_t vertex_count,
                           const std::int64_t* triangles, std::size_t face_count,
-                          const double* values, const SegmentOptions& options);
+                          const double* values, const SegmentOptions& options,
+                          const ProgressFn& progress = nullptr);
 
 // The Potts energy that segment_mesh minimises for these values and options, of any
 // labelling `clusters` (values already in [0, 1], as Segmentation::values): to compare

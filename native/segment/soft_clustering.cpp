@@ -69,7 +69,8 @@ void log_normalize(const double* values, std::size_t n, double alpha, double* ou
 }
 
 std::vector<double> kmeans_centres(const double* points, std::size_t n, std::size_t k,
-                                   std::size_t max_iterations, unsigned threads) {
+                                   std::size_t max_iterations, unsigned threads,
+                                   const WorkCheck& check) {
   std::vector<double> centres = plus_plus_seeds(points, n, k);
   k = centres.size();
   std::vector<std::uint32_t> assignment(n, std::numeric_limits<std::uint32_t>::max());
@@ -100,6 +101,7 @@ std::vector<double> kmeans_centres(const double* points, std::size_t n, std::siz
       if (count > 0) centres[c] = sum / count;
     }
     if (std::find(changed.begin(), changed.end(), 1) == changed.end()) break;
+    if (check) check(static_cast<double>(iteration + 1) / static_cast<double>(max_iterations));
   }
   std::sort(centres.begin(), centres.end());
   return centres;
@@ -214,16 +216,20 @@ std::vector<Gaussian> initial_mixture(const double* points, std::size_t n,
 
 std::vector<Gaussian> fit_mixture(const double* points, std::size_t n,
                                   const std::vector<double>& centres, std::size_t max_iterations,
-                                  double threshold, unsigned threads) {
+                                  double threshold, unsigned threads, const WorkCheck& check) {
   std::vector<Gaussian> mixture = initial_mixture(points, n, centres);
   std::vector<double> posterior(n * mixture.size());
   double likelihood = -std::numeric_limits<double>::max();
   for (std::size_t iteration = 0; iteration < max_iterations; ++iteration) {
-    if (iteration == 0) expectation(points, n, mixture, threads, posterior);
+    if (iteration == 0) {
+      expectation(points, n, mixture, threads, posterior);
+      if (check) check(0.0);
+    }
     maximization(points, n, posterior, threads, mixture);
     const double previous = likelihood;
     likelihood = expectation(points, n, mixture, threads, posterior);
     if (likelihood - previous < threshold * std::abs(likelihood)) break;
+    if (check) check(static_cast<double>(iteration + 1) / static_cast<double>(max_iterations));
   }
   std::sort(mixture.begin(), mixture.end(),
             [](const Gaussian& a, const Gaussian& b) { return a.mean < b.mean; });
@@ -231,34 +237,37 @@ std::vector<Gaussian> fit_mixture(const double* points, std::size_t n,
 }
 
 void cluster_costs(const double* points, std::size_t n, const std::vector<Gaussian>& mixture,
-                   unsigned threads, double* costs, int* labels) {
+                   unsigned threads, double* costs, int* labels, const WorkCheck& check) {
   const std::size_t k = mixture.size();
   const std::vector<double> means = means_of(mixture);
-  parallel_for(n, 4096, threads, [&](std::size_t begin, std::size_t end) {
-    std::vector<double> p(k);
-    for (std::size_t j = begin; j < end; ++j) {
-      double total = 0.0, best = 0.0;
-      int label = -1;
-      for (std::size_t c = 0; c < k; ++c) {
-        p[c] = density(mixture[c], points[j]) * mixture[c].weight;
-        total += p[c];
-        if (best < p[c]) {
-          best = p[c];
-          label = static_cast<int>(c);
+  parallel_for(
+      n, 4096, threads,
+      [&](std::size_t begin, std::size_t end) {
+        std::vector<double> p(k);
+        for (std::size_t j = begin; j < end; ++j) {
+          double total = 0.0, best = 0.0;
+          int label = -1;
+          for (std::size_t c = 0; c < k; ++c) {
+            p[c] = density(mixture[c], points[j]) * mixture[c].weight;
+            total += p[c];
+            if (best < p[c]) {
+              best = p[c];
+              label = static_cast<int>(c);
+            }
+          }
+          if (!(total > 0.0 && std::isfinite(total))) {
+            label = static_cast<int>(nearest(means, points[j]));
+            std::fill(p.begin(), p.end(), 0.0);
+            p[label] = total = 1.0;
+          }
+          labels[j] = label;
+          for (std::size_t c = 0; c < k; ++c) {
+            const double cost = -std::log(std::max(p[c] / total, 5e-6));
+            costs[j * k + c] = std::max(cost, std::numeric_limits<double>::epsilon());
+          }
         }
-      }
-      if (!(total > 0.0 && std::isfinite(total))) {
-        label = static_cast<int>(nearest(means, points[j]));
-        std::fill(p.begin(), p.end(), 0.0);
-        p[label] = total = 1.0;
-      }
-      labels[j] = label;
-      for (std::size_t c = 0; c < k; ++c) {
-        const double cost = -std::log(std::max(p[c] / total, 5e-6));
-        costs[j * k + c] = std::max(cost, std::numeric_limits<double>::epsilon());
-      }
-    }
-  });
+      },
+      as_progress(check));
 }
 
 }  // namespace sdf::segment

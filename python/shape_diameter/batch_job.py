@@ -20,7 +20,7 @@ from .cli_jobs import EXIT_ENVIRONMENT, EXIT_USAGE, CommandError
 from .colormap import colormap, segment_colors
 from .engine_choice import DEVICE_ERRORS
 from .output_files import written_whole
-from .segmentation import segment
+from .segmentation import SDF_SHARE, _scaled, segment
 from .smoothing import texture_cost
 
 # Texture smoothing estimated past this on the CPU threads is announced before it starts (a
@@ -78,7 +78,7 @@ def skipped_report(job) -> dict:
 
 
 # segment()'s keywords a batch takes, with the defaults --segment gives them.
-SEGMENT_DEFAULTS = {"clusters": 5, "smoothness": 0.26, "mode": "auto"}
+SEGMENT_DEFAULTS = {"clusters": 5, "smoothness": 0.26, "mode": "auto", "min_part_area": 0.0}
 
 
 def run_job(
@@ -87,8 +87,9 @@ def run_job(
     """Read, compute (compute()'s keyword arguments in `options`) and write one input; returns
     its --json object without its warnings, which go to warn(message) as they come.
 
-    `segment_options`: segment()'s keywords (clusters, smoothness, mode) to also segment the
-    SDF: the mesh is coloured by segment and the labels written to job.segments.
+    `segment_options`: segment()'s keywords (clusters, smoothness, mode, min_part_area) to
+    also segment the SDF: the mesh is coloured by segment and the labels written to
+    job.segments.
 
     `progress`: compute()'s callback; `check`: called between the steps (the command line's
     Ctrl-C check points). Failures raise; failure() maps them to a status and a message."""
@@ -100,15 +101,20 @@ def run_job(
     with _warnings_to(warn):
         if uvs is not None and (notice := long_texture_work(options, uvs)):
             warn(notice)  # now, not once the work is done
-        result = compute(vertices, triangles, progress=progress, uvs=uvs, **options)
+        # With segmentation, the SDF reports [0, 0.8] and the segmentation the rest, as
+        # segment(values=None) does.
+        segmenting = segment_options is not None
+        sdf_progress = _scaled(progress, 0.0, SDF_SHARE) if segmenting else progress
+        result = compute(vertices, triangles, progress=sdf_progress, uvs=uvs, **options)
         parts = None
-        if segment_options is not None:
+        if segmenting:
             parts = segment(
                 vertices,
                 triangles,
                 result.values,
                 postprocess=True,
                 threads=options.get("threads", 0),
+                progress=_scaled(progress, SDF_SHARE, 1.0),
                 **segment_options,
             )
     computed = time.perf_counter()
@@ -152,6 +158,7 @@ def run_job(
             "clusters": int(len(parts.mixture)),
             "smoothness": float(segment_options["smoothness"]),
             "mode": segment_options["mode"],
+            "min_part_area": float(segment_options.get("min_part_area", 0.0)),
             "seconds": {stage: float(t) for stage, t in parts.timings.items()},
         }
         report["outputs"]["segments"] = job.segments

@@ -170,6 +170,16 @@ def _positive_float(high: float):
     return parse
 
 
+def _share(text: str) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"not a number: {text!r}") from None
+    if not 0.0 <= value < 1.0:
+        raise argparse.ArgumentTypeError(f"must be a share in [0, 1) (0.01: 1%), got {text}")
+    return value
+
+
 # Each smoothing option of the command line, the method it belongs to and its name in
 # shape_diameter.smooth().
 SMOOTHING_FLAGS = {
@@ -351,6 +361,14 @@ def build_parser() -> argparse.ArgumentParser:
         choices=("auto", "cgal"),
         help="--segment: auto (the graph cut run until no move helps), or cgal (CGAL 5.5's "
         "segmentation_from_sdf_values exactly) (default: auto)",
+    )
+    parser.add_argument(
+        "--min-part-area",
+        type=_share,
+        metavar="SHARE",
+        help="--segment: a minimum part size, as a share of the mesh's area in [0, 1) (0.01: "
+        "1%%): a smaller segment joins the neighbour it shares the longest boundary with; a "
+        "separate solid stays whole (default: 0, off)",
     )
     parser.add_argument(
         "--output-dir",
@@ -633,7 +651,12 @@ def segment_options(args):
     """--segment's options as segment() keywords, or None without --segment."""
     if args.segment is None:
         return None
-    given = {"clusters": args.segment, "smoothness": args.smoothness, "mode": args.segment_mode}
+    given = {
+        "clusters": args.segment,
+        "smoothness": args.smoothness,
+        "mode": args.segment_mode,
+        "min_part_area": args.min_part_area,
+    }
     return {**SEGMENT_DEFAULTS, **{k: v for k, v in given.items() if v is not None}}
 
 
@@ -748,7 +771,7 @@ def _check_combinations(args) -> None:
         )
     if args.segment is not None and args.points != "faces":
         raise CommandError("--segment needs --points faces (segments are made of faces)")
-    for flag in ("smoothness", "segment_mode"):
+    for flag in ("smoothness", "segment_mode", "min_part_area"):
         if getattr(args, flag) is not None and args.segment is None:
             raise CommandError(f"--{flag.replace('_', '-')} applies to --segment")
     args.seed = 0 if args.seed is None else args.seed

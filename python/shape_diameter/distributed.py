@@ -83,9 +83,10 @@ def compute_files(
     declare one; without it, ``engine="auto"`` runs the CPU engine. save_values: each mesh's
     values next to its output as .npy (cow.sdf.npy). skip_existing: an input whose outputs
     exist is not computed again (a rerun after a crash or a preemption finishes the rest).
-    segment: segment()'s keyword arguments (clusters, smoothness, mode; {} for its defaults)
-    to also split each mesh into parts, as ``--segment``: the mesh coloured by segment and the
-    labels written next to it (cow.sdf.segments.npy); None (the default) for the SDF alone.
+    segment: segment()'s keyword arguments (clusters, smoothness, mode, min_part_area; {} for
+    its defaults) to also split each mesh into parts, as ``--segment``: the mesh coloured by
+    segment and the labels written next to it (cow.sdf.segments.npy); None (the default) for
+    the SDF alone.
     on_result(job, row): called on this process as each row arrives (job.source: the input).
 
     Returns one row per input, in the inputs' order: the command line's --json object
@@ -140,7 +141,8 @@ def task_options(given: dict, gpu: bool) -> dict:
 
 def segment_options(given: Optional[dict]) -> Optional[dict]:
     """segment()'s keywords with the command line's defaults (clusters 5, smoothness 0.26,
-    mode 'auto'), or None for no segmentation; ValueError for a keyword it does not take."""
+    mode 'auto', min_part_area 0), or None for no segmentation; ValueError for a keyword it
+    does not take."""
     if given is None:
         return None
     unknown = sorted(set(given) - set(SEGMENT_DEFAULTS))

@@ -19,10 +19,13 @@ import numpy as np
 
 from . import _core
 from .api import _check_choice, _check_integer, _check_mesh, compute
+from .checks import check_progress
 from .normalization import check_threads
 
 MODES = ("auto", "cgal")
 MAX_CLUSTERS = 256
+# With values=None, the share of the progress the SDF takes; the segmentation takes the rest.
+SDF_SHARE = 0.8
 
 
 class VertexWeights(NamedTuple):
@@ -93,6 +96,23 @@ def _check_number(name, value, lo):
         raise ValueError(f"{name} must be a finite number >= {lo}, got {value!r}")
 
 
+def _check_share(name, value):
+    """A share of a whole: a real number in [0, 1)."""
+    if (
+        isinstance(value, bool)
+        or not isinstance(value, (int, float, np.integer, np.floating))
+        or not 0.0 <= float(value) < 1.0
+    ):
+        raise ValueError(f"{name} must be a share in [0, 1) (0.01: 1%), got {value!r}")
+
+
+def _scaled(progress, start: float, end: float):
+    """`progress` told [start, end] for a step's [0, 1]; None for None."""
+    if progress is None:
+        return None
+    return lambda fraction: progress(start + (end - start) * fraction)
+
+
 def _check_values(values, faces):
     """Per-face values as float64; NaN marks a missing value. ValueError naming the problem."""
     v = np.asarray(values)
@@ -120,7 +140,9 @@ def segment(
     mode: str = "auto",
     postprocess=None,
     weight_rings: int = 2,
+    min_part_area: float = 0.0,
     threads: int = 0,
+    progress=None,
     **compute_options,
 ) -> Segmentation:
     """Segments a triangle mesh into parts by thickness.
@@ -139,7 +161,17 @@ def segment(
     postprocess: CGAL's bilateral filter of the values before clustering (sdf_values'
         postprocess). None (default): on for values computed here, off for values given.
     weight_rings: rings of faces the soft vertex weights fall off over, 0..16.
+    min_part_area: a minimum part size, as a share of the mesh's total area in [0, 1) (0.01:
+        1%); 0 (default) is off. A segment below it joins the adjacent segment it shares the
+        longest boundary with, smallest first, until none is below; a separate solid (no
+        shared edge with the rest) below it stays a segment of its own. `clusters` keeps the
+        graph cut's labels, so a joined segment may hold faces of several clusters.
     threads: CPU threads, 0 for every core. The result is the same for any count.
+    progress: called with the fraction done in [0, 1] from the calling thread, as compute()'s
+        (with values=None the SDF reports [0, 0.8] and the segmentation [0.8, 1]): between
+        the steps and at most every 20 ms inside the long ones (the graph cut's moves and
+        their max-flow). If it raises, the work stops and the exception propagates; nothing
+        is returned.
     """
     _check_integer("clusters", clusters, 1, MAX_CLUSTERS)
     _check_number("smoothness", smoothness, 0.0)
@@ -147,7 +179,9 @@ def segment(
     if postprocess is not None and not isinstance(postprocess, bool):
         raise ValueError(f"postprocess must be None, True or False, got {postprocess!r}")
     _check_integer("weight_rings", weight_rings, 0, 16)
+    _check_share("min_part_area", min_part_area)
     check_threads(threads)
+    check_progress(progress)
     if values is not None and compute_options:
         names = ", ".join(sorted(compute_options))
         raise ValueError(f"compute() options ({names}) apply only with values=None")
@@ -156,8 +190,11 @@ def segment(
     v, t = _check_mesh(vertices, triangles, threads)
     start = time.perf_counter()
     timings = {}
+    told = progress
     if values is None:
-        result = compute(v, t, threads=threads, **compute_options)
+        told = _scaled(progress, SDF_SHARE, 1.0)
+        sdf_progress = _scaled(progress, 0.0, SDF_SHARE)
+        result = compute(v, t, threads=threads, progress=sdf_progress, **compute_options)
         values = result.values
         timings["sdf"] = time.perf_counter() - start
         if postprocess is None:
@@ -175,6 +212,8 @@ def segment(
         first_move_only=cgal,
         weight_rings=int(weight_rings),
         threads=threads,
+        min_segment_area=float(min_part_area),
+        progress=told,
     )
     timings.update(out["timings"])
     timings["total"] = time.perf_counter() - start

@@ -239,6 +239,24 @@ def test_values_on_the_mesh_are_reused():
     assert not api.segment_object(ob, clusters=2).reused_values  # other geometry
 
 
+def test_minimum_part_size_joins_the_neck_to_a_ball():
+    """The neck is 7% of the dumbbell's area: a minimum part size of 10% joins it to a ball,
+    as the package does on the same triangles."""
+    api = addon_module("api")
+    ob = dumbbell()
+    result = api.segment_object(ob, clusters=2, min_part_area=0.1)
+    labels, seg = reference(ob, clusters=2, min_part_area=0.1)
+    assert result.segment_count == seg.segment_count == 2
+    np.testing.assert_array_equal(result.labels, labels)
+    assert [g.name for g in ob.vertex_groups] == ["part_01", "part_02"]
+    assert bpy.ops.object.shape_diameter_segment(clusters=2, min_part_area=0.1) == {"FINISHED"}
+    np.testing.assert_array_equal(face_ints(ob.data, "segment"), labels)
+    before = state()
+    with pytest.raises(api.UserError, match=r"min_part_area must be a share in \[0, 1\)"):
+        api.segment_object(ob, min_part_area=1.0)
+    assert state() == before
+
+
 def test_a_second_run_replaces_its_own_outputs():
     api = addon_module("api")
     ob = dumbbell()
@@ -440,7 +458,15 @@ def test_segment_panel_and_operator_draw():
     assert panel.poll(bpy.context)
     drawn = draw(panel, bpy.context)
     assert ("operator", "object.shape_diameter_segment") in drawn
-    for name in ("clusters", "smoothness", "mode", "face_sets", "group_prefix", "armature"):
+    for name in (
+        "clusters",
+        "smoothness",
+        "mode",
+        "min_part_area",
+        "face_sets",
+        "group_prefix",
+        "armature",
+    ):
         assert ("prop", name) in drawn, name
     operator = addon_module("segment_operator").OBJECT_OT_shape_diameter_segment
     names = bpy.ops.object.shape_diameter_segment.get_rna_type().properties.keys()
@@ -458,3 +484,72 @@ def test_unregister_removes_the_segment_operator_and_panel():
     finally:
         addon_utils.enable("bl_ext.user_default.shape_diameter", default_set=True)
     assert bpy.types.OBJECT_OT_shape_diameter_segment.is_registered
+
+
+def segment_spy(monkeypatch):
+    """What each call of the core's segment() did ('returned', or the exception's name), and
+    the fractions it reported of its own work."""
+    core = addon_module("core")
+    original = core.segment
+    outcomes, fractions = [], []
+
+    def spy(vertices, triangles, values, options, progress=None):
+        def told(fraction):
+            fractions.append(fraction)
+            progress(fraction)
+
+        try:
+            result = original(vertices, triangles, values, options, told)
+        except BaseException as ex:
+            outcomes.append(type(ex).__name__)
+            raise
+        outcomes.append("returned")
+        return result
+
+    monkeypatch.setattr(core, "segment", spy)
+    return outcomes, fractions
+
+
+def big_dumbbell_with_values():
+    """200k triangles with the SDF already on them: a run that is all segmentation, long
+    enough to be stopped half way."""
+    api = addon_module("api")
+    ob = dumbbell(sides=256, rings=400)
+    api.compute_object(ob, rays=8)
+    return ob
+
+
+def test_a_stop_from_progress_stops_the_segmentation_itself(monkeypatch):
+    api = addon_module("api")
+    ob = big_dumbbell_with_values()
+    before = state()
+    outcomes, fractions = segment_spy(monkeypatch)
+
+    def progress(fraction):
+        return not (fractions and fractions[-1] >= 0.3)
+
+    with pytest.raises(api.Cancelled):
+        api.segment_object(ob, rays=8, progress=progress)
+    assert outcomes == ["Cancelled"]  # raised inside the core's segment(), not after it
+    assert 0.3 <= fractions[-1] < 0.9  # the graph cut's second move
+    assert state() == before
+
+
+def test_escape_during_the_segmentation_stops_it_and_changes_nothing(monkeypatch):
+    import time
+
+    operators = addon_module("operators")
+    ob = big_dumbbell_with_values()
+    before = state()
+    outcomes, fractions = segment_spy(monkeypatch)
+    op, context, reports = modal_segment(monkeypatch, rays=8)
+    assert op.invoke(context, event("LEFTMOUSE")) == {"RUNNING_MODAL"}
+    job = operators.running
+    while not (fractions and fractions[-1] >= 0.3) and not job.done:
+        time.sleep(0.001)
+    assert not job.done
+    assert op.modal(context, event("ESC", "PRESS")) == {"CANCELLED"}
+    assert outcomes == ["Cancelled"] and fractions[-1] < 0.9
+    assert job.tasks[0].segmentation is None
+    assert state() == before and ob.name in bpy.data.objects
+    assert reports == [({"WARNING"}, "Segment cancelled: nothing was changed")]

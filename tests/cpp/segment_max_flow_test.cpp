@@ -77,3 +77,35 @@ TEST(SegmentMaxFlow, MatchesEveryCutOfSmallNetworks) {
 }
 
 }  // namespace
+
+namespace {
+
+// A long chain with alternating terminals: a search of many steps.
+TEST(SegmentMaxFlow, ACheckIsCalledDuringTheSearchAndCanStopIt) {
+  const std::uint32_t nodes = 100000;
+  std::vector<double> terminal(nodes);
+  std::vector<FlowEdge> edges;
+  for (std::uint32_t i = 0; i < nodes; ++i) {
+    terminal[i] = i % 2 ? 1.0 : -1.0;
+    if (i + 1 < nodes) edges.push_back(FlowEdge{i, i + 1, 0.5, 0.5});
+  }
+  MaxFlow flow;
+  flow.reset(nodes, terminal, edges);
+  const double unchecked = flow.solve();
+  int calls = 0;
+  flow.reset(nodes, terminal, edges);
+  EXPECT_EQ(flow.solve([&] { ++calls; }), unchecked);
+  EXPECT_GE(calls, 10);  // every 4096 steps of at least one per node
+  struct Stop {};
+  flow.reset(nodes, terminal, edges);
+  calls = 0;
+  EXPECT_THROW(flow.solve([&] {
+    if (++calls == 3) throw Stop{};
+  }),
+               Stop);
+  // The next reset gives a usable network again.
+  flow.reset(nodes, terminal, edges);
+  EXPECT_EQ(flow.solve(), unchecked);
+}
+
+}  // namespace

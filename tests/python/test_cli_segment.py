@@ -81,6 +81,11 @@ def test_segment_without_k_takes_five_clusters_and_cgal_mode(tmp_path, capsys):
         (["--segment", "--points", "vertices"], "--segment needs --points faces"),
         (["--smoothness", "0.5"], "--smoothness applies to --segment"),
         (["--segment-mode", "cgal"], "--segment-mode applies to --segment"),
+        (["--min-part-area", "0.01"], "--min-part-area applies to --segment"),
+        (["--segment", "--min-part-area", "1"], "must be a share in [0, 1) (0.01: 1%), got 1"),
+        (["--segment", "--min-part-area", "-0.1"], "must be a share in [0, 1)"),
+        (["--segment", "--min-part-area", "nan"], "must be a share in [0, 1)"),
+        (["--segment", "--min-part-area", "1%"], "not a number: '1%'"),
     ],
 )
 def test_segment_options_out_of_place_are_refused(tmp_path, capsys, extra, message):
@@ -93,3 +98,26 @@ def test_segment_options_out_of_place_are_refused(tmp_path, capsys, extra, messa
 def test_segment_k_out_of_range_is_a_usage_error(capsys):
     assert cli.main([str(DATA / "psb" / "341.off"), "--segment", "0"]) == 2
     assert "argument --segment: must be in [1, 256], got 0" in capsys.readouterr().err
+
+
+def test_min_part_area_joins_small_parts(tmp_path, capsys):
+    """--min-part-area: the labels segment(min_part_area=...) gives on the same SDF, fewer
+    parts than without it on an ant whose default run has parts under 3% of its area."""
+    source = DATA / "psb" / "81.off"
+    common = [str(source), "--rays", str(RAYS), "--json", "--threads", "2", "--segment"]
+    reports = {}
+    for share in ("0", "0.03"):
+        out = tmp_path / share
+        out.mkdir()
+        argv = [*common, "-o", str(out / "ant.ply"), "--min-part-area", share]
+        assert cli.main(argv) == 0
+        reports[share] = json.loads(capsys.readouterr().out)["segments"]
+        assert reports[share]["min_part_area"] == float(share)
+    labels = np.load(tmp_path / "0.03" / "ant.segments.npy")
+    vertices, triangles = load_mesh(source)
+    result = shape_diameter.compute(vertices, triangles, rays=RAYS, threads=2)
+    expected = shape_diameter.segment(
+        vertices, triangles, result.values, postprocess=True, min_part_area=0.03
+    )
+    np.testing.assert_array_equal(labels, expected.labels)
+    assert reports["0.03"]["count"] == expected.segment_count < reports["0"]["count"]
