@@ -8,6 +8,7 @@
 #include <stdexcept>
 #include <string>
 
+#include "arrays.h"
 #include "progress.h"
 #include "segment/postprocess.h"
 #include "segment/segmentation.h"
@@ -17,8 +18,8 @@ namespace py = pybind11;
 
 namespace {
 
-using Doubles = py::array_t<double, py::array::c_style | py::array::forcecast>;
-using Int64s = py::array_t<std::int64_t, py::array::c_style | py::array::forcecast>;
+using sdf::Doubles;
+using sdf::Int64s;
 using Ints = py::array_t<int, py::array::c_style | py::array::forcecast>;
 
 // The arrays' shapes and every corner index in range: the core trusts them.
@@ -139,28 +140,6 @@ double segmentation_energy(const Doubles& vertices, const Int64s& triangles, con
       static_cast<std::size_t>(triangles.shape(0)), values.data(), o, labels.data());
 }
 
-// CGAL's bilateral filter of per-face values over edge-neighbour rings (window 0: CGAL's
-// size for the face count).
-py::array_t<double> bilateral_filter(const Int64s& triangles, std::size_t vertex_count,
-                                     const Doubles& values, std::size_t window, unsigned threads) {
-  if (triangles.ndim() != 2 || triangles.shape(1) != 3)
-    throw std::invalid_argument("triangles must have shape (m, 3)");
-  const auto n = static_cast<std::size_t>(triangles.shape(0));
-  if (values.ndim() != 1 || static_cast<std::size_t>(values.shape(0)) != n)
-    throw std::invalid_argument("values must have one entry per face");
-  for (py::ssize_t i = 0; i < triangles.size(); ++i)
-    if (triangles.data()[i] < 0 || triangles.data()[i] >= static_cast<std::int64_t>(vertex_count))
-      throw std::invalid_argument("a triangle index is out of range");
-  py::array_t<double> out(static_cast<py::ssize_t>(n));
-  double* to = out.mutable_data();
-  const double* from = values.data();
-  py::gil_scoped_release release;
-  const auto graph = sdf::segment::build_face_graph(triangles.data(), n, vertex_count, threads);
-  sdf::segment::bilateral_filter(graph, from, n,
-                                 window ? window : sdf::segment::bilateral_window(n), threads, to);
-  return out;
-}
-
 }  // namespace
 
 void bind_segmentation(py::module_& m) {
@@ -171,6 +150,4 @@ void bind_segmentation(py::module_& m) {
   m.def("segmentation_energy", &segmentation_energy, py::arg("vertices"), py::arg("triangles"),
         py::arg("values"), py::arg("labels"), py::arg("clusters"), py::arg("smoothness"),
         py::arg("filter"), py::arg("threads"));
-  m.def("bilateral_filter", &bilateral_filter, py::arg("triangles"), py::arg("vertex_count"),
-        py::arg("values"), py::arg("window"), py::arg("threads"));
 }
