@@ -10,6 +10,7 @@ import pytest
 import shape_diameter
 import shape_diameter.colormap
 from helpers import DATA, addon_module, select_only, snapshot_all, world_triangles
+from modal_stand_in import defaults, event, stand_in
 
 BALL, NECK, CENTRE = 1.0, 0.25, 1.6  # ball radius, neck radius, ball centres at x = +-CENTRE
 
@@ -360,57 +361,17 @@ def test_undo_restores_the_mesh_and_removes_the_armature():
 
 
 def modal_segment(monkeypatch, **values):
-    """The Segment operator's own invoke() and modal() on a stand-in instance and context, as
-    test_worker drives Compute's (a headless Blender has no window or event loop)."""
-    import dataclasses
-    import functools
-    import math
-    import types
-
-    from test_worker import FakeWindowManager
-
-    operators = addon_module("operators")
-    process = addon_module("process")
-    segmenting = addon_module("segmenting")
-    monkeypatch.setattr(operators, "can_run_modal", lambda context: True)
-    options = {
-        f.name: getattr(process.Options(), f.name)
-        for f in dataclasses.fields(process.Options)
-        if f.name != "extra"
-    }
-    options.update(
-        {
-            f.name: getattr(segmenting.SegmentOptions(), f.name)
-            for f in dataclasses.fields(segmenting.SegmentOptions)
-            if f.name != "sdf"
-        }
-    )
-    options.update(cone_angle=math.radians(120.0), **values)
-    reports = []
-    op = types.SimpleNamespace(report=lambda kind, text: reports.append((kind, text)), **options)
+    """The Segment operator's invoke() and modal() on a stand-in (modal_stand_in.py), as
+    test_worker drives Compute's."""
+    process, segmenting = addon_module("process"), addon_module("segmenting")
     cls = addon_module("segment_operator").OBJECT_OT_shape_diameter_segment
-    for name in ("_prepare", "_finish", "_report_error", "_stop", "invoke", "modal"):
-        setattr(op, name, functools.partial(getattr(cls, name), op))
-    op.work, op.title = cls.work, cls.title
-    context = types.SimpleNamespace(
-        window=object(),
-        window_manager=FakeWindowManager(),
-        workspace=None,
-        screen=None,
-        scene=bpy.context.scene,
-        view_layer=bpy.context.view_layer,
-        selected_objects=bpy.context.selected_objects,
-        active_object=bpy.context.active_object,
-        evaluated_depsgraph_get=bpy.context.evaluated_depsgraph_get,
-        preferences=bpy.context.preferences,
-    )
-    return op, context, reports
-
-
-def event(kind, value="NOTHING"):
-    import types
-
-    return types.SimpleNamespace(type=kind, value=value)
+    methods = ("_prepare", "_finish", "_report_error", "_stop", "invoke", "modal")
+    options = {
+        **defaults(process.Options),
+        **defaults(segmenting.SegmentOptions, leave_out=("sdf",)),
+    }
+    return stand_in(monkeypatch, cls, methods, options, values, scene=bpy.context.scene,
+                    view_layer=bpy.context.view_layer)  # fmt: skip
 
 
 def test_modal_segment_runs_on_the_worker_and_writes_at_the_end(monkeypatch):

@@ -12,6 +12,7 @@ import bpy
 import numpy as np
 import pytest
 from helpers import addon_module, select_only
+from modal_stand_in import defaults, event, stand_in
 
 
 def big_sphere():
@@ -82,57 +83,12 @@ def test_invoke_runs_synchronously_in_background():
     assert "sdf" in bpy.context.active_object.data.attributes
 
 
-class FakeWindowManager:
-    """What the modal path asks of the window manager, recorded."""
-
-    def __init__(self):
-        self.calls = []
-
-    def __getattr__(self, name):  # event_timer_add, progress_update, modal_handler_add, ...
-        return lambda *args, **kwargs: self.calls.append(name) or name
-
-
 def modal_operator(monkeypatch, **values):
-    """The operator's own invoke() and modal() on a stand-in instance and context: the parts
-    a headless Blender cannot drive (no window, no event loop), driven by hand with the
-    events Blender would send. Returns (operator, context, reports)."""
-    import dataclasses
-    import functools
-    import math
-    import types
-
-    operators = addon_module("operators")
+    """The Compute operator's invoke() and modal() on a stand-in (modal_stand_in.py)."""
     process = addon_module("process")
-    monkeypatch.setattr(operators, "can_run_modal", lambda context: True)
-    options = {
-        f.name: getattr(process.Options(), f.name)
-        for f in dataclasses.fields(process.Options)
-        if f.name != "extra"
-    }
-    options.update(cone_angle=math.radians(120.0), **values)
-    reports = []
-    op = types.SimpleNamespace(report=lambda kind, text: reports.append((kind, text)), **options)
-    cls = operators.OBJECT_OT_shape_diameter
-    for name in ("_options", "_prepare", "_finish", "_report_error", "_stop", "invoke", "modal"):
-        setattr(op, name, functools.partial(getattr(cls, name), op))
-    op.work, op.title = cls.work, cls.title  # a static method and a string: no instance
-    context = types.SimpleNamespace(
-        window=object(),
-        window_manager=FakeWindowManager(),
-        workspace=None,
-        screen=None,
-        selected_objects=bpy.context.selected_objects,
-        active_object=bpy.context.active_object,
-        evaluated_depsgraph_get=bpy.context.evaluated_depsgraph_get,
-        preferences=bpy.context.preferences,
-    )
-    return op, context, reports
-
-
-def event(kind, value="NOTHING"):
-    import types
-
-    return types.SimpleNamespace(type=kind, value=value)
+    cls = addon_module("operators").OBJECT_OT_shape_diameter
+    methods = ("_options", "_prepare", "_finish", "_report_error", "_stop", "invoke", "modal")
+    return stand_in(monkeypatch, cls, methods, defaults(process.Options), values)
 
 
 def test_modal_run_writes_when_the_job_is_done(monkeypatch):
