@@ -47,6 +47,11 @@ except ImportError as exc:  # the extra is not installed
 # declares more units than it has GPUs.
 GPU = "GPU"
 
+# Threads of a worker process: two tasks at once, one computing (with every core) while the
+# other reads its mesh or writes its outputs; their compute() calls take turns (run_job's
+# overlapped mode). A third would only wait.
+THREADS_PER_WORKER = 2
+
 # compute()'s keyword arguments a caller may give (the mesh, its UVs and the progress
 # callback are the task's own).
 _PER_MESH = {"vertices", "triangles", "uvs", "progress"}
@@ -77,15 +82,17 @@ def compute_files(
     its subfolders too, mirrored under output_dir). options: compute()'s keyword arguments
     (rays, cone_angle, sampling, seed, points, normalize, orientation, engine, accel,
     bvh_quality, threads, smoothing, smoothing_options, ...). client: a
-    ``dask.distributed.Client``; without one, a LocalCluster of `workers` processes (one thread
-    each: a task uses every core) is started and closed. gpu: each task holds one ``GPU``
-    resource of a worker (``dask worker --resources GPU=1``), so runs only on workers that
-    declare one; without it, ``engine="auto"`` runs the CPU engine. save_values: each mesh's
-    values next to its output as .npy (cow.sdf.npy). skip_existing: an input whose outputs
-    exist is not computed again (a rerun after a crash or a preemption finishes the rest).
-    segment: segment()'s keyword arguments (clusters, smoothness, mode; {} for its defaults)
-    to also split each mesh into parts, as ``--segment``: the mesh coloured by segment and the
-    labels written next to it (cow.sdf.segments.npy); None (the default) for the SDF alone.
+    ``dask.distributed.Client``; without one, a LocalCluster of `workers` processes is started
+    and closed, each of THREADS_PER_WORKER threads (tasks on one worker compute in turn, each
+    with every core; the others read and write their files meanwhile). gpu: each task holds one
+    ``GPU`` resource of a worker (``dask worker --resources GPU=1``), so runs only on workers
+    that declare one; without it, ``engine="auto"`` runs the CPU engine. save_values: each
+    mesh's values next to its output as .npy (cow.sdf.npy). skip_existing: an input whose
+    outputs exist is not computed again (a rerun after a crash or a preemption finishes the
+    rest). segment: segment()'s keyword arguments (clusters, smoothness, mode; {} for its
+    defaults) to also split each mesh into parts, as ``--segment``: the mesh coloured by segment
+    and the labels written next to it (cow.sdf.segments.npy); None (the default) for the SDF
+    alone.
     on_result(job, row): called on this process as each row arrives (job.source: the input).
 
     Returns one row per input, in the inputs' order: the command line's --json object
@@ -246,6 +253,7 @@ def compute_on_worker(
             mesh_io,
             warn=lambda message: warned.append(one_line(message)),
             segment_options=segment,
+            overlapped=True,
         )
         row["warnings"] = warned
     except Exception as exc:  # noqa: BLE001 - every failure is this input's row
@@ -275,16 +283,17 @@ def _remove_stale_temporaries(outputs, started: float) -> None:
 
 
 @contextlib.contextmanager
-def local_client(workers: int, gpu: bool = False):
-    """A LocalCluster of `workers` processes, one thread each, and its client. Worker
-    processes are spawned, never forked: a process forked from one that loaded OpenCL cannot
-    use OpenCL (the driver's threads do not survive a fork)."""
+def local_client(workers: int, gpu: bool = False, threads: Optional[int] = None):
+    """A LocalCluster of `workers` processes, `threads` threads each (THREADS_PER_WORKER
+    unless given), and its client. Worker processes are spawned, never forked: a process
+    forked from one that loaded OpenCL cannot use OpenCL (the driver's threads do not survive
+    a fork)."""
     import dask
 
     with dask.config.set({"distributed.worker.multiprocessing-method": "spawn"}):
         cluster = distributed.LocalCluster(
             n_workers=workers,
-            threads_per_worker=1,
+            threads_per_worker=threads or THREADS_PER_WORKER,
             processes=True,
             dashboard_address=None,
             resources={GPU: 1} if gpu else None,
