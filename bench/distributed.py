@@ -166,18 +166,21 @@ def overhead(root: Path, rays: int, copies: int, large: bool, gpu: bool) -> None
     time. One thread a worker runs its tasks one after the other: reading, writing and
     scheduling (the wall time outside the tasks) add up. Two (the default) overlap one task's
     reading and writing with the other's compute(): what is left is the wall time in which
-    no compute() ran (the first mesh's reading and the last one's writing included)."""
+    no compute() ran (the first mesh's reading and the last one's writing included), and how
+    much slower compute() ran beside the other thread's reading and writing (the cores are
+    shared) than alone."""
     runs = [("1 thread", 1, False), (f"{THREADS_PER_WORKER} threads", None, False)]
     runs += [("GPU=1, tasks hold it", None, True)] if gpu else []
     print(
         f"\n## Per-mesh overhead, 1 worker, {copies} meshes of each size, {rays} rays "
         f"(target: under {TARGET:.0%} of compute())\n"
     )
-    print("| mesh | faces | run | engine | compute s a mesh | read | write | scheduling "
-          "| overhead | target |")  # fmt: skip
-    print("|---|---|---|---|---|---|---|---|---|---|")
+    print("| mesh | faces | run | engine | compute s a mesh | vs 1 thread | read | write "
+          "| scheduling | overhead | target |")  # fmt: skip
+    print("|---|---|---|---|---|---|---|---|---|---|---|")
     for name, times in SIZES + (LARGE if large else ()):
         folder = size_folder(root, name, times, copies)
+        alone = None  # compute() seconds with one thread a worker
         for label, threads, holds_gpu in runs:
             out = root / f"{folder.name}-{label.split()[0]}-out"
             _, wall, rows = on_cluster(folder, out, 1, rays, holds_gpu, threads)
@@ -187,9 +190,12 @@ def overhead(root: Path, rays: int, copies: int, large: bool, gpu: bool) -> None
             # One thread: outside every task. Two: not told apart from reading and writing.
             scheduling = wall - sum(row["total_seconds"] for row in rows)
             exposed = (wall - compute) / compute  # wall time with no compute() running
+            alone = alone or compute
+            slower = f"{compute / alone - 1:+.1%}" if threads != 1 and not holds_gpu else "-"
             print(
                 f"| {folder.name} | {rows[0]['faces']} | {label} | {rows[0]['engine']} | "
-                f"{compute / len(rows):.3f} | {read / compute:.1%} | {write / compute:.1%} | "
+                f"{compute / len(rows):.3f} | {slower} | {read / compute:.1%} | "
+                f"{write / compute:.1%} | "
                 f"{f'{scheduling / compute:.1%}' if threads == 1 else '-'} | {exposed:.1%} | "
                 f"{'met' if exposed < TARGET else 'not met'} |",
                 flush=True,
@@ -197,8 +203,9 @@ def overhead(root: Path, rays: int, copies: int, large: bool, gpu: bool) -> None
         shutil.rmtree(folder)
     print(
         "\nread, write: inside the tasks, as shares of compute() (hidden behind another "
-        "task's compute() where the worker has two threads); overhead: the run's wall time "
-        "less its compute() time, over its compute() time."
+        "task's compute() where the worker has two threads); vs 1 thread: compute() time "
+        "against the one-thread run's (noise, or the cores shared with the other thread); "
+        "overhead: the run's wall time less its compute() time, over its compute() time."
     )
 
 
