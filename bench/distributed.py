@@ -12,7 +12,7 @@
 3. compute()'s peak memory per face, each mesh in a process of its own.
 
     .venv/bin/python bench/distributed.py [--rays 30] [--copies 4] [--per-size 3] [--large]
-        [--gpu] [--skip throughput,memory]
+        [--gpu] [--skip throughput,overhead,memory]
 
 --gpu adds LocalClusters whose workers declare GPU=1, the tasks holding it (engine 'auto');
 --large adds meshes of 832k and 1.2M faces to the overhead's sizes.
@@ -140,12 +140,14 @@ def throughput(root: Path, copies: int, rays: int, gpu: bool) -> None:
         f"| command line, one process | {wall - inputs:.2f} | {inputs:.2f} | "
         f"{count / inputs:.2f} | 1.00x |"
     )
-    runs = [(1, False), (2, False)] + ([(1, True), (2, True)] if gpu else [])
-    for workers, holds_gpu in runs:
-        out = root / f"cluster-{workers}-{holds_gpu}"
-        startup, seconds, rows = on_cluster(folder, out, workers, rays, holds_gpu)
+    runs = [(1, 1, False), (1, None, False), (2, None, False)]
+    runs += [(1, None, True), (2, None, True)] if gpu else []
+    for workers, threads, holds_gpu in runs:
+        out = root / f"cluster-{workers}-{threads}-{holds_gpu}"
+        startup, seconds, rows = on_cluster(folder, out, workers, rays, holds_gpu, threads)
         label = (
-            f"LocalCluster, {workers} worker{'s' * (workers > 1)}"
+            f"LocalCluster, {workers} worker{'s' * (workers > 1)} of "
+            f"{threads or THREADS_PER_WORKER} thread{'s' * ((threads or THREADS_PER_WORKER) > 1)}"
             + (", GPU=1 each, tasks hold it" if holds_gpu else "")
             + " ("
             + ", ".join(sorted({row["engine"] for row in rows}))
@@ -262,14 +264,17 @@ def main() -> None:
     parser.add_argument("--gpu", action="store_true", help="also with GPU=1 workers")
     parser.add_argument("--per-size", type=int, default=3, help="meshes of each large size")
     parser.add_argument("--large", action="store_true", help="also 832k and 1.2M faces")
-    parser.add_argument("--skip", default="", help="sections to leave out: throughput,memory")
+    parser.add_argument(
+        "--skip", default="", help="sections to leave out: throughput,overhead,memory"
+    )
     args = parser.parse_args()
     print(f"{os.cpu_count()} cores; load average {os.getloadavg()[0]:.1f} at the start")
     root = Path(tempfile.mkdtemp(prefix="sdf-distributed-"))
     try:
         if "throughput" not in args.skip:
             throughput(root, args.copies, args.rays, args.gpu)
-        overhead(root, args.rays, args.per_size, args.large, args.gpu)
+        if "overhead" not in args.skip:
+            overhead(root, args.rays, args.per_size, args.large, args.gpu)
         if "memory" not in args.skip:
             memory(root, args.rays)
     finally:

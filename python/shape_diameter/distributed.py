@@ -49,7 +49,8 @@ GPU = "GPU"
 
 # Threads of a worker process: two tasks at once, one computing (with every core) while the
 # other reads its mesh or writes its outputs; their compute() calls take turns (run_job's
-# overlapped mode). A third would only wait.
+# overlapped mode). A third would only wait. For meshes of 50k faces and more; small meshes on
+# few cores ran faster one at a time (bench/distributed.py, docs/distributed.md).
 THREADS_PER_WORKER = 2
 
 # compute()'s keyword arguments a caller may give (the mesh, its UVs and the progress
@@ -66,6 +67,7 @@ def compute_files(
     *,
     client=None,
     workers: int = 2,
+    worker_threads: int = THREADS_PER_WORKER,
     gpu: bool = False,
     recursive: bool = True,
     save_values: bool = False,
@@ -83,16 +85,16 @@ def compute_files(
     (rays, cone_angle, sampling, seed, points, normalize, orientation, engine, accel,
     bvh_quality, threads, smoothing, smoothing_options, ...). client: a
     ``dask.distributed.Client``; without one, a LocalCluster of `workers` processes is started
-    and closed, each of THREADS_PER_WORKER threads (tasks on one worker compute in turn, each
-    with every core; the others read and write their files meanwhile). gpu: each task holds one
-    ``GPU`` resource of a worker (``dask worker --resources GPU=1``), so runs only on workers
-    that declare one; without it, ``engine="auto"`` runs the CPU engine. save_values: each
-    mesh's values next to its output as .npy (cow.sdf.npy). skip_existing: an input whose
-    outputs exist is not computed again (a rerun after a crash or a preemption finishes the
-    rest). segment: segment()'s keyword arguments (clusters, smoothness, mode; {} for its
-    defaults) to also split each mesh into parts, as ``--segment``: the mesh coloured by segment
-    and the labels written next to it (cow.sdf.segments.npy); None (the default) for the SDF
-    alone.
+    and closed, each of `worker_threads` threads (tasks on one worker compute in turn, each with
+    every core; the others read and write their files meanwhile; 1: one after the other, no mesh
+    read while another computes). gpu: each task holds one ``GPU`` resource of a worker (``dask
+    worker --resources GPU=1``), so runs only on workers that declare one; without it,
+    ``engine="auto"`` runs the CPU engine. save_values: each mesh's values next to its output as
+    .npy (cow.sdf.npy). skip_existing: an input whose outputs exist is not computed again (a
+    rerun after a crash or a preemption finishes the rest). segment: segment()'s keyword
+    arguments (clusters, smoothness, mode; {} for its defaults) to also split each mesh into
+    parts, as ``--segment``: the mesh coloured by segment and the labels written next to it
+    (cow.sdf.segments.npy); None (the default) for the SDF alone.
     on_result(job, row): called on this process as each row arrives (job.source: the input).
 
     Returns one row per input, in the inputs' order: the command line's --json object
@@ -112,7 +114,7 @@ def compute_files(
         raise ValueError(str(exc)) from None
     with contextlib.ExitStack() as stack:
         if client is None:
-            client = stack.enter_context(local_client(workers, gpu))
+            client = stack.enter_context(local_client(workers, gpu, worker_threads))
         rows = run_jobs(
             client,
             jobs,
