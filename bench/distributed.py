@@ -38,11 +38,7 @@ import numpy as np
 HERE = Path(__file__).resolve().parent
 sys.path[:] = [path for path in sys.path if Path(path or ".").resolve() != HERE] + [str(HERE)]
 from meshes import DATA, read_off, subdivide, write_off  # noqa: E402
-from shape_diameter.distributed import (  # noqa: E402
-    THREADS_PER_WORKER,
-    compute_files,
-    local_client,
-)
+from shape_diameter.distributed import compute_files, local_client  # noqa: E402
 
 SMALL = ("cow.obj", "spot.obj", "teapot.obj", "fandisk.obj", "ChineseDragon-10kv.off")
 
@@ -140,14 +136,14 @@ def throughput(root: Path, copies: int, rays: int, gpu: bool) -> None:
         f"| command line, one process | {wall - inputs:.2f} | {inputs:.2f} | "
         f"{count / inputs:.2f} | 1.00x |"
     )
-    runs = [(1, 1, False), (1, None, False), (2, None, False)]
-    runs += [(1, None, True), (2, None, True)] if gpu else []
+    runs = [(1, 1, False), (1, 2, False), (2, 1, False)]
+    runs += [(1, 1, True), (2, 1, True)] if gpu else []
     for workers, threads, holds_gpu in runs:
         out = root / f"cluster-{workers}-{threads}-{holds_gpu}"
         startup, seconds, rows = on_cluster(folder, out, workers, rays, holds_gpu, threads)
         label = (
-            f"LocalCluster, {workers} worker{'s' * (workers > 1)} of "
-            f"{threads or THREADS_PER_WORKER} thread{'s' * ((threads or THREADS_PER_WORKER) > 1)}"
+            f"LocalCluster, {workers} worker{'s' * (workers > 1)} of {threads} "
+            f"thread{'s' * (threads > 1)}"
             + (", GPU=1 each, tasks hold it" if holds_gpu else "")
             + " ("
             + ", ".join(sorted({row["engine"] for row in rows}))
@@ -165,14 +161,14 @@ TARGET = 0.10
 
 def overhead(root: Path, rays: int, copies: int, large: bool, gpu: bool) -> None:
     """Per size, a folder of `copies` meshes on one worker: compute() against the run's wall
-    time. One thread a worker runs its tasks one after the other: reading, writing and
-    scheduling (the wall time outside the tasks) add up. Two (the default) overlap one task's
+    time. One thread a worker (the default) runs its tasks one after the other: reading,
+    writing and scheduling (the wall time outside the tasks) add up. Two overlap one task's
     reading and writing with the other's compute(): what is left is the wall time in which
     no compute() ran (the first mesh's reading and the last one's writing included), and how
     much slower compute() ran beside the other thread's reading and writing (the cores are
     shared) than alone."""
-    runs = [("1 thread", 1, False), (f"{THREADS_PER_WORKER} threads", None, False)]
-    runs += [("GPU=1, tasks hold it", None, True)] if gpu else []
+    runs = [("1 thread", 1, False), ("2 threads", 2, False)]
+    runs += [("GPU=1, tasks hold it", 1, True)] if gpu else []
     print(
         f"\n## Per-mesh overhead, 1 worker, {copies} meshes of each size, {rays} rays "
         f"(target: under {TARGET:.0%} of compute())\n"

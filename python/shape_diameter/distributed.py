@@ -47,11 +47,12 @@ except ImportError as exc:  # the extra is not installed
 # declares more units than it has GPUs.
 GPU = "GPU"
 
-# Threads of a worker process: two tasks at once, one computing (with every core) while the
-# other reads its mesh or writes its outputs; their compute() calls take turns (run_job's
-# overlapped mode). A third would only wait. For meshes of 50k faces and more; small meshes on
-# few cores ran faster one at a time (bench/distributed.py, docs/distributed.md).
-THREADS_PER_WORKER = 2
+# Threads of a LocalCluster's worker process: one task at a time. A worker of two threads runs
+# two tasks at once, one computing (with every core) while the other reads its mesh or writes
+# its outputs, their compute() calls in turn (run_job's overlapped mode); a third would only
+# wait. Two pay for meshes of 50k faces and more; small meshes ran slower beside another
+# task's reading (bench/distributed.py, docs/distributed.md).
+THREADS_PER_WORKER = 1
 
 # compute()'s keyword arguments a caller may give (the mesh, its UVs and the progress
 # callback are the task's own).
@@ -85,16 +86,16 @@ def compute_files(
     (rays, cone_angle, sampling, seed, points, normalize, orientation, engine, accel,
     bvh_quality, threads, smoothing, smoothing_options, ...). client: a
     ``dask.distributed.Client``; without one, a LocalCluster of `workers` processes is started
-    and closed, each of `worker_threads` threads (tasks on one worker compute in turn, each with
-    every core; the others read and write their files meanwhile; 1: one after the other, no mesh
-    read while another computes). gpu: each task holds one ``GPU`` resource of a worker (``dask
-    worker --resources GPU=1``), so runs only on workers that declare one; without it,
-    ``engine="auto"`` runs the CPU engine. save_values: each mesh's values next to its output as
-    .npy (cow.sdf.npy). skip_existing: an input whose outputs exist is not computed again (a
-    rerun after a crash or a preemption finishes the rest). segment: segment()'s keyword
-    arguments (clusters, smoothness, mode; {} for its defaults) to also split each mesh into
-    parts, as ``--segment``: the mesh coloured by segment and the labels written next to it
-    (cow.sdf.segments.npy); None (the default) for the SDF alone.
+    and closed, each of `worker_threads` threads (1: a task at a time; 2: tasks on one worker
+    compute in turn, each with every core, one reading and writing its files while the other
+    computes). gpu: each task holds one ``GPU`` resource of a worker (``dask worker --resources
+    GPU=1``), so runs only on workers that declare one; without it, ``engine="auto"`` runs the
+    CPU engine. save_values: each mesh's values next to its output as .npy (cow.sdf.npy).
+    skip_existing: an input whose outputs exist is not computed again (a rerun after a crash or
+    a preemption finishes the rest). segment: segment()'s keyword arguments (clusters,
+    smoothness, mode; {} for its defaults) to also split each mesh into parts, as ``--segment``:
+    the mesh coloured by segment and the labels written next to it (cow.sdf.segments.npy); None
+    (the default) for the SDF alone.
     on_result(job, row): called on this process as each row arrives (job.source: the input).
 
     Returns one row per input, in the inputs' order: the command line's --json object
@@ -242,11 +243,11 @@ def compute_on_worker(
 
     started = time.time()
     job = Job(source, output, values, segments=segments)
-    worker = distributed.get_worker().address
+    worker = distributed.get_worker()
     written = [path for path in job.paths() if path is not None]
     if skip_existing and all(map(os.path.exists, written)):
         # A retry of a task whose worker died after writing: done once, not again.
-        return {**skipped_report(job), "worker": worker}
+        return {**skipped_report(job), "worker": worker.address}
     warned = []
     try:
         row = run_job(
@@ -255,7 +256,7 @@ def compute_on_worker(
             mesh_io,
             warn=lambda message: warned.append(one_line(message)),
             segment_options=segment,
-            overlapped=True,
+            overlapped=worker.state.nthreads > 1,  # other tasks beside this one
         )
         row["warnings"] = warned
     except Exception as exc:  # noqa: BLE001 - every failure is this input's row
@@ -265,7 +266,7 @@ def compute_on_worker(
             status, message = EXIT_ENVIRONMENT, f"{type(exc).__name__}: {exc}"
         row = error_report(job, status, naming_a_file(job, message), warned)
     _remove_stale_temporaries(written, started)
-    row["worker"] = worker
+    row["worker"] = worker.address
     return row
 
 
@@ -297,7 +298,7 @@ def local_client(workers: int, gpu: bool = False, threads: Optional[int] = None)
             n_workers=workers,
             threads_per_worker=threads or THREADS_PER_WORKER,
             processes=True,
-            dashboard_address=None,
+            dashboard_address=":0",  # (any free port: two clusters on one machine clash on none)
             resources={GPU: 1} if gpu else None,
         )
     with cluster, distributed.Client(cluster) as client:

@@ -112,6 +112,14 @@ def test_a_folder_on_two_workers_gives_the_command_lines_files(folder, reference
     assert len({row["worker"] for row in by_input.values()}) == 2  # both processes worked
 
 
+def test_a_worker_of_two_threads_gives_the_command_lines_files(folder, reference, tmp_path):
+    # Its two tasks at a time compute in turn, one reading or writing meanwhile.
+    out = tmp_path / "out"
+    rows = compute_files([folder], out, workers=1, worker_threads=2, rays=RAYS, save_values=True)
+    assert _files(out) == reference
+    assert sorted(row["status"] for row in rows) == ["error"] + ["ok"] * sum(SOURCES.values())
+
+
 def test_a_worker_killed_mid_run_loses_and_repeats_nothing(folder, reference, client, tmp_path):
     out = tmp_path / "out"
     pids = client.run(os.getpid)  # worker address -> process id
