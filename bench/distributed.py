@@ -21,7 +21,6 @@
 from __future__ import annotations
 
 import argparse
-import importlib
 import json
 import os
 import shutil
@@ -111,12 +110,30 @@ def command_line(folder: Path, out: Path, rays: int):
     return wall, sum(json.loads(line)["total_seconds"] for line in done.stdout.splitlines())
 
 
+def _warm_up(folder: str) -> None:
+    """A worker's first mesh read and written (the mesh library's lazy imports and first
+    calls: once a worker's life, not a mesh's)."""
+    from shape_diameter import mesh_io
+
+    source = Path(folder) / "warm-up.ply"
+    vertices, triangles = mesh_io.load_mesh(source)
+    colors = np.full((len(triangles), 4), 255, dtype=np.uint8)
+    mesh_io.save_colored(Path(folder) / f"warm-up-{os.getpid()}.ply", vertices, triangles, colors)
+
+
 def on_cluster(folder: Path, out: Path, workers: int, rays: int, gpu: bool, threads=None):
     """(cluster start-up seconds, run seconds, rows)."""
+    from shape_diameter import mesh_io
+
     start = time.perf_counter()
     with local_client(workers, gpu, threads) as client:
-        # Every worker up, with the mesh library imported (once a worker's life, not a mesh's).
-        client.run(importlib.import_module, "shape_diameter.mesh_io")
+        # Every worker up, having read and written a small mesh of the folder's format.
+        warm = Path(tempfile.mkdtemp(prefix="warm-up-", dir=folder.parent))
+        vertices, triangles = read_off(DATA / "ChineseDragon-10kv.off")
+        colors = np.full((len(triangles), 4), 255, dtype=np.uint8)
+        mesh_io.save_colored(warm / "warm-up.ply", vertices, triangles, colors)
+        client.run(_warm_up, str(warm))
+        shutil.rmtree(warm)
         ready = time.perf_counter()
         rows = compute_files([folder], out, client=client, rays=rays, gpu=gpu)
         done = time.perf_counter()
