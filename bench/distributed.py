@@ -4,20 +4,23 @@
 1. Meshes per second over one folder: the in-process command line (`shape-diameter DIR -r
    --output-dir OUT`, one process, start-up included) against shape_diameter.distributed on a
    LocalCluster of 1 and of 2 worker processes (cluster start-up timed apart).
-2. Per-mesh overhead for meshes of 50k faces and more, one worker (tasks run one after the
-   other, so the wall time not spent inside the tasks is the scheduling's): scheduling,
-   reading and writing against compute()'s own time.
+2. Per-mesh overhead for meshes of 50k faces and more, per size (a folder of --per-size
+   copies of each), one worker of one thread (tasks one after the other: reading, writing
+   and scheduling add up) and of two (one task's files read and written while the other
+   computes): the run's wall time less compute()'s, against compute()'s, and whether that
+   stays under 10%.
 3. compute()'s peak memory per face, each mesh in a process of its own.
 
-    .venv/bin/python bench/distributed.py [--rays 30] [--copies 4] [--gpu]
+    .venv/bin/python bench/distributed.py [--rays 30] [--copies 4] [--per-size 3] [--large]
+        [--gpu] [--skip throughput,overhead,memory]
 
---gpu adds LocalClusters whose workers declare GPU=1, the tasks holding it (engine 'auto').
+--gpu adds LocalClusters whose workers declare GPU=1, the tasks holding it (engine 'auto');
+--large adds meshes of 832k and 1.2M faces to the overhead's sizes.
 """
 
 from __future__ import annotations
 
 import argparse
-import importlib
 import json
 import os
 import shutil
@@ -57,26 +60,26 @@ def small_folder(root: Path, copies: int) -> Path:
     return folder
 
 
-def large_folder(root: Path) -> Path:
-    """Meshes of 52k-320k faces as binary PLY, the command line's own output format."""
+# Meshes of 50k faces and more: (mesh, 1-to-4 subdivisions), 52k to 302k faces; --large adds
+# 832k and 1.2M.
+SIZES = (("armadillo", 0), ("bunny00", 0), ("armadillo", 1), ("bunny00", 1))
+LARGE = (("armadillo", 2), ("bunny00", 2))
+
+
+def size_folder(root: Path, name: str, times: int, copies: int) -> Path:
+    """`copies` of one mesh of 52k faces or more, each moved apart (its own values, the same
+    cost), as binary PLY: the command line's own output format."""
     from shape_diameter import mesh_io
 
-    folder, rng = root / "large", np.random.default_rng(2)
+    folder, rng = root / f"{name}-x{4**times}", np.random.default_rng(times)
     folder.mkdir()
-    for name, times in (
-        ("armadillo", 0),
-        ("bunny00", 0),
-        ("ChineseDragon-10kv", 2),
-        ("armadillo", 1),
-        ("bunny00", 1),
-    ):
-        vertices, triangles = read_off(DATA / f"{name}.off")
-        for _ in range(times):
-            vertices, triangles = subdivide(vertices, triangles)
-        colors = np.full((len(triangles), 4), 255, dtype=np.uint8)
-        mesh_io.save_colored(
-            folder / f"{name}-x{4**times}.ply", _moved(vertices, rng), triangles, colors
-        )
+    vertices, triangles = read_off(DATA / f"{name}.off")
+    for _ in range(times):
+        vertices, triangles = subdivide(vertices, triangles)
+    colors = np.full((len(triangles), 4), 255, dtype=np.uint8)
+    for copy in range(copies):
+        path = folder / f"{name}-x{4**times}-{copy}.ply"
+        mesh_io.save_colored(path, _moved(vertices, rng), triangles, colors)
     return folder
 
 
@@ -107,12 +110,30 @@ def command_line(folder: Path, out: Path, rays: int):
     return wall, sum(json.loads(line)["total_seconds"] for line in done.stdout.splitlines())
 
 
-def on_cluster(folder: Path, out: Path, workers: int, rays: int, gpu: bool):
+def _warm_up(folder: str) -> None:
+    """A worker's first mesh read and written (the mesh library's lazy imports and first
+    calls: once a worker's life, not a mesh's)."""
+    from shape_diameter import mesh_io
+
+    source = Path(folder) / "warm-up.ply"
+    vertices, triangles = mesh_io.load_mesh(source)
+    colors = np.full((len(triangles), 4), 255, dtype=np.uint8)
+    mesh_io.save_colored(Path(folder) / f"warm-up-{os.getpid()}.ply", vertices, triangles, colors)
+
+
+def on_cluster(folder: Path, out: Path, workers: int, rays: int, gpu: bool, threads=None):
     """(cluster start-up seconds, run seconds, rows)."""
+    from shape_diameter import mesh_io
+
     start = time.perf_counter()
-    with local_client(workers, gpu) as client:
-        # Every worker up, with the mesh library imported (once a worker's life, not a mesh's).
-        client.run(importlib.import_module, "shape_diameter.mesh_io")
+    with local_client(workers, gpu, threads) as client:
+        # Every worker up, having read and written a small mesh of the folder's format.
+        warm = Path(tempfile.mkdtemp(prefix="warm-up-", dir=folder.parent))
+        vertices, triangles = read_off(DATA / "ChineseDragon-10kv.off")
+        colors = np.full((len(triangles), 4), 255, dtype=np.uint8)
+        mesh_io.save_colored(warm / "warm-up.ply", vertices, triangles, colors)
+        client.run(_warm_up, str(warm))
+        shutil.rmtree(warm)
         ready = time.perf_counter()
         rows = compute_files([folder], out, client=client, rays=rays, gpu=gpu)
         done = time.perf_counter()
@@ -132,12 +153,14 @@ def throughput(root: Path, copies: int, rays: int, gpu: bool) -> None:
         f"| command line, one process | {wall - inputs:.2f} | {inputs:.2f} | "
         f"{count / inputs:.2f} | 1.00x |"
     )
-    runs = [(1, False), (2, False)] + ([(1, True), (2, True)] if gpu else [])
-    for workers, holds_gpu in runs:
-        out = root / f"cluster-{workers}-{holds_gpu}"
-        startup, seconds, rows = on_cluster(folder, out, workers, rays, holds_gpu)
+    runs = [(1, 1, False), (1, 2, False), (2, 1, False)]
+    runs += [(1, 1, True), (2, 1, True)] if gpu else []
+    for workers, threads, holds_gpu in runs:
+        out = root / f"cluster-{workers}-{threads}-{holds_gpu}"
+        startup, seconds, rows = on_cluster(folder, out, workers, rays, holds_gpu, threads)
         label = (
-            f"LocalCluster, {workers} worker{'s' * (workers > 1)}"
+            f"LocalCluster, {workers} worker{'s' * (workers > 1)} of {threads} "
+            f"thread{'s' * (threads > 1)}"
             + (", GPU=1 each, tasks hold it" if holds_gpu else "")
             + " ("
             + ", ".join(sorted({row["engine"] for row in rows}))
@@ -149,32 +172,55 @@ def throughput(root: Path, copies: int, rays: int, gpu: bool) -> None:
         )
 
 
-def overhead(root: Path, rays: int) -> None:
-    folder = large_folder(root)
-    _, wall, rows = on_cluster(folder, root / "large-out", 1, rays, False)
-    print(f"\n## Per-mesh overhead, 1 worker, {rays} rays (compute = compute()'s own time)\n")
-    print("| mesh | faces | compute s | read s | write s | read+write / compute |")
-    print("|---|---|---|---|---|---|")
-    compute = read = write = inside = 0.0
-    for row in rows:
-        c, r, w = row["seconds"]["total"], row["io_seconds"]["load"], row["io_seconds"]["write"]
-        compute, read, write, inside = (
-            compute + c,
-            read + r,
-            write + w,
-            inside + row["total_seconds"],
-        )
-        print(
-            f"| {Path(row['input']).name} | {row['faces']} | {c:.3f} | {r:.3f} | {w:.3f} | "
-            f"{(r + w) / c:.1%} |"
-        )
-    scheduling = wall - inside  # the run's time outside the tasks: submitting, results back
+# The target: a mesh's files and its scheduling cost under this share of its compute() time.
+TARGET = 0.10
+
+
+def overhead(root: Path, rays: int, copies: int, large: bool, gpu: bool) -> None:
+    """Per size, a folder of `copies` meshes on one worker: compute() against the run's wall
+    time. One thread a worker (the default) runs its tasks one after the other: reading,
+    writing and scheduling (the wall time outside the tasks) add up. Two overlap one task's
+    reading and writing with the other's compute(): what is left is the wall time in which
+    no compute() ran (the first mesh's reading and the last one's writing included), and how
+    much slower compute() ran beside the other thread's reading and writing (the cores are
+    shared) than alone."""
+    runs = [("1 thread", 1, False), ("2 threads", 2, False)]
+    runs += [("GPU=1, tasks hold it", 1, True)] if gpu else []
     print(
-        f"\nAll {len(rows)}: compute {compute:.2f} s, read {read:.2f} s, write {write:.2f} s, "
-        f"scheduling {scheduling:.2f} s ({scheduling / len(rows) * 1e3:.0f} ms a mesh). "
-        f"Overhead over compute: scheduling {scheduling / compute:.1%}, reading and writing "
-        f"{(read + write) / compute:.1%} (the command line reads and writes the same), "
-        f"together {(scheduling + read + write) / compute:.1%}."
+        f"\n## Per-mesh overhead, 1 worker, {copies} meshes of each size, {rays} rays "
+        f"(target: under {TARGET:.0%} of compute())\n"
+    )
+    print("| mesh | faces | run | engine | compute s a mesh | vs 1 thread | read | write "
+          "| scheduling | overhead | target |")  # fmt: skip
+    print("|---|---|---|---|---|---|---|---|---|---|---|")
+    for name, times in SIZES + (LARGE if large else ()):
+        folder = size_folder(root, name, times, copies)
+        alone = None  # compute() seconds with one thread a worker
+        for label, threads, holds_gpu in runs:
+            out = root / f"{folder.name}-{label.split()[0]}-out"
+            _, wall, rows = on_cluster(folder, out, 1, rays, holds_gpu, threads)
+            compute = sum(row["seconds"]["total"] for row in rows)
+            read = sum(row["io_seconds"]["load"] for row in rows)
+            write = sum(row["io_seconds"]["write"] for row in rows)
+            # One thread: outside every task. Two: not told apart from reading and writing.
+            scheduling = wall - sum(row["total_seconds"] for row in rows)
+            exposed = (wall - compute) / compute  # wall time with no compute() running
+            alone = alone or compute
+            slower = f"{compute / alone - 1:+.1%}" if threads != 1 and not holds_gpu else "-"
+            print(
+                f"| {folder.name} | {rows[0]['faces']} | {label} | {rows[0]['engine']} | "
+                f"{compute / len(rows):.3f} | {slower} | {read / compute:.1%} | "
+                f"{write / compute:.1%} | "
+                f"{f'{scheduling / compute:.1%}' if threads == 1 else '-'} | {exposed:.1%} | "
+                f"{'met' if exposed < TARGET else 'not met'} |",
+                flush=True,
+            )
+        shutil.rmtree(folder)
+    print(
+        "\nread, write: inside the tasks, as shares of compute() (hidden behind another "
+        "task's compute() where the worker has two threads); vs 1 thread: compute() time "
+        "against the one-thread run's (noise, or the cores shared with the other thread); "
+        "overhead: the run's wall time less its compute() time, over its compute() time."
     )
 
 
@@ -229,13 +275,21 @@ def main() -> None:
     parser.add_argument("--rays", type=int, default=30)
     parser.add_argument("--copies", type=int, default=4, help="copies of each small mesh")
     parser.add_argument("--gpu", action="store_true", help="also with GPU=1 workers")
+    parser.add_argument("--per-size", type=int, default=3, help="meshes of each large size")
+    parser.add_argument("--large", action="store_true", help="also 832k and 1.2M faces")
+    parser.add_argument(
+        "--skip", default="", help="sections to leave out: throughput,overhead,memory"
+    )
     args = parser.parse_args()
     print(f"{os.cpu_count()} cores; load average {os.getloadavg()[0]:.1f} at the start")
     root = Path(tempfile.mkdtemp(prefix="sdf-distributed-"))
     try:
-        throughput(root, args.copies, args.rays, args.gpu)
-        overhead(root, args.rays)
-        memory(root, args.rays)
+        if "throughput" not in args.skip:
+            throughput(root, args.copies, args.rays, args.gpu)
+        if "overhead" not in args.skip:
+            overhead(root, args.rays, args.per_size, args.large, args.gpu)
+        if "memory" not in args.skip:
+            memory(root, args.rays)
     finally:
         shutil.rmtree(root, ignore_errors=True)
     print(

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import contextlib
 import io
+import threading
 import time
 import warnings
 
@@ -22,6 +23,7 @@ from .engine_choice import DEVICE_ERRORS
 from .output_files import written_whole
 from .segmentation import SDF_SHARE, _scaled, segment
 from .smoothing import texture_cost
+from .warning_log import collect_warnings
 
 # Texture smoothing estimated past this on the CPU threads is announced before it starts (a
 # 8192^2 run at a radius of 8192 texels went on for an hour without a word).
@@ -77,12 +79,27 @@ def skipped_report(job) -> dict:
     }
 
 
+# run_job(overlapped=True), on the threads of one process: one input computes at a time, with
+# every core, while another reads or writes its files; one reads at a time (reading silences
+# the parsers' warnings through the process-wide filters).
+_COMPUTING = threading.Lock()
+_READING = threading.Lock()
+
+
 # segment()'s keywords a batch takes, with the defaults --segment gives them.
 SEGMENT_DEFAULTS = {"clusters": 5, "smoothness": 0.26, "mode": "auto", "min_part_area": 0.0}
 
 
 def run_job(
-    job, options: dict, mesh_io, *, warn, progress=None, check=None, segment_options=None
+    job,
+    options: dict,
+    mesh_io,
+    *,
+    warn,
+    progress=None,
+    check=None,
+    segment_options=None,
+    overlapped=False,
 ) -> dict:
     """Read, compute (compute()'s keyword arguments in `options`) and write one input; returns
     its --json object without its warnings, which go to warn(message) as they come.
@@ -92,13 +109,21 @@ def run_job(
     job.segments.
 
     `progress`: compute()'s callback; `check`: called between the steps (the command line's
-    Ctrl-C check points). Failures raise; failure() maps them to a status and a message."""
+    Ctrl-C check points). Failures raise; failure() maps them to a status and a message.
+
+    `overlapped`: for several threads of one process running inputs side by side (a Dask
+    worker's): computing takes turns, so one input's reading and writing overlap another's
+    compute(), and warn() gets the package's warnings alone (warnings.catch_warnings, which
+    also catches other libraries', swaps process-wide state that threads would undo)."""
     check = check or (lambda: None)
-    started = time.perf_counter()
-    vertices, triangles, uvs = _load(job, options, mesh_io)
-    loaded = time.perf_counter()
+    caught = _package_warnings_to if overlapped else _warnings_to
+    turn = _COMPUTING if overlapped else contextlib.nullcontext()
+    with _READING if overlapped else contextlib.nullcontext():
+        started = time.perf_counter()  # (a turn to read waited for is not reading)
+        vertices, triangles, uvs = _load(job, options, mesh_io)
+        loaded = time.perf_counter()
     check()  # (trimesh catches BaseException in places)
-    with _warnings_to(warn):
+    with turn, caught(warn):
         if uvs is not None and (notice := long_texture_work(options, uvs)):
             warn(notice)  # now, not once the work is done
         # With segmentation, the SDF reports [0, 0.8] and the segmentation the rest, as
@@ -122,7 +147,7 @@ def run_job(
     colors = colormap(result.normalized) if parts is None else segment_colors(parts.labels)
 
     def save_mesh():
-        with _warnings_to(warn):  # GLB and STL: float32 coordinates
+        with caught(warn):  # GLB and STL: float32 coordinates
             mesh_io.save_colored(job.output, vertices, triangles, colors, options["points"])
         if parts is not None and job.segments:
             save_labels()
@@ -179,6 +204,18 @@ def _load(job, options: dict, mesh_io):
             "without one), or PLY texture coordinates)"
         )
     return vertices, triangles, uvs
+
+
+@contextlib.contextmanager
+def _package_warnings_to(warn):
+    """The package's warnings raised inside, on this thread, handed to warn(message) once the
+    block is left."""
+    with collect_warnings() as caught:
+        try:
+            yield
+        finally:
+            for message in caught:
+                warn(message)
 
 
 @contextlib.contextmanager

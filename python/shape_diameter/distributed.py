@@ -47,6 +47,13 @@ except ImportError as exc:  # the extra is not installed
 # declares more units than it has GPUs.
 GPU = "GPU"
 
+# Threads of a LocalCluster's worker process: one task at a time. A worker of two threads runs
+# two tasks at once, one computing (with every core) while the other reads its mesh or writes
+# its outputs, their compute() calls in turn (run_job's overlapped mode); a third would only
+# wait. Two pay for meshes of 50k faces and more; small meshes ran slower beside another
+# task's reading (bench/distributed.py, docs/distributed.md).
+THREADS_PER_WORKER = 1
+
 # compute()'s keyword arguments a caller may give (the mesh, its UVs and the progress
 # callback are the task's own).
 _PER_MESH = {"vertices", "triangles", "uvs", "progress"}
@@ -61,6 +68,7 @@ def compute_files(
     *,
     client=None,
     workers: int = 2,
+    worker_threads: int = THREADS_PER_WORKER,
     gpu: bool = False,
     recursive: bool = True,
     save_values: bool = False,
@@ -77,16 +85,17 @@ def compute_files(
     its subfolders too, mirrored under output_dir). options: compute()'s keyword arguments
     (rays, cone_angle, sampling, seed, points, normalize, orientation, engine, accel,
     bvh_quality, threads, smoothing, smoothing_options, ...). client: a
-    ``dask.distributed.Client``; without one, a LocalCluster of `workers` processes (one thread
-    each: a task uses every core) is started and closed. gpu: each task holds one ``GPU``
-    resource of a worker (``dask worker --resources GPU=1``), so runs only on workers that
-    declare one; without it, ``engine="auto"`` runs the CPU engine. save_values: each mesh's
-    values next to its output as .npy (cow.sdf.npy). skip_existing: an input whose outputs
-    exist is not computed again (a rerun after a crash or a preemption finishes the rest).
-    segment: segment()'s keyword arguments (clusters, smoothness, mode, min_part_area; {} for
-    its defaults) to also split each mesh into parts, as ``--segment``: the mesh coloured by
-    segment and the labels written next to it (cow.sdf.segments.npy); None (the default) for
-    the SDF alone.
+    ``dask.distributed.Client``; without one, a LocalCluster of `workers` processes is started
+    and closed, each of `worker_threads` threads (1: a task at a time; 2: tasks on one worker
+    compute in turn, each with every core, one reading and writing its files while the other
+    computes). gpu: each task holds one ``GPU`` resource of a worker (``dask worker --resources
+    GPU=1``), so runs only on workers that declare one; without it, ``engine="auto"`` runs the
+    CPU engine. save_values: each mesh's values next to its output as .npy (cow.sdf.npy).
+    skip_existing: an input whose outputs exist is not computed again (a rerun after a crash or
+    a preemption finishes the rest). segment: segment()'s keyword arguments (clusters,
+    smoothness, mode, min_part_area; {} for its defaults) to also split each mesh into parts,
+    as ``--segment``: the mesh coloured by segment and the labels written next to it
+    (cow.sdf.segments.npy); None (the default) for the SDF alone.
     on_result(job, row): called on this process as each row arrives (job.source: the input).
 
     Returns one row per input, in the inputs' order: the command line's --json object
@@ -106,7 +115,7 @@ def compute_files(
         raise ValueError(str(exc)) from None
     with contextlib.ExitStack() as stack:
         if client is None:
-            client = stack.enter_context(local_client(workers, gpu))
+            client = stack.enter_context(local_client(workers, gpu, worker_threads))
         rows = run_jobs(
             client,
             jobs,
@@ -235,11 +244,11 @@ def compute_on_worker(
 
     started = time.time()
     job = Job(source, output, values, segments=segments)
-    worker = distributed.get_worker().address
+    worker = distributed.get_worker()
     written = [path for path in job.paths() if path is not None]
     if skip_existing and all(map(os.path.exists, written)):
         # A retry of a task whose worker died after writing: done once, not again.
-        return {**skipped_report(job), "worker": worker}
+        return {**skipped_report(job), "worker": worker.address}
     warned = []
     try:
         row = run_job(
@@ -248,6 +257,7 @@ def compute_on_worker(
             mesh_io,
             warn=lambda message: warned.append(one_line(message)),
             segment_options=segment,
+            overlapped=worker.state.nthreads > 1,  # other tasks beside this one
         )
         row["warnings"] = warned
     except Exception as exc:  # noqa: BLE001 - every failure is this input's row
@@ -257,7 +267,7 @@ def compute_on_worker(
             status, message = EXIT_ENVIRONMENT, f"{type(exc).__name__}: {exc}"
         row = error_report(job, status, naming_a_file(job, message), warned)
     _remove_stale_temporaries(written, started)
-    row["worker"] = worker
+    row["worker"] = worker.address
     return row
 
 
@@ -277,18 +287,19 @@ def _remove_stale_temporaries(outputs, started: float) -> None:
 
 
 @contextlib.contextmanager
-def local_client(workers: int, gpu: bool = False):
-    """A LocalCluster of `workers` processes, one thread each, and its client. Worker
-    processes are spawned, never forked: a process forked from one that loaded OpenCL cannot
-    use OpenCL (the driver's threads do not survive a fork)."""
+def local_client(workers: int, gpu: bool = False, threads: Optional[int] = None):
+    """A LocalCluster of `workers` processes, `threads` threads each (THREADS_PER_WORKER
+    unless given), and its client. Worker processes are spawned, never forked: a process
+    forked from one that loaded OpenCL cannot use OpenCL (the driver's threads do not survive
+    a fork)."""
     import dask
 
     with dask.config.set({"distributed.worker.multiprocessing-method": "spawn"}):
         cluster = distributed.LocalCluster(
             n_workers=workers,
-            threads_per_worker=1,
+            threads_per_worker=threads or THREADS_PER_WORKER,
             processes=True,
-            dashboard_address=None,
+            dashboard_address=":0",  # (any free port: two clusters on one machine clash on none)
             resources={GPU: 1} if gpu else None,
         )
     with cluster, distributed.Client(cluster) as client:

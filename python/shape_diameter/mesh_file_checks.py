@@ -92,7 +92,8 @@ def check_complete(path: str, suffix: str) -> None:
         if suffix not in (".off", ".ply", ".stl"):
             _check_kind(suffix, head + stream.read(4096 - len(head)), size)
             return
-        data = head + stream.read()
+        stream.seek(0)
+        data = stream.read()  # (head + the rest would copy it all once more)
     if suffix == ".off":
         _check_off(data)
     elif suffix == ".ply":
@@ -241,10 +242,10 @@ def _check_ply_lists(data: bytes, start: int, elements, types, big_endian: bool)
             lists.append((stride, size, length))
             stride += size + length * _PLY_SIZES[item_type]
         if lists and count > 0:
-            rows = data[offset : offset + count * stride]
-            if len(rows) < count * stride:
+            if len(data) < offset + count * stride:
                 return  # short, or mixed: trimesh's length check says so
-            table = np.frombuffer(rows, dtype=np.uint8).reshape(count, stride)
+            table = np.frombuffer(data, dtype=np.uint8, count=count * stride, offset=offset)
+            table = table.reshape(count, stride)
             for column, size, _ in lists:
                 lengths = table[:, column : column + size]
                 first = np.frombuffer(data[offset + column : offset + column + size],

@@ -81,3 +81,18 @@ def test_nan_is_neutral_grey():
     assert not np.any(np.all(everything == np.asarray(NAN_RGBA, dtype=np.uint8), axis=1))
     # NaN does not disturb the neighbours.
     np.testing.assert_array_equal(rgba[[0, 2]], colormap([0.5, 0.2]))
+
+
+def test_same_colours_as_np_interp_bit_for_bit():
+    # colormap() computes np.interp's arithmetic itself (one knot search for three channels):
+    # every value, the knots and their neighbours included, gives the same doubles.
+    from shape_diameter import colormap as module
+
+    knots = module._POSITIONS
+    position = np.clip(np.concatenate([np.random.default_rng(5).random(200_000), knots,
+                                       np.nextafter(knots, 2.0), np.nextafter(knots, -1.0),
+                                       [0.0, 1.0, 5e-324]]), 0.0, 1.0)  # fmt: skip
+    reference = np.column_stack(
+        [np.interp(position, knots, module._VIRIDIS[:, c]) for c in range(3)]
+    )
+    assert np.array_equal(module._interpolate(position).view(np.uint64), reference.view(np.uint64))

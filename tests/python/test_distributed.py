@@ -112,6 +112,14 @@ def test_a_folder_on_two_workers_gives_the_command_lines_files(folder, reference
     assert len({row["worker"] for row in by_input.values()}) == 2  # both processes worked
 
 
+def test_a_worker_of_two_threads_gives_the_command_lines_files(folder, reference, tmp_path):
+    # Its two tasks at a time compute in turn, one reading or writing meanwhile.
+    out = tmp_path / "out"
+    rows = compute_files([folder], out, workers=1, worker_threads=2, rays=RAYS, save_values=True)
+    assert _files(out) == reference
+    assert sorted(row["status"] for row in rows) == ["error"] + ["ok"] * sum(SOURCES.values())
+
+
 def test_a_worker_killed_mid_run_loses_and_repeats_nothing(folder, reference, client, tmp_path):
     out = tmp_path / "out"
     pids = client.run(os.getpid)  # worker address -> process id
@@ -259,3 +267,58 @@ def test_segments_on_workers_equal_the_command_lines(folder, client, tmp_path):
     assert _files(there) == expected
     with pytest.raises(ValueError, match="'k'"):
         compute_files(inputs, tmp_path / "bad", client=client, segment={"k": 3})
+
+
+def test_threads_of_a_worker_compute_in_turn_and_keep_their_own_warnings(tmp_path, monkeypatch):
+    # A worker's threads run inputs side by side (run_job's overlapped mode): one computes while
+    # another reads or writes, their compute() calls never at once; each input's warnings are
+    # its own (a GLB far from the origin warns of float32 coordinates, the other input does
+    # not), and the files are those of a run one input after the other.
+    import threading
+
+    from shape_diameter import batch_job, mesh_io
+    from shape_diameter.cli_jobs import Job
+
+    vertices, triangles = sd.load_mesh(DATA / "cow.obj")
+    inputs = {"near": vertices, "far": vertices + 5.4e6}
+    for name, moved in inputs.items():
+        _write_mesh(tmp_path / f"{name}.obj", moved, triangles)
+    options = task_options({"rays": RAYS}, gpu=False)
+    inside, overlaps, real_compute = [], [], batch_job.compute
+
+    def compute_in_turn(*args, **kwargs):
+        inside.append(threading.get_ident())
+        overlaps.append(len(inside))
+        time.sleep(0.2)  # long enough for the other thread to come if it could
+        try:
+            return real_compute(*args, **kwargs)
+        finally:
+            inside.remove(threading.get_ident())
+
+    def run(name: str, folder: str, overlapped: bool, rows: dict) -> None:
+        (tmp_path / folder).mkdir(exist_ok=True)
+        job = Job(str(tmp_path / f"{name}.obj"), str(tmp_path / folder / f"{name}.glb"),
+                  str(tmp_path / folder / f"{name}.npy"))  # fmt: skip
+        warned = []
+        rows[name] = batch_job.run_job(
+            job, options, mesh_io, warn=warned.append, overlapped=overlapped
+        )
+        rows[name]["warnings"] = warned
+
+    alone = {}
+    for name in inputs:
+        run(name, "alone", False, alone)
+    monkeypatch.setattr(batch_job, "compute", compute_in_turn)
+    together = {}
+    threads = [threading.Thread(target=run, args=(name, "together", True, together))
+               for name in inputs]  # fmt: skip
+    for thread in threads:
+        thread.start()
+    for thread in threads:
+        thread.join()
+    assert overlaps == [1, 1]
+    assert together["near"]["warnings"] == alone["near"]["warnings"] == []
+    named = [message.replace("/together/", "/alone/") for message in together["far"]["warnings"]]
+    assert named == alone["far"]["warnings"]
+    assert any("32-bit float" in message for message in together["far"]["warnings"])
+    assert _files(tmp_path / "together") == _files(tmp_path / "alone")
