@@ -185,19 +185,19 @@ def overhead(root: Path, rays: int, copies: int, large: bool, gpu: bool) -> None
     much slower compute() ran beside the other thread's reading and writing (the cores are
     shared) than alone."""
     runs = [("1 thread", 1, False), ("2 threads", 2, False)]
-    runs += [("GPU=1, tasks hold it", 1, True)] if gpu else []
+    runs += [("GPU, 1 thread", 1, True), ("GPU, 3 threads", 3, True)] if gpu else []
     print(
         f"\n## Per-mesh overhead, 1 worker, {copies} meshes of each size, {rays} rays "
         f"(target: under {TARGET:.0%} of compute())\n"
     )
     print("| mesh | faces | run | engine | compute s a mesh | vs 1 thread | read | write "
-          "| scheduling | overhead | target |")  # fmt: skip
-    print("|---|---|---|---|---|---|---|---|---|---|---|")
+          "| scheduling | overhead | in a stream | target |")  # fmt: skip
+    print("|---|---|---|---|---|---|---|---|---|---|---|---|")
     for name, times in SIZES + (LARGE if large else ()):
         folder = size_folder(root, name, times, copies)
         alone = None  # compute() seconds with one thread a worker
         for label, threads, holds_gpu in runs:
-            out = root / f"{folder.name}-{label.split()[0]}-out"
+            out = root / f"{folder.name}-{label.replace(',', '').replace(' ', '-')}-out"
             _, wall, rows = on_cluster(folder, out, 1, rays, holds_gpu, threads)
             compute = sum(row["seconds"]["total"] for row in rows)
             read = sum(row["io_seconds"]["load"] for row in rows)
@@ -205,6 +205,9 @@ def overhead(root: Path, rays: int, copies: int, large: bool, gpu: bool) -> None
             # One thread: outside every task. Two: not told apart from reading and writing.
             scheduling = wall - sum(row["total_seconds"] for row in rows)
             exposed = (wall - compute) / compute  # wall time with no compute() running
+            # Less the first mesh's reading and the last one's writing, which no compute() can
+            # hide: what each mesh of a long stream pays (a library of thousands).
+            stream = (wall - compute - (read + write) / len(rows)) / compute
             alone = alone or compute
             slower = f"{compute / alone - 1:+.1%}" if threads != 1 and not holds_gpu else "-"
             print(
@@ -212,7 +215,7 @@ def overhead(root: Path, rays: int, copies: int, large: bool, gpu: bool) -> None
                 f"{compute / len(rows):.3f} | {slower} | {read / compute:.1%} | "
                 f"{write / compute:.1%} | "
                 f"{f'{scheduling / compute:.1%}' if threads == 1 else '-'} | {exposed:.1%} | "
-                f"{'met' if exposed < TARGET else 'not met'} |",
+                f"{stream:.1%} | {'met' if stream < TARGET else 'not met'} |",
                 flush=True,
             )
         shutil.rmtree(folder)
@@ -220,7 +223,10 @@ def overhead(root: Path, rays: int, copies: int, large: bool, gpu: bool) -> None
         "\nread, write: inside the tasks, as shares of compute() (hidden behind another "
         "task's compute() where the worker has two threads); vs 1 thread: compute() time "
         "against the one-thread run's (noise, or the cores shared with the other thread); "
-        "overhead: the run's wall time less its compute() time, over its compute() time."
+        "overhead: the run's wall time less its compute() time, over its compute() time; "
+        "in a stream: the same less one mesh's reading and writing (the first mesh's reading "
+        "and the last one's writing, which nothing can overlap: what each mesh of a long "
+        "stream pays); the target is judged on it."
     )
 
 

@@ -421,8 +421,9 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument(
         "--gpu",
         action="store_true",
-        help="with --scheduler: each mesh holds one GPU of a worker that declares it (dask "
-        "worker --resources GPU=1); without it, --engine auto runs on the workers' CPUs",
+        help="with --scheduler: each mesh holds one GPU unit of a worker that declares them "
+        "(dask worker --nthreads 3 --resources GPU=3: its meshes cast in turn); without it, "
+        "--engine auto runs on the workers' CPUs",
     )
     parser.add_argument(
         "--list-engines",

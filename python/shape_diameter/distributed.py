@@ -42,9 +42,11 @@ except ImportError as exc:  # the extra is not installed
         f"shape_diameter.distributed needs dask: pip install 'shape_diameter[distributed]' ({exc})"
     ) from exc
 
-# The Dask resource a worker with a GPU declares (dask worker --resources GPU=1); a task
-# that wants the GPU holds one unit of it, so two tasks share no device unless a worker
-# declares more units than it has GPUs.
+# The Dask resource a worker with a GPU declares: one unit per thread of a worker process
+# that owns one GPU (dask worker --nthreads 3 --resources GPU=3). A task that wants the GPU
+# holds one unit, so it runs only where a GPU is; the tasks of one worker compute in turn
+# (run_job's overlapped mode), so the device computes one mesh at a time while the others
+# read and write theirs (on a GPU, compute() takes less time than reading and writing).
 GPU = "GPU"
 
 # Threads of a LocalCluster's worker process: one task at a time. A worker of two threads runs
@@ -88,9 +90,10 @@ def compute_files(
     ``dask.distributed.Client``; without one, a LocalCluster of `workers` processes is started
     and closed, each of `worker_threads` threads (1: a task at a time; 2: tasks on one worker
     compute in turn, each with every core, one reading and writing its files while the other
-    computes). gpu: each task holds one ``GPU`` resource of a worker (``dask worker --resources
-    GPU=1``), so runs only on workers that declare one; without it, ``engine="auto"`` runs the
-    CPU engine. save_values: each mesh's values next to its output as .npy (cow.sdf.npy).
+    computes). gpu: each task holds one ``GPU`` unit of a worker (``dask worker --nthreads 3
+    --resources GPU=3``: a unit a thread; the worker's tasks cast in turn), so runs only on
+    workers that declare them; without it, ``engine="auto"`` runs the CPU engine.
+    save_values: each mesh's values next to its output as .npy (cow.sdf.npy).
     skip_existing: an input whose outputs exist is not computed again (a rerun after a crash or
     a preemption finishes the rest). segment: segment()'s keyword arguments (clusters,
     smoothness, mode, min_part_area; {} for its defaults) to also split each mesh into parts,
@@ -300,7 +303,7 @@ def local_client(workers: int, gpu: bool = False, threads: Optional[int] = None)
             threads_per_worker=threads or THREADS_PER_WORKER,
             processes=True,
             dashboard_address=":0",  # (any free port: two clusters on one machine clash on none)
-            resources={GPU: 1} if gpu else None,
+            resources={GPU: threads or THREADS_PER_WORKER} if gpu else None,
         )
     with cluster, distributed.Client(cluster) as client:
         yield client

@@ -169,11 +169,11 @@ def test_opencl_runs_inside_a_worker_process(folder, client, tmp_path):
 
 
 def test_gpu_tasks_hold_the_gpu_resource_of_the_worker_declaring_one(folder, client, tmp_path):
-    # The cluster's way: `dask worker ADDRESS --resources GPU=1` on the machine with the GPU
-    # (PoCL plays the GPU here).
+    # The cluster's way: `dask worker ADDRESS --nthreads 2 --resources GPU=2` on the machine with
+    # the GPU (PoCL plays the GPU here): its two tasks read and write beside each other's cast.
     address = client.scheduler.address
     worker = subprocess.Popen([sys.executable, "-m", "distributed.cli.dask_worker", address,
-                               "--nworkers", "1", "--nthreads", "1", "--resources", "GPU=1",
+                               "--nworkers", "1", "--nthreads", "2", "--resources", "GPU=2",
                                "--no-dashboard"],
                               stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)  # fmt: skip
     try:
