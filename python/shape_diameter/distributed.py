@@ -49,12 +49,14 @@ except ImportError as exc:  # the extra is not installed
 # read and write theirs (on a GPU, compute() takes less time than reading and writing).
 GPU = "GPU"
 
-# Threads of a LocalCluster's worker process: one task at a time. A worker of two threads runs
-# two tasks at once, one computing (with every core) while the other reads its mesh or writes
-# its outputs, their compute() calls in turn (run_job's overlapped mode); a third would only
-# wait. Two pay for meshes of 50k faces and more; small meshes ran slower beside another
-# task's reading (bench/distributed.py, docs/distributed.md).
-THREADS_PER_WORKER = 1
+# Threads of a LocalCluster's worker process. A worker of two threads runs two tasks at once,
+# one computing (with every core) while the other reads its mesh or writes its outputs, their
+# compute() calls in turn (run_job's overlapped mode); a third would only wait. On 16 cores
+# compute() is 15-20x faster than on 2 and the files are not: one thread left reading and
+# writing at 15-28% of compute() there, two at 3% or less. On 2 cores, one thread kept them
+# under 6%, and small meshes ran slower beside another task's reading (bench/distributed.py,
+# docs/distributed.md): two threads where there are 4 cores or more, else one.
+THREADS_PER_WORKER = 2 if (os.cpu_count() or 1) >= 4 else 1
 
 # compute()'s keyword arguments a caller may give (the mesh, its UVs and the progress
 # callback are the task's own).
