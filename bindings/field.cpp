@@ -46,6 +46,7 @@ sdf::SmoothingOptions smoothing_options(const std::string& method, const py::dic
     s.projected.max_depth = o["max_depth"].cast<int>();
     s.projected.min_points = o["min_points"].cast<double>();
     s.projected.node_size_ratio = o["node_size_ratio"].cast<double>();
+    s.projected.radius = o["radius"].cast<double>();
     const auto branch_on = o["branch_on"].cast<std::string>();
     if (branch_on != "mean" && branch_on != "min")
       throw std::invalid_argument("branch_on must be 'mean' or 'min', got '" + branch_on + "'");

@@ -8,13 +8,13 @@
 /* Projected points, one iteration: one work item per point of [first, first + count).
  * points: the projected point (xyz) and its value (w), one aligned 16-byte load a point. */
 __kernel void sdf_smooth_projected(uint first, uint count, __global const SdfPointNode* nodes,
-                                   __global const float4* points, float lo, float hi,
-                                   __global float* next) {
+                                   __global const float4* points, float radius_scale, float lo,
+                                   float hi, __global float* next) {
   uint gid = get_global_id(0);
   if (gid >= count) return;
   uint i = first + gid;
   float4 p = points[i];
-  next[i] = sdf_smooth_projected_point(nodes, p.xyz, p.w, lo, hi);
+  next[i] = sdf_smooth_projected_point(nodes, p.xyz, p.w, radius_scale, lo, hi);
 }
 
 /* Texture space, one ring of dilation: one work item per texel. */

@@ -121,12 +121,13 @@ SDF_INLINE int sdf_gather_sphere(SDF_GLOBAL const SdfPointNode* nodes, float3 ce
   return 1;
 }
 
-/* One point of one iteration: the gathered mean clamped to [lo, hi] (the input's range), or
- * the point's own value when its sphere gathers nothing. */
+/* One point of one iteration: the mean its sphere (radius: radius_scale times its value)
+ * gathers, clamped to [lo, hi] (the input's range), or the point's own value when the sphere
+ * gathers nothing. */
 SDF_INLINE float sdf_smooth_projected_point(SDF_GLOBAL const SdfPointNode* nodes, float3 projected,
-                                            float value, float lo, float hi) {
+                                            float value, float radius_scale, float lo, float hi) {
   float mean;
-  if (!sdf_gather_sphere(nodes, projected, value, &mean)) return value;
+  if (!sdf_gather_sphere(nodes, projected, radius_scale * value, &mean)) return value;
   return sdf_min(hi, sdf_max(lo, mean));
 }
 

@@ -217,9 +217,10 @@ void smooth_on_device(const Device& device, DeviceState& s, cl_mem origins, cl_m
     Buffer node_buffer(s, bytes_of(nodes), nodes.data());
     gather.arg(2, node_buffer.get());
     gather.arg(3, points.get());
-    gather.arg(4, range.lo);
-    gather.arg(5, range.hi);
-    gather.arg(6, next->get());
+    gather.arg(4, static_cast<float>(options.radius));
+    gather.arg(5, range.lo);
+    gather.arg(6, range.hi);
+    gather.arg(7, next->get());
     launch_chunks(device, s, gather, n, std::size_t{1} << 18);
     check(api()->clFinish(s.queue), "clFinish (gather)");
     add_time(timings, "device: gather", clock.lap());

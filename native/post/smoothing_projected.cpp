@@ -41,6 +41,8 @@ void check_projected_options(const ProjectedOptions& options) {
     throw std::invalid_argument("min_points must be a fraction in [0, 1]");
   if (!(options.node_size_ratio >= 0.0) || !std::isfinite(options.node_size_ratio))
     throw std::invalid_argument("node_size_ratio must be a finite number >= 0");
+  if (!(options.radius > 0.0 && options.radius <= 16.0))
+    throw std::invalid_argument("radius must be in (0, 16] (a share of each point's value)");
 }
 
 PointCube::PointCube(glm::vec3 lo, glm::vec3 hi, int depth) {
@@ -450,6 +452,7 @@ void smooth_projected_into(const Mesh& mesh, PointKind kind, const float* values
   Stopwatch clock;
   const std::size_t n = point_count(mesh, kind);
   const ValueRange range = checked_projected_input(values, n, options);
+  const float radius_scale = static_cast<float>(options.radius);
   auto unchanged = [&] { std::copy(values, values + n, out); };
   if (n == 0 || range.lo == range.hi || options.iterations == 0) return unchanged();
 
@@ -492,7 +495,7 @@ void smooth_projected_into(const Mesh& mesh, PointKind kind, const float* values
     if (nodes.empty()) return unchanged();  // no point has an axis (then on the first iteration)
     auto smooth_point = [&](std::size_t i) {
       out[i] = kern::sdf_smooth_projected_point(nodes.data(), glm::vec3(points[i]), points[i].w,
-                                                range.lo, range.hi);
+                                                radius_scale, range.lo, range.hi);
     };
     // Members in Morton order: consecutive points take nearly the same path through the
     // tree, which the branch predictor learns (measured 12-17% faster than mesh order at
@@ -510,7 +513,8 @@ void smooth_projected_into(const Mesh& mesh, PointKind kind, const float* values
           for (std::size_t k = begin; k < end; k += 8) {
             const int lanes = static_cast<int>(std::min<std::size_t>(8, end - k));
             for (int l = 0; l < lanes; ++l) index[l] = tree.order.index(k + l);
-            smooth_packet_avx2(nodes.data(), points.data(), index, lanes, range.lo, range.hi, out);
+            smooth_packet_avx2(nodes.data(), points.data(), index, lanes, radius_scale, range.lo,
+                               range.hi, out);
           }
         },
         progress, progress_from + it * span, progress_from + (it + 1) * span);

@@ -43,6 +43,11 @@ struct ProjectedOptions {
   // value). Costs more nodes near thin parts.
   enum class Branch { Mean, Min };
   Branch branch_on = Branch::Mean;
+  // Each point gathers the points in a sphere of this share of its own value (the SDF, a
+  // diameter) around its projected point. The paper's rule is 1: there a point reaches the
+  // medial points a whole diameter away, across joints into parts of other thicknesses
+  // (bench/smoothing_fidelity.py: it moved a clean field by 12% at the median of 13 meshes).
+  double radius = 1.0;
   unsigned threads = 0;  // 0: every core
 };
 

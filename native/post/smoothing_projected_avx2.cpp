@@ -69,15 +69,16 @@ bool projected_avx2_supported() {
 }
 
 SDF_AVX2 void smooth_packet_avx2(const PointOctreeNode* nodes, const glm::vec4* points,
-                                 const std::uint32_t* index, int lanes, float lo, float hi,
-                                 float* out) {
-  alignas(32) float px[8], py[8], pz[8], pr[8];
+                                 const std::uint32_t* index, int lanes, float radius_scale,
+                                 float lo, float hi, float* out) {
+  alignas(32) float px[8], py[8], pz[8], pr[8], pv[8];
   for (int l = 0; l < 8; ++l) {
     const glm::vec4 p = points[index[l < lanes ? l : 0]];  // idle lanes copy lane 0, unused
     px[l] = p.x;
     py[l] = p.y;
     pz[l] = p.z;
-    pr[l] = p.w;
+    pv[l] = p.w;
+    pr[l] = radius_scale * p.w;  // as the scalar kernel rounds it
   }
   const __m256 x = _mm256_load_ps(px), y = _mm256_load_ps(py), z = _mm256_load_ps(pz);
   const __m256 r = _mm256_load_ps(pr), r2 = _mm256_mul_ps(r, r);
@@ -150,7 +151,7 @@ SDF_AVX2 void smooth_packet_avx2(const PointOctreeNode* nodes, const glm::vec4* 
       static_cast<unsigned>(_mm256_movemask_pd(_mm256_cmp_pd(weight_hi, zero_d, _CMP_GT_OQ))) << 4;
   const __m256 gathered = mask_of(gathered_bits);
   alignas(32) float result[8];
-  _mm256_store_ps(result, _mm256_blendv_ps(r, clamped, gathered));
+  _mm256_store_ps(result, _mm256_blendv_ps(_mm256_load_ps(pv), clamped, gathered));
   for (int l = 0; l < lanes; ++l) out[index[l]] = result[l];
 }
 
@@ -163,7 +164,7 @@ namespace sdf {
 bool projected_avx2_supported() { return false; }
 
 void smooth_packet_avx2(const PointOctreeNode*, const glm::vec4*, const std::uint32_t*, int, float,
-                        float, float*) {}
+                        float, float, float*) {}
 
 }  // namespace sdf
 

@@ -19,9 +19,10 @@ namespace sdf {
 // Whether smooth_packet_avx2 may be called here.
 bool projected_avx2_supported();
 
-// out[i] = kern::sdf_smooth_projected_point(nodes, points[i].xyz, points[i].w, lo, hi) for
-// the `lanes` (1 to 8) point indices i = index[0], ..., index[lanes - 1].
+// out[i] = kern::sdf_smooth_projected_point(nodes, points[i].xyz, points[i].w, radius_scale,
+// lo, hi) for the `lanes` (1 to 8) point indices i = index[0], ..., index[lanes - 1].
 void smooth_packet_avx2(const PointOctreeNode* nodes, const glm::vec4* points,
-                        const std::uint32_t* index, int lanes, float lo, float hi, float* out);
+                        const std::uint32_t* index, int lanes, float radius_scale, float lo,
+                        float hi, float* out);
 
 }  // namespace sdf

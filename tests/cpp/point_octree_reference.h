@@ -187,7 +187,8 @@ inline std::vector<float> reference_smooth_projected(const Mesh& mesh, PointKind
         reference_point_octree(tree_points.data(), tree_values.data(), members.size(), options, hi,
                                n);  // the input's largest value: later iterations stay below it
     for (std::size_t i = 0; i < n; ++i)
-      next[i] = kern::sdf_smooth_projected_point(nodes.data(), projected[i], current[i], lo, hi);
+      next[i] = kern::sdf_smooth_projected_point(nodes.data(), projected[i], current[i],
+                                                 static_cast<float>(options.radius), lo, hi);
     current.swap(next);
   }
   return current;

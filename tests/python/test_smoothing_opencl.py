@@ -58,6 +58,7 @@ def test_projected_octree_built_on_the_device_is_the_cpus_to_the_bit(spot, point
         {"max_depth": 12},
         {"max_depth": 4, "min_points": 0.0},
         {"node_size_ratio": 4.0},
+        {"radius": 0.1, "node_size_ratio": 16.0, "min_points": 2e-5, "max_depth": 14},
     ]:
         cpu = sd.smooth(v, t, values, "projected", points=points, engine="cpu", **options)
         opencl = sd.smooth(v, t, values, "projected", points=points, engine=DEVICE, **options)
