@@ -4,6 +4,9 @@
 #include <cmath>
 #include <stdexcept>
 
+#include "post/smoothing_texture_pages.h"
+#include "post/uv_islands.h"
+#include "post/uv_layout.h"
 #include "prepare/unit_scale.h"
 #include "segment/face_graph.h"
 #include "segment/postprocess.h"
@@ -93,6 +96,9 @@ void projected(const Mesh& mesh, PointKind kind, const float* values, const Proj
   smooth_projected_into(mesh, kind, values, o, out.values.data(), progress, 0.0, 1.0, &out.timings);
 }
 
+// Texture smoothing on the UV layout's pages (uv_layout.h): UDIM tiles and layers that part
+// overlapping islands, one image each, one after another through the per-image code (on the
+// CPU threads or a device). A layout of one page in the [0, 1] square uses what was prepared.
 void texture(const SmoothingMesh& mesh, PointKind kind, const float* values,
              const SmoothingOptions& options, [[maybe_unused]] DevicePtr device,
              const PreparedSmoothing* prepared, const ProgressFn& progress, Smoothed& out) {
@@ -102,30 +108,41 @@ void texture(const SmoothingMesh& mesh, PointKind kind, const float* values,
   if (!ready && !mesh.as_given)
     throw std::logic_error("texture smoothing needs the mesh as given or a prepared texture");
   const Mesh& given = ready ? ready->mesh : *mesh.as_given;
+  const float* uvs = ready ? ready->uvs : mesh.uvs;
   out.values.resize(point_count(given, kind));
-  TextureSmoothing done;
+  Stopwatch clock;
+  UvLayout layout;
+  {
+    // The checks smooth_texture makes (finite UVs, size) come first, with their own words.
+    if (!ready) check_texture_input(uvs, given.triangles.size(), o);
+    const std::vector<std::int32_t> islands =
+        ready ? ready->islands.face_island : uv_islands(given, uvs, o.weld_tolerance, o.threads);
+    layout = layout_uvs(uvs, islands, o.threads);
+  }
+  const double layout_seconds = clock.lap();
+  const bool as_prepared = ready && layout.single_square();
+  auto run_page = [&](const float* page_uvs, bool keep, const ProgressFn& part, float* into) {
 #ifdef SDF_HAVE_OPENCL
-  if (device && ready)
-    done = cl::smooth_texture_opencl(*device, *ready, kind, values, o, options.return_image,
-                                     progress, out.values.data());
-  else if (device)
-    done = cl::smooth_texture_opencl(*device, given, kind, values, mesh.uvs, o,
-                                     options.return_image, progress, out.values.data());
-  else
+    if (device && as_prepared)
+      return cl::smooth_texture_opencl(*device, *ready, kind, values, o, keep, part, into);
+    if (device)
+      return cl::smooth_texture_opencl(*device, given, kind, values, page_uvs, o, keep, part, into);
 #endif
-      if (ready)
-    done = smooth_texture(*ready, kind, values, o, options.return_image, progress, 0.0, 1.0,
-                          nullptr, out.values.data());
-  else
-    done = smooth_texture(given, kind, values, mesh.uvs, o, options.return_image, progress, 0.0,
-                          1.0, nullptr, out.values.data());
-  out.timings = std::move(done.timings);
+    if (as_prepared)
+      return smooth_texture(*ready, kind, values, o, keep, part, 0.0, 1.0, nullptr, into);
+    return smooth_texture(given, kind, values, page_uvs, o, keep, part, 0.0, 1.0, nullptr, into);
+  };
+  TextureSmoothing done =
+      smooth_texture_pages(given, kind, values, uvs, layout, options.return_image, o.threads,
+                           progress, run_page, out.values.data());
+  out.timings.emplace_back("uv layout", layout_seconds);
+  for (auto& stage : done.timings) out.timings.push_back(std::move(stage));
   out.faces_outside = done.faces_outside;
+  out.faces_spanning = done.faces_spanning;
+  out.faces_overlapping = done.faces_overlapping;
+  out.pages = done.pages;
   out.kept_off_device = done.kept_off_device;
-  out.image = std::move(done.image);
-  out.mask = std::move(done.mask);
-  out.width = done.width;
-  out.height = done.height;
+  out.tiles = std::move(done.tiles);
 }
 
 }  // namespace

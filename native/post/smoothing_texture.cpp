@@ -444,6 +444,12 @@ TextureSmoothing smooth_texture(const Mesh& mesh, PointKind kind, const float* v
   return out;
 }
 
+void check_texture_input(const float* uvs, std::size_t m, const TextureOptions& options) {
+  check_size(options);
+  check_face_count(m);
+  (void)check_uvs(uvs, m, options.width, options.height, options.threads);
+}
+
 PreparedTexture prepare_texture(Mesh mesh, const float* uvs, const TextureOptions& options,
                                 bool need_merged) {
   Stopwatch clock;

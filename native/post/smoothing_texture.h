@@ -52,6 +52,14 @@ struct TextureOptions {
   unsigned threads = 0;          // 0: every core
 };
 
+// One UDIM tile's image (smoothing_texture_pages.h), as TextureSmoothing's image and mask.
+struct TextureTile {
+  int tile = 1001;
+  std::vector<float> image;
+  std::vector<std::uint8_t> mask;
+  int width = 0, height = 0;
+};
+
 struct TextureSmoothing {
   std::vector<float> values;  // per face or vertex, like the input, within its [min, max]
   // The blurred image, width x height, row-major from row 0 (v = 0), 0 where empty; and
@@ -66,6 +74,13 @@ struct TextureSmoothing {
   // Faces whose UVs lie wholly outside the [0, 1] square (UDIM tiles, offset layouts): they
   // cover no texel and keep their values.
   std::size_t faces_outside = 0;
+  // Set by smooth_texture_pages (uv_layout.h): faces reaching beyond their tile, faces
+  // overlapping another island's, the pages drawn, and each tile's image (keep_image; the
+  // image and mask above then stay empty). faces_outside: faces in no tile there.
+  std::size_t faces_spanning = 0;
+  std::size_t faces_overlapping = 0;
+  std::size_t pages = 0;
+  std::vector<TextureTile> tiles;
   // A device was given, but a face whose UV box covers more than kMostTexelsPerDeviceFace
   // texels kept the work on the CPU threads (same values, a device's speed lost).
   bool kept_off_device = false;
@@ -143,6 +158,10 @@ struct PreparedTexture {
   std::shared_ptr<void> on_device;
   StageTimings timings;  // seconds per step of the preparation (and of the uploads)
 };
+
+// The checks smooth_texture starts with: the size, the face count, and m faces' UVs finite.
+// Throws std::invalid_argument naming the problem.
+void check_texture_input(const float* uvs, std::size_t m, const TextureOptions& options);
 
 // options' width, height, weld_tolerance and threads are used; need_merged: for vertex
 // values. uvs must stay alive and unchanged while the result is used (set its `keep` to
