@@ -98,44 +98,49 @@ void projected(const Mesh& mesh, PointKind kind, const float* values, const Proj
 
 // Texture smoothing on the UV layout's pages (uv_layout.h): UDIM tiles and layers that part
 // overlapping islands, one image each, one after another through the per-image code (on the
-// CPU threads or a device). A layout of one page in the [0, 1] square uses what was prepared.
+// CPU threads or a device). A layout of one page in the [0, 1] square uses what was prepared
+// (its islands; on a device, what was uploaded).
 void texture(const SmoothingMesh& mesh, PointKind kind, const float* values,
              const SmoothingOptions& options, [[maybe_unused]] DevicePtr device,
              const PreparedSmoothing* prepared, const ProgressFn& progress, Smoothed& out) {
   TextureOptions o = options.texture;
   o.threads = options.threads;
-  const PreparedTexture* ready = prepared ? prepared->texture.get() : nullptr;
-  if (!ready && !mesh.as_given)
+  const PreparedTexture* given_ready = prepared ? prepared->texture.get() : nullptr;
+  if (!given_ready && !mesh.as_given)
     throw std::logic_error("texture smoothing needs the mesh as given or a prepared texture");
-  const Mesh& given = ready ? ready->mesh : *mesh.as_given;
-  const float* uvs = ready ? ready->uvs : mesh.uvs;
-  out.values.resize(point_count(given, kind));
   Stopwatch clock;
-  UvLayout layout;
-  {
-    // The checks smooth_texture makes (finite UVs, size) come first, with their own words.
-    if (!ready) check_texture_input(uvs, given.triangles.size(), o);
-    const std::vector<std::int32_t> islands =
-        ready ? ready->islands.face_island : uv_islands(given, uvs, o.weld_tolerance, o.threads);
-    layout = layout_uvs(uvs, islands, o.threads);
+  // Without a preparation, one made here: the layout and a one-image run share its islands
+  // (and its checks of the UVs and size come first, with their own words).
+  PreparedTexture own;
+  if (!given_ready) {
+    own = prepare_texture(copy_mesh(*mesh.as_given, o.threads), mesh.uvs, o,
+                          kind == PointKind::Vertices);
+    for (auto& stage : own.timings)
+      out.timings.emplace_back("prepare: " + stage.first, stage.second);
+    clock.lap();
   }
-  const double layout_seconds = clock.lap();
-  const bool as_prepared = ready && layout.single_square();
+  const PreparedTexture& ready = given_ready ? *given_ready : own;
+  const Mesh& given = ready.mesh;
+  const float* uvs = ready.uvs;
+  out.values.resize(point_count(given, kind));
+  const UvLayout layout = layout_uvs(uvs, ready.islands.face_island, o.threads);
+  out.timings.emplace_back("uv layout", clock.lap());
+  const bool one_image = layout.single_square();
   auto run_page = [&](const float* page_uvs, bool keep, const ProgressFn& part, float* into) {
 #ifdef SDF_HAVE_OPENCL
-    if (device && as_prepared)
-      return cl::smooth_texture_opencl(*device, *ready, kind, values, o, keep, part, into);
+    // What prepare_smoothing made (uploaded to the device where it could), or the page's UVs.
+    if (device && one_image && given_ready)
+      return cl::smooth_texture_opencl(*device, ready, kind, values, o, keep, part, into);
     if (device)
       return cl::smooth_texture_opencl(*device, given, kind, values, page_uvs, o, keep, part, into);
 #endif
-    if (as_prepared)
-      return smooth_texture(*ready, kind, values, o, keep, part, 0.0, 1.0, nullptr, into);
+    if (one_image)
+      return smooth_texture(ready, kind, values, o, keep, part, 0.0, 1.0, nullptr, into);
     return smooth_texture(given, kind, values, page_uvs, o, keep, part, 0.0, 1.0, nullptr, into);
   };
   TextureSmoothing done =
       smooth_texture_pages(given, kind, values, uvs, layout, options.return_image, o.threads,
                            progress, run_page, out.values.data());
-  out.timings.emplace_back("uv layout", layout_seconds);
   for (auto& stage : done.timings) out.timings.push_back(std::move(stage));
   out.faces_outside = done.faces_outside;
   out.faces_spanning = done.faces_spanning;

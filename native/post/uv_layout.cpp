@@ -152,16 +152,31 @@ UvGrid build_grid(const float* uvs, const FaceTiles& t) {
   return grid;
 }
 
-// The (tile, island) nodes: per face its node, -1 in no tile; nodes ordered by tile, then island.
+// The (tile, island) nodes: per face its node, -1 in no tile; nodes ordered by tile, then
+// island; returns each node's key, tile index x islands + island.
 std::vector<std::int64_t> node_keys(const FaceTiles& t, const std::vector<std::int32_t>& island,
                                     std::int64_t islands, std::vector<std::int32_t>& face_node) {
   const std::size_t m = island.size();
+  const std::int64_t slots = static_cast<std::int64_t>(t.tiles.size()) * islands;
   std::vector<std::int64_t> keys;
+  face_node.assign(m, -1);
+  if (slots <= static_cast<std::int64_t>(4 * m) + 1024) {  // a table of every (tile, island)
+    std::vector<std::int32_t> node(static_cast<std::size_t>(slots), -1);
+    for (std::size_t f = 0; f < m; ++f)
+      if (t.tile_index[f] >= 0) node[t.tile_index[f] * islands + island[f]] = 0;
+    for (std::int64_t k = 0; k < slots; ++k)
+      if (node[k] == 0) {
+        node[k] = static_cast<std::int32_t>(keys.size());
+        keys.push_back(k);
+      }
+    for (std::size_t f = 0; f < m; ++f)
+      if (t.tile_index[f] >= 0) face_node[f] = node[t.tile_index[f] * islands + island[f]];
+    return keys;
+  }
   for (std::size_t f = 0; f < m; ++f)
     if (t.tile_index[f] >= 0) keys.push_back(t.tile_index[f] * islands + island[f]);
   std::sort(keys.begin(), keys.end());
   keys.erase(std::unique(keys.begin(), keys.end()), keys.end());
-  face_node.assign(m, -1);
   for (std::size_t f = 0; f < m; ++f)
     if (t.tile_index[f] >= 0)
       face_node[f] = static_cast<std::int32_t>(

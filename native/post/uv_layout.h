@@ -51,10 +51,9 @@ struct UvLayout {
   std::size_t faces_spanning = 0;       // UVs reaching beyond their tile by more than 1e-4
   std::size_t faces_overlapping = 0;    // overlapping faces of another island (see above)
   int tile_count = 0;
-  // One page, tile 1001, every face in it: the UVs can be drawn as given.
-  bool single_square() const {
-    return faces_outside == 0 && pages.size() == 1 && pages[0].tile == kFirstTile;
-  }
+  // One page, tile 1001: the UVs are drawn as given, in one image (faces of no tile too,
+  // clipped: one whose corners lie in no tile still covers a sliver of the square at most).
+  bool single_square() const { return pages.size() == 1 && pages[0].tile == kFirstTile; }
 };
 
 // The tile of UV point (u, v), or 0 for none.
