@@ -156,9 +156,19 @@ def bake(
         margin=int(margin),
         return_image=True,
     )
-    rgba = np.empty(out.image.shape + (4,), dtype=np.float32)
-    rgba[..., :3] = out.image[..., None]
-    rgba[..., 3] = out.mask
+    # The image holds UDIM tile 1001, the [0, 1] square a material's UVs read: faces on other
+    # tiles are smoothed in their own, which the bake leaves out (and says so).
+    others = sorted(set(out.tiles) - {1001})
+    if others:
+        load().warning_log.warn(
+            f"the UVs lie on UDIM tiles {', '.join(map(str, others))} besides 1001: the baked "
+            "image holds tile 1001 (the [0, 1] square) only, and leaves out the faces on the "
+            "others; move a tile's UVs into the square to bake it"
+        )
+    image, mask = out.tiles.get(1001, (np.zeros_like(out.image), np.zeros_like(out.mask)))
+    rgba = np.empty(image.shape + (4,), dtype=np.float32)
+    rgba[..., :3] = image[..., None]
+    rgba[..., 3] = mask
     return rgba
 
 

@@ -177,9 +177,9 @@ def test_the_bake_runs_on_the_chosen_engine_and_threads(monkeypatch, engine):
 
 
 def test_a_bake_of_uvs_outside_the_square_warns_and_takes_the_object_name():
-    # UVs moved one tile up and right (a UDIM layout): the bake leaves those faces out, which
-    # the run's warnings say (it went to stderr only); "{object}" alone names the image after
-    # the object (it was refused as empty).
+    # UVs moved one tile up and right (UDIM tile 1012): the bake holds tile 1001 and leaves
+    # those faces out, which the run's warnings say (it went to stderr only); "{object}" alone
+    # names the image after the object (it was refused as empty).
     api = addon_module("api")
     ob = import_obj("spot.obj")
     uv = np.empty(len(ob.data.loops) * 2, dtype=np.float32)
@@ -187,9 +187,16 @@ def test_a_bake_of_uvs_outside_the_square_warns_and_takes_the_object_name():
     ob.data.uv_layers[0].data.foreach_set("uv", uv + 1.0)
     result = api.compute_object(ob, rays=8, bake_image=True, texture_size=32, image_name="{object}")
     assert result.image == "spot"
-    # The core's warning, once, for the object (not also printed: warnings are errors here).
-    (bake,) = [w for w in result.warnings if "outside the [0, 1] square" in w]
-    assert bake.startswith("spot (bake): ") and "the image leaves them out" in bake
+    # The warning, once, for the object (not also printed: warnings are errors here).
+    (bake,) = [w for w in result.warnings if "UDIM tiles" in w]
+    assert bake.startswith("spot (bake): the UVs lie on UDIM tiles ")
+    assert "holds tile 1001 (the [0, 1] square) only" in bake
+    # Nothing of the object is in tile 1001: the image is empty (alpha 0 everywhere).
+    import bpy
+
+    pixels = np.empty(32 * 32 * 4, dtype=np.float32)
+    bpy.data.images["spot"].pixels.foreach_get(pixels)
+    assert (pixels[3::4] == 0).all()
 
 
 BAD_TEXTURE_OPTIONS = [

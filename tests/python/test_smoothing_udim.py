@@ -163,3 +163,32 @@ def test_mirrored_half_overlapping_is_reported_and_kept_apart():
     with pytest.warns(RuntimeWarning, match=r"faces have UVs overlapping another UV island's"):
         out = smooth(both_v, both_t, values, "texture", uvs=both_uvs, texture_size=128)
     np.testing.assert_array_equal(out, values)  # constant per shell: no mixing at all
+
+
+def test_command_line_smooths_a_udim_obj_per_tile(tmp_path, capsys):
+    # spot.obj with its texture coordinates moved to tile 1002: smoothed there, with no word
+    # about UVs outside anything (they were all left out, with a warning).
+    from shape_diameter import cli
+
+    text = (DATA / "spot.obj").read_text().splitlines()
+    moved = []
+    for line in text:
+        p = line.split()
+        if p and p[0] == "vt":
+            line = f"vt {float(p[1]) + 1.0!r} {p[2]}"
+        moved.append(line)
+    obj = tmp_path / "spot_udim.obj"
+    obj.write_text("\n".join(moved) + "\n")
+    values = tmp_path / "values.npy"
+    argv = [str(obj), "--rays", "12", "--engine", "cpu", "--smooth", "texture",
+            "--texture-size", "64", "--values", str(values)]  # fmt: skip
+    assert cli.main(argv) == 0
+    assert "outside" not in capsys.readouterr().err
+    v, t, uvs = shape_diameter.load_mesh(obj, uvs=True)
+    assert uvs[..., 0].min() > 0.9  # on tile 1002 (and a few faces' corners on 1001)
+    expected = shape_diameter.compute(
+        v, t, rays=12, engine="cpu", smoothing="texture", uvs=uvs,
+        smoothing_options={"texture_size": 64},
+    )  # fmt: skip
+    np.testing.assert_array_equal(np.load(values), expected.values)
+    assert not np.array_equal(expected.values, expected.raw)
