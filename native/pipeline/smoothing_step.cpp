@@ -136,7 +136,10 @@ void texture(const SmoothingMesh& mesh, PointKind kind, const float* values,
 #endif
     if (one_image)
       return smooth_texture(ready, kind, values, o, keep, part, 0.0, 1.0, nullptr, into);
-    return smooth_texture(given, kind, values, page_uvs, o, keep, part, 0.0, 1.0, nullptr, into);
+    // A page keeps the whole layout's islands (labelling them again cost as much as the rest).
+    return smooth_texture_on_islands(given, kind, values, page_uvs, ready.islands,
+                                     kind == PointKind::Vertices ? &ready.groups : nullptr, o, keep,
+                                     part, into);
   };
   TextureSmoothing done =
       smooth_texture_pages(given, kind, values, uvs, layout, options.return_image, o.threads,

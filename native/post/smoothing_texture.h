@@ -140,6 +140,16 @@ TextureSmoothing smooth_texture(const Mesh& mesh, PointKind kind, const float* v
                                 double progress_to = 1.0, const TextureDeviceFn& device = nullptr,
                                 float* into = nullptr);
 
+// As above, on UV islands (and, for vertex values, corner groups) made already for these
+// faces, with other UVs: a page of a UDIM or layered layout (smoothing_texture_pages.h), whose
+// faces keep the whole layout's islands (others', moved out of the square, draw nothing). On
+// the CPU threads. Throws as above, and where vertex values come without groups.
+TextureSmoothing smooth_texture_on_islands(const Mesh& mesh, PointKind kind, const float* values,
+                                           const float* uvs, const UvIslands& islands,
+                                           const CornerGroups* groups,
+                                           const TextureOptions& options, bool keep_image,
+                                           const ProgressFn& progress, float* into);
+
 // What texture smoothing needs of the mesh and its UVs alone, made ahead of the values:
 // compute() makes it while a device casts, when the host would only wait. The mesh, the UVs
 // (checked; not copied: 36 MB at 1.5M faces took 20 ms of page faults and copying), their
