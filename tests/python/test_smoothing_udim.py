@@ -192,3 +192,16 @@ def test_command_line_smooths_a_udim_obj_per_tile(tmp_path, capsys):
     )  # fmt: skip
     np.testing.assert_array_equal(np.load(values), expected.values)
     assert not np.array_equal(expected.values, expected.raw)
+
+
+@pytest.mark.parametrize("engine", ["cpu", "auto"])
+def test_compute_smooths_a_udim_layout_as_smooth_does(spot_tiles, engine):
+    # compute() prepares the texture beside the cast (on a device, uploaded): a layout of
+    # several pages runs page by page all the same.
+    v, t, _, tiled, _, _, _, _ = spot_tiles
+    options = {"texture_size": 128}
+    result = shape_diameter.compute(v, t, rays=16, engine=engine, smoothing="texture", uvs=tiled,
+                                    smoothing_options=options)  # fmt: skip
+    alone = smooth(v, t, result.raw, "texture", uvs=tiled, engine=engine, **options)
+    np.testing.assert_array_equal(result.values, alone)
+    assert not np.array_equal(result.values, result.raw)
