@@ -84,21 +84,23 @@ FaceTiles find_tiles(const float* uvs, std::size_t m, unsigned threads, UvLayout
                        uv[2 * c + 1] < v0 - kSpanSlack || uv[2 * c + 1] > v0 + 1 + kSpanSlack;
     }
   });
-  FaceTiles found;
+  // Tile numbers are few (1001 to 2000): a table from each to its index.
+  constexpr int kTiles = kTileColumns * kTileRows;
+  std::vector<int> index(kTiles, -1);
   for (std::size_t f = 0; f < m; ++f) {
     layout.faces_outside += tile[f] == 0;
     layout.faces_spanning += spanning[f];
-    if (tile[f] != 0) found.tiles.push_back(tile[f]);
+    if (tile[f] != 0) index[tile[f] - kFirstTile] = 0;
   }
-  std::sort(found.tiles.begin(), found.tiles.end());
-  found.tiles.erase(std::unique(found.tiles.begin(), found.tiles.end()), found.tiles.end());
+  FaceTiles found;
+  for (int k = 0; k < kTiles; ++k)
+    if (index[k] == 0) {
+      index[k] = static_cast<int>(found.tiles.size());
+      found.tiles.push_back(kFirstTile + k);
+    }
   found.tile_index.resize(m);
   for (std::size_t f = 0; f < m; ++f)
-    found.tile_index[f] =
-        tile[f] == 0
-            ? -1
-            : static_cast<int>(std::lower_bound(found.tiles.begin(), found.tiles.end(), tile[f]) -
-                               found.tiles.begin());
+    found.tile_index[f] = tile[f] == 0 ? -1 : index[tile[f] - kFirstTile];
   return found;
 }
 
