@@ -315,7 +315,8 @@ class TextureCost(NamedTuple):
     """texture_cost()'s answer."""
 
     texels: int
-    """width x height: drawing, dilating and reading back are linear in it."""
+    """width x height, times the UDIM tiles the UVs use (each an image): drawing, dilating
+    and reading back are linear in it."""
     blur_reads: float
     """Texels the blur reads, its time being proportional: in each of its two passes (rows,
     then columns) every texel of an island reads the texels within the radius along its row
@@ -344,15 +345,30 @@ def texture_cost(texture_size=1024, radius=None, uvs=None) -> TextureCost:
         radius = default_radius((width, height))
     taps = math.floor(_real("radius", radius, 0.0, 16384.0))  # as the core cuts it
     texels = width * height
-    covered = 1.0
+    covered, tiles = 1.0, 1
     if uvs is not None:
         uv = np.asarray(uvs, dtype=np.float64).reshape(-1, 3, 2)
         a, b = uv[:, 1] - uv[:, 0], uv[:, 2] - uv[:, 0]
-        covered = min(1.0, 0.5 * float(np.abs(a[:, 0] * b[:, 1] - a[:, 1] * b[:, 0]).sum()))
+        tiles = _udim_tile_count(uv)
+        area = 0.5 * float(np.abs(a[:, 0] * b[:, 1] - a[:, 1] * b[:, 0]).sum())
+        covered = min(1.0, area / tiles)
+    # Tiles are smoothed one after another, each an image: time grows with them, the peak
+    # memory does not (the images kept for return_image aside).
     if taps < 1:
-        return TextureCost(texels, 0.0, texels * TEXTURE_BYTES_PER_TEXEL_NO_BLUR)
+        return TextureCost(tiles * texels, 0.0, texels * TEXTURE_BYTES_PER_TEXEL_NO_BLUR)
     window = min(2 * taps + 1, width) + min(2 * taps + 1, height)
-    return TextureCost(texels, texels * covered * window, texels * TEXTURE_BYTES_PER_TEXEL)
+    return TextureCost(
+        tiles * texels, tiles * texels * covered * window, texels * TEXTURE_BYTES_PER_TEXEL
+    )
+
+
+def _udim_tile_count(uv) -> int:
+    """The UDIM tiles (u in [0, 10), v in [0, 100)) the faces' UV centroids lie in; at least
+    1."""
+    centre = uv.mean(axis=1)
+    inside = (centre[:, 0] >= 0) & (centre[:, 0] < 10) & (centre[:, 1] >= 0) & (centre[:, 1] < 100)
+    tile = np.floor(centre[inside, 0]) + 10 * np.floor(centre[inside, 1])
+    return max(1, len(np.unique(tile)))
 
 
 def warn_of_texture_limits(out, face_count, o, engine):

@@ -478,6 +478,13 @@ def test_texture_cost_follows_the_core(spot):
     # Spot's islands cover about half of its UV square: about half the reads.
     share = texture_cost(2048, 16.0, uvs=uvs).blur_reads / cost.blur_reads
     assert 0.45 < share < 0.55, share
+    # The same islands over three UDIM tiles: three images, each a third covered.
+    tiled = np.asarray(uvs, dtype=np.float32).copy()
+    tiled[1::3] += np.float32([1.0, 0.0])
+    tiled[2::3] += np.float32([0.0, 2.0])
+    on_tiles = texture_cost(2048, 16.0, uvs=tiled)
+    assert on_tiles.texels == 3 * 2048**2 and on_tiles.bytes == cost.bytes
+    np.testing.assert_allclose(on_tiles.blur_reads / cost.blur_reads, share, rtol=0.02)
     with pytest.raises(ValueError, match="texture_size"):
         texture_cost(0)
     with pytest.raises(ValueError, match="radius"):
