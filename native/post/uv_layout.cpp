@@ -113,7 +113,8 @@ struct UvGrid {
   struct Box {
     int x0, y0, x1, y1;
   };
-  std::vector<Box> boxes;  // per face, its cells (x1 < x0 for faces in no tile)
+  std::vector<Box> boxes;                     // per face, its cells (x1 < x0 for faces in no tile)
+  std::vector<std::array<double, 4>> extent;  // per face, its UV box in its tile: u0, v0, u1, v1
 };
 
 UvGrid build_grid(const float* uvs, const FaceTiles& t) {
@@ -124,6 +125,7 @@ UvGrid build_grid(const float* uvs, const FaceTiles& t) {
   const int g = grid.g;
   auto cell = [&](double x) { return std::clamp(static_cast<int>(std::floor(x * g)), 0, g - 1); };
   grid.boxes.resize(m);
+  grid.extent.resize(m);
   const std::size_t cells = t.tiles.size() * std::size_t(g) * g;
   grid.first.assign(cells + 1, 0);
   for (std::size_t f = 0; f < m; ++f) {
@@ -133,10 +135,10 @@ UvGrid build_grid(const float* uvs, const FaceTiles& t) {
     const int tile = t.tiles[t.tile_index[f]];
     const Triangle tri = local_triangle(uvs, f, (tile - kFirstTile) % kTileColumns,
                                         (tile - kFirstTile) / kTileColumns);
-    b.x0 = cell(std::min({tri[0].u, tri[1].u, tri[2].u}));
-    b.x1 = cell(std::max({tri[0].u, tri[1].u, tri[2].u}));
-    b.y0 = cell(std::min({tri[0].v, tri[1].v, tri[2].v}));
-    b.y1 = cell(std::max({tri[0].v, tri[1].v, tri[2].v}));
+    std::array<double, 4>& e = grid.extent[f];
+    e = {std::min({tri[0].u, tri[1].u, tri[2].u}), std::min({tri[0].v, tri[1].v, tri[2].v}),
+         std::max({tri[0].u, tri[1].u, tri[2].u}), std::max({tri[0].v, tri[1].v, tri[2].v})};
+    b = {cell(e[0]), cell(e[1]), cell(e[2]), cell(e[3])};
     const std::size_t base = std::size_t(t.tile_index[f]) * g * g;
     for (int y = b.y0; y <= b.y1; ++y)
       for (int x = b.x0; x <= b.x1; ++x) ++grid.first[base + std::size_t(y) * g + x + 1];
@@ -211,7 +213,9 @@ std::vector<std::pair<std::int32_t, std::int32_t>> find_overlaps(
       const double area_a = 0.5 * cross(a[0], a[1], a[2]);
       if (!(area_a > 0.0)) continue;
       const UvGrid::Box& bf = grid.boxes[f];
+      const std::array<double, 4>& ef = grid.extent[f];
       const std::size_t base = std::size_t(t.tile_index[f]) * g * g;
+      std::int32_t known = -1;  // a node f was found to overlap: its other faces need no test
       for (int y = bf.y0; y <= bf.y1; ++y)
         for (int x = bf.x0; x <= bf.x1; ++x) {
           const std::size_t c = base + std::size_t(y) * g + x;
@@ -221,11 +225,16 @@ std::vector<std::pair<std::int32_t, std::int32_t>> find_overlaps(
             const UvGrid::Box& bh = grid.boxes[h];
             // Each pair once: in the first cell both boxes share.
             if (x != std::max(bf.x0, bh.x0) || y != std::max(bf.y0, bh.y0)) continue;
+            if (face_node[h] == known) continue;
+            const std::array<double, 4>& eh = grid.extent[h];
+            if (eh[0] >= ef[2] || ef[0] >= eh[2] || eh[1] >= ef[3] || ef[1] >= eh[3])
+              continue;  // the boxes meet in a line at most: no area in common
             const Triangle b = triangle(h);
             const double area_b = 0.5 * cross(b[0], b[1], b[2]);
             if (!(area_b > 0.0)) continue;
             if (overlap_area(a, b) <= kOverlapShare * std::min(area_a, area_b)) continue;
             overlapping[f] = 1;
+            known = face_node[h];
             if (face_node[f] < face_node[h]) found.emplace_back(face_node[f], face_node[h]);
           }
         }
