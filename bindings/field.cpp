@@ -147,6 +147,7 @@ py::dict compute_field(const Doubles& vertices, const Int64s& triangles, const p
   result["smoothed_faces"] = field.smoothed_faces;
   result["faces_outside"] = field.texture_faces_outside;
   result["faces_overlapping"] = field.texture_faces_overlapping;
+  result["overlaps_unparted"] = field.texture_overlaps_unparted;
   result["pages"] = field.texture_pages;
   result["kept_off_device"] = field.texture_kept_off_device;
   return result;
@@ -190,6 +191,7 @@ py::dict smooth_field(const Doubles& vertices, const Int64s& triangles, const Fl
   result["faces_outside"] = done.faces_outside;
   result["faces_spanning"] = done.faces_spanning;
   result["faces_overlapping"] = done.faces_overlapping;
+  result["overlaps_unparted"] = done.overlaps_unparted;
   result["pages"] = done.pages;
   result["kept_off_device"] = done.kept_off_device;
   if (options.return_image) {

@@ -39,6 +39,7 @@ struct Field {
   // overlapping another UV island's (smoothed apart), the pages drawn.
   std::size_t texture_faces_outside = 0;
   std::size_t texture_faces_overlapping = 0;
+  bool texture_overlaps_unparted = false;
   std::size_t texture_pages = 0;
   bool texture_kept_off_device = false;  // texture smoothing: the device was not used
 };

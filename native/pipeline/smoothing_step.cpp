@@ -148,6 +148,7 @@ void texture(const SmoothingMesh& mesh, PointKind kind, const float* values,
   out.faces_outside = done.faces_outside;
   out.faces_spanning = done.faces_spanning;
   out.faces_overlapping = done.faces_overlapping;
+  out.overlaps_unparted = done.overlaps_unparted;
   out.pages = done.pages;
   out.kept_off_device = done.kept_off_device;
   out.tiles = std::move(done.tiles);

@@ -70,6 +70,7 @@ struct Smoothed {
   std::size_t faces_outside = 0;
   std::size_t faces_spanning = 0;
   std::size_t faces_overlapping = 0;
+  bool overlaps_unparted = false;
   std::size_t pages = 0;
   bool kept_off_device = false;
   std::vector<TextureTile> tiles;

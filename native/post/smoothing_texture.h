@@ -79,6 +79,7 @@ struct TextureSmoothing {
   // image and mask above then stay empty). faces_outside: faces in no tile there.
   std::size_t faces_spanning = 0;
   std::size_t faces_overlapping = 0;
+  bool overlaps_unparted = false;  // UVs overlapping everywhere, drawn as laid out (uv_layout.h)
   std::size_t pages = 0;
   std::vector<TextureTile> tiles;
   // A device was given, but a face whose UV box covers more than kMostTexelsPerDeviceFace

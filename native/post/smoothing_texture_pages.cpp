@@ -36,6 +36,7 @@ void add_counts(const UvLayout& layout, TextureSmoothing& out) {
   out.faces_outside = layout.faces_outside;
   out.faces_spanning = layout.faces_spanning;
   out.faces_overlapping = layout.faces_overlapping;
+  out.overlaps_unparted = layout.overlaps_unparted;
   out.pages = layout.pages.size();
 }
 

@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <array>
+#include <atomic>
 #include <cmath>
 
 #include "util/parallel.h"
@@ -108,50 +109,82 @@ FaceTiles find_tiles(const float* uvs, std::size_t m, unsigned threads, UvLayout
 // clipped UV boxes touch each cell.
 struct UvGrid {
   int g = 1;
-  std::vector<std::uint32_t> first;  // per cell, where its faces start in `faces`
-  std::vector<std::uint32_t> faces;
   struct Box {
     int x0, y0, x1, y1;
   };
-  std::vector<Box> boxes;                     // per face, its cells (x1 < x0 for faces in no tile)
-  std::vector<std::array<double, 4>> extent;  // per face, its UV box in its tile: u0, v0, u1, v1
+  // A face in a cell, with what the search reads of it (in one place: scanning the cells
+  // was the layout's cost, most of it cache misses on arrays per face).
+  struct Entry {
+    std::uint32_t face;
+    std::int32_t node;
+    int x0, y0;            // its first cell
+    float u0, v0, u1, v1;  // its UV box in its tile
+  };
+  std::vector<std::uint32_t> first;  // per cell, where its entries start
+  std::vector<Entry> entries;
+  std::vector<Box> boxes;                    // per face, its cells (x1 < x0 for faces in no tile)
+  std::vector<std::array<float, 4>> extent;  // per face, its UV box in its tile: u0, v0, u1, v1
 };
 
-UvGrid build_grid(const float* uvs, const FaceTiles& t) {
+// Cells about the size of a typical face's UV box (the median side): a face then spans a few
+// cells, each holding a few faces, whatever the faces' sizes (a cell per face on average
+// scanned a random UV soup's hundreds of cells a face, each with thousands of faces).
+int grid_size(const FaceTiles& t, const std::vector<std::array<float, 4>>& extent) {
+  std::vector<float> side;
+  side.reserve(extent.size());
+  for (std::size_t f = 0; f < extent.size(); ++f)
+    if (t.tile_index[f] >= 0)
+      side.push_back(std::max(extent[f][2] - extent[f][0], extent[f][3] - extent[f][1]));
+  if (side.empty()) return 1;
+  std::nth_element(side.begin(), side.begin() + side.size() / 2, side.end());
+  const double median = std::max(double(side[side.size() / 2]), 1.0 / 2048);
+  const double per_tile = double(side.size()) / t.tiles.size();
+  return std::clamp(static_cast<int>(1.0 / median), 1,
+                    std::clamp(2 * int(std::sqrt(per_tile)), 1, 2048));
+}
+
+UvGrid build_grid(const float* uvs, const FaceTiles& t,
+                  const std::vector<std::int32_t>& face_node) {
   const std::size_t m = t.tile_index.size();
   UvGrid grid;
-  const double per_tile = double(m) / std::max<std::size_t>(1, t.tiles.size());
-  grid.g = std::clamp(static_cast<int>(std::sqrt(per_tile)), 1, 2048);
+  grid.extent.resize(m);
+  for (std::size_t f = 0; f < m; ++f) {
+    if (t.tile_index[f] < 0) continue;
+    const int tile = t.tiles[t.tile_index[f]];
+    const Triangle tri = local_triangle(uvs, f, (tile - kFirstTile) % kTileColumns,
+                                        (tile - kFirstTile) / kTileColumns);
+    grid.extent[f] = {float(std::min({tri[0].u, tri[1].u, tri[2].u})),
+                      float(std::min({tri[0].v, tri[1].v, tri[2].v})),
+                      float(std::max({tri[0].u, tri[1].u, tri[2].u})),
+                      float(std::max({tri[0].v, tri[1].v, tri[2].v}))};
+  }
+  grid.g = grid_size(t, grid.extent);
   const int g = grid.g;
   auto cell = [&](double x) { return std::clamp(static_cast<int>(std::floor(x * g)), 0, g - 1); };
   grid.boxes.resize(m);
-  grid.extent.resize(m);
   const std::size_t cells = t.tiles.size() * std::size_t(g) * g;
   grid.first.assign(cells + 1, 0);
   for (std::size_t f = 0; f < m; ++f) {
     UvGrid::Box& b = grid.boxes[f];
     b = {0, 0, -1, -1};
     if (t.tile_index[f] < 0) continue;
-    const int tile = t.tiles[t.tile_index[f]];
-    const Triangle tri = local_triangle(uvs, f, (tile - kFirstTile) % kTileColumns,
-                                        (tile - kFirstTile) / kTileColumns);
-    std::array<double, 4>& e = grid.extent[f];
-    e = {std::min({tri[0].u, tri[1].u, tri[2].u}), std::min({tri[0].v, tri[1].v, tri[2].v}),
-         std::max({tri[0].u, tri[1].u, tri[2].u}), std::max({tri[0].v, tri[1].v, tri[2].v})};
+    const std::array<float, 4>& e = grid.extent[f];
     b = {cell(e[0]), cell(e[1]), cell(e[2]), cell(e[3])};
     const std::size_t base = std::size_t(t.tile_index[f]) * g * g;
     for (int y = b.y0; y <= b.y1; ++y)
       for (int x = b.x0; x <= b.x1; ++x) ++grid.first[base + std::size_t(y) * g + x + 1];
   }
   for (std::size_t c = 0; c < cells; ++c) grid.first[c + 1] += grid.first[c];
-  grid.faces.resize(grid.first[cells]);
+  grid.entries.resize(grid.first[cells]);
   std::vector<std::uint32_t> at(grid.first.begin(), grid.first.end() - 1);
   for (std::size_t f = 0; f < m; ++f) {
     const UvGrid::Box& b = grid.boxes[f];
+    const std::array<float, 4>& e = grid.extent[f];
+    const UvGrid::Entry entry{
+        static_cast<std::uint32_t>(f), face_node[f], b.x0, b.y0, e[0], e[1], e[2], e[3]};
     const std::size_t base = t.tile_index[f] < 0 ? 0 : std::size_t(t.tile_index[f]) * g * g;
     for (int y = b.y0; y <= b.y1; ++y)
-      for (int x = b.x0; x <= b.x1; ++x)
-        grid.faces[at[base + std::size_t(y) * g + x]++] = static_cast<std::uint32_t>(f);
+      for (int x = b.x0; x <= b.x1; ++x) grid.entries[at[base + std::size_t(y) * g + x]++] = entry;
   }
   return grid;
 }
@@ -194,7 +227,7 @@ std::vector<std::int64_t> node_keys(const FaceTiles& t, const std::vector<std::i
 std::vector<std::pair<std::int32_t, std::int32_t>> find_overlaps(
     const float* uvs, const FaceTiles& t, const UvGrid& grid,
     const std::vector<std::int32_t>& face_node, unsigned threads,
-    std::vector<std::uint8_t>& overlapping) {
+    std::vector<std::uint8_t>& overlapping, bool& over_budget) {
   const std::size_t m = face_node.size();
   const int g = grid.g;
   overlapping.assign(m, 0);
@@ -205,31 +238,42 @@ std::vector<std::pair<std::int32_t, std::int32_t>> find_overlaps(
     return local_triangle(uvs, f, (tile - kFirstTile) % kTileColumns,
                           (tile - kFirstTile) / kTileColumns);
   };
+  // Clips allowed, kClipsPerFace a face on average: a layout where UVs overlap everywhere (a
+  // random soup: every face's box meets most others') stops here, unparted.
+  const std::uint64_t budget = kClipsPerFace * std::uint64_t(m) + 4096;
+  std::atomic<std::uint64_t> clips{0};
+  std::atomic<bool> stop{false};
   parallel_for(m, kFaceGrain, threads, [&](std::size_t begin, std::size_t end) {
     auto& found = pairs[begin / kFaceGrain];
+    std::uint64_t mine = 0;
     for (std::size_t f = begin; f < end; ++f) {
+      if (stop.load(std::memory_order_relaxed)) return;
+      if (mine > 4096) {
+        if (clips.fetch_add(mine, std::memory_order_relaxed) + mine > budget) stop = true;
+        mine = 0;
+      }
       if (face_node[f] < 0) continue;
       const Triangle a = triangle(f);
       const double area_a = 0.5 * cross(a[0], a[1], a[2]);
       if (!(area_a > 0.0)) continue;
       const UvGrid::Box& bf = grid.boxes[f];
-      const std::array<double, 4>& ef = grid.extent[f];
+      const std::array<float, 4>& ef = grid.extent[f];
       const std::size_t base = std::size_t(t.tile_index[f]) * g * g;
+      const std::int32_t node = face_node[f];
       std::int32_t known = -1;  // a node f was found to overlap: its other faces need no test
       for (int y = bf.y0; y <= bf.y1; ++y)
         for (int x = bf.x0; x <= bf.x1; ++x) {
           const std::size_t c = base + std::size_t(y) * g + x;
           for (std::uint32_t j = grid.first[c]; j < grid.first[c + 1]; ++j) {
-            const std::uint32_t h = grid.faces[j];
-            if (face_node[h] == face_node[f]) continue;
-            const UvGrid::Box& bh = grid.boxes[h];
+            const UvGrid::Entry& eh = grid.entries[j];
+            if (eh.node == node || eh.node == known) continue;
             // Each pair once: in the first cell both boxes share.
-            if (x != std::max(bf.x0, bh.x0) || y != std::max(bf.y0, bh.y0)) continue;
-            if (face_node[h] == known) continue;
-            const std::array<double, 4>& eh = grid.extent[h];
-            if (eh[0] >= ef[2] || ef[0] >= eh[2] || eh[1] >= ef[3] || ef[1] >= eh[3])
+            if (x != std::max(bf.x0, eh.x0) || y != std::max(bf.y0, eh.y0)) continue;
+            if (eh.u0 >= ef[2] || ef[0] >= eh.u1 || eh.v0 >= ef[3] || ef[1] >= eh.v1)
               continue;  // the boxes meet in a line at most: no area in common
+            const std::uint32_t h = eh.face;
             const Triangle b = triangle(h);
+            ++mine;
             const double area_b = 0.5 * cross(b[0], b[1], b[2]);
             if (!(area_b > 0.0)) continue;
             if (overlap_area(a, b) <= kOverlapShare * std::min(area_a, area_b)) continue;
@@ -240,7 +284,9 @@ std::vector<std::pair<std::int32_t, std::int32_t>> find_overlaps(
         }
     }
   });
+  over_budget = stop.load();
   std::vector<std::pair<std::int32_t, std::int32_t>> all;
+  if (over_budget) return all;
   for (auto& p : pairs) all.insert(all.end(), p.begin(), p.end());
   std::sort(all.begin(), all.end());
   all.erase(std::unique(all.begin(), all.end()), all.end());
@@ -288,9 +334,11 @@ UvLayout layout_uvs(const float* uvs, const std::vector<std::int32_t>& face_isla
   for (std::int32_t i : face_island) islands = std::max<std::int64_t>(islands, i + 1);
   std::vector<std::int32_t> face_node;
   const std::vector<std::int64_t> keys = node_keys(t, face_island, islands, face_node);
-  const UvGrid grid = build_grid(uvs, t);
+  const UvGrid grid = build_grid(uvs, t, face_node);
   std::vector<std::uint8_t> overlapping;
-  const auto pairs = find_overlaps(uvs, t, grid, face_node, threads, overlapping);
+  bool over_budget = false;
+  const auto pairs = find_overlaps(uvs, t, grid, face_node, threads, overlapping, over_budget);
+  layout.overlaps_unparted = over_budget;
   for (std::uint8_t o : overlapping) layout.faces_overlapping += o;
   const std::vector<int> layer = assign_layers(keys.size(), pairs);
 

@@ -19,7 +19,9 @@
 // at its resolution, on an image of its own. A tile has at most kMostLayers layers (each costs
 // a pass over an image): islands that find none free share the last, where overlapping faces
 // are drawn as in one image (the later face wins), as are faces that overlap faces of their
-// own island (a folded island), which no layering parts.
+// own island (a folded island), which no layering parts. Where UVs overlap everywhere (the search
+// would clip more than kClipsPerFace pairs a face: a random UV soup), the search stops and each
+// tile is drawn in one image, as laid out.
 #pragma once
 
 #include <cstddef>
@@ -32,6 +34,9 @@ namespace sdf {
 
 constexpr double kOverlapShare = 0.01;
 constexpr int kMostLayers = 8;
+// The overlap search clips at most this many face pairs a face on average; beyond, the UVs
+// overlap everywhere (a random soup) and are drawn as laid out, in one image a tile.
+constexpr std::uint64_t kClipsPerFace = 64;
 constexpr int kFirstTile = 1001;
 constexpr int kTileColumns = 10;
 constexpr int kTileRows = 100;  // tiles 1001 to 2000, as Blender holds them
@@ -50,6 +55,9 @@ struct UvLayout {
   std::size_t faces_outside = 0;        // no corner in a tile: not drawn, values kept
   std::size_t faces_spanning = 0;       // UVs reaching beyond their tile by more than 1e-4
   std::size_t faces_overlapping = 0;    // overlapping faces of another island (see above)
+  // The search stopped at kClipsPerFace: faces_overlapping counts those found so far (at
+  // least that many), and no layers part them.
+  bool overlaps_unparted = false;
   int tile_count = 0;
   // One page, tile 1001: the UVs are drawn as given, in one image (faces of no tile too,
   // clipped: one whose corners lie in no tile still covers a sliver of the square at most).

@@ -389,7 +389,14 @@ def warn_of_texture_limits(out, face_count, o, engine):
             f"(u in [0, 10), v in [0, 100)): {reach}; move their UVs into a tile to include "
             "them"
         )
-    if out.get("faces_overlapping", 0) > 0:
+    if out.get("overlaps_unparted"):
+        warn(
+            f"the UVs overlap everywhere (at least {out['faces_overlapping']} of {face_count} "
+            "faces overlap another UV island's, as in a random layout): texture smoothing drew "
+            "each tile as laid out, in one image, where overlapping faces mix (the later face "
+            "wins); unwrap the mesh without overlaps to keep them apart"
+        )
+    elif out.get("faces_overlapping", 0) > 0:
         warn(
             f"{out['faces_overlapping']} of {face_count} faces have UVs overlapping another UV "
             "island's (mirrored or stacked shells): texture smoothing ran each tile's "

@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cstdint>
+#include <random>
 #include <vector>
 
 #include "post/smoothing_texture.h"
@@ -116,6 +117,22 @@ TEST(UvLayout, OverlapsBelowTheShareAreNotCounted) {
   EXPECT_EQ(layout.pages.size(), 2u);
   EXPECT_GT(layout.faces_overlapping, 0u);
   EXPECT_LE(layout.faces_overlapping, 4u * 8u);  // the two columns' faces at most
+}
+
+TEST(UvLayout, ASoupOfOverlappingFacesIsDrawnAsLaidOut) {
+  // 3000 faces, each its own island, with random UVs over the square: every face's box meets
+  // most others', past the search's budget; one page, marked unparted.
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<float> unit(0.0f, 0.999f);
+  const std::size_t m = 3000;
+  std::vector<float> uvs(6 * m);
+  for (float& x : uvs) x = unit(rng);
+  std::vector<std::int32_t> islands(m);
+  for (std::size_t f = 0; f < m; ++f) islands[f] = static_cast<std::int32_t>(f);
+  const UvLayout layout = layout_uvs(uvs.data(), islands, 0);
+  EXPECT_TRUE(layout.overlaps_unparted);
+  EXPECT_TRUE(layout.single_square());
+  EXPECT_GT(layout.faces_overlapping, 0u);
 }
 
 // Stacked sheets smoothed on their pages: each sheet's values are those of smoothing it alone
