@@ -55,7 +55,9 @@ class ObjectResult:
     attributes: list
     shared_by: list = field(default_factory=list)
     warnings: list = field(default_factory=list)
-    image: str = ""  # name of the baked image in bpy.data.images, if any
+    image: str = ""  # name of the baked image in bpy.data.images (UDIM tile 1001), if any
+    # Every baked tile's image: tile number -> name (1001: `image`; 1002: "<image>.1002", ...).
+    tile_images: dict = field(default_factory=dict)
 
 
 def engines():
@@ -117,6 +119,11 @@ def compute_objects(objects, *, depsgraph=None, write=True, progress=None, **opt
             shared_by=list(t.shared_by),
             warnings=[*run_warnings, *t.warnings],
             image=t.image_name if write else "",
+            tile_images={
+                tile: process.tile_image_name(t.image_name, tile) for tile in (t.image or {})
+            }
+            if write
+            else {},
         )
         for t in tasks
     ]

@@ -135,9 +135,10 @@ def bake(
     engine="auto",
     threads=0,
 ):
-    """The field rasterised through per-corner uvs (m, 3, 2) into a (size, size, 4) float32
-    RGBA image in Blender's pixel order (row 0 at v = 0): the value in R, G and B, alpha 1
-    where a face (or the margin around an island) covers the texel, else 0. `radius` is the
+    """The field rasterised through per-corner uvs (m, 3, 2) into (size, size, 4) float32
+    RGBA images in Blender's pixel order (row 0 at v = 0), one per UDIM tile the UVs use (a
+    dict tile number -> image, tile 1001 always): the value in R, G and B, alpha 1 where a
+    face (or the margin around an island) covers the texel, else 0. `radius` is the
     texture-space blur in texels (0: none, None: the core's default). Rasterising and
     blurring are the core's (shape_diameter.smooth(..., 'texture', return_image=True)), on
     `engine` (compute()'s names) with `threads` CPU threads (0: every core)."""
@@ -156,10 +157,18 @@ def bake(
         margin=int(margin),
         return_image=True,
     )
-    rgba = np.empty(out.image.shape + (4,), dtype=np.float32)
-    rgba[..., :3] = out.image[..., None]
-    rgba[..., 3] = out.mask
-    return rgba
+    # One image per UDIM tile, and always tile 1001 (the [0, 1] square, the image the user
+    # named): empty where no face lies in it.
+    tiles = dict(out.tiles)
+    tiles.setdefault(1001, (np.zeros_like(out.image), np.zeros_like(out.mask)))
+    images = {}
+    for number in sorted(tiles):
+        image, mask = tiles[number]
+        rgba = np.empty(image.shape + (4,), dtype=np.float32)
+        rgba[..., :3] = image[..., None]
+        rgba[..., 3] = mask
+        images[number] = rgba
+    return images
 
 
 def segment(vertices, triangles, values, options, progress=None):

@@ -225,7 +225,8 @@ class Task:
     colors: np.ndarray = None  # float32 (k, 4) sRGB, per polygon (or vertex)
     corner_uvs: np.ndarray = None  # float32 (m, 3, 2) per triangle corner, when needed
     image_name: str = ""
-    image: np.ndarray = None  # float32 (height, width, 4) RGBA, Blender's row order
+    # Per UDIM tile (1001 always): float32 (height, width, 4) RGBA, Blender's row order.
+    image: dict = None
     engine: str = ""
     timings: dict = None
     warnings: list = field(default_factory=list)
@@ -780,9 +781,9 @@ def write(bpy_data, tasks, options):
         # Images are made under a temporary name and replace the old ones (same name) only
         # when everything else is written: users of an old image (materials) get the new one.
         for _, task in targets:
-            if task.image is not None:
-                image = mesh_data.new_image(task.image_name + ".sdf-new", task.image)
-                new_images.append((image, task.image_name))
+            for tile, rgba in (task.image or {}).items():
+                name = tile_image_name(task.image_name, tile)
+                new_images.append((mesh_data.new_image(name + ".sdf-new", rgba), name))
     except BaseException:
         for image, _ in new_images:
             bpy_data.images.remove(image)
@@ -796,6 +797,12 @@ def write(bpy_data, tasks, options):
             bpy_data.images.remove(old)
         image.name = name
     return [ob for ob, _ in targets]
+
+
+def tile_image_name(name, tile):
+    """The baked image of UDIM tile `tile`: `name` itself for tile 1001 (the [0, 1] square),
+    NAME.TILE (spot_sdf.1002) for the others."""
+    return name if tile == 1001 else f"{name}.{tile}"
 
 
 def put_attribute(me, name, data_type, domain, data, undo):

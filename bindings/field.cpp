@@ -147,6 +147,9 @@ py::dict compute_field(const Doubles& vertices, const Int64s& triangles, const p
   result["twin_faces"] = field.twin_faces;
   result["smoothed_faces"] = field.smoothed_faces;
   result["faces_outside"] = field.texture_faces_outside;
+  result["faces_overlapping"] = field.texture_faces_overlapping;
+  result["overlaps_unparted"] = field.texture_overlaps_unparted;
+  result["pages"] = field.texture_pages;
   result["kept_off_device"] = field.texture_kept_off_device;
   return result;
 }
@@ -187,14 +190,22 @@ py::dict smooth_field(const Doubles& vertices, const Int64s& triangles, const Fl
   result["timings"] = sdf::timings_dict(done.timings);
   result["failure"] = failure;
   result["faces_outside"] = done.faces_outside;
+  result["faces_spanning"] = done.faces_spanning;
+  result["faces_overlapping"] = done.faces_overlapping;
+  result["overlaps_unparted"] = done.overlaps_unparted;
+  result["pages"] = done.pages;
   result["kept_off_device"] = done.kept_off_device;
   if (options.return_image) {
-    py::array_t<float> image({py::ssize_t(done.height), py::ssize_t(done.width)});
-    py::array_t<bool> mask({py::ssize_t(done.height), py::ssize_t(done.width)});
-    std::copy(done.image.begin(), done.image.end(), image.mutable_data());
-    std::copy(done.mask.begin(), done.mask.end(), mask.mutable_data());
-    result["image"] = image;
-    result["mask"] = mask;
+    // Per UDIM tile: its number -> (image, mask), rows from v = 0.
+    py::dict tiles;
+    for (const sdf::TextureTile& tile : done.tiles) {
+      py::array_t<float> image({py::ssize_t(tile.height), py::ssize_t(tile.width)});
+      py::array_t<bool> mask({py::ssize_t(tile.height), py::ssize_t(tile.width)});
+      std::copy(tile.image.begin(), tile.image.end(), image.mutable_data());
+      std::copy(tile.mask.begin(), tile.mask.end(), mask.mutable_data());
+      tiles[py::int_(tile.tile)] = py::make_tuple(image, mask);
+    }
+    result["tiles"] = tiles;
   }
   return result;
 }

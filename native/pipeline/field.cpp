@@ -115,6 +115,9 @@ void smooth_cast(Field& field, CastRun& run, const MeshArrays& arrays, const flo
     out.timings.emplace_back("smooth: " + name, seconds);
   field.smoothed_faces = arrays.triangle_count;
   field.texture_faces_outside = done.faces_outside;
+  field.texture_faces_overlapping = done.faces_overlapping;
+  field.texture_overlaps_unparted = done.overlaps_unparted;
+  field.texture_pages = done.pages;
   field.texture_kept_off_device = done.kept_off_device;
   out.mesh = Mesh();  // no longer needed
 }

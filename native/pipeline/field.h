@@ -35,8 +35,13 @@ struct Field {
   std::string fallback;            // '<what> failed: <why>' where the CPU ran instead; or empty
   std::size_t twin_faces = 0;      // faces given their twins' values
   std::size_t smoothed_faces = 0;  // faces the smoothing ran on
-  std::size_t texture_faces_outside = 0;  // texture smoothing: faces left out (UDIM, offsets)
-  bool texture_kept_off_device = false;   // texture smoothing: the device was not used
+  // Texture smoothing (smoothing_step.h's Smoothed): faces in no UDIM tile (left out), faces
+  // overlapping another UV island's (smoothed apart), the pages drawn.
+  std::size_t texture_faces_outside = 0;
+  std::size_t texture_faces_overlapping = 0;
+  bool texture_overlaps_unparted = false;
+  std::size_t texture_pages = 0;
+  bool texture_kept_off_device = false;  // texture smoothing: the device was not used
 };
 
 // mesh: checked by the caller as make_mesh does (std::invalid_argument otherwise). Progress

@@ -4,6 +4,9 @@
 #include <cmath>
 #include <stdexcept>
 
+#include "post/smoothing_texture_pages.h"
+#include "post/uv_islands.h"
+#include "post/uv_layout.h"
 #include "prepare/unit_scale.h"
 #include "segment/face_graph.h"
 #include "segment/postprocess.h"
@@ -93,39 +96,62 @@ void projected(const Mesh& mesh, PointKind kind, const float* values, const Proj
   smooth_projected_into(mesh, kind, values, o, out.values.data(), progress, 0.0, 1.0, &out.timings);
 }
 
+// Texture smoothing on the UV layout's pages (uv_layout.h): UDIM tiles and layers that part
+// overlapping islands, one image each, one after another through the per-image code (on the
+// CPU threads or a device). A layout of one page in the [0, 1] square uses what was prepared
+// (its islands; on a device, what was uploaded).
 void texture(const SmoothingMesh& mesh, PointKind kind, const float* values,
              const SmoothingOptions& options, [[maybe_unused]] DevicePtr device,
              const PreparedSmoothing* prepared, const ProgressFn& progress, Smoothed& out) {
   TextureOptions o = options.texture;
   o.threads = options.threads;
-  const PreparedTexture* ready = prepared ? prepared->texture.get() : nullptr;
-  if (!ready && !mesh.as_given)
+  const PreparedTexture* given_ready = prepared ? prepared->texture.get() : nullptr;
+  if (!given_ready && !mesh.as_given)
     throw std::logic_error("texture smoothing needs the mesh as given or a prepared texture");
-  const Mesh& given = ready ? ready->mesh : *mesh.as_given;
+  Stopwatch clock;
+  // Without a preparation, one made here: the layout and a one-image run share its islands
+  // (and its checks of the UVs and size come first, with their own words).
+  PreparedTexture own;
+  if (!given_ready) {
+    own = prepare_texture(copy_mesh(*mesh.as_given, o.threads), mesh.uvs, o,
+                          kind == PointKind::Vertices);
+    for (auto& stage : own.timings)
+      out.timings.emplace_back("prepare: " + stage.first, stage.second);
+    clock.lap();
+  }
+  const PreparedTexture& ready = given_ready ? *given_ready : own;
+  const Mesh& given = ready.mesh;
+  const float* uvs = ready.uvs;
   out.values.resize(point_count(given, kind));
-  TextureSmoothing done;
+  const UvLayout layout = layout_uvs(uvs, ready.islands.face_island, o.threads);
+  out.timings.emplace_back("uv layout", clock.lap());
+  const bool one_image = layout.single_square();
+  auto run_page = [&](const float* page_uvs, bool keep, const ProgressFn& part, float* into) {
 #ifdef SDF_HAVE_OPENCL
-  if (device && ready)
-    done = cl::smooth_texture_opencl(*device, *ready, kind, values, o, options.return_image,
-                                     progress, out.values.data());
-  else if (device)
-    done = cl::smooth_texture_opencl(*device, given, kind, values, mesh.uvs, o,
-                                     options.return_image, progress, out.values.data());
-  else
+    // What prepare_smoothing made (uploaded to the device where it could), or the page's UVs.
+    if (device && one_image && given_ready)
+      return cl::smooth_texture_opencl(*device, ready, kind, values, o, keep, part, into);
+    if (device)
+      return cl::smooth_texture_opencl(*device, given, kind, values, page_uvs, o, keep, part, into);
 #endif
-      if (ready)
-    done = smooth_texture(*ready, kind, values, o, options.return_image, progress, 0.0, 1.0,
-                          nullptr, out.values.data());
-  else
-    done = smooth_texture(given, kind, values, mesh.uvs, o, options.return_image, progress, 0.0,
-                          1.0, nullptr, out.values.data());
-  out.timings = std::move(done.timings);
+    if (one_image)
+      return smooth_texture(ready, kind, values, o, keep, part, 0.0, 1.0, nullptr, into);
+    // A page keeps the whole layout's islands (labelling them again cost as much as the rest).
+    return smooth_texture_on_islands(given, kind, values, page_uvs, ready.islands,
+                                     kind == PointKind::Vertices ? &ready.groups : nullptr, o, keep,
+                                     part, into);
+  };
+  TextureSmoothing done =
+      smooth_texture_pages(given, kind, values, uvs, layout, options.return_image, o.threads,
+                           progress, run_page, out.values.data());
+  for (auto& stage : done.timings) out.timings.push_back(std::move(stage));
   out.faces_outside = done.faces_outside;
+  out.faces_spanning = done.faces_spanning;
+  out.faces_overlapping = done.faces_overlapping;
+  out.overlaps_unparted = done.overlaps_unparted;
+  out.pages = done.pages;
   out.kept_off_device = done.kept_off_device;
-  out.image = std::move(done.image);
-  out.mask = std::move(done.mask);
-  out.width = done.width;
-  out.height = done.height;
+  out.tiles = std::move(done.tiles);
 }
 
 }  // namespace

@@ -63,13 +63,17 @@ PreparedSmoothing prepare_smoothing(Mesh as_given, const float* uvs, PointKind k
 struct Smoothed {
   std::vector<float> values;  // one per point
   StageTimings timings;       // the method's stages
-  // Texture smoothing: faces whose UVs lie wholly outside [0, 1]; whether a device was
-  // asked for but the work stayed on the CPU threads; the image when asked (TextureSmoothing).
+  // Texture smoothing (smoothing_texture_pages.h): faces whose UV centroid lies in no UDIM
+  // tile (kept), faces reaching beyond their tile (clipped), faces overlapping another UV
+  // island's (smoothed on a layer of their own), the pages drawn; whether a device was asked
+  // for but the work stayed on the CPU threads; each tile's image when asked.
   std::size_t faces_outside = 0;
+  std::size_t faces_spanning = 0;
+  std::size_t faces_overlapping = 0;
+  bool overlaps_unparted = false;
+  std::size_t pages = 0;
   bool kept_off_device = false;
-  std::vector<float> image;
-  std::vector<std::uint8_t> mask;
-  int width = 0, height = 0;
+  std::vector<TextureTile> tiles;
 };
 
 // The method on `values` (one per point of `kind`, finite; >= 0 for projected). prepared:

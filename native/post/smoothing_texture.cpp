@@ -444,6 +444,27 @@ TextureSmoothing smooth_texture(const Mesh& mesh, PointKind kind, const float* v
   return out;
 }
 
+TextureSmoothing smooth_texture_on_islands(const Mesh& mesh, PointKind kind, const float* values,
+                                           const float* uvs, const UvIslands& islands,
+                                           const CornerGroups* groups,
+                                           const TextureOptions& options, bool keep_image,
+                                           const ProgressFn& progress, float* into) {
+  Stopwatch clock;
+  StageTimings timings;
+  check_texture_input(uvs, mesh.triangles.size(), options);
+  if (islands.face_island.size() != mesh.triangles.size() ||
+      (kind == PointKind::Vertices && (!groups || !islands.need_merged)))
+    throw std::invalid_argument("the UV islands were made for other faces or for face values");
+  return smooth_checked(mesh, kind, values, uvs, options, keep_image, progress, 0.0, 1.0, nullptr,
+                        &islands, groups, into, clock, timings);
+}
+
+void check_texture_input(const float* uvs, std::size_t m, const TextureOptions& options) {
+  check_size(options);
+  check_face_count(m);
+  (void)check_uvs(uvs, m, options.width, options.height, options.threads);
+}
+
 PreparedTexture prepare_texture(Mesh mesh, const float* uvs, const TextureOptions& options,
                                 bool need_merged) {
   Stopwatch clock;

@@ -52,6 +52,14 @@ struct TextureOptions {
   unsigned threads = 0;          // 0: every core
 };
 
+// One UDIM tile's image (smoothing_texture_pages.h), as TextureSmoothing's image and mask.
+struct TextureTile {
+  int tile = 1001;
+  std::vector<float> image;
+  std::vector<std::uint8_t> mask;
+  int width = 0, height = 0;
+};
+
 struct TextureSmoothing {
   std::vector<float> values;  // per face or vertex, like the input, within its [min, max]
   // The blurred image, width x height, row-major from row 0 (v = 0), 0 where empty; and
@@ -66,6 +74,14 @@ struct TextureSmoothing {
   // Faces whose UVs lie wholly outside the [0, 1] square (UDIM tiles, offset layouts): they
   // cover no texel and keep their values.
   std::size_t faces_outside = 0;
+  // Set by smooth_texture_pages (uv_layout.h): faces reaching beyond their tile, faces
+  // overlapping another island's, the pages drawn, and each tile's image (keep_image; the
+  // image and mask above then stay empty). faces_outside: faces in no tile there.
+  std::size_t faces_spanning = 0;
+  std::size_t faces_overlapping = 0;
+  bool overlaps_unparted = false;  // UVs overlapping everywhere, drawn as laid out (uv_layout.h)
+  std::size_t pages = 0;
+  std::vector<TextureTile> tiles;
   // A device was given, but a face whose UV box covers more than kMostTexelsPerDeviceFace
   // texels kept the work on the CPU threads (same values, a device's speed lost).
   bool kept_off_device = false;
@@ -125,6 +141,16 @@ TextureSmoothing smooth_texture(const Mesh& mesh, PointKind kind, const float* v
                                 double progress_to = 1.0, const TextureDeviceFn& device = nullptr,
                                 float* into = nullptr);
 
+// As above, on UV islands (and, for vertex values, corner groups) made already for these
+// faces, with other UVs: a page of a UDIM or layered layout (smoothing_texture_pages.h), whose
+// faces keep the whole layout's islands (others', moved out of the square, draw nothing). On
+// the CPU threads. Throws as above, and where vertex values come without groups.
+TextureSmoothing smooth_texture_on_islands(const Mesh& mesh, PointKind kind, const float* values,
+                                           const float* uvs, const UvIslands& islands,
+                                           const CornerGroups* groups,
+                                           const TextureOptions& options, bool keep_image,
+                                           const ProgressFn& progress, float* into);
+
 // What texture smoothing needs of the mesh and its UVs alone, made ahead of the values:
 // compute() makes it while a device casts, when the host would only wait. The mesh, the UVs
 // (checked; not copied: 36 MB at 1.5M faces took 20 ms of page faults and copying), their
@@ -143,6 +169,10 @@ struct PreparedTexture {
   std::shared_ptr<void> on_device;
   StageTimings timings;  // seconds per step of the preparation (and of the uploads)
 };
+
+// The checks smooth_texture starts with: the size, the face count, and m faces' UVs finite.
+// Throws std::invalid_argument naming the problem.
+void check_texture_input(const float* uvs, std::size_t m, const TextureOptions& options);
 
 // options' width, height, weld_tolerance and threads are used; need_merged: for vertex
 // values. uvs must stay alive and unchanged while the result is used (set its `keep` to

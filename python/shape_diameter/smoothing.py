@@ -53,18 +53,35 @@ OPTIONS = {
 }
 
 
-class TextureResult(NamedTuple):
-    """smooth(..., method='texture', return_image=True) returns this (it unpacks as a tuple)."""
-
+class _TextureImage(NamedTuple):
     values: np.ndarray
     """float32 per face or vertex: the smoothed field."""
     image: np.ndarray
-    """float32 (height, width): the blurred field in UV space, 0 where no island is. Row 0 is
-    v = 0 (the bottom), column 0 is u = 0, as in Blender's Image.pixels; np.flipud gives the
-    top-first order of image files."""
+    """float32 (height, width): the blurred field in UV space of the lowest-numbered UDIM tile
+    (1001 for a layout in the [0, 1] square), 0 where no island is. Row 0 is v = 0 (the
+    bottom), column 0 is u = 0, as in Blender's Image.pixels; np.flipud gives the top-first
+    order of image files."""
     mask: np.ndarray
     """bool (height, width): True where a texel holds a value (a face covers it, or it is in
     the dilated margin around an island)."""
+
+
+class TextureResult(_TextureImage):
+    """smooth(..., method='texture', return_image=True) returns this: it unpacks as the tuple
+    (values, image, mask), and `tiles` holds every UDIM tile's image.
+
+    UVs may lie on UDIM tiles: tile 1001 + floor(u) + 10 floor(v), u in [0, 10), v in
+    [0, 100); each tile is smoothed as an image of its own, texture_size texels. A layout in
+    the [0, 1] square has one tile, 1001.
+
+    tiles: dict, each tile's number (1001, 1002, ...) -> (image, mask), as image and mask, in
+    ascending order. Where UV islands overlap in a tile, they are smoothed on separate images
+    and laid over each other in the tile's image (the later island's texels on top)."""
+
+    def __new__(cls, values, image, mask, tiles=None):
+        result = super().__new__(cls, values, image, mask)
+        result.tiles = {1001: (image, mask)} if tiles is None else tiles
+        return result
 
 
 def default_k(face_count: int) -> int:
@@ -194,8 +211,21 @@ def smooth(
     if method == "texture":
         warn_of_texture_limits(out, len(t), resolved, "cpu" if out["failure"] else chosen)
         if resolved["return_image"]:
-            return TextureResult(out["values"], out["image"], out["mask"])
+            return _texture_result(out, resolved["texture_size"])
     return out["values"]
+
+
+def _texture_result(out, texture_size):
+    """The core's per-tile images as a TextureResult (an empty image where no face lies in any
+    tile)."""
+    tiles = dict(sorted(out["tiles"].items()))
+    if tiles:
+        image, mask = next(iter(tiles.values()))
+    else:
+        width, height = texture_size
+        image = np.zeros((height, width), dtype=np.float32)
+        mask = np.zeros((height, width), dtype=bool)
+    return TextureResult(out["values"], image, mask, tiles)
 
 
 def check_bilateral_points(points) -> None:
@@ -296,7 +326,8 @@ class TextureCost(NamedTuple):
     """texture_cost()'s answer."""
 
     texels: int
-    """width x height: drawing, dilating and reading back are linear in it."""
+    """width x height, times the UDIM tiles the UVs use (each an image): drawing, dilating
+    and reading back are linear in it."""
     blur_reads: float
     """Texels the blur reads, its time being proportional: in each of its two passes (rows,
     then columns) every texel of an island reads the texels within the radius along its row
@@ -325,34 +356,64 @@ def texture_cost(texture_size=1024, radius=None, uvs=None) -> TextureCost:
         radius = default_radius((width, height))
     taps = math.floor(_real("radius", radius, 0.0, 16384.0))  # as the core cuts it
     texels = width * height
-    covered = 1.0
+    covered, tiles = 1.0, 1
     if uvs is not None:
         uv = np.asarray(uvs, dtype=np.float64).reshape(-1, 3, 2)
         a, b = uv[:, 1] - uv[:, 0], uv[:, 2] - uv[:, 0]
-        covered = min(1.0, 0.5 * float(np.abs(a[:, 0] * b[:, 1] - a[:, 1] * b[:, 0]).sum()))
+        tiles = _udim_tile_count(uv)
+        area = 0.5 * float(np.abs(a[:, 0] * b[:, 1] - a[:, 1] * b[:, 0]).sum())
+        covered = min(1.0, area / tiles)
+    # Tiles are smoothed one after another, each an image: time grows with them, the peak
+    # memory does not (the images kept for return_image aside).
     if taps < 1:
-        return TextureCost(texels, 0.0, texels * TEXTURE_BYTES_PER_TEXEL_NO_BLUR)
+        return TextureCost(tiles * texels, 0.0, texels * TEXTURE_BYTES_PER_TEXEL_NO_BLUR)
     window = min(2 * taps + 1, width) + min(2 * taps + 1, height)
-    return TextureCost(texels, texels * covered * window, texels * TEXTURE_BYTES_PER_TEXEL)
+    return TextureCost(
+        tiles * texels, tiles * texels * covered * window, texels * TEXTURE_BYTES_PER_TEXEL
+    )
+
+
+def _udim_tile_count(uv) -> int:
+    """The UDIM tiles (u in [0, 10), v in [0, 100)) the faces' UV centroids lie in; at least
+    1."""
+    centre = uv.mean(axis=1)
+    inside = (centre[:, 0] >= 0) & (centre[:, 0] < 10) & (centre[:, 1] >= 0) & (centre[:, 1] < 100)
+    tile = np.floor(centre[inside, 0]) + 10 * np.floor(centre[inside, 1])
+    return max(1, len(np.unique(tile)))
 
 
 def warn_of_texture_limits(out, face_count, o, engine):
     """Texture smoothing's words on faces its image leaves out and on a run kept off the
     device."""
-    # A few faces just over the square's edge are common (spot.obj's layout: 0.05% at 1.5M
-    # faces) and lose little; most of them outside is a UDIM or offset layout.
+    # A few faces with UVs off every tile are of little weight; most of them is a layout
+    # with negative or far-off UVs.
     if out["faces_outside"] > 0.01 * face_count:
         # A bake (the add-on's) asks for the image: say that it leaves these faces out.
         reach = (
-            "the image leaves them out and texture smoothing does not reach them (they "
+            "the images leave them out and texture smoothing does not reach them (they "
             "keep their values)"
             if o["return_image"]
             else "texture smoothing does not reach them and they keep their values"
         )
         warn(
-            f"{out['faces_outside']} of {face_count} faces have UVs wholly outside the [0, 1] "
-            f"square (UDIM tiles or an offset layout): {reach}; move each tile's UVs into the "
-            "square to include them"
+            f"{out['faces_outside']} of {face_count} faces have UVs outside every UDIM tile "
+            f"(u in [0, 10), v in [0, 100)): {reach}; move their UVs into a tile to include "
+            "them"
+        )
+    if out.get("overlaps_unparted"):
+        warn(
+            f"the UVs overlap everywhere (at least {out['faces_overlapping']} of {face_count} "
+            "faces overlap another UV island's, as in a random layout): texture smoothing drew "
+            "each tile as laid out, in one image, where overlapping faces mix (the later face "
+            "wins); unwrap the mesh without overlaps to keep them apart"
+        )
+    elif out.get("faces_overlapping", 0) > 0:
+        warn(
+            f"{out['faces_overlapping']} of {face_count} faces have UVs overlapping another UV "
+            "island's (mirrored or stacked shells): texture smoothing ran each tile's "
+            f"overlapping islands on images of their own ({out['pages']} images in all), so "
+            "values do not mix across them"
+            + ("; the returned image lays them over each other" if o["return_image"] else "")
         )
     if out["kept_off_device"]:
         width, height = o["texture_size"]

@@ -176,10 +176,12 @@ def test_the_bake_runs_on_the_chosen_engine_and_threads(monkeypatch, engine):
     assert seen == [(engine, 1)]
 
 
-def test_a_bake_of_uvs_outside_the_square_warns_and_takes_the_object_name():
-    # UVs moved one tile up and right (a UDIM layout): the bake leaves those faces out, which
-    # the run's warnings say (it went to stderr only); "{object}" alone names the image after
-    # the object (it was refused as empty).
+def test_a_bake_of_udim_tiles_makes_an_image_per_tile_named_by_its_number():
+    # UVs moved one tile up and right (UDIM tiles 1011, 1012 and 1022 by their centroids): an
+    # image per tile, NAME.TILE, beside NAME for tile 1001 (empty here), without a warning;
+    # "{object}" alone names the image after the object (it was refused as empty).
+    import bpy
+
     api = addon_module("api")
     ob = import_obj("spot.obj")
     uv = np.empty(len(ob.data.loops) * 2, dtype=np.float32)
@@ -187,9 +189,34 @@ def test_a_bake_of_uvs_outside_the_square_warns_and_takes_the_object_name():
     ob.data.uv_layers[0].data.foreach_set("uv", uv + 1.0)
     result = api.compute_object(ob, rays=8, bake_image=True, texture_size=32, image_name="{object}")
     assert result.image == "spot"
+    assert not [w for w in result.warnings if "UV" in w]
+    assert 1001 in result.tile_images and 1012 in result.tile_images
+    assert result.tile_images[1012] == "spot.1012"
+
+    def alpha(name):
+        image = bpy.data.images[name]
+        assert tuple(image.size) == (32, 32) and image.packed_file is not None
+        pixels = np.empty(32 * 32 * 4, dtype=np.float32)
+        image.pixels.foreach_get(pixels)
+        return pixels[3::4]
+
+    assert (alpha("spot") == 0).all()  # no face in tile 1001
+    assert (alpha("spot.1012") == 1).sum() > 100  # most of spot
+    assert set(result.tile_images.values()) <= {im.name for im in bpy.data.images}
+
+
+def test_a_bake_of_uvs_outside_every_tile_warns():
+    # UVs at negative u and v lie in no tile: the bake leaves those faces out, which the run's
+    # warnings say (it went to stderr only).
+    api = addon_module("api")
+    ob = import_obj("spot.obj")
+    uv = np.empty(len(ob.data.loops) * 2, dtype=np.float32)
+    ob.data.uv_layers[0].data.foreach_get("uv", uv)
+    ob.data.uv_layers[0].data.foreach_set("uv", uv - 2.0)
+    result = api.compute_object(ob, rays=8, bake_image=True, texture_size=32)
     # The core's warning, once, for the object (not also printed: warnings are errors here).
-    (bake,) = [w for w in result.warnings if "outside the [0, 1] square" in w]
-    assert bake.startswith("spot (bake): ") and "the image leaves them out" in bake
+    (bake,) = [w for w in result.warnings if "outside every UDIM tile" in w]
+    assert bake.startswith("spot (bake): ") and "the images leave them out" in bake
 
 
 BAD_TEXTURE_OPTIONS = [

@@ -3,6 +3,7 @@
 unwelded patches and holes give finite values everywhere, with valid rays on the faces that
 can see the other side."""
 
+import contextlib
 import warnings
 from pathlib import Path
 
@@ -226,19 +227,29 @@ def test_a_double_sided_mesh_smooths_as_the_single_sided_one(smoothing, points):
     v, t = load_mesh(DATA / "spot.obj")
     uvs = np.random.default_rng(5).random((len(t), 3, 2)).astype(np.float32)
     options = {"texture_size": 64} if smoothing == "texture" else None
-    single = sd.compute(
-        v, t, smoothing=smoothing, uvs=uvs, smoothing_options=options, points=points, rays=8
-    )
+
+    def overlapping():
+        # Random UVs: each face an island, overlapping most others (drawn as laid out, with a
+        # warning); the back's faces join their front's islands (same corners, same UVs).
+        if smoothing != "texture":
+            return contextlib.nullcontext()
+        return pytest.warns(RuntimeWarning, match="the UVs overlap everywhere")
+
+    with overlapping():
+        single = sd.compute(
+            v, t, smoothing=smoothing, uvs=uvs, smoothing_options=options, points=points, rays=8
+        )
     vertices, triangles = double_sided(v, t, split=True)
-    both = sd.compute(
-        vertices,
-        triangles,
-        smoothing=smoothing,
-        uvs=np.vstack([uvs, uvs]),
-        smoothing_options=options,
-        points=points,
-        rays=8,
-    )
+    with overlapping():
+        both = sd.compute(
+            vertices,
+            triangles,
+            smoothing=smoothing,
+            uvs=np.vstack([uvs, uvs]),
+            smoothing_options=options,
+            points=points,
+            rays=8,
+        )
     assert both.twin_faces == len(t)
     n = len(single.values)
     np.testing.assert_array_equal(both.values[:n], single.values)

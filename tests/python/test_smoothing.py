@@ -384,43 +384,41 @@ def test_texture_per_vertex_uvs_equal_per_corner_uvs():
 
 
 @pytest.mark.parametrize("engine", ["cpu", "auto"])
-def test_texture_warns_about_faces_outside_the_uv_square(spot, engine):
-    # A UDIM layout (tile 1002: u in [1, 2]) or an offset one reaches no texel of the [0, 1]
-    # image: those faces keep their values, and a warning says how many and why.
+def test_texture_warns_about_faces_outside_every_udim_tile(spot, engine):
+    # UVs with no corner in a UDIM tile (negative u or v here) reach no image: those faces keep
+    # their values, and a warning says how many and why. A layout moved onto tile 1002 is
+    # smoothed there, without a word (test_smoothing_udim.py).
     import warnings
 
     v, t, uvs, faces, _ = spot
     corner_uvs = np.asarray(uvs[t] if uvs.shape == (len(v), 2) else uvs, dtype=np.float32)
 
     def outside(shifted):
-        lo, hi = shifted.min(axis=1), shifted.max(axis=1)
-        return (hi[:, 0] < 0) | (lo[:, 0] > 1) | (hi[:, 1] < 0) | (lo[:, 1] > 1)
+        return ((shifted[..., 0] < 0) | (shifted[..., 1] < 0)).all(axis=1)
 
     with warnings.catch_warnings():
-        warnings.simplefilter("error")  # none inside the square
+        warnings.simplefilter("error")  # none inside the square, none on tile 1002
         smooth(v, t, faces, "texture", uvs=corner_uvs, engine=engine)
-    for shift in ([1.0, 0.0], [-0.5, -0.5]):
-        shifted = corner_uvs + np.float32(shift)
-        away = outside(shifted)
-        assert 0.01 * len(t) < away.sum() <= len(t)  # above the warning's 1%
-        with pytest.warns(RuntimeWarning, match=rf"^{away.sum()} of {len(t)} faces have UVs "
-                                                r"wholly outside the \[0, 1\] square"):  # fmt: skip
-            out = smooth(v, t, faces, "texture", uvs=shifted, engine=engine)
-        np.testing.assert_array_equal(out[away], faces[away])
-    # A bake (return_image) says the image leaves them out.
+        smooth(v, t, faces, "texture", uvs=corner_uvs + np.float32([1.0, 0.0]), engine=engine)
+    shifted = corner_uvs + np.float32([-0.5, -0.5])
+    away = outside(shifted)
+    assert 0.01 * len(t) < away.sum() <= len(t)  # above the warning's 1%
+    with pytest.warns(RuntimeWarning, match=rf"^{away.sum()} of {len(t)} faces have UVs "
+                                            r"outside every UDIM tile"):  # fmt: skip
+        out = smooth(v, t, faces, "texture", uvs=shifted, engine=engine)
+    np.testing.assert_array_equal(out[away], faces[away])
+    # A bake (return_image) says the images leave them out.
     with pytest.warns(
-        RuntimeWarning,
-        match=r"square \(UDIM tiles or an offset layout\): the "
-        r"image leaves them out",
+        RuntimeWarning, match=r"outside every UDIM tile .*: the images leave them out"
     ):
         smooth(
             v, t, faces, "texture", uvs=shifted, engine=engine, return_image=True, texture_size=64
         )
     with pytest.warns(RuntimeWarning, match=rf"^{away.sum()} of {len(t)} faces"):
         shape_diameter.compute(v, t, rays=8, smoothing="texture", uvs=shifted, engine=engine)
-    # A few faces just over the edge (under 1%) lose little and warn nothing.
+    # A few faces off every tile (under 1%) lose little and warn nothing.
     few = corner_uvs.copy()
-    few[:20] += np.float32(2.0)
+    few[:20] -= np.float32(2.0)
     with warnings.catch_warnings():
         warnings.simplefilter("error")
         out = smooth(v, t, faces, "texture", uvs=few, engine=engine)
@@ -480,6 +478,13 @@ def test_texture_cost_follows_the_core(spot):
     # Spot's islands cover about half of its UV square: about half the reads.
     share = texture_cost(2048, 16.0, uvs=uvs).blur_reads / cost.blur_reads
     assert 0.45 < share < 0.55, share
+    # The same islands over three UDIM tiles: three images, each a third covered.
+    tiled = np.asarray(uvs, dtype=np.float32).copy()
+    tiled[1::3] += np.float32([1.0, 0.0])
+    tiled[2::3] += np.float32([0.0, 2.0])
+    on_tiles = texture_cost(2048, 16.0, uvs=tiled)
+    assert on_tiles.texels == 3 * 2048**2 and on_tiles.bytes == cost.bytes
+    np.testing.assert_allclose(on_tiles.blur_reads / cost.blur_reads, share, rtol=0.02)
     with pytest.raises(ValueError, match="texture_size"):
         texture_cost(0)
     with pytest.raises(ValueError, match="radius"):

@@ -151,7 +151,7 @@ def test_texture_default_size_agrees_with_cpu(spot):
 
 
 @pytest.mark.parametrize("points", ["faces", "vertices"])
-@pytest.mark.filterwarnings("ignore:.*wholly outside the \\[0, 1\\] square:RuntimeWarning")
+@pytest.mark.filterwarnings("ignore:.*outside every UDIM tile:RuntimeWarning")
 def test_texture_drawing_on_the_device_is_the_cpus_to_the_bit(points):
     """Overlapping, mirrored, sliver and out-of-image UV triangles: which face a texel takes
     (device: two passes of 32-bit maxima; CPU: one of 64-bit) and what it reads back are the
@@ -165,11 +165,19 @@ def test_texture_drawing_on_the_device_is_the_cpus_to_the_bit(points):
     values = rng.random(m if points == "faces" else 3 * m).astype(np.float32)
     for size in (37, (200, 64)):
         options = {"texture_size": size, "weld_tolerance": None, "return_image": True}
-        cpu = sd.smooth(v, t, values, "texture", uvs=uvs, engine="cpu", **options)
-        opencl = sd.smooth(v, t, values, "texture", uvs=uvs, engine=DEVICE, **options)
+        # Each triangle its own island, most overlapping others: drawn as laid out (the overlap
+        # search gives up on a soup), one image for each of tiles 1001, 1002, 1011 and 1012.
+        with pytest.warns(RuntimeWarning, match=r"the UVs overlap everywhere"):
+            cpu = sd.smooth(v, t, values, "texture", uvs=uvs, engine="cpu", **options)
+        with pytest.warns(RuntimeWarning, match=r"the UVs overlap everywhere"):
+            opencl = sd.smooth(v, t, values, "texture", uvs=uvs, engine=DEVICE, **options)
         np.testing.assert_array_equal(opencl.mask, cpu.mask)
         np.testing.assert_array_equal(opencl.image, cpu.image)
         np.testing.assert_array_equal(opencl.values, cpu.values)
+        assert list(cpu.tiles) == [1001, 1002, 1011, 1012] == list(opencl.tiles)
+        for number, (image, mask) in cpu.tiles.items():
+            np.testing.assert_array_equal(opencl.tiles[number][0], image)
+            np.testing.assert_array_equal(opencl.tiles[number][1], mask)
 
 
 @pytest.mark.parametrize("method", ["projected", "texture"])

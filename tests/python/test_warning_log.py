@@ -17,8 +17,8 @@ NO_RAY = "no ray of any point found the other side"
 
 
 def uvs_outside_the_square(faces):
-    """Each face's UVs a small triangle at (2, 2): wholly outside [0, 1], with area."""
-    return np.tile(np.array([[2.0, 2.0], [2.1, 2.0], [2.0, 2.1]]), (faces, 1, 1))
+    """Each face's UVs a small triangle at (-2, -2): in no UDIM tile, with area."""
+    return np.tile(np.array([[-2.0, -2.0], [-1.9, -2.0], [-2.0, -1.9]]), (faces, 1, 1))
 
 
 def test_compute_keeps_its_warnings_and_still_issues_them_naming_the_callers_line():
@@ -75,14 +75,14 @@ def test_collect_warnings_keeps_them_from_the_warnings_module():
 
 
 def test_collect_warnings_takes_smooths_warnings_too():
-    # smooth() with every face's UVs wholly outside the square.
+    # smooth() with every face's UVs outside every UDIM tile.
     V, F = shapes.icosphere(1.0, 2)
     uvs = uvs_outside_the_square(len(F))
     with shape_diameter.collect_warnings() as caught:
         shape_diameter.smooth(
             V, F, np.ones(len(F), dtype=np.float32), "texture", uvs=uvs, texture_size=16
         )
-    assert len(caught) == 1 and "outside the [0, 1] square" in caught[0]
+    assert len(caught) == 1 and "outside every UDIM tile" in caught[0]
 
 
 def test_threads_collect_their_own_warnings_only():
