@@ -56,9 +56,30 @@ wheel_for() {
 # unpack WHEEL FOLDER: the wheel's files into FOLDER (a site-packages of its own).
 unpack() { rm -rf "$2" && mkdir -p "$2" && python3 -m zipfile -e "$1" "$2"; }
 
+# reference_values TAG: the Linux values the other builds must equal: from the linux-x64 wheel
+# where it was built, else (cp311) from the package scripts/setup.sh built into .venv with the
+# host's compiler (the same values, bit for bit), so one Windows build can be checked alone.
+reference_values() {
+  [ ! -f "$CHECK/values-linux-x64-$1.npz" ] || return 0
+  local wheel
+  wheel=$(wheel_for linux-x64 "$1")
+  if [ -n "$wheel" ]; then
+    check_linux_x64 "$1" "$wheel"
+  elif [ "$1" = cp311 ] && [ -x .venv/bin/python ]; then
+    log "reference values from the package in .venv (no linux-x64 $1 wheel)"
+    mkdir -p "$CHECK"
+    (cd "$CHECK" && "$ROOT/.venv/bin/python" "$ROOT/scripts/wheel_values.py" "$ROOT/$MESH" \
+      "values-linux-x64-$1" --expect-width 8)
+  else
+    fail "$1: no Linux values to compare with (build the linux-x64 wheel)"
+  fi
+}
+
 # same_values A B: the .npz files hold the same arrays, byte for byte.
 same_values() {
-  "$CHECK/linux-x64-cp311/bin/python" - "$1.npz" "$2.npz" <<'EOF'
+  local py=$CHECK/linux-x64-cp311/bin/python
+  [ -x "$py" ] || py=.venv/bin/python
+  "$py" - "$1.npz" "$2.npz" <<'EOF'
 import sys
 import numpy as np
 a, b = np.load(sys.argv[1]), np.load(sys.argv[2])
@@ -133,6 +154,55 @@ if [ ${#targets[@]} -eq 0 ]; then
     done
   done
 fi
+# Debian 12's arm64 Python 3.11 and the libraries it needs, fetched by apt-get download with
+# a package index of their own (build/apt-arm64: the host's apt state stays as it is) and
+# unpacked with dpkg -x: qemu-aarch64-static runs it with -L (no binfmt, nothing installed).
+ARM64_DEBS=(libc6 libgcc-s1 libstdc++6 python3.11-minimal libpython3.11-minimal
+            libpython3.11-stdlib libexpat1 zlib1g libffi8)
+arm64_root() {
+  local apt_dir=$ROOT/build/apt-arm64 deb
+  if [ ! -x "$apt_dir/root/usr/bin/python3.11" ]; then
+    local apt=(apt-get -q -o APT::Architectures=arm64 -o APT::Architecture=arm64
+               -o Dir::State::Lists="$apt_dir/lists" -o Dir::Cache="$apt_dir/cache")
+    rm -rf "$apt_dir" && mkdir -p "$apt_dir/lists/partial" "$apt_dir/cache/archives/partial" "$apt_dir/debs"
+    "${apt[@]}" update >&2
+    (cd "$apt_dir/debs" && "${apt[@]}" download "${ARM64_DEBS[@]}" >&2)
+    for deb in "$apt_dir"/debs/*.deb; do dpkg -x "$deb" "$apt_dir/root"; done
+  fi
+  echo "$apt_dir/root"
+}
+
+check_linux_arm64() {  # check_linux_arm64 TAG WHEEL
+  local dir=$CHECK/linux-arm64-$1 root
+  auditwheel_check "$2"
+  [ "$1" = cp311 ] || { log "linux-arm64 $1: not run (Debian 12 has no arm64 Python $1)"; return; }
+  command -v qemu-aarch64-static >/dev/null || { fail "qemu-aarch64-static missing (qemu-user-static)"; return; }
+  root=$(arm64_root)
+  unpack "$(numpy_wheel "$1-manylinux_2_17_aarch64")" "$dir"
+  python3 -m zipfile -e "$2" "$dir"
+  log "linux-arm64 $1: compute() under qemu-aarch64-static, in Debian's arm64 Python"
+  (cd "$CHECK" && PYTHONPATH="$ROOT/$dir" qemu-aarch64-static -L "$root" "$root/usr/bin/python3.11" \
+    "$ROOT/scripts/wheel_values.py" "$ROOT/$MESH" "values-linux-arm64-$1") ||
+    { fail "linux-arm64 $1: the run under qemu"; return; }
+  same_values "$CHECK/values-linux-x64-$1" "$CHECK/values-linux-arm64-$1" ||
+    fail "linux-arm64 $1: values differ from linux-x64's"
+}
+
+check_macos() {  # check_macos TARGET TAG WHEEL
+  local dir=$CHECK/$1-$2 module min=11.0 signed=--signed lookups
+  [ "$1" = macos-arm64 ] || { min=10.15; signed=; }
+  unpack "$3" "$dir"
+  module=$(ls "$dir"/shape_diameter/_core*.so)
+  python3 scripts/macho_check.py "$module" --min-os "$min" $signed || { fail "$1 $2: $module"; return; }
+  # Python's C API: undefined in the module, found in the interpreter when it loads it.
+  lookups=$(llvm-nm -m -u "$module" | grep -E ' _Py' || true)
+  if [ -z "$lookups" ] || echo "$lookups" | grep -vq 'dynamically looked up'; then
+    fail "$1 $2: Python's symbols are not all looked up at load: $(echo "$lookups" | head -3)"
+  else
+    log "$1 $2: $(echo "$lookups" | wc -l) Python symbols looked up at load"
+  fi
+}
+
 for target in "${targets[@]}"; do
   for tag in $PYTHON_TAGS; do
     wheel=$(wheel_for "$target" "$tag")
@@ -142,9 +212,13 @@ for target in "${targets[@]}"; do
       linux-x64) check_linux_x64 "$tag" "$wheel" ;;
       windows-x64)
         windows_imports "$wheel" "$tag"
-        [ -f "$CHECK/values-linux-x64-$tag.npz" ] || check_linux_x64 "$tag" "$(wheel_for linux-x64 "$tag")"
+        reference_values "$tag"
         check_windows_x64 "$tag" "$wheel" ;;
       windows-arm64) windows_imports "$wheel" "$tag" ;;
+      linux-arm64)
+        reference_values "$tag"
+        check_linux_arm64 "$tag" "$wheel" ;;
+      macos-*) check_macos "$target" "$tag" "$wheel" ;;
       *) fail "$target: no check written yet" ;;
     esac
     log "$target $tag: $((SECONDS - start)) s"

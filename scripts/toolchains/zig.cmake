@@ -25,3 +25,9 @@ set(CMAKE_FIND_ROOT_PATH_MODE_PROGRAM NEVER)
 set(CMAKE_FIND_ROOT_PATH_MODE_LIBRARY ONLY)
 set(CMAKE_FIND_ROOT_PATH_MODE_INCLUDE ONLY)
 set(CMAKE_FIND_ROOT_PATH_MODE_PACKAGE ONLY)
+
+# macOS: the linker signs the module (ad-hoc, which arm64 macOS requires); a strip after the
+# link would void that signature and macOS would refuse to load it. No strip there.
+if(CMAKE_SYSTEM_NAME STREQUAL "Darwin")
+  set(CMAKE_STRIP "" CACHE FILEPATH "No strip: it would void the code signature" FORCE)
+endif()
