@@ -50,7 +50,7 @@ wheel_for() {
     macos-x64) pattern=macosx_*_x86_64 ;;
   esac
   # shellcheck disable=SC2086
-  ls $WHEELS/shape_diameter-*-"$2"-"$2"-$pattern.whl 2>/dev/null | head -n 1
+  ls $WHEELS/shape_diameter-*-"$2"-"$2"-$pattern.whl 2>/dev/null | head -n 1 || true
 }
 
 # unpack WHEEL FOLDER: the wheel's files into FOLDER (a site-packages of its own).
