@@ -84,13 +84,13 @@ fi
 arm64_import_library() {
   local dir=$1 ver=$2 lib=$SDF_ZIG_WRAPPERS/python$2-arm64.lib
   if [ ! -f "$lib" ]; then
+    # An import library names each export twice: __imp_NAME, and NAME as well for functions
+    # (the call thunk); data (PyExc_*, _Py_NoneStruct, ...) has __imp_NAME alone.
     { echo "LIBRARY python$ver.dll"; echo "EXPORTS"
-      llvm-nm --defined-only "$dir/libs/python$ver.lib" 2>/dev/null |
-        sed -n 's/^.* [TD] __imp_\(.*\)$/\1/p' | sort -u |
-        while read -r sym; do
-          if llvm-nm --defined-only "$dir/libs/python$ver.lib" 2>/dev/null | grep -q " T $sym\$"
-          then echo "$sym"; else echo "$sym DATA"; fi
-        done
+      llvm-nm --defined-only "$dir/libs/python$ver.lib" 2>/dev/null | awk '
+        $2 ~ /^[TD]$/ && $3 ~ /^__imp_/ { imp[substr($3, 7)] = 1; next }
+        $2 == "T" { code[$3] = 1 }
+        END { for (n in imp) print (n in code) ? n : n " DATA" }' | sort
     } > "$lib.def"
     "$ZIG" dlltool -m arm64 -d "$lib.def" -l "$lib"
   fi
