@@ -30,4 +30,5 @@ set(CMAKE_FIND_ROOT_PATH_MODE_PACKAGE ONLY)
 # link would void that signature and macOS would refuse to load it. No strip there.
 if(CMAKE_SYSTEM_NAME STREQUAL "Darwin")
   set(CMAKE_STRIP "" CACHE FILEPATH "No strip: it would void the code signature" FORCE)
+  set(CMAKE_USER_MAKE_RULES_OVERRIDE_CXX "${CMAKE_CURRENT_LIST_DIR}/zig-macos-module.cmake")
 endif()
