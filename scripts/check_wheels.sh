@@ -16,6 +16,7 @@
 #                  3.11 (its packages unpacked with dpkg -x, nothing installed), numpy from
 #                  PyPI's aarch64 wheel; values equal to linux-x64's. Every Python: auditwheel
 #   windows-*      static: the module imports python3XX.dll, KERNEL32 and api-ms-win-crt only
+#   every wheel    its tags (scripts/wheel_tags.py): WHEEL's Tag, the module's suffix, RECORD
 #   macos-*        static (scripts/macho_check.py): minimum macOS, only libSystem linked,
 #                  Python's symbols looked up at load, the ad-hoc code signature intact
 #
@@ -227,6 +228,7 @@ for target in "${targets[@]}"; do
     wheel=$(wheel_for "$target" "$tag")
     [ -n "$wheel" ] || { fail "$target $tag: no wheel in $WHEELS"; continue; }
     start=$SECONDS
+    python3 scripts/wheel_tags.py "$wheel" || fail "$(basename "$wheel"): its tags"
     case $target in
       linux-x64) check_linux_x64 "$tag" "$wheel" ;;
       windows-x64)
