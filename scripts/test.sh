@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # SPDX-License-Identifier: GPL-3.0-or-later
 # Every test: set-up, C++ tests (ctest) with the CGAL reference built beside them, the same
-# cross-compiled for aarch64 and run under qemu (scripts/cross_aarch64.sh), the C++
+# cross-compiled for aarch64 and run under qemu (scripts/cross_aarch64.sh), the Windows x64
+# wheel under wine (scripts/build_wheels.sh, scripts/check_wheels.sh), the C++
 # tests under ASan + UBSan and the fuzzers (scripts/fuzz.sh), the extension inside two real
 # Blenders (bpy from PyPI), then pytest. Every suite runs even when one before it failed; the
 # last lines sum them up, one line a suite, and the exit status is non-zero if any failed.
@@ -55,6 +56,14 @@ build_and_ctest() {
 }
 suite "C++ (ctest)" "$LOGS/ctest.log" build_and_ctest
 suite "C++ on aarch64 (qemu)" "$LOGS/aarch64.log" bash scripts/cross_aarch64.sh
+# The Windows x64 wheel for Python 3.11, cross-built with zig and run under wine, against the
+# values of the package in .venv. The other platforms: scripts/build_wheels.sh all, then
+# scripts/check_wheels.sh (README.md, Platforms).
+windows_under_wine() {
+  SDF_WHEEL_PYTHONS=cp311 bash scripts/build_wheels.sh windows-x64 &&
+    SDF_WHEEL_PYTHONS=cp311 bash scripts/check_wheels.sh windows-x64
+}
+suite "Windows x64 (wine)" "$LOGS/windows.log" windows_under_wine
 # fuzz.sh prints the sanitized ctest's counts, then each fuzzer's runs.
 suite "ASan+UBSan, fuzzers" "$LOGS/fuzz.log" bash scripts/fuzz.sh
 suite "Blender" "$LOGS/blender.log" bash scripts/test_blender.sh

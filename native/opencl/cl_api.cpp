@@ -1,8 +1,14 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
 #include "cl_api.h"
 
+#if defined(_WIN32)
+#define NOMINMAX
+#define WIN32_LEAN_AND_MEAN
+#include <windows.h>
+#else
 #include <dlfcn.h>
 #include <pthread.h>
+#endif
 
 #include <atomic>
 #include <cstdlib>
@@ -19,7 +25,7 @@ namespace {
 
 std::atomic<bool> forked{false};
 
-void mark_forked() { forked.store(true, std::memory_order_relaxed); }
+[[maybe_unused]] void mark_forked() { forked.store(true, std::memory_order_relaxed); }
 
 struct Loaded {
   Api api;
@@ -27,32 +33,56 @@ struct Loaded {
   std::string why;
 };
 
+// The OpenCL loader where each system puts it: the ICD loader on Linux (and other Unix), the
+// system framework on macOS, OpenCL.dll (installed with the GPU driver) on Windows.
+#if defined(_WIN32)
+const char* const kLibraryNames[] = {"OpenCL.dll"};
+void* open_library(const char* name) { return reinterpret_cast<void*>(LoadLibraryA(name)); }
+void* find_symbol(void* library, const char* name) {
+  return reinterpret_cast<void*>(GetProcAddress(static_cast<HMODULE>(library), name));
+}
+std::string open_error() { return "Windows error " + std::to_string(GetLastError()); }
+#else
+#if defined(__APPLE__)
+const char* const kLibraryNames[] = {"/System/Library/Frameworks/OpenCL.framework/OpenCL"};
+#else
+const char* const kLibraryNames[] = {"libOpenCL.so.1", "libOpenCL.so"};
+#endif
+void* open_library(const char* name) { return dlopen(name, RTLD_NOW | RTLD_LOCAL); }
+void* find_symbol(void* library, const char* name) { return dlsym(library, name); }
+std::string open_error() {
+  const char* err = dlerror();
+  return err ? err : "unknown";
+}
+#endif
+
 Loaded load() {
   Loaded loaded;
   // SDF_OPENCL_LIBRARY: a user setting for an OpenCL loader outside the library path
   // (docs/python.md); tests set a path that does not exist to act out "no OpenCL".
-  const char* forced = std::getenv("SDF_OPENCL_LIBRARY");
-  const char* candidates[] = {forced, "libOpenCL.so.1", "libOpenCL.so"};
   void* handle = nullptr;
-  for (const char* name : candidates) {
-    if (!name) continue;
-    handle = dlopen(name, RTLD_NOW | RTLD_LOCAL);
-    if (handle || forced) break;
+  if (const char* forced = std::getenv("SDF_OPENCL_LIBRARY")) {
+    handle = open_library(forced);
+  } else {
+    for (const char* name : kLibraryNames) {
+      if ((handle = open_library(name))) break;
+    }
   }
   if (!handle) {
-    const char* err = dlerror();
-    loaded.why = std::string("no OpenCL library could be loaded (") + (err ? err : "unknown") + ")";
+    loaded.why = "no OpenCL library could be loaded (" + open_error() + ")";
     return loaded;
   }
-#define SDF_CL_RESOLVE(name)                                                   \
-  loaded.api.name = reinterpret_cast<decltype(&::name)>(dlsym(handle, #name)); \
-  if (!loaded.api.name) {                                                      \
-    loaded.why = "the OpenCL library lacks " #name;                            \
-    return loaded;                                                             \
+#define SDF_CL_RESOLVE(name)                                                         \
+  loaded.api.name = reinterpret_cast<decltype(&::name)>(find_symbol(handle, #name)); \
+  if (!loaded.api.name) {                                                            \
+    loaded.why = "the OpenCL library lacks " #name;                                  \
+    return loaded;                                                                   \
   }
   SDF_CL_FUNCTIONS(SDF_CL_RESOLVE)
 #undef SDF_CL_RESOLVE
+#if !defined(_WIN32)  // (Windows has no fork)
   pthread_atfork(nullptr, nullptr, mark_forked);
+#endif
   loaded.ok = true;
   return loaded;
 }

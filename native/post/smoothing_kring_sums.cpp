@@ -23,8 +23,16 @@ bool add_ring_avx512_supported() { return cpu_features().avx512f; }
 // 64 sums and 64 weights in 16 registers of 8 doubles; an item's mask, 8 bits at a time,
 // selects the lanes of each register that add (w x, w). Masked-off lanes keep their value,
 // so each lane sees exactly the scalar loop's additions.
-__attribute__((target("avx512f"))) void add_ring_avx512(const RingItem* items, std::size_t count,
-                                                        double w, double* sum, double* weight) {
+// Clang 18 and later split the 512-bit registers off AVX-512 (evex512), and refuse 512-bit
+// vectors in a function enabled for avx512f alone; GCC before 14 knows no such feature.
+#if defined(__clang__) && __clang_major__ >= 18
+#define SDF_TARGET_AVX512F "avx512f,evex512"
+#else
+#define SDF_TARGET_AVX512F "avx512f"
+#endif
+__attribute__((target(SDF_TARGET_AVX512F))) void add_ring_avx512(const RingItem* items,
+                                                                 std::size_t count, double w,
+                                                                 double* sum, double* weight) {
   __m512d s[8], t[8];
   for (int j = 0; j < 8; ++j) {
     s[j] = _mm512_loadu_pd(sum + 8 * j);

