@@ -151,7 +151,9 @@ TEST(ProjectedSmoothingPaths, SameValuesAsTheSerialVersion) {
       for (int iterations : {1, 2}) {
         ProjectedOptions o = options_of(c, 1);
         o.iterations = iterations;
-        o.radius = iterations == 1 ? 1.0 : 0.25;  // the paper's sphere, and a smaller one
+        // A smaller sphere than the paper's on the coarse trees: on the deep ones it opens
+        // most nodes down to the leaves, minutes of the reference's walk.
+        o.radius = iterations == 2 && c.min_points >= 0.002 ? 0.25 : 1.0;
         const std::vector<float> expected =
             test::reference_smooth_projected(mesh, kind, v.data(), o);
         // The gather eight points at a time (AVX2), and the scalar one (as without AVX2).
