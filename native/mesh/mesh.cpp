@@ -213,11 +213,6 @@ MeshValues mesh_values(const double* vertices, std::size_t vertex_count,
   return out;
 }
 
-double used_width(const double* vertices, std::size_t vertex_count, const std::int64_t* triangles,
-                  std::size_t triangle_count, unsigned threads) {
-  return UsedBox(vertices, vertex_count, triangles, triangle_count, threads).width();
-}
-
 Mesh make_mesh(const double* vertices, std::size_t vertex_count, const std::int64_t* triangles,
                std::size_t triangle_count, unsigned threads) {
   if (vertex_count == 0) throw std::invalid_argument("the mesh has no vertices");

@@ -44,12 +44,6 @@ inline Mesh make_mesh(const MeshArrays& mesh, unsigned threads = 0) {
   return make_mesh(mesh.vertices, mesh.vertex_count, mesh.triangles, mesh.triangle_count, threads);
 }
 
-// The largest side of the box make_mesh takes (the vertices the triangles with area use; 0
-// for no triangle), for what runs on the caller's arrays outside compute() (projected
-// smoothing's unit scaling). Throws std::invalid_argument for an index out of range.
-double used_width(const double* vertices, std::size_t vertex_count, const std::int64_t* triangles,
-                  std::size_t triangle_count, unsigned threads = 0);
-
 // What the caller's checks report about a mesh's values, in one parallel pass (numpy's passes
 // cost 6 ms on 1.2M faces on a 16-core host, most of the time outside compute()'s stages).
 struct MeshValues {
