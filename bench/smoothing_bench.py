@@ -178,17 +178,20 @@ def main():
 
     # Projected points.
     lines += ["### Projected points", "",
-              "Seconds per call (octree of the points moved inward by half their SDF: depth 8, "
-              "branching above 0.2% of the points and while the mean SDF fits the node; each "
-              "point gathers the nodes within its own SDF). Paper: 0.58 s (GPU) to 3.39 s (CPU) "
-              "at 500k faces (Table 1, smoothing column).", "",
-              "| mesh | faces | 1 iteration | 2 iterations | 1 iteration, branch on min |",
-              "|---|---:|---:|---:|---:|"]  # fmt: skip
+              "Seconds per call (octree of the points moved inward by half their SDF; the "
+              "default rule 'local': depth 14, branching above 0.002% of the points and while "
+              "the mean SDF is at most 16 times the node, each point gathers the nodes within "
+              "a tenth of its SDF; the paper's rule: depth 8, 0.2%, 1 times, the whole SDF). "
+              "Paper: 0.58 s (GPU) to 3.39 s (CPU) at 500k faces (Table 1, smoothing column).",
+              "", "| mesh | faces | 1 iteration | 2 iterations | 1 iteration, branch on min | "
+              "the paper's rule |", "|---|---:|---:|---:|---:|---:|"]  # fmt: skip
     for m in [spot64] + big:
         one = m.smooth("projected", repeat, threads)[0]
         two = m.smooth("projected", repeat, threads, iterations=2)[0]
         by_min = m.smooth("projected", repeat, threads, branch_on="min")[0]
-        lines.append(f"| {m.name} | {len(m.t):,} | {one:.3f} | {two:.3f} | {by_min:.3f} |")
+        paper = m.smooth("projected", repeat, threads, rule="paper")[0]
+        lines.append(f"| {m.name} | {len(m.t):,} | {one:.3f} | {two:.3f} | {by_min:.3f} | "
+                     f"{paper:.3f} |")  # fmt: skip
     lines.append("")
 
     # Growth with the face count (linear time): spot x4 .. x256 at fixed options.
@@ -277,16 +280,21 @@ def opencl_main(args, repeat, threads):
         "all run on the device; the points' frames are made on the host). Paper: 0.58 s "
         "(GPU) to 3.39 s (CPU) at 500k faces.",
         "",
-        "| mesh | faces | CPU | OpenCL | OpenCL, 2 iterations |",
-        "|---|---:|---:|---:|---:|",
+        "| mesh | faces | CPU | OpenCL | OpenCL, 2 iterations | CPU, the paper's rule | "
+        "OpenCL, the paper's rule |",
+        "|---|---:|---:|---:|---:|---:|---:|",
     ]
     for m in meshes:
         cpu = m.smooth("projected", repeat, threads)[0]
         opencl = m.smooth("projected", repeat, threads, engine=engine)[0]
         two = m.smooth("projected", repeat, threads, engine=engine, iterations=2)[0]
-        lines.append(f"| {m.name} | {len(m.t):,} | {cpu:.3f} | {opencl:.3f} | {two:.3f} |")
+        paper = [m.smooth("projected", repeat, threads, engine=e, rule="paper")[0]
+                 for e in ("cpu", engine)]  # fmt: skip
+        lines.append(f"| {m.name} | {len(m.t):,} | {cpu:.3f} | {opencl:.3f} | {two:.3f} | "
+                     f"{paper[0]:.3f} | {paper[1]:.3f} |")  # fmt: skip
     lines += ["", "### Against ray casting on the same OpenCL engine", "",
-              "Defaults (projected: 1 iteration; texture: 1024 x 1024, radius 8), over "
+              "Defaults (projected: the local rule, 1 iteration; texture: 1024 x 1024, "
+              "radius 8), over "
               f"compute(engine={engine!r})'s cast time on the same mesh: smooth() alone, and "
               "compute(smoothing=...)'s 'smooth' stage (there the texture's UV islands are found "
               "while the device casts, and the projected points' frames uploaded).", "",

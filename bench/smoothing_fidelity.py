@@ -5,7 +5,8 @@
 
 For each mesh (by default the real meshes of tests/data, and with --psb the Princeton
 Segmentation Benchmark meshes DIR/off/*.off): the clean field is compute()'s unsmoothed SDF
-(CPU engine, defaults). Per method, with its defaults:
+(CPU engine, defaults). Per method, with its defaults (projected points also by the paper's
+rule, `rule="paper"`):
 - shift: the median over faces of |smooth(clean) - clean| / clean: how far the method moves a
   field that needs no smoothing (the paper's purpose is removing noise, not reshaping);
 - noisy: the median relative error to the clean field of the clean field times
@@ -28,7 +29,11 @@ ROOT = Path(__file__).resolve().parents[1]
 DATA = ROOT / "tests" / "data"
 DEFAULT_MESHES = ["armadillo.off", "bunny00.off", "horse.ply", "fandisk.obj", "cow.obj",
                   "spot.obj", "teapot.obj", "ChineseDragon-10kv.off"]  # fmt: skip
-METHODS = ("kring", "projected", "bilateral", "texture")
+# (label, method, options): each method with its defaults, and projected points by the paper's
+# rule too (the default is the local rule).
+METHODS = (("kring", "kring", {}), ("projected", "projected", {}),
+           ("projected, paper", "projected", {"rule": "paper"}),
+           ("bilateral", "bilateral", {}), ("texture", "texture", {}))  # fmt: skip
 
 
 def relative_error(field: np.ndarray, clean: np.ndarray) -> float:
@@ -40,17 +45,17 @@ def rows_of(name, v, t, uvs, noise, rng):
     clean = sd.compute(v, t, engine="cpu").raw.astype(np.float64)
     noisy = np.maximum(clean * (1.0 + noise * rng.standard_normal(len(clean))), 0.0)
     before = relative_error(noisy, clean)
-    for method in METHODS:
+    for label, method, options in METHODS:
         if method == "texture" and uvs is None:
             continue
-        extra = {"uvs": uvs} if method == "texture" else {}
+        extra = {"uvs": uvs, **options} if method == "texture" else options
         smoothed = [
             sd.smooth(v, t, field, method, points="faces", engine="cpu", **extra)
             for field in (clean, noisy)
         ]
         shift = relative_error(smoothed[0].astype(np.float64), clean)
         after = relative_error(smoothed[1].astype(np.float64), clean)
-        yield name, len(t), method, shift, before, after
+        yield name, len(t), label, shift, before, after
 
 
 def meshes(args):
@@ -74,7 +79,7 @@ def main():
     print(f"noise {args.noise:.0%} of each value (Gaussian); medians over faces\n")
     print("| mesh | faces | method | shift | noisy | smoothed | gain |")
     print("|---|---:|---|---:|---:|---:|---:|")
-    summary = {m: [] for m in METHODS}
+    summary = {label: [] for label, _, _ in METHODS}
     for name, v, t, uvs in meshes(args):
         for row in rows_of(name, v, t, uvs, args.noise, rng):
             mesh, faces, method, shift, before, after = row

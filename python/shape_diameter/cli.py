@@ -185,6 +185,7 @@ def _share(text: str) -> float:
 SMOOTHING_FLAGS = {
     "k": ("kring", "k"),
     "iterations": ("projected", "iterations"),
+    "rule": ("projected", "rule"),
     "texture_size": ("texture", "texture_size"),
     "radius": ("texture", "radius"),
 }
@@ -317,6 +318,12 @@ def build_parser() -> argparse.ArgumentParser:
         type=_int_in(0, 1000),
         metavar="N",
         help="--smooth projected: passes (default: 1)",
+    )
+    parser.add_argument(
+        "--rule",
+        choices=("local", "paper"),
+        help="--smooth projected: 'local' (default: a sphere of a tenth of each value over fine "
+        "leaves, keeps a clean field) or 'paper' (the paper's sphere of the whole value)",
     )
     parser.add_argument(
         "--texture-size",

@@ -33,12 +33,13 @@ OPTIONS = {
     "none": {},
     "kring": {"k": None, "sigma": None, "corner_angle": None, "weld_tolerance": 1e-6},
     "projected": {
+        "rule": "local",
         "iterations": 1,
-        "max_depth": 8,
-        "min_points": 0.002,
-        "node_size_ratio": 1.0,
+        "max_depth": None,
+        "min_points": None,
+        "node_size_ratio": None,
         "branch_on": "mean",
-        "radius": 1.0,
+        "radius": None,
     },
     "bilateral": {"window": None},
     "texture": {
@@ -50,6 +51,17 @@ OPTIONS = {
         "weld_tolerance": 1e-6,
         "return_image": False,
     },
+}
+
+
+# Projected points' named rules: the octree and sphere options an option left at None takes.
+# 'paper': the paper's (sphere of the whole value, depth 8, leaves above 0.2% of the points,
+# branching while the mean value fits the node). 'local': a sphere of a tenth of the value over
+# fine leaves, which removes noise without moving a clean field more than k-ring does (the
+# paper's moves it by 12% at the median of 13 real meshes: bench/smoothing_fidelity.py).
+PROJECTED_RULES = {
+    "paper": {"max_depth": 8, "min_points": 0.002, "node_size_ratio": 1.0, "radius": 1.0},
+    "local": {"max_depth": 14, "min_points": 2e-5, "node_size_ratio": 16.0, "radius": 0.1},
 }
 
 
@@ -150,17 +162,19 @@ def smooth(
         lengths >= 0 in mesh units, the sphere radius is `radius` times each point's value;
         inward is against the faces' normals, so the winding must point outward: compute()
         orients the mesh first and smooths with its orientation):
-        iterations: int >= 0 (default 1); max_depth: 0..20 (default 8, paper);
-        min_points: a node branches only if it holds more than this fraction of the points
-            (default 0.002, paper); node_size_ratio: ... and only if its points' value is at
-            most this times its side (default 1, paper); branch_on: which value that is,
-            'mean' (default, paper) or 'min' (keeps thin parts next to thick ones: with
-            'mean' they share a leaf whose mean the thick points set); radius: the sphere
-            each point gathers, as a share of its value, in (0, 16] (default 1, paper). The
-            paper's rules move a clean SDF by 12% at the median of 13 real meshes and barely
-            remove noise; radius=0.1, node_size_ratio=16, min_points=2e-5, max_depth=14 move
-            it by about 3% (as 'kring') and removed noise on each of six, at 2-3x the time
-            (bench/smoothing_fidelity.py; docs/performance.md).
+        rule: 'local' (default) or 'paper', the defaults of the four options after
+            iterations (PROJECTED_RULES): 'paper' is the paper's (radius 1, max_depth 8,
+            min_points 0.002, node_size_ratio 1), which moves a clean SDF by 12% at the median
+            of 13 real meshes and barely removes noise; 'local' (radius 0.1, max_depth 14,
+            min_points 2e-5, node_size_ratio 16) moves it about as little as 'kring' does and
+            removes noise, at 2-3x the time (bench/smoothing_fidelity.py; docs/performance.md).
+            An option given explicitly overrides its rule's value.
+        iterations: int >= 0 (default 1); max_depth: 0..20; min_points: a node branches only
+            if it holds more than this fraction of the points, in [0, 1]; node_size_ratio:
+            ... and only if its points' value is at most this times its side, >= 0;
+            branch_on: which value that is, 'mean' (default, paper) or 'min' (keeps thin parts
+            next to thick ones: with 'mean' they share a leaf whose mean the thick points set);
+            radius: the sphere each point gathers, as a share of its value, in (0, 16].
     Options of 'bilateral' (CGAL's post-processing filter: each face takes the mean of the faces
         within `window` rings of edge neighbours, weighted by a Gaussian over the ring, sigma
         window / 2, times a Gaussian over the value difference, sigma 1.5 times the RMS
@@ -269,6 +283,11 @@ def check_smoothing(
             o["corner_angle"] = _positive("corner_angle", o["corner_angle"])
         o["weld_tolerance"] = _weld("weld_tolerance", o["weld_tolerance"])
     elif method == "projected":
+        if o["rule"] not in PROJECTED_RULES:
+            raise ValueError(f"rule must be one of {tuple(PROJECTED_RULES)}, got {o['rule']!r}")
+        for name, value in PROJECTED_RULES[o["rule"]].items():
+            if o[name] is None:
+                o[name] = value
         o["iterations"] = _integer("iterations", o["iterations"], 0, 1000)
         o["max_depth"] = _integer("max_depth", o["max_depth"], 0, 20)
         o["min_points"] = _real("min_points", o["min_points"], 0.0, 1.0)
