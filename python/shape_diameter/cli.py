@@ -322,8 +322,8 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument(
         "--rule",
         choices=("local", "paper"),
-        help="--smooth projected: 'local' (default: a sphere of a tenth of each value over fine "
-        "leaves, keeps a clean field) or 'paper' (the paper's sphere of the whole value)",
+        help="--smooth projected: 'local' (default: a sphere of a twentieth of each value over "
+        "fine leaves, keeps a clean field) or 'paper' (the paper's sphere of the whole value)",
     )
     parser.add_argument(
         "--texture-size",

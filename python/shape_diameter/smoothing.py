@@ -56,12 +56,12 @@ OPTIONS = {
 
 # Projected points' named rules: the octree and sphere options an option left at None takes.
 # 'paper': the paper's (sphere of the whole value, depth 8, leaves above 0.2% of the points,
-# branching while the mean value fits the node). 'local': a sphere of a tenth of the value over
+# branching while the mean value fits the node). 'local': a sphere of a twentieth of the value over
 # fine leaves, which removes noise without moving a clean field more than k-ring does (the
 # paper's moves it by 12% at the median of 13 real meshes: bench/smoothing_fidelity.py).
 PROJECTED_RULES = {
     "paper": {"max_depth": 8, "min_points": 0.002, "node_size_ratio": 1.0, "radius": 1.0},
-    "local": {"max_depth": 14, "min_points": 2e-5, "node_size_ratio": 16.0, "radius": 0.1},
+    "local": {"max_depth": 16, "min_points": 1e-5, "node_size_ratio": 16.0, "radius": 0.05},
 }
 
 
@@ -163,11 +163,11 @@ def smooth(
         inward is against the faces' normals, so the winding must point outward: compute()
         orients the mesh first and smooths with its orientation):
         rule: 'local' (default) or 'paper', the defaults of the four options after
-            iterations (PROJECTED_RULES): 'paper' is the paper's (radius 1, max_depth 8,
-            min_points 0.002, node_size_ratio 1), which moves a clean SDF by 12% at the median
-            of 13 real meshes and barely removes noise; 'local' (radius 0.1, max_depth 14,
-            min_points 2e-5, node_size_ratio 16) moves it about as little as 'kring' does and
-            removes noise, at 2-3x the time (bench/smoothing_fidelity.py; docs/performance.md).
+            iterations (PROJECTED_RULES). 'paper' is the paper's (radius 1, max_depth 8,
+            min_points 0.002, node_size_ratio 1): it moves a clean SDF by 8% at the median
+            of 46 real meshes. 'local' (radius 0.05, max_depth 16, min_points 1e-5,
+            node_size_ratio 16) moves it by 1.5%, as little as 'kring' does, and removes
+            less noise than 'kring' (bench/smoothing_fidelity.py; docs/performance.md).
             An option given explicitly overrides its rule's value.
         iterations: int >= 0 (default 1); max_depth: 0..20; min_points: a node branches only
             if it holds more than this fraction of the points, in [0, 1]; node_size_ratio:

@@ -141,13 +141,13 @@ def test_noise_goes_down_and_values_stay_in_range(spot, method, points):
     out = smooth(v, t, noisy, method, **_method_options(method, uvs))
     assert np.isfinite(out).all()
     assert out.min() >= noisy.min() and out.max() <= noisy.max()
-    assert np.var(out) < 0.9 * np.var(noisy)
-    if method != "projected":
-        # The noise goes, not the field: closer to the clean SDF than the noisy input. Not so
-        # for projected points, whose spheres (radius = the SDF, around medial points) reach
-        # into neighbouring parts by design: on spot the mean change is about 25% even for
-        # the clean field (paper 4.4: "it fails when the mesh surface is too irregular").
-        assert np.abs(out - clean).mean() < 0.75 * np.abs(noisy - clean).mean()
+    # The noise goes, not the field: closer to the clean SDF than the noisy input. Projected
+    # points' default sphere (a twentieth of each value, so that it keeps a clean field)
+    # gathers fewer neighbours than the other methods' windows and removes less: measured
+    # 0.75-0.77 here, variance 0.91.
+    weaker = method == "projected"
+    assert np.var(out) < (0.95 if weaker else 0.9) * np.var(noisy)
+    assert np.abs(out - clean).mean() < (0.85 if weaker else 0.75) * np.abs(noisy - clean).mean()
 
 
 @pytest.mark.parametrize("method", METHODS)
@@ -285,14 +285,14 @@ def test_projected_on_a_sphere_stays_within_one_percent_of_the_analytic_sdf(poin
         out = smooth(v, t, raw, "projected", rule=rule)
         assert np.abs(out / analytic - 1).max() < 0.01, rule
     # Noise of 10% around it: the paper's sphere gathers every medial point of a sphere (all
-    # near its centre) and brings it back within 1%; the local rule's tenth of the value
-    # gathers a neighbourhood only, and still removes most of it.
+    # near its centre) and brings it back within 1%; the local rule's twentieth of the value
+    # gathers a neighbourhood only (measured: the median error 0.030 from 0.050).
     noisy = _noisy(raw, 0.1, seed=7)
     out = smooth(v, t, noisy, "projected", rule="paper")
     assert np.abs(out / analytic - 1).max() < 0.01
     out = smooth(v, t, noisy, "projected")
     before, after = (np.median(np.abs(x / analytic - 1)) for x in (noisy, out))
-    assert after < 0.5 * before
+    assert after < 0.7 * before
 
 
 def _median_shift(field, clean):
@@ -301,10 +301,10 @@ def _median_shift(field, clean):
 
 def test_projected_default_keeps_a_clean_field_as_kring_does():
     # The cow (5804 faces), the unsmoothed SDF. Measured: k-ring moves it by 3.4% at the median
-    # face, the local rule 2.3%, the paper's 18.5% (its sphere reaches across legs and head);
-    # on 20% noise the local rule's result lies 1.6x closer to the clean field than the noisy
-    # input does. Per mesh the local rule falls either side of k-ring (spot: 2.7% against
-    # 1.5%); bench/smoothing_fidelity.py gives the medians over many meshes.
+    # face, the local rule 0.8%, the paper's 18.5% (its sphere reaches across legs and head);
+    # on uniform noise of 20% the local rule's result lies 1.26-1.32x closer to the clean field
+    # than the noisy input does (five seeds). Per mesh the local rule falls either side of
+    # k-ring; bench/smoothing_fidelity.py gives the medians over many meshes.
     v, t = shape_diameter.load_mesh(DATA / "cow.obj")
     clean = shape_diameter.compute(v, t, engine="cpu").raw.astype(np.float64)
     kring, local, paper = (
@@ -317,7 +317,7 @@ def test_projected_default_keeps_a_clean_field_as_kring_does():
     gain = _median_shift(noisy, clean) / _median_shift(
         smooth(v, t, noisy, "projected", engine="cpu"), clean
     )
-    assert gain > 1.3
+    assert gain > 1.2
 
 
 def test_projected_rule_fills_only_the_options_left_out():
@@ -327,7 +327,7 @@ def test_projected_rule_fills_only_the_options_left_out():
     )
     assert checked["radius"] == 0.5
     assert checked["max_depth"] == rules["paper"]["max_depth"]
-    assert shape_diameter.smoothing.check_smoothing("projected", {})["radius"] == 0.1
+    assert shape_diameter.smoothing.check_smoothing("projected", {})["radius"] == 0.05
     with pytest.raises(ValueError, match="rule must be one of"):
         shape_diameter.smoothing.check_smoothing("projected", {"rule": "exact"})
 
@@ -353,7 +353,7 @@ def test_projected_same_result_for_any_thread_count_over_many_chunks(points):
         np.testing.assert_array_equal(
             one, smooth(v, t, values, "projected", points=points, threads=2, **options)
         )
-        assert np.var(one) < 0.5 * np.var(values)
+        assert np.var(one) < 0.7 * np.var(values)
 
 
 def test_projected_needs_lengths(spot):
