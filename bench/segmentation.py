@@ -7,6 +7,7 @@ CGAL's segmentation_from_sdf_values, our segment() and CGAL in one run on one ma
     .venv/bin/python bench/segmentation.py PSB_FOLDER --speed    # the speed table only
     options: --only 1,81 (meshes by number)  --largest N (speed: skip meshes above N faces)
              --cgal PATH (default: $SDF_CGAL_SEGMENT, else build/cpp/tests/reference/cgal_segment)
+             --no-cgal (with --quality: our variants only, where CGAL is not built)
 
 PSB_FOLDER holds the meshes as off/N.off (or N.off) and the human segmentations as
 seg/N/N_K.seg, as the benchmark distributes them: tests/data/psb (five meshes), or the
@@ -17,7 +18,9 @@ Quality: each mesh is segmented with the defaults (5 clusters, lambda 0.26) by
   segmentation_from_sdf_values;
 - ours: shape_diameter.segment(vertices, triangles), the SDF computed with compute()'s defaults,
   mode "auto"; and again with mode="cgal"; and in mode "auto" with a minimum part size
-  (min_part_area 0.5%, 1% and 2% of the area: "ours, min part 1%");
+  (min_part_area 0.5%, 1% and 2% of the area: "ours, min part 1%"); and asked for as many
+  segments as the mesh's human segmentations have at the median ("ours, segments = people's
+  median": what a user who knows how many parts they want gets);
 - ours, mode="cgal" on CGAL's post-processed SDF: the same input as CGAL's segmentation, so its
   labels should equal CGAL's ("same labels" gives the share of faces that do), and its
   graph-cut energy CGAL's; the energies of CGAL's labels and of ours (both modes) on those
@@ -150,8 +153,9 @@ def scores(cuts: MeshCuts, labels: np.ndarray, humans: list, human_cuts: list) -
     return _mean(rows)
 
 
-def segmentations(off: Path, vertices, triangles, cgal: str, tmp: Path) -> dict:
-    """{method: labels} for one mesh, and 'same labels' for the run on CGAL's SDF."""
+def segmentations(off: Path, vertices, triangles, cgal: str, tmp: Path, wanted: int) -> dict:
+    """{method: labels} for one mesh, and 'same labels' for the run on CGAL's SDF; `wanted`:
+    the segment count to ask for (the people's median)."""
     out = {}
     ref = cgal_ref.run(off, tmp / "cgal.txt") if cgal else None
     if ref is not None:
@@ -163,6 +167,7 @@ def segmentations(off: Path, vertices, triangles, cgal: str, tmp: Path) -> dict:
     values = sd.compute(vertices, triangles).values
     variants = [("ours", {}), ('ours, mode="cgal"', {"mode": "cgal"})]
     variants += [(f"ours, min part {100 * s:g}%", {"min_part_area": s}) for s in MIN_PART_AREAS]
+    variants.append(("ours, segments = people's median", {"segments": wanted}))
     for name, kwargs in variants:
         seg = sd.segment(vertices, triangles, values, postprocess=True, **kwargs)
         out[name] = np.asarray(seg.labels)
@@ -187,7 +192,8 @@ def quality_of_mesh(number: int, off: Path, human_files: list, cgal: str, tmp: P
             sys.exit(f"{path}: {len(human)} labels for {len(triangles)} faces")
     cuts = MeshCuts(vertices, triangles)
     human_cuts = [cuts.distance_to_cuts(h) for h in humans]
-    found = segmentations(off, vertices, triangles, cgal, tmp)
+    wanted = round(float(np.median([len(np.unique(h)) for h in humans])))
+    found = segmentations(off, vertices, triangles, cgal, tmp, wanted)
     row = {
         "mesh": number,
         "category": category(number),
@@ -387,9 +393,14 @@ def main():
         "--largest", type=int, default=2_000_000, help="speed: skip meshes above this many faces"
     )
     parser.add_argument("--cgal", default="", help="path of the cgal_segment reference")
+    parser.add_argument(
+        "--no-cgal", action="store_true", help="quality of our variants only, without CGAL"
+    )
     args = parser.parse_args()
     folder = args.psb / "dev" if (args.psb / "dev").is_dir() else args.psb
-    cgal = cgal_binary(args.cgal)
+    if args.no_cgal and not args.quality:
+        sys.exit("--no-cgal measures quality only (the speed table is against CGAL): add --quality")
+    cgal = "" if args.no_cgal else cgal_binary(args.cgal)
     os.environ["SDF_CGAL_SEGMENT"] = cgal
     tmp = Path(tempfile.mkdtemp(prefix="sdf-segmentation-"))
     print(

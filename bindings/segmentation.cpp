@@ -11,6 +11,7 @@
 #include "arrays.h"
 #include "progress.h"
 #include "segment/postprocess.h"
+#include "segment/segment_count.h"
 #include "segment/segmentation.h"
 #include "timings.h"
 
@@ -96,6 +97,7 @@ py::dict to_dict(const sdf::segment::Segmentation& s) {
   }
   out["mixture"] = mixture;
   out["energy"] = s.energy;
+  out["smoothness"] = s.smoothness;
   out["segment_area"] = array_of(s.stats.area);
   out["segment_mean"] = array_of(s.stats.mean_value);
   out["vertex_labels"] = array_of(s.vertex_labels);
@@ -110,7 +112,7 @@ py::dict to_dict(const sdf::segment::Segmentation& s) {
 py::dict segment(const Doubles& vertices, const Int64s& triangles, const Doubles& values,
                  std::size_t clusters, double smoothness, bool filter, bool ties_move,
                  bool first_move_only, std::size_t weight_rings, unsigned threads,
-                 double min_segment_area, const py::object& progress) {
+                 double min_segment_area, std::size_t segments, const py::object& progress) {
   check_mesh(vertices, triangles, values);
   const auto o = options_of(clusters, smoothness, filter, ties_move, first_move_only, weight_rings,
                             threads, min_segment_area);
@@ -120,9 +122,13 @@ py::dict segment(const Doubles& vertices, const Int64s& triangles, const Doubles
   sdf::segment::Segmentation s;
   {
     py::gil_scoped_release release;
-    s = sdf::segment::segment_mesh(vertices.data(), static_cast<std::size_t>(vertices.shape(0)),
-                                   triangles.data(), static_cast<std::size_t>(triangles.shape(0)),
-                                   values.data(), o, report);
+    const auto nv = static_cast<std::size_t>(vertices.shape(0));
+    const auto nf = static_cast<std::size_t>(triangles.shape(0));
+    // segments = 0: the clusters as asked; else searched for that many segments.
+    s = segments == 0 ? sdf::segment::segment_mesh(vertices.data(), nv, triangles.data(), nf,
+                                                   values.data(), o, report)
+                      : sdf::segment::segment_to_count(vertices.data(), nv, triangles.data(), nf,
+                                                       values.data(), o, segments, report);
   }
   return to_dict(s);
 }
@@ -146,7 +152,8 @@ void bind_segmentation(py::module_& m) {
   m.def("segment", &segment, py::arg("vertices"), py::arg("triangles"), py::arg("values"),
         py::arg("clusters"), py::arg("smoothness"), py::arg("filter"), py::arg("ties_move"),
         py::arg("first_move_only"), py::arg("weight_rings"), py::arg("threads"),
-        py::arg("min_segment_area") = 0.0, py::arg("progress") = py::none());
+        py::arg("min_segment_area") = 0.0, py::arg("segments") = 0,
+        py::arg("progress") = py::none());
   m.def("segmentation_energy", &segmentation_energy, py::arg("vertices"), py::arg("triangles"),
         py::arg("values"), py::arg("labels"), py::arg("clusters"), py::arg("smoothness"),
         py::arg("filter"), py::arg("threads"));

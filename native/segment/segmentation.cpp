@@ -101,6 +101,7 @@ Segmentation segment_mesh(const double* vertices, std::size_t vertex_count,
   const double* at = options.filter ? kFiltered : kPlain;
   progress.report(at[kGraph]);
   Segmentation out;
+  out.smoothness = options.smoothness;
   StageClock clock(&out.timings);
   const FaceGraph graph = build_face_graph(triangles, n, vertex_count, options.threads,
                                            progress.step(at[kGraph], at[kValues]));

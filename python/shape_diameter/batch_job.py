@@ -87,7 +87,13 @@ _READING = threading.Lock()
 
 
 # segment()'s keywords a batch takes, with the defaults --segment gives them.
-SEGMENT_DEFAULTS = {"clusters": 5, "smoothness": 0.26, "mode": "auto", "min_part_area": 0.0}
+SEGMENT_DEFAULTS = {
+    "clusters": 5,
+    "smoothness": 0.26,
+    "mode": "auto",
+    "min_part_area": 0.0,
+    "segments": None,
+}
 
 
 def run_job(
@@ -104,9 +110,9 @@ def run_job(
     """Read, compute (compute()'s keyword arguments in `options`) and write one input; returns
     its --json object without its warnings, which go to warn(message) as they come.
 
-    `segment_options`: segment()'s keywords (clusters, smoothness, mode, min_part_area) to
-    also segment the SDF: the mesh is coloured by segment and the labels written to
-    job.segments.
+    `segment_options`: segment()'s keywords (clusters, smoothness, mode, min_part_area,
+    segments) to also segment the SDF: the mesh is coloured by segment and the labels written
+    to job.segments.
 
     `progress`: compute()'s callback; `check`: called between the steps (the command line's
     Ctrl-C check points). Failures raise; failure() maps them to a status and a message.
@@ -181,9 +187,10 @@ def run_job(
         report["segments"] = {
             "count": parts.segment_count,
             "clusters": int(len(parts.mixture)),
-            "smoothness": float(segment_options["smoothness"]),
+            "smoothness": parts.smoothness,
             "mode": segment_options["mode"],
             "min_part_area": float(segment_options.get("min_part_area", 0.0)),
+            "segments_asked": segment_options.get("segments"),
             "seconds": {stage: float(t) for stage, t in parts.timings.items()},
         }
         report["outputs"]["segments"] = job.segments

@@ -378,6 +378,13 @@ def build_parser() -> argparse.ArgumentParser:
         "separate solid stays whole (default: 0, off)",
     )
     parser.add_argument(
+        "--segments",
+        type=_int_in(1, 4096),
+        metavar="N",
+        help="--segment: the number of segments wanted: clusters 2-9 and the smoothness x 1, "
+        "0.4 and 2 are searched for it, the nearest count kept (default: K clusters decide)",
+    )
+    parser.add_argument(
         "--output-dir",
         metavar="DIR",
         help="write each input's outputs into DIR (made if missing) instead of next to the "
@@ -664,6 +671,7 @@ def segment_options(args):
         "smoothness": args.smoothness,
         "mode": args.segment_mode,
         "min_part_area": args.min_part_area,
+        "segments": args.segments,
     }
     return {**SEGMENT_DEFAULTS, **{k: v for k, v in given.items() if v is not None}}
 
@@ -779,7 +787,7 @@ def _check_combinations(args) -> None:
         )
     if args.segment is not None and args.points != "faces":
         raise CommandError("--segment needs --points faces (segments are made of faces)")
-    for flag in ("smoothness", "segment_mode", "min_part_area"):
+    for flag in ("smoothness", "segment_mode", "min_part_area", "segments"):
         if getattr(args, flag) is not None and args.segment is None:
             raise CommandError(f"--{flag.replace('_', '-')} applies to --segment")
     args.seed = 0 if args.seed is None else args.seed
