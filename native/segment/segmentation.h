@@ -38,7 +38,7 @@ struct Segmentation {
   std::vector<int> clusters;      // per face, in [0, k): 0 the thinnest
   std::vector<int> segments;      // per face, in [0, segment_count): by ascending mean
   std::size_t segment_count = 0;
-  double energy = 0.0;  // of `clusters`
+  double energy = 0.0;      // of `clusters`
   double smoothness = 0.0;  // the lambda used (segment_to_count chooses it)
   SegmentStats stats;
   std::vector<int> vertex_labels;
