@@ -181,13 +181,15 @@ def segment_objects(objects, *, depsgraph=None, write=True, progress=None, **opt
     outputs (all or none), as the operator object.shape_diameter_segment does. Options:
     clusters=5, smoothness=0.26, mode='auto' ('cgal'), min_part_area=0.0 (a minimum part
     size, a share of the mesh's area in [0, 1): smaller parts join the neighbour they share
-    the longest boundary with; 0: off), reuse_values=True (the SDF attribute
-    Compute wrote per face with the same settings on the same geometry is segmented as it
-    is), face_sets=True, label_name='segment', segment_color_name='segment_color' (empty:
-    not written), vertex_groups=True, group_prefix='part_', soft_weights=True,
-    materials=False, armature=True, armature_name='{object}_parts'; and compute_objects()'
-    options for the SDF where it is computed (points is always 'faces'). Raises UserError
-    (nothing written) for what the user can fix, Cancelled when `progress` returns False."""
+    the longest boundary with; 0: off), segments=0 (the number of parts wanted: clusters
+    and smoothness are searched for it; 0: the clusters decide), reuse_values=True (the SDF
+    attribute Compute wrote per face with the same settings on the same geometry is
+    segmented as it is), face_sets=True, label_name='segment',
+    segment_color_name='segment_color' (empty: not written), vertex_groups=True,
+    group_prefix='part_', soft_weights=True, materials=False, armature=True,
+    armature_name='{object}_parts'; and compute_objects()' options for the SDF where it is
+    computed (points is always 'faces'). Raises UserError (nothing written) for what the
+    user can fix, Cancelled when `progress` returns False."""
     if progress is not None and not callable(progress):
         raise UserError("progress must be a callable taking the fraction done, or None")
     context = bpy.context

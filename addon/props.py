@@ -314,6 +314,15 @@ def segment_options():
             min=0.0,
             soft_max=2.0,
         ),
+        "segments": IntProperty(
+            name="Number of Parts",
+            description="The parts wanted: clusters 2-9 and the smoothness are searched for "
+            "that many, the nearest count kept (0: the clusters decide)",
+            default=0,
+            min=0,
+            max=4096,
+            soft_max=32,
+        ),
         "mode": EnumProperty(
             name="Mode", description="The graph cut", items=SEGMENT_MODE_ITEMS, default="auto"
         ),

@@ -72,7 +72,7 @@ class OBJECT_OT_shape_diameter_segment(operators.WorkerRun, bpy.types.Operator):
 
 def draw_segment_settings(layout, settings):
     """The segmentation options and outputs (operator and panel)."""
-    for name in ("clusters", "smoothness", "mode", "min_part_area", "reuse_values"):
+    for name in ("segments", "clusters", "smoothness", "mode", "min_part_area", "reuse_values"):
         layout.prop(settings, name)
     col = layout.column(heading="Outputs")
     col.prop(settings, "face_sets")

@@ -36,6 +36,7 @@ class SegmentOptions:
     smoothness: float = 0.26
     mode: str = "auto"
     min_part_area: float = 0.0
+    segments: int = 0  # the parts wanted; 0: the clusters decide
     reuse_values: bool = True
     face_sets: bool = True
     label_name: str = "segment"
@@ -65,6 +66,7 @@ class SegmentOptions:
             "smoothness": self.smoothness,
             "mode": self.mode,
             "min_part_area": self.min_part_area,
+            "segments": self.segments or None,
             "postprocess": self.sdf.smoothing == "none",
         }
 
@@ -88,6 +90,11 @@ class SegmentOptions:
         share = self.min_part_area
         if isinstance(share, bool) or not isinstance(share, (int, float)) or not 0 <= share < 1:
             raise UserError(f"min_part_area must be a share in [0, 1) (0.01: 1%), got {share!r}")
+        wanted = self.segments
+        if isinstance(wanted, bool) or not isinstance(wanted, (int, np.integer)):
+            raise UserError(f"segments must be an integer in [0, 4096] (0: off), got {wanted!r}")
+        if not 0 <= wanted <= 4096:
+            raise UserError(f"segments must be an integer in [0, 4096] (0: off), got {wanted!r}")
         names = [name for name, _, _ in self.attribute_outputs()]
         for name in names[1:] if self.face_sets else names:
             if name.startswith("."):

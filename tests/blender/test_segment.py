@@ -258,6 +258,25 @@ def test_minimum_part_size_joins_the_neck_to_a_ball():
     assert state() == before
 
 
+def test_number_of_parts_searches_for_that_many():
+    """Number of Parts: the package's segment(segments=N) on the same triangles, through the
+    API and the operator; a bad count is refused with nothing written."""
+    api = addon_module("api")
+    ob = dumbbell()
+    result = api.segment_object(ob, segments=3)
+    labels, seg = reference(ob, segments=3)
+    assert result.segment_count == seg.segment_count == 3
+    np.testing.assert_array_equal(result.labels, labels)
+    assert bpy.ops.object.shape_diameter_segment(segments=3, clusters=8) == {"FINISHED"}
+    np.testing.assert_array_equal(
+        face_ints(ob.data, "segment"), reference(ob, segments=3, clusters=8)[0]
+    )
+    before = state()
+    with pytest.raises(api.UserError, match=r"segments must be an integer in \[0, 4096\]"):
+        api.segment_object(ob, segments=-2)
+    assert state() == before
+
+
 def test_a_second_run_replaces_its_own_outputs():
     api = addon_module("api")
     ob = dumbbell()
