@@ -72,8 +72,9 @@ def compute_objects(objects, *, depsgraph=None, write=True, progress=None, **opt
     preferences' default engine; or 'auto', 'opencl' (the best OpenCL device), or a name
     from engines()), orientation='auto' ('as_is', 'flip'), accel='bvh' or 'octree',
     smoothing='none', 'kring' (smoothing_rings=0: automatic), 'projected'
-    (smoothing_iterations=1) or 'texture' (texture_size=1024, an integer in [16, 16384];
-    texture_radius=0: automatic, or texels in [0, 1024]; needs a UV map), attribute_name='sdf',
+    (smoothing_iterations=1, smoothing_rule='local' or 'paper') or 'texture'
+    (texture_size=1024, an integer in [16, 16384]; texture_radius=0: automatic, or texels in
+    [0, 1024]; needs a UV map), attribute_name='sdf',
     normalized_name='sdf_normalized', color_name='sdf_color' (empty: not written),
     bake_image=False, uv_map='' (the active one), image_name='{object}_sdf', bake_margin=4
     (texels around each UV island, an integer in [0, 16384]), use_modifiers=False,

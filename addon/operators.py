@@ -225,6 +225,7 @@ def draw_smoothing(layout, settings):
         layout.prop(settings, "smoothing_rings")
     elif settings.smoothing == "projected":
         layout.prop(settings, "smoothing_iterations")
+        layout.prop(settings, "smoothing_rule")
     elif settings.smoothing == "texture":
         layout.prop(settings, "texture_size")
         layout.prop(settings, "texture_radius")

@@ -71,6 +71,7 @@ class Options:
     smoothing: str = "none"
     smoothing_rings: int = 0  # kring: rings, 0 = chosen from the face count
     smoothing_iterations: int = 1  # projected
+    smoothing_rule: str = "local"  # projected: 'local' or the paper's ('paper')
     texture_size: int = 1024  # texture smoothing and the bake, square
     texture_radius: float = 0.0  # texture smoothing: texels, 0 = 2 per 256 texels (paper)
     attribute_name: str = "sdf"
@@ -97,7 +98,7 @@ class Options:
         if self.smoothing == "kring":
             return {"k": self.smoothing_rings or None}
         if self.smoothing == "projected":
-            return {"iterations": self.smoothing_iterations}
+            return {"iterations": self.smoothing_iterations, "rule": self.smoothing_rule}
         if self.smoothing == "texture":
             return {"texture_size": self.texture_size, "radius": self.texture_radius or None}
         return {}

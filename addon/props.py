@@ -218,6 +218,25 @@ def options():
             min=1,
             max=100,
         ),
+        "smoothing_rule": EnumProperty(
+            name="Rule",
+            description="Projected points: how far each point gathers",
+            items=(
+                (
+                    "local",
+                    "Local",
+                    "A sphere of a twentieth of each value over fine cells: "
+                    "keeps a clean field, removes some noise",
+                ),
+                (
+                    "paper",
+                    "Paper",
+                    "The paper's sphere of the whole value: smooths more, "
+                    "and moves values across parts of other thicknesses",
+                ),
+            ),
+            default="local",
+        ),
         "texture_size": IntProperty(
             name="Resolution",
             description="Size in texels of the texture used by texture smoothing and the bake "

@@ -97,6 +97,7 @@ def test_everything_is_registered():
         "smoothing",
         "smoothing_rings",
         "smoothing_iterations",
+        "smoothing_rule",
         "texture_size",
         "texture_radius",
         "bake_image",

@@ -31,6 +31,10 @@ def corner_uvs(ob, name=None):
 SMOOTHING = {
     "kring": ({"smoothing_rings": 2}, {"k": 2}),
     "projected": ({"smoothing_iterations": 2}, {"iterations": 2}),
+    "projected, the paper's rule": (
+        {"smoothing_iterations": 1, "smoothing_rule": "paper"},
+        {"iterations": 1, "rule": "paper"},
+    ),
     "texture": (
         {"texture_size": 256, "texture_radius": 3.0},
         {"texture_size": 256, "radius": 3.0},
@@ -42,6 +46,7 @@ SMOOTHING = {
 def test_smoothing_methods(method):
     ob = import_obj("spot.obj")
     operator_options, smooth_options = SMOOTHING[method]
+    method = method.split(",")[0]
     assert run(rays=16) == {"FINISHED"}
     plain = attribute_array(ob.data, "sdf")
     assert run(rays=16, smoothing=method, **operator_options) == {"FINISHED"}
