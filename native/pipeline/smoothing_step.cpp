@@ -111,10 +111,12 @@ void texture(const SmoothingMesh& mesh, PointKind kind, const float* values,
   Stopwatch clock;
   // Without a preparation, one made here: the layout and a one-image run share its islands
   // (and its checks of the UVs and size come first, with their own words).
+  const UvPlan* plan = options.uv_plan.get();
+  if (plan) check_plan(*plan, mesh.face_count, o.weld_tolerance, kind == PointKind::Vertices);
   PreparedTexture own;
   if (!given_ready) {
     own = prepare_texture(copy_mesh(*mesh.as_given, o.threads), mesh.uvs, o,
-                          kind == PointKind::Vertices);
+                          kind == PointKind::Vertices, plan ? &plan->islands : nullptr);
     for (auto& stage : own.timings)
       out.timings.emplace_back("prepare: " + stage.first, stage.second);
     clock.lap();
@@ -123,8 +125,13 @@ void texture(const SmoothingMesh& mesh, PointKind kind, const float* values,
   const Mesh& given = ready.mesh;
   const float* uvs = ready.uvs;
   out.values.resize(point_count(given, kind));
-  const UvLayout layout = layout_uvs(uvs, ready.islands.face_island, o.threads);
-  out.timings.emplace_back("uv layout", clock.lap());
+  // The layout found before (its search cost about as much as a 1024^2 smoothing), or now.
+  UvLayout found;
+  if (!plan) {
+    found = layout_uvs(uvs, ready.islands.face_island, o.threads);
+    out.timings.emplace_back("uv layout", clock.lap());
+  }
+  const UvLayout& layout = plan ? plan->layout : found;
   const bool one_image = layout.single_square();
   auto run_page = [&](const float* page_uvs, bool keep, const ProgressFn& part, float* into) {
 #ifdef SDF_HAVE_OPENCL
@@ -164,8 +171,11 @@ PreparedSmoothing prepare_smoothing(Mesh as_given, const float* uvs, PointKind k
   if (options.method == SmoothingMethod::Texture) {
     TextureOptions o = options.texture;
     o.threads = options.threads;
-    prepared.texture = std::make_shared<PreparedTexture>(
-        prepare_texture(std::move(as_given), uvs, o, kind == PointKind::Vertices));
+    const UvPlan* plan = options.uv_plan.get();
+    if (plan)
+      check_plan(*plan, as_given.triangles.size(), o.weld_tolerance, kind == PointKind::Vertices);
+    prepared.texture = std::make_shared<PreparedTexture>(prepare_texture(
+        std::move(as_given), uvs, o, kind == PointKind::Vertices, plan ? &plan->islands : nullptr));
 #ifdef SDF_HAVE_OPENCL
     if (device) {
       try {
