@@ -48,7 +48,8 @@ def uv_layout(vertices, triangles, uvs, *, points="faces", weld_tolerance=1e-6, 
     v, t = check_mesh(vertices, triangles, threads)
     if points not in ("faces", "vertices"):
         raise ValueError(f"points must be 'faces' or 'vertices', got {points!r}")
-    resolved = check_smoothing("texture", {"weld_tolerance": weld_tolerance}, uvs=uvs,
+    given = {"weld_tolerance": weld_tolerance, "return_image": return_image}
+    resolved = check_smoothing("texture", given, uvs=uvs,
                                face_count=len(t), vertex_count=len(v), triangles=t)  # fmt: skip
     return find(v, t, resolved["uvs"], resolved, points, threads)
 
