@@ -99,8 +99,10 @@ def _settle(image):
 
 
 def _packed_image(bpy_data, name, data, task):
-    size = task.image_size
-    image = bpy_data.images.new(name, size, size, float_buffer=True)
+    # A 1 x 1 placeholder: the packed file is the image (its size, its pixels, read by
+    # Blender when first used); a size x size one was a buffer of 16 bytes a texel made for
+    # nothing (64 MiB at 2048^2).
+    image = bpy_data.images.new(name, 1, 1, float_buffer=True)
     try:
         image.pack(data=data, data_len=len(data))
         image.source = "FILE"

@@ -506,10 +506,14 @@ def prepare(depsgraph, objects, options, for_writing=True, active=None):
 # (shape_diameter.smoothing.texture_cost: the blur's reads, the buffers) and the add-on's
 # own, measured on a 2-core AMD EPYC with bpy 4.5 on Spot (TextureCost.cpu_seconds is the
 # core's side):
-SECONDS_PER_BAKED_TEXEL = 1.2e-7  # Blender's side of a bake: its image made, filled, packed
-BAKED_BYTES_PER_TEXEL = 56  # a bake at its peak, Blender's image included: 52.5-56.7 measured
-# (4096^2 and 8192^2; 8192^2 without blur: 10.2 s and 3.4 GB in all). Every baked image is
-# held until all are written. Past WARN_SECONDS or WARN_MEMORY of the machine's memory the
+# The image's side of a bake: its one-channel half-float OpenEXR encoded (worker thread;
+# bench/blender_bake.py: 0.131 s at 2048^2, 0.045 s at 1024^2), Blender's part being 0.1 ms.
+SECONDS_PER_BAKED_TEXEL = 4.5e-8
+# A bake at its peak: 52.5-56.7 measured with the RGBA float images baked before (4096^2 and
+# 8192^2); now an upper bound, the images being held as compressed files until all are
+# written (not measured again).
+BAKED_BYTES_PER_TEXEL = 56
+# Past WARN_SECONDS or WARN_MEMORY of the machine's memory the
 # run says so before it starts (the interface's Esc still cancels it); past REFUSE_MEMORY it
 # is refused: swapping, or the kernel's out-of-memory killer ending Blender and its unsaved
 # work. Time alone never refuses: an OpenCL GPU blurs far faster than the estimate's CPU.
