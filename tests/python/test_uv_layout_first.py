@@ -136,3 +136,36 @@ def test_vertex_values_with_a_layout_for_vertices(stacked):
     assert layout.for_vertices
     out = smooth(v, t, values, "texture", uvs=uvs, texture_size=64, uv_layout=layout)
     np.testing.assert_array_equal(out, expected)
+
+
+def test_the_command_line_says_the_overlaps_before_computing(tmp_path, capsys, monkeypatch):
+    # spot.obj with every face twice (a second shell on the same UVs): the warning is printed
+    # once, before compute() starts, and compute() gets the layout found.
+    from shape_diameter import batch_job, cli
+
+    lines = (DATA / "spot.obj").read_text().splitlines()
+    faces = [line for line in lines if line.startswith("f ")]
+    vertex_count = sum(line.startswith("v ") for line in lines)
+    moved = [line for line in lines if line.startswith(("v ", "vt "))]
+    moved += [f"v {float(p[1]) + 3.0!r} {p[2]} {p[3]}"
+              for p in (line.split() for line in lines if line.startswith("v "))]  # fmt: skip
+    again = []
+    for face in faces:
+        corners = [c.split("/") for c in face.split()[1:]]
+        again.append("f " + " ".join(f"{int(c[0]) + vertex_count}/{c[1]}" for c in corners))
+    obj = tmp_path / "spot_twice.obj"
+    obj.write_text("\n".join(moved + faces + again) + "\n")
+    seen = []
+    compute = batch_job.compute
+
+    def recording(*args, **kwargs):
+        seen.append((capsys.readouterr().err, kwargs["smoothing_options"]["uv_layout"]))
+        return compute(*args, **kwargs)
+
+    monkeypatch.setattr(batch_job, "compute", recording)
+    argv = [str(obj), "--rays", "8", "--engine", "cpu", "--smooth", "texture",
+            "--texture-size", "64", "--values", str(tmp_path / "values.npy")]  # fmt: skip
+    assert cli.main(argv) == 0
+    (before, layout), after = seen[0], capsys.readouterr().err
+    assert before.count(OVERLAP) == 1 and OVERLAP not in after
+    assert layout.faces_overlapping > 0.9 * layout.face_count
