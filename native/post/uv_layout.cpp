@@ -122,6 +122,11 @@ struct UvGrid {
   };
   std::vector<std::uint32_t> first;  // per cell, where its entries start
   std::vector<Entry> entries;
+  // Per cell, 1 where its entries are of more than one node: only there can faces of two
+  // nodes meet (a pair is looked at in the first cell both share). Most cells of a layout
+  // without overlaps hold one island: their entries, read again by each of their faces, were
+  // most of the search's time.
+  std::vector<std::uint8_t> mixed;
   std::vector<Box> boxes;                    // per face, its cells (x1 < x0 for faces in no tile)
   std::vector<std::array<float, 4>> extent;  // per face, its UV box in its tile: u0, v0, u1, v1
 };
@@ -143,8 +148,8 @@ int grid_size(const FaceTiles& t, const std::vector<std::array<float, 4>>& exten
                     std::clamp(2 * int(std::sqrt(per_tile)), 1, 2048));
 }
 
-UvGrid build_grid(const float* uvs, const FaceTiles& t,
-                  const std::vector<std::int32_t>& face_node) {
+UvGrid build_grid(const float* uvs, const FaceTiles& t, const std::vector<std::int32_t>& face_node,
+                  unsigned threads) {
   const std::size_t m = t.tile_index.size();
   UvGrid grid;
   grid.extent.resize(m);
@@ -186,6 +191,15 @@ UvGrid build_grid(const float* uvs, const FaceTiles& t,
     for (int y = b.y0; y <= b.y1; ++y)
       for (int x = b.x0; x <= b.x1; ++x) grid.entries[at[base + std::size_t(y) * g + x]++] = entry;
   }
+  grid.mixed.resize(cells);
+  parallel_for(cells, kFaceGrain, threads, [&](std::size_t begin, std::size_t end) {
+    for (std::size_t c = begin; c < end; ++c) {
+      std::uint8_t several = 0;
+      for (std::uint32_t j = grid.first[c] + 1; j < grid.first[c + 1] && !several; ++j)
+        several = grid.entries[j].node != grid.entries[grid.first[c]].node;
+      grid.mixed[c] = several;
+    }
+  });
   return grid;
 }
 
@@ -264,6 +278,7 @@ std::vector<std::pair<std::int32_t, std::int32_t>> find_overlaps(
       for (int y = bf.y0; y <= bf.y1; ++y)
         for (int x = bf.x0; x <= bf.x1; ++x) {
           const std::size_t c = base + std::size_t(y) * g + x;
+          if (!grid.mixed[c]) continue;  // f's node alone
           for (std::uint32_t j = grid.first[c]; j < grid.first[c + 1]; ++j) {
             const UvGrid::Entry& eh = grid.entries[j];
             if (eh.node == node || eh.node == known) continue;
@@ -334,7 +349,7 @@ UvLayout layout_uvs(const float* uvs, const std::vector<std::int32_t>& face_isla
   for (std::int32_t i : face_island) islands = std::max<std::int64_t>(islands, i + 1);
   std::vector<std::int32_t> face_node;
   const std::vector<std::int64_t> keys = node_keys(t, face_island, islands, face_node);
-  const UvGrid grid = build_grid(uvs, t, face_node);
+  const UvGrid grid = build_grid(uvs, t, face_node, threads);
   std::vector<std::uint8_t> overlapping;
   bool over_budget = false;
   const auto pairs = find_overlaps(uvs, t, grid, face_node, threads, overlapping, over_budget);
