@@ -649,6 +649,19 @@ def polygon_means(triangle_values, mesh):
     return np.where(weight > 0.0, weighted / safe, plain).astype(np.float32)
 
 
+def _bake(task, options, step):
+    """The normalised field through the UV map, blurred in texture space when that is the
+    smoothing chosen (the paper's texture-space smoothing, 4.4), into task.image; `step`
+    reports the bake's progress (0 to 1) and raises to cancel."""
+    started = time.perf_counter()
+    normalized = task.normalized
+    per_point = normalized[task.mesh.triangle_polygons] if options.points == "faces" else normalized
+    with core.collect_warnings() as caught:  # e.g. a device's failure
+        baking.bake(task, options, per_point, step)
+    task.warnings.extend(f"{task.object_name} (bake): {message}" for message in caught)
+    task.timings["bake"] = time.perf_counter() - started
+
+
 def _with_layout(compute_options, task):
     """compute()'s options with the task's UV layout, for texture smoothing (found before)."""
     if task.uv_layout is None or compute_options.get("smoothing") != "texture":
@@ -716,19 +729,8 @@ def compute(tasks, options, progress=None, cancelled=None):
                 )
         task.timings = dict(result.timings)
         if options.bake_image:
-            # The normalised field through the UV map; blurred in texture space when that is
-            # the smoothing chosen (the paper's texture-space smoothing, 4.4).
-            started = time.perf_counter()
-            per_point = (
-                task.normalized[mesh.triangle_polygons]
-                if options.points == "faces"
-                else task.normalized
-            )
-            bake_step = functools.partial(step, start=done + cast_share, width=share - cast_share)
-            with core.collect_warnings() as caught:  # e.g. faces whose UVs it leaves out
-                baking.bake(task, options, per_point, bake_step)
-            task.warnings.extend(f"{task.object_name} (bake): {message}" for message in caught)
-            task.timings["bake"] = time.perf_counter() - started
+            _bake(task, options, functools.partial(step, start=done + cast_share,
+                                                   width=share - cast_share))  # fmt: skip
         task.valid_rays = result.valid_rays
         task.colors = core.colors(task.normalized) if options.color_name else None
         if loose is not None and task.colors is not None:
