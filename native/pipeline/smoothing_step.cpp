@@ -96,6 +96,17 @@ void projected(const Mesh& mesh, PointKind kind, const float* values, const Proj
   smooth_projected_into(mesh, kind, values, o, out.values.data(), progress, 0.0, 1.0, &out.timings);
 }
 
+// The UV layout found before (options.uv_plan), where it was found for these faces (not for
+// a double-sided mesh's second cast, without its twins), or null: found here.
+const UvPlan* fitting_plan(const SmoothingOptions& options, std::size_t face_count,
+                           PointKind kind) {
+  const UvPlan* plan = options.uv_plan.get();
+  return plan && plan_fits(*plan, face_count, options.texture.weld_tolerance,
+                           kind == PointKind::Vertices)
+             ? plan
+             : nullptr;
+}
+
 // Texture smoothing on the UV layout's pages (uv_layout.h): UDIM tiles and layers that part
 // overlapping islands, one image each, one after another through the per-image code (on the
 // CPU threads or a device). A layout of one page in the [0, 1] square uses what was prepared
@@ -111,8 +122,7 @@ void texture(const SmoothingMesh& mesh, PointKind kind, const float* values,
   Stopwatch clock;
   // Without a preparation, one made here: the layout and a one-image run share its islands
   // (and its checks of the UVs and size come first, with their own words).
-  const UvPlan* plan = options.uv_plan.get();
-  if (plan) check_plan(*plan, mesh.face_count, o.weld_tolerance, kind == PointKind::Vertices);
+  const UvPlan* plan = fitting_plan(options, mesh.face_count, kind);
   PreparedTexture own;
   if (!given_ready) {
     own = prepare_texture(copy_mesh(*mesh.as_given, o.threads), mesh.uvs, o,
@@ -171,9 +181,7 @@ PreparedSmoothing prepare_smoothing(Mesh as_given, const float* uvs, PointKind k
   if (options.method == SmoothingMethod::Texture) {
     TextureOptions o = options.texture;
     o.threads = options.threads;
-    const UvPlan* plan = options.uv_plan.get();
-    if (plan)
-      check_plan(*plan, as_given.triangles.size(), o.weld_tolerance, kind == PointKind::Vertices);
+    const UvPlan* plan = fitting_plan(options, as_given.triangles.size(), kind);
     prepared.texture = std::make_shared<PreparedTexture>(prepare_texture(
         std::move(as_given), uvs, o, kind == PointKind::Vertices, plan ? &plan->islands : nullptr));
 #ifdef SDF_HAVE_OPENCL

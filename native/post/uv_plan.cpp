@@ -1,8 +1,6 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
 #include "post/uv_plan.h"
 
-#include <stdexcept>
-
 #include "post/smoothing_texture.h"
 #include "util/stopwatch.h"
 
@@ -22,13 +20,10 @@ UvPlan plan_uvs(const Mesh& mesh, const float* uvs, double weld_tolerance, bool 
   return plan;
 }
 
-void check_plan(const UvPlan& plan, std::size_t face_count, double weld_tolerance,
-                bool need_merged) {
-  if (plan.face_count != face_count || plan.islands.weld_tolerance != weld_tolerance ||
-      (need_merged && !plan.islands.need_merged))
-    throw std::invalid_argument(
-        "the UV layout was found for another mesh, weld tolerance or points ('vertices' needs "
-        "one found for vertex values)");
+bool plan_fits(const UvPlan& plan, std::size_t face_count, double weld_tolerance,
+               bool need_merged) {
+  return plan.face_count == face_count && plan.islands.weld_tolerance == weld_tolerance &&
+         (!need_merged || plan.islands.need_merged);
 }
 
 }  // namespace sdf

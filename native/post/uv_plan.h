@@ -26,9 +26,9 @@ struct UvPlan {
 UvPlan plan_uvs(const Mesh& mesh, const float* uvs, double weld_tolerance, bool need_merged,
                 unsigned threads);
 
-// Throws std::invalid_argument where `plan` was made for another face count or weld
-// tolerance, or without the merged vertices vertex values need.
-void check_plan(const UvPlan& plan, std::size_t face_count, double weld_tolerance,
-                bool need_merged);
+// Whether `plan` was made for this face count and weld tolerance, with the merged vertices
+// vertex values need. Texture smoothing finds the layout again where it was not (a
+// double-sided mesh's second cast smooths the mesh without its twin faces).
+bool plan_fits(const UvPlan& plan, std::size_t face_count, double weld_tolerance, bool need_merged);
 
 }  // namespace sdf

@@ -56,8 +56,7 @@ def uv_layout(vertices, triangles, uvs, *, points="faces", weld_tolerance=1e-6, 
 
 def find(v, t, corners, resolved, points, threads):
     """uv_layout() on checked arrays and texture options (check_smoothing's)."""
-    weld = resolved["weld_tolerance"]
-    plan = _core.uv_layout(v, t, corners, -1.0 if weld is None else float(weld),
+    plan = _core.uv_layout(v, t, corners, _core_weld(resolved["weld_tolerance"]),
                            points == "vertices", int(threads))  # fmt: skip
     return UvLayout(
         face_count=plan.face_count,
@@ -75,6 +74,11 @@ def find(v, t, corners, resolved, points, threads):
     )
 
 
+def _core_weld(weld_tolerance):
+    """The core's weld tolerance: < 0 merges nothing (None)."""
+    return -1.0 if weld_tolerance is None else float(weld_tolerance)
+
+
 def use_layout(v, t, corners, resolved, points, threads):
     """compute()'s and smooth()'s step before the core's work: the texture option
     `uv_layout` checked, or found now and its warnings issued; resolved['uv_layout'] then
@@ -89,10 +93,14 @@ def use_layout(v, t, corners, resolved, points, threads):
             "uv_layout must be what shape_diameter.uv_layout() returned, got "
             f"{type(given).__name__}"
         )
-    elif given.face_count != len(t) or (points == "vertices" and not given.for_vertices):
+    elif (
+        given.face_count != len(t)
+        or given.plan.weld_tolerance != _core_weld(resolved["weld_tolerance"])
+        or (points == "vertices" and not given.for_vertices)
+    ):
         raise ValueError(
-            "uv_layout was found for another mesh or for face values (find it with "
-            "points='vertices' for vertex values)"
+            "uv_layout was found for another mesh, another weld_tolerance or for face values "
+            "(find it with points='vertices' for vertex values)"
         )
     resolved["uv_layout"] = given.plan
     return given

@@ -123,6 +123,9 @@ def test_a_layout_of_other_faces_or_points_is_refused(stacked):
     with pytest.raises(ValueError, match="another mesh"):
         smooth(v, t[:half], np.ones(half, np.float32), "texture", uvs=uvs[:half],
                uv_layout=layout)  # fmt: skip
+    with pytest.raises(ValueError, match="another weld_tolerance"):
+        smooth(v, t, np.ones(len(t), np.float32), "texture", uvs=uvs, uv_layout=layout,
+               weld_tolerance=1e-4)  # fmt: skip
     with pytest.raises(ValueError, match="uv_layout must be"):
         smooth(v, t, np.ones(len(t), np.float32), "texture", uvs=uvs, uv_layout="yes")
 
