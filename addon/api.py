@@ -27,7 +27,7 @@ from dataclasses import dataclass, field
 import bpy
 import numpy as np
 
-from . import core, operators, part_writing, process, segmenting
+from . import baking, core, operators, part_writing, process, segmenting
 
 UserError = process.UserError
 Cancelled = process.Cancelled  # a progress callback returned False
@@ -56,7 +56,8 @@ class ObjectResult:
     shared_by: list = field(default_factory=list)
     warnings: list = field(default_factory=list)
     image: str = ""  # name of the baked image in bpy.data.images (UDIM tile 1001), if any
-    # Every baked tile's image: tile number -> name (1001: `image`; 1002: "<image>.1002", ...).
+    # Every baked tile's image: tile number -> name (1001: `image`; 1002: "<image>.1002", ...;
+    # with bake_tiles='TILED', `image` for every tile: one tiled image).
     tile_images: dict = field(default_factory=dict)
 
 
@@ -77,9 +78,13 @@ def compute_objects(objects, *, depsgraph=None, write=True, progress=None, **opt
     [0, 1024]; needs a UV map), attribute_name='sdf',
     normalized_name='sdf_normalized', color_name='sdf_color' (empty: not written),
     bake_image=False, uv_map='' (the active one), image_name='{object}_sdf', bake_margin=4
-    (texels around each UV island, an integer in [0, 16384]), use_modifiers=False,
+    (texels around each UV island, an integer in [0, 16384]), bake_depth='16' (the packed
+    OpenEXR's half floats; '32': 32-bit floats), bake_tiles='IMAGES' (UVs on UDIM tiles: an
+    image per tile; 'TILED': one tiled image), use_modifiers=False,
     apply_scale=True; and any further keyword that
-    shape_diameter.compute() accepts. write=False computes without writing. progress: called
+    shape_diameter.compute() accepts. write=False computes without writing, and so without
+    baking (a bake makes images in the file): bake_image is then skipped with a
+    RuntimeWarning, and its UV map is not needed. progress: called
     now and then with the fraction done (0 to 1); returning False stops the run, which raises
     Cancelled having written nothing. A mesh that several objects share is computed once,
     from the first of them in `objects` (the operator: from the active object, where it is
@@ -93,12 +98,14 @@ def compute_objects(objects, *, depsgraph=None, write=True, progress=None, **opt
     if options.get("engine") in (None, "DEFAULT"):
         options["engine"] = operators.resolve_engine(context, "DEFAULT")
     opts = process.Options.from_keywords(**options)
+    skipped = _bake_skipped(opts, write)
     if depsgraph is None:
         depsgraph = context.evaluated_depsgraph_get()
     # Warnings about the whole run (what was skipped, long or large texture work) are issued
     # before computing, as the operator reports them, and go into every result, so that a
     # caller that reads any result's warnings sees them.
     tasks, run_warnings = process.prepare(depsgraph, objects, opts, for_writing=write)
+    run_warnings = [*skipped, *run_warnings]
     for warning in run_warnings:
         warnings.warn(warning, RuntimeWarning, stacklevel=2)
     _run_cancellable(process.compute, tasks, opts, progress)
@@ -120,14 +127,20 @@ def compute_objects(objects, *, depsgraph=None, write=True, progress=None, **opt
             shared_by=list(t.shared_by),
             warnings=[*run_warnings, *t.warnings],
             image=t.image_name if write else "",
-            tile_images={
-                tile: process.tile_image_name(t.image_name, tile) for tile in (t.image or {})
-            }
-            if write
-            else {},
+            tile_images=baking.image_names(t.image_name, t.image or {}, opts) if write else {},
         )
         for t in tasks
     ]
+
+
+def _bake_skipped(opts, write):
+    """With write=False a bake would make images only to throw them away: it is turned off
+    (the options are the caller's copy). Returns the warning saying so, if any."""
+    if write or not opts.bake_image:
+        return []
+    opts.bake_image = False
+    return ["bake_image is skipped with write=False: a bake makes images in the file, and "
+            "write=False writes nothing"]  # fmt: skip
 
 
 def _run_cancellable(compute, work, opts, progress):

@@ -122,6 +122,13 @@ def default_radius(size):
     return load().smoothing.default_radius(int(size))
 
 
+def uv_layout(vertices, triangles, uvs, points, for_images):
+    """shape_diameter.uv_layout: the UV layout (UDIM tiles, overlapping shells) that texture
+    smoothing and the bake take (found once); its `warnings` say what it is, worded for
+    images where `for_images`."""
+    return load().uv_layout(vertices, triangles, uvs, points=points, return_image=for_images)
+
+
 def bake(
     vertices,
     triangles,
@@ -134,14 +141,17 @@ def bake(
     progress=None,
     engine="auto",
     threads=0,
+    uv_layout=None,
 ):
-    """The field rasterised through per-corner uvs (m, 3, 2) into (size, size, 4) float32
-    RGBA images in Blender's pixel order (row 0 at v = 0), one per UDIM tile the UVs use (a
-    dict tile number -> image, tile 1001 always): the value in R, G and B, alpha 1 where a
-    face (or the margin around an island) covers the texel, else 0. `radius` is the
+    """The field rasterised through per-corner uvs (m, 3, 2) into (size, size) float32
+    images in Blender's pixel order (row 0 at v = 0), one per UDIM tile the UVs use (a dict
+    tile number -> image, tile 1001 always, empty where no face lies in it): the value where
+    a face (or the margin around an island) covers the texel, else 0. `radius` is the
     texture-space blur in texels (0: none, None: the core's default). Rasterising and
     blurring are the core's (shape_diameter.smooth(..., 'texture', return_image=True)), on
-    `engine` (compute()'s names) with `threads` CPU threads (0: every core)."""
+    `engine` (compute()'s names) with `threads` CPU threads (0: every core); `uv_layout`:
+    what uv_layout() found for these UVs and points, or None."""
+    layout = {} if uv_layout is None else {"uv_layout": uv_layout}
     out = load().smooth(
         vertices,
         triangles,
@@ -156,19 +166,11 @@ def bake(
         radius=radius,
         margin=int(margin),
         return_image=True,
+        **layout,
     )
-    # One image per UDIM tile, and always tile 1001 (the [0, 1] square, the image the user
-    # named): empty where no face lies in it.
-    tiles = dict(out.tiles)
-    tiles.setdefault(1001, (np.zeros_like(out.image), np.zeros_like(out.mask)))
-    images = {}
-    for number in sorted(tiles):
-        image, mask = tiles[number]
-        rgba = np.empty(image.shape + (4,), dtype=np.float32)
-        rgba[..., :3] = image[..., None]
-        rgba[..., 3] = mask
-        images[number] = rgba
-    return images
+    tiles = {number: image for number, (image, _) in out.tiles.items()}
+    tiles.setdefault(1001, np.zeros_like(out.image))
+    return dict(sorted(tiles.items()))
 
 
 def segment(vertices, triangles, values, options, progress=None):

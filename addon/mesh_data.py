@@ -8,7 +8,6 @@ Called on the main thread only.
 import json
 from dataclasses import dataclass
 
-import bpy
 import numpy as np
 
 # bpy attribute data types -> (the property foreach_get/set reads, its width, numpy dtype).
@@ -129,23 +128,6 @@ def corner_uvs(me, name, flipped=False):
     me.loop_triangles.foreach_get("loops", loops)
     corners = uv.reshape(-1, 2)[loops.reshape(m, 3)]
     return np.ascontiguousarray(corners[:, ::-1] if flipped else corners)
-
-
-def new_image(name, rgba):
-    """A packed float RGBA image holding `rgba` (height, width, 4), Blender's row order, kept
-    by a fake user (with no user Blender drops it when the file is saved, and a bake
-    was gone after a save and reload) and tagged Non-Color (it holds values, not colours)."""
-    height, width = rgba.shape[:2]
-    image = bpy.data.images.new(name, width, height, alpha=True, float_buffer=True)
-    try:
-        image.use_fake_user = True
-        image.colorspace_settings.name = "Non-Color"
-        image.pixels.foreach_set(np.ascontiguousarray(rgba, dtype=np.float32).reshape(-1))
-        image.pack()
-    except BaseException:
-        bpy.data.images.remove(image)
-        raise
-    return image
 
 
 def attribute_signature(me):

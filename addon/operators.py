@@ -244,6 +244,8 @@ def draw_bake(layout, settings, context):
     col = layout.column()
     col.active = settings.bake_image
     col.prop(settings, "image_name")
+    col.prop(settings, "bake_depth")
+    col.prop(settings, "bake_tiles")
     if settings.smoothing != "texture":
         col.prop(settings, "texture_size")
 

@@ -10,6 +10,7 @@ the scripting API:
              (a failure half-way restores what was written).
 """
 
+import functools
 import json
 import os
 import threading
@@ -19,7 +20,7 @@ from dataclasses import dataclass, field, fields
 import bpy
 import numpy as np
 
-from . import core, mesh_data
+from . import baking, core, mesh_data
 
 # Attribute names: Blender 4.x refuses names over 67 bytes (its layer name buffer is 68
 # bytes); names starting with "." are Blender's internal attributes.
@@ -38,6 +39,11 @@ class Cancelled(Exception):
 
 
 SMOOTHING_METHODS = ("none", "kring", "projected", "texture")
+# An object's share of the progress that its cast (and smoothing) takes when it is also
+# baked; the bake takes the rest.
+CAST_SHARE_WHEN_BAKING = 0.5
+BAKE_DEPTHS = ("16", "32")  # bits of each float in the packed OpenEXR
+BAKE_TILES = ("IMAGES", "TILED")  # UDIM tiles: an image each, or one tiled image
 
 # What a vertex in no face gets in every output (values, normalised values; its colour is
 # transparent black): it has no thickness. 0 is what the core gives every point where no ray
@@ -81,6 +87,8 @@ class Options:
     uv_map: str = ""  # empty: the active UV map
     image_name: str = "{object}_sdf"
     bake_margin: int = 4
+    bake_depth: str = "16"  # the packed OpenEXR's floats: "16" (half) or "32"
+    bake_tiles: str = "IMAGES"  # UDIM tiles: "IMAGES" (one per tile) or "TILED" (one image)
     use_modifiers: bool = False
     apply_scale: bool = True
     extra: dict = field(default_factory=dict)
@@ -203,6 +211,10 @@ class Options:
             raise UserError("The image name is empty")
         if self.smoothing != "none" and not core.supports("smoothing"):
             raise UserError("This build of the core has no smoothing")
+        if self.bake_depth not in BAKE_DEPTHS:
+            raise UserError(f"bake_depth must be one of {BAKE_DEPTHS}, got {self.bake_depth!r}")
+        if self.bake_tiles not in BAKE_TILES:
+            raise UserError(f"bake_tiles must be one of {BAKE_TILES}, got {self.bake_tiles!r}")
         if self.bake_image and not core.has("smooth"):
             raise UserError("This build of the core cannot bake (no shape_diameter.smooth)")
 
@@ -226,8 +238,10 @@ class Task:
     colors: np.ndarray = None  # float32 (k, 4) sRGB, per polygon (or vertex)
     corner_uvs: np.ndarray = None  # float32 (m, 3, 2) per triangle corner, when needed
     image_name: str = ""
-    # Per UDIM tile (1001 always): float32 (height, width, 4) RGBA, Blender's row order.
+    # Per UDIM tile (1001 always): the bytes of its one-channel OpenEXR file (exr.py).
     image: dict = None
+    image_size: int = 0  # texels, square
+    uv_layout: object = None  # shape_diameter.UvLayout of corner_uvs, where they are needed
     engine: str = ""
     timings: dict = None
     warnings: list = field(default_factory=list)
@@ -462,6 +476,7 @@ def prepare(depsgraph, objects, options, for_writing=True, active=None):
     notice = _texture_work_notice(list(tasks.values()), options)
     if notice:
         notices.append(notice)
+    notices.extend(_find_uv_layouts(tasks.values(), options))
     # Users of a computed mesh that were not selected show its values too, measured with the
     # computing object's transform (computing a scaled copy rescaled the original's values
     # without a word).
@@ -492,10 +507,14 @@ def prepare(depsgraph, objects, options, for_writing=True, active=None):
 # (shape_diameter.smoothing.texture_cost: the blur's reads, the buffers) and the add-on's
 # own, measured on a 2-core AMD EPYC with bpy 4.5 on Spot (TextureCost.cpu_seconds is the
 # core's side):
-SECONDS_PER_BAKED_TEXEL = 1.2e-7  # Blender's side of a bake: its image made, filled, packed
-BAKED_BYTES_PER_TEXEL = 56  # a bake at its peak, Blender's image included: 52.5-56.7 measured
-# (4096^2 and 8192^2; 8192^2 without blur: 10.2 s and 3.4 GB in all). Every baked image is
-# held until all are written. Past WARN_SECONDS or WARN_MEMORY of the machine's memory the
+# The image's side of a bake: its one-channel half-float OpenEXR encoded (worker thread;
+# bench/blender_bake.py: 0.131 s at 2048^2, 0.045 s at 1024^2), Blender's part being 0.1 ms.
+SECONDS_PER_BAKED_TEXEL = 4.5e-8
+# A bake at its peak: 52.5-56.7 measured with the RGBA float images baked before (4096^2 and
+# 8192^2); now an upper bound, the images being held as compressed files until all are
+# written (not measured again).
+BAKED_BYTES_PER_TEXEL = 56
+# Past WARN_SECONDS or WARN_MEMORY of the machine's memory the
 # run says so before it starts (the interface's Esc still cancels it); past REFUSE_MEMORY it
 # is refused: swapping, or the kernel's out-of-memory killer ending Blender and its unsaved
 # work. Time alone never refuses: an OpenCL GPU blurs far faster than the estimate's CPU.
@@ -574,6 +593,22 @@ def _texture_work_notice(tasks, options):
     return None
 
 
+def _find_uv_layouts(tasks, options):
+    """Each task's UV layout (UDIM tiles, overlapping shells) for texture smoothing and the
+    bake, found now, so that what it says is reported before the work (and found once: the
+    work takes it). Returns those words, each naming its object."""
+    if not options.needs_uvs or not core.has("uv_layout"):
+        return []
+    notices = []
+    for task in tasks:
+        mesh = task.mesh
+        task.uv_layout = core.uv_layout(
+            mesh.vertices, mesh.triangles, task.corner_uvs, options.points, options.bake_image
+        )
+        notices.extend(f"{task.object_name}: {message}" for message in task.uv_layout.warnings)
+    return notices
+
+
 def _corner_uvs(ob, me, options, flipped):
     """The chosen UV map per triangle corner, when the run needs one (after triangulation())."""
     if not options.needs_uvs:
@@ -615,6 +650,27 @@ def polygon_means(triangle_values, mesh):
     return np.where(weight > 0.0, weighted / safe, plain).astype(np.float32)
 
 
+def _bake(task, options, step):
+    """The normalised field through the UV map, blurred in texture space when that is the
+    smoothing chosen (the paper's texture-space smoothing, 4.4), into task.image; `step`
+    reports the bake's progress (0 to 1) and raises to cancel."""
+    started = time.perf_counter()
+    normalized = task.normalized
+    per_point = normalized[task.mesh.triangle_polygons] if options.points == "faces" else normalized
+    with core.collect_warnings() as caught:  # e.g. a device's failure
+        baking.bake(task, options, per_point, step)
+    task.warnings.extend(f"{task.object_name} (bake): {message}" for message in caught)
+    task.timings["bake"] = time.perf_counter() - started
+
+
+def _with_layout(compute_options, task):
+    """compute()'s options with the task's UV layout, for texture smoothing (found before)."""
+    if task.uv_layout is None or compute_options.get("smoothing") != "texture":
+        return compute_options
+    smoothing = {**compute_options["smoothing_options"], "uv_layout": task.uv_layout}
+    return {**compute_options, "smoothing_options": smoothing}
+
+
 def compute(tasks, options, progress=None, cancelled=None):
     """Runs the core on every task (no bpy: safe on a worker thread). `progress(fraction)` is
     called now and then; when `cancelled()` turns true, Cancelled is raised."""
@@ -624,11 +680,15 @@ def compute(tasks, options, progress=None, cancelled=None):
     for task in tasks:
         share = len(task.mesh.triangles) / total
 
-        def step(fraction, done=done, share=share):
+        # The cast (and smoothing) and the bake each have their part of the object's share,
+        # one after the other: progress only moves forward.
+        cast_share = share * (CAST_SHARE_WHEN_BAKING if options.bake_image else 1.0)
+
+        def step(fraction, start=done, width=cast_share):
             if cancelled is not None and cancelled():
                 raise Cancelled()
             if progress is not None:
-                progress(done + share * fraction)
+                progress(start + width * fraction)
 
         step(0.0)
         computing = time.perf_counter()
@@ -641,8 +701,9 @@ def compute(tasks, options, progress=None, cancelled=None):
         try:
             with core.collect_warnings() as caught:
                 result = core.compute(
-                    mesh.vertices, mesh.triangles, compute_options, step, task.corner_uvs
-                )
+                    mesh.vertices, mesh.triangles, _with_layout(compute_options, task), step,
+                    task.corner_uvs,
+                )  # fmt: skip
         except ValueError as ex:  # the core refused this mesh: say which object it was
             raise UserError(f"{task.object_name}: {ex}") from ex
         task.warnings.extend(f"{task.object_name}: {message}" for message in caught)
@@ -669,33 +730,8 @@ def compute(tasks, options, progress=None, cancelled=None):
                 )
         task.timings = dict(result.timings)
         if options.bake_image:
-            # The normalised field through the UV map; blurred in texture space when that is
-            # the smoothing chosen (the paper's texture-space smoothing, 4.4).
-            started = time.perf_counter()
-            radius = options.bake_radius()
-            per_point = (
-                task.normalized[mesh.triangle_polygons]
-                if options.points == "faces"
-                else task.normalized
-            )
-            with core.collect_warnings() as caught:  # e.g. faces whose UVs it leaves out
-                task.image = core.bake(
-                    mesh.vertices,
-                    mesh.triangles,
-                    per_point,
-                    options.points,
-                    task.corner_uvs,
-                    options.texture_size,
-                    radius,
-                    options.bake_margin,
-                    step,
-                    # The engine and threads the user chose for the cast (it ran on 'auto'
-                    # whatever was chosen).
-                    engine=options.engine,
-                    threads=int(options.extra.get("threads") or 0),
-                )
-            task.warnings.extend(f"{task.object_name} (bake): {message}" for message in caught)
-            task.timings["bake"] = time.perf_counter() - started
+            _bake(task, options, functools.partial(step, start=done + cast_share,
+                                                   width=share - cast_share))  # fmt: skip
         task.valid_rays = result.valid_rays
         task.colors = core.colors(task.normalized) if options.color_name else None
         if loose is not None and task.colors is not None:
@@ -782,9 +818,7 @@ def write(bpy_data, tasks, options):
         # Images are made under a temporary name and replace the old ones (same name) only
         # when everything else is written: users of an old image (materials) get the new one.
         for _, task in targets:
-            for tile, rgba in (task.image or {}).items():
-                name = tile_image_name(task.image_name, tile)
-                new_images.append((mesh_data.new_image(name + ".sdf-new", rgba), name))
+            new_images.extend(baking.make_images(bpy_data, task, options))
     except BaseException:
         for image, _ in new_images:
             bpy_data.images.remove(image)
@@ -798,12 +832,6 @@ def write(bpy_data, tasks, options):
             bpy_data.images.remove(old)
         image.name = name
     return [ob for ob, _ in targets]
-
-
-def tile_image_name(name, tile):
-    """The baked image of UDIM tile `tile`: `name` itself for tile 1001 (the [0, 1] square),
-    NAME.TILE (spot_sdf.1002) for the others."""
-    return name if tile == 1001 else f"{name}.{tile}"
 
 
 def put_attribute(me, name, data_type, domain, data, undo):
@@ -917,7 +945,7 @@ class Job:
             self._done.set()
 
     def _set_progress(self, fraction):
-        self.progress = fraction
+        self.progress = max(self.progress, fraction)  # never backwards, whatever reports it
 
     @property
     def done(self):

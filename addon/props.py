@@ -270,6 +270,24 @@ def options():
             description="Name of the baked image; {object} is replaced by the object's name",
             default="{object}_sdf",
         ),
+        "bake_depth": EnumProperty(
+            name="Floats",
+            description="Precision of the baked image, packed as a one-channel OpenEXR file",
+            items=[
+                ("16", "Half (16-bit)", "Half floats: 3 significant digits, half the size"),
+                ("32", "Full (32-bit)", "32-bit floats: the values as computed"),
+            ],
+            default="16",
+        ),
+        "bake_tiles": EnumProperty(
+            name="UDIM Tiles",
+            description="What a bake of UVs on several UDIM tiles makes",
+            items=[
+                ("IMAGES", "Image per Tile", "One image per tile: NAME, NAME.1002, ..."),
+                ("TILED", "Tiled Image", "One UDIM tiled image NAME holding every tile"),
+            ],
+            default="IMAGES",
+        ),
         "attribute_name": StringProperty(
             name="Attribute",
             description="FLOAT attribute for the values, in mesh (or world) units",

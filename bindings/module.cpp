@@ -35,6 +35,7 @@ namespace py = pybind11;
 
 void bind_field(py::module_& m);         // field.cpp
 void bind_segmentation(py::module_& m);  // segmentation.cpp
+void bind_uv_plan(py::module_& m);       // uv_plan.cpp
 
 namespace {
 
@@ -254,6 +255,7 @@ PYBIND11_MODULE(_core, m) {
   m.attr("NEAR_CUTOFF_SHARE") = sdf::kNearCutoffShare;
   bind_field(m);
   bind_segmentation(m);
+  bind_uv_plan(m);
   // For the test-only module shape_diameter._testing alone (test_bridge.h).
   static sdf::TestBridge bridge{
       [](const sdf::TestOverrides& overrides) { sdf::test_overrides() = overrides; },

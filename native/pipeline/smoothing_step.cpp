@@ -96,6 +96,17 @@ void projected(const Mesh& mesh, PointKind kind, const float* values, const Proj
   smooth_projected_into(mesh, kind, values, o, out.values.data(), progress, 0.0, 1.0, &out.timings);
 }
 
+// The UV layout found before (options.uv_plan), where it was found for these faces (not for
+// a double-sided mesh's second cast, without its twins), or null: found here.
+const UvPlan* fitting_plan(const SmoothingOptions& options, std::size_t face_count,
+                           PointKind kind) {
+  const UvPlan* plan = options.uv_plan.get();
+  return plan && plan_fits(*plan, face_count, options.texture.weld_tolerance,
+                           kind == PointKind::Vertices)
+             ? plan
+             : nullptr;
+}
+
 // Texture smoothing on the UV layout's pages (uv_layout.h): UDIM tiles and layers that part
 // overlapping islands, one image each, one after another through the per-image code (on the
 // CPU threads or a device). A layout of one page in the [0, 1] square uses what was prepared
@@ -111,10 +122,11 @@ void texture(const SmoothingMesh& mesh, PointKind kind, const float* values,
   Stopwatch clock;
   // Without a preparation, one made here: the layout and a one-image run share its islands
   // (and its checks of the UVs and size come first, with their own words).
+  const UvPlan* plan = fitting_plan(options, mesh.face_count, kind);
   PreparedTexture own;
   if (!given_ready) {
     own = prepare_texture(copy_mesh(*mesh.as_given, o.threads), mesh.uvs, o,
-                          kind == PointKind::Vertices);
+                          kind == PointKind::Vertices, plan ? &plan->islands : nullptr);
     for (auto& stage : own.timings)
       out.timings.emplace_back("prepare: " + stage.first, stage.second);
     clock.lap();
@@ -123,8 +135,13 @@ void texture(const SmoothingMesh& mesh, PointKind kind, const float* values,
   const Mesh& given = ready.mesh;
   const float* uvs = ready.uvs;
   out.values.resize(point_count(given, kind));
-  const UvLayout layout = layout_uvs(uvs, ready.islands.face_island, o.threads);
-  out.timings.emplace_back("uv layout", clock.lap());
+  // The layout found before (its search cost about as much as a 1024^2 smoothing), or now.
+  UvLayout found;
+  if (!plan) {
+    found = layout_uvs(uvs, ready.islands.face_island, o.threads);
+    out.timings.emplace_back("uv layout", clock.lap());
+  }
+  const UvLayout& layout = plan ? plan->layout : found;
   const bool one_image = layout.single_square();
   auto run_page = [&](const float* page_uvs, bool keep, const ProgressFn& part, float* into) {
 #ifdef SDF_HAVE_OPENCL
@@ -164,8 +181,9 @@ PreparedSmoothing prepare_smoothing(Mesh as_given, const float* uvs, PointKind k
   if (options.method == SmoothingMethod::Texture) {
     TextureOptions o = options.texture;
     o.threads = options.threads;
-    prepared.texture = std::make_shared<PreparedTexture>(
-        prepare_texture(std::move(as_given), uvs, o, kind == PointKind::Vertices));
+    const UvPlan* plan = fitting_plan(options, as_given.triangles.size(), kind);
+    prepared.texture = std::make_shared<PreparedTexture>(prepare_texture(
+        std::move(as_given), uvs, o, kind == PointKind::Vertices, plan ? &plan->islands : nullptr));
 #ifdef SDF_HAVE_OPENCL
     if (device) {
       try {

@@ -14,6 +14,7 @@
 #include "post/smoothing_kring.h"
 #include "post/smoothing_projected.h"
 #include "post/smoothing_texture.h"
+#include "post/uv_plan.h"
 #include "prepare/sampling.h"
 #include "util/parallel.h"
 #include "util/stopwatch.h"
@@ -30,6 +31,8 @@ struct SmoothingOptions {
   std::size_t bilateral_window = 0;  // rings; 0: CGAL's size for the face count
   bool return_image = false;         // texture: keep the blurred image
   unsigned threads = 0;              // every method's; 0: every core
+  // texture: the UV map's islands and layout, found before (uv_plan.h), or null (found here).
+  std::shared_ptr<const UvPlan> uv_plan;
 };
 
 // The mesh a smoothing reads, in the caller's units. `oriented`: wound outward (projected

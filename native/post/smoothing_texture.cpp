@@ -101,14 +101,21 @@ void check_face_count(std::size_t m) {
 void rasterise(const Mesh& mesh, PointKind kind, const float* values, const float* uvs,
                const std::vector<std::int32_t>& face_island, int width, int height, float lo,
                float hi, unsigned threads, std::vector<std::int32_t>& island,
-               std::vector<float>& value) {
+               std::vector<float>& value, const ProgressFn& progress, double progress_from,
+               double progress_to) {
+  // Every pass over the texels or faces checks for a cancel (a 4096^2 image took 0.5 s to
+  // draw, too long to wait after Esc).
+  const double third = (progress_to - progress_from) / 3.0;
   static_assert(sizeof(glm::uvec3) == 3 * sizeof(std::uint32_t), "uvec3 is 3 packed uint32");
   const std::uint32_t m = static_cast<std::uint32_t>(mesh.triangles.size());
   const std::size_t texels = static_cast<std::size_t>(width) * height;
   std::unique_ptr<std::atomic<std::uint64_t>[]> owner(new std::atomic<std::uint64_t>[texels]);
-  parallel_for(texels, kTexelGrain, threads, [&](std::size_t begin, std::size_t end) {
-    for (std::size_t t = begin; t < end; ++t) owner[t].store(0, std::memory_order_relaxed);
-  });
+  parallel_for(
+      texels, kTexelGrain, threads,
+      [&](std::size_t begin, std::size_t end) {
+        for (std::size_t t = begin; t < end; ++t) owner[t].store(0, std::memory_order_relaxed);
+      },
+      progress, progress_from, progress_from + third);
   auto offer = [&](std::size_t t, std::uint32_t rank, float x) {
     std::uint32_t bits;
     std::memcpy(&bits, &x, sizeof bits);
@@ -120,32 +127,38 @@ void rasterise(const Mesh& mesh, PointKind kind, const float* values, const floa
   const std::uint32_t* corners =
       kind == PointKind::Faces ? nullptr
                                : reinterpret_cast<const std::uint32_t*>(mesh.triangles.data());
-  parallel_for(m, kFaceGrain, threads, [&](std::size_t begin, std::size_t end) {
-    for (std::uint32_t f = static_cast<std::uint32_t>(begin); f < end; ++f) {
-      const kern::SdfFaceDraw d = kern::sdf_face_draw(f, values, corners);
-      kern::SdfFaceOffers o;
-      kern::sdf_face_offers_start(f, m, uvs, width, height, &o);
-      while (kern::sdf_face_offers_next(&o))
-        offer(o.texel, o.rank, kern::sdf_face_draw_offer(&d, &o, lo, hi));
-    }
-  });
+  parallel_for(
+      m, kFaceGrain, threads,
+      [&](std::size_t begin, std::size_t end) {
+        for (std::uint32_t f = static_cast<std::uint32_t>(begin); f < end; ++f) {
+          const kern::SdfFaceDraw d = kern::sdf_face_draw(f, values, corners);
+          kern::SdfFaceOffers o;
+          kern::sdf_face_offers_start(f, m, uvs, width, height, &o);
+          while (kern::sdf_face_offers_next(&o))
+            offer(o.texel, o.rank, kern::sdf_face_draw_offer(&d, &o, lo, hi));
+        }
+      },
+      progress, progress_from + third, progress_from + 2 * third);
   island.resize(texels);
   value.resize(texels);
-  parallel_for(texels, kTexelGrain, threads, [&](std::size_t begin, std::size_t end) {
-    for (std::size_t t = begin; t < end; ++t) {
-      const std::uint64_t key = owner[t].load(std::memory_order_relaxed);
-      if (key == 0) {
-        island[t] = -1;
-        value[t] = 0.0f;
-        continue;
-      }
-      const std::uint32_t rank = static_cast<std::uint32_t>(key >> 32);
-      const std::uint32_t f = rank > m ? rank - m - 1 : m - rank;
-      const std::uint32_t bits = static_cast<std::uint32_t>(key);
-      island[t] = face_island[f];
-      std::memcpy(&value[t], &bits, sizeof bits);
-    }
-  });
+  parallel_for(
+      texels, kTexelGrain, threads,
+      [&](std::size_t begin, std::size_t end) {
+        for (std::size_t t = begin; t < end; ++t) {
+          const std::uint64_t key = owner[t].load(std::memory_order_relaxed);
+          if (key == 0) {
+            island[t] = -1;
+            value[t] = 0.0f;
+            continue;
+          }
+          const std::uint32_t rank = static_cast<std::uint32_t>(key >> 32);
+          const std::uint32_t f = rank > m ? rank - m - 1 : m - rank;
+          const std::uint32_t bits = static_cast<std::uint32_t>(key);
+          island[t] = face_island[f];
+          std::memcpy(&value[t], &bits, sizeof bits);
+        }
+      },
+      progress, progress_from + 2 * third, progress_to);
 }
 
 // Steps 3 and 4 on the CPU threads: dilates island and value in place and returns the
@@ -164,12 +177,16 @@ std::vector<float> filter_cpu(const TextureFilter& f, std::vector<std::int32_t>&
     std::vector<std::int32_t> island2(texels);
     std::vector<float> value2(texels);
     for (int ring = 0; ring < f.margin; ++ring) {
-      parallel_for(height, 16, threads, [&](std::size_t begin, std::size_t end) {
-        for (std::size_t y = begin; y < end; ++y)
-          for (int x = 0; x < width; ++x)
-            kern::sdf_dilate_texel(x, static_cast<int>(y), width, height, island.data(),
-                                   value.data(), island2.data(), value2.data());
-      });
+      const double ring_from = at(0.1 + 0.05 * ring / f.margin);
+      parallel_for(
+          height, 16, threads,
+          [&](std::size_t begin, std::size_t end) {
+            for (std::size_t y = begin; y < end; ++y)
+              for (int x = 0; x < width; ++x)
+                kern::sdf_dilate_texel(x, static_cast<int>(y), width, height, island.data(),
+                                       value.data(), island2.data(), value2.data());
+          },
+          progress, ring_from, at(0.1 + 0.05 * (ring + 1) / f.margin));
       island.swap(island2);
       value.swap(value2);
     }
@@ -213,12 +230,16 @@ std::vector<float> filter_cpu(const TextureFilter& f, std::vector<std::int32_t>&
 void read_back_faces(const float* uvs, const std::vector<std::int32_t>& face_island, int width,
                      int height, const std::vector<std::int32_t>& island,
                      const std::vector<float>& blurred, float lo, float hi, unsigned threads,
-                     float* out) {
-  parallel_for(face_island.size(), kFaceGrain, threads, [&](std::size_t begin, std::size_t end) {
-    for (std::uint32_t f = static_cast<std::uint32_t>(begin); f < end; ++f)
-      out[f] = kern::sdf_texture_read_face(f, uvs, width, height, face_island[f], island.data(),
-                                           blurred.data(), lo, hi, out[f]);
-  });
+                     float* out, const ProgressFn& progress, double progress_from,
+                     double progress_to) {
+  parallel_for(
+      face_island.size(), kFaceGrain, threads,
+      [&](std::size_t begin, std::size_t end) {
+        for (std::uint32_t f = static_cast<std::uint32_t>(begin); f < end; ++f)
+          out[f] = kern::sdf_texture_read_face(f, uvs, width, height, face_island[f], island.data(),
+                                               blurred.data(), lo, hi, out[f]);
+      },
+      progress, progress_from, progress_to);
 }
 
 // Step 5 for vertex values: a bilinear read at every corner (taps of the corner's island),
@@ -227,16 +248,20 @@ void read_back_faces(const float* uvs, const std::vector<std::int32_t>& face_isl
 void read_back_vertices(const Mesh& mesh, const float* uvs, const UvIslands& islands,
                         const CornerGroups& groups, int width, int height,
                         const std::vector<std::int32_t>& island, const std::vector<float>& blurred,
-                        float lo, float hi, unsigned threads, float* out) {
+                        float lo, float hi, unsigned threads, float* out,
+                        const ProgressFn& progress, double progress_from, double progress_to) {
   const std::size_t m = mesh.triangles.size();
   UninitializedVector<float> samples(3 * m);
-  parallel_for(m, kFaceGrain, threads, [&](std::size_t begin, std::size_t end) {
-    for (std::size_t f = begin; f < end; ++f)
-      for (int c = 0; c < 3; ++c)
-        samples[3 * f + c] = kern::sdf_texture_sample_corner(
-            uvs[6 * f + 2 * c], uvs[6 * f + 2 * c + 1], width, height, islands.face_island[f],
-            island.data(), blurred.data());
-  });
+  parallel_for(
+      m, kFaceGrain, threads,
+      [&](std::size_t begin, std::size_t end) {
+        for (std::size_t f = begin; f < end; ++f)
+          for (int c = 0; c < 3; ++c)
+            samples[3 * f + c] = kern::sdf_texture_sample_corner(
+                uvs[6 * f + 2 * c], uvs[6 * f + 2 * c + 1], width, height, islands.face_island[f],
+                island.data(), blurred.data());
+      },
+      progress, progress_from, progress_to);
   parallel_for(mesh.vertices.size(), kFaceGrain, threads, [&](std::size_t begin, std::size_t end) {
     for (std::size_t v = begin; v < end; ++v) {
       const std::uint32_t k =
@@ -271,9 +296,11 @@ TextureSmoothing smooth_checked(const Mesh& mesh, PointKind kind, const float* v
   const float lo = range.lo, hi = range.hi;
   const double radius =
       options.radius < 0.0 ? 2.0 * std::max(width, height) / 256.0 : options.radius;
+  auto at = [&](double fraction) {
+    return progress_from + (progress_to - progress_from) * fraction;
+  };
   auto report = [&](double fraction) {
-    if (progress && !progress(progress_from + (progress_to - progress_from) * fraction))
-      throw Cancelled();
+    if (progress && !progress(at(fraction))) throw Cancelled();
   };
 
   report(0.0);
@@ -340,17 +367,17 @@ TextureSmoothing smooth_checked(const Mesh& mesh, PointKind kind, const float* v
   } else {
     std::vector<float> value;
     rasterise(mesh, kind, values, uvs, islands.face_island, width, height, lo, hi, threads, island,
-              value);
+              value, progress, progress_from, at(0.1));
     report(0.1);
     timings.emplace_back("rasterise", clock.lap());
     blurred = filter_cpu(f, island, value, threads, progress, progress_from, progress_to);
     timings.emplace_back("filter", clock.lap());
     if (faces)
       read_back_faces(uvs, islands.face_island, width, height, island, blurred, lo, hi, threads,
-                      into);
+                      into, progress, at(0.85), at(1.0));
     else
       read_back_vertices(mesh, uvs, islands, *groups, width, height, island, blurred, lo, hi,
-                         threads, into);
+                         threads, into, progress, at(0.85), at(1.0));
   }
   report(1.0);
   if (!device) timings.emplace_back("read back", clock.lap());
@@ -360,9 +387,12 @@ TextureSmoothing smooth_checked(const Mesh& mesh, PointKind kind, const float* v
     out.width = width;
     out.height = height;
     out.mask.resize(texels);
-    parallel_for(texels, kTexelGrain, threads, [&](std::size_t begin, std::size_t end) {
-      for (std::size_t t = begin; t < end; ++t) out.mask[t] = island[t] >= 0 ? 1 : 0;
-    });
+    parallel_for(
+        texels, kTexelGrain, threads,
+        [&](std::size_t begin, std::size_t end) {
+          for (std::size_t t = begin; t < end; ++t) out.mask[t] = island[t] >= 0 ? 1 : 0;
+        },
+        progress, at(1.0), at(1.0));
     out.image = std::move(blurred);
   }
   timings.emplace_back("image", clock.lap());
@@ -466,7 +496,7 @@ void check_texture_input(const float* uvs, std::size_t m, const TextureOptions& 
 }
 
 PreparedTexture prepare_texture(Mesh mesh, const float* uvs, const TextureOptions& options,
-                                bool need_merged) {
+                                bool need_merged, const UvIslands* islands) {
   Stopwatch clock;
   check_size(options);
   const std::size_t m = mesh.triangles.size();
@@ -479,9 +509,13 @@ PreparedTexture prepare_texture(Mesh mesh, const float* uvs, const TextureOption
   prepared.width = options.width;
   prepared.height = options.height;
   prepared.timings.emplace_back("checks", clock.lap());
-  prepared.islands =
-      label_uv_islands(mesh, uvs, options.weld_tolerance, need_merged, options.threads);
-  prepared.timings.emplace_back("islands", clock.lap());
+  if (islands) {
+    prepared.islands = *islands;
+  } else {
+    prepared.islands =
+        label_uv_islands(mesh, uvs, options.weld_tolerance, need_merged, options.threads);
+    prepared.timings.emplace_back("islands", clock.lap());
+  }
   if (need_merged) {
     prepared.groups = group_corners(mesh, prepared.islands, options.threads);
     prepared.timings.emplace_back("corner groups", clock.lap());

@@ -176,9 +176,10 @@ void check_texture_input(const float* uvs, std::size_t m, const TextureOptions& 
 
 // options' width, height, weld_tolerance and threads are used; need_merged: for vertex
 // values. uvs must stay alive and unchanged while the result is used (set its `keep` to
-// what owns them). Throws std::invalid_argument for non-finite UVs or a bad size.
+// what owns them). islands: found already for these faces and UVs (uv_plan.h; copied), or
+// null. Throws std::invalid_argument for non-finite UVs or a bad size.
 PreparedTexture prepare_texture(Mesh mesh, const float* uvs, const TextureOptions& options,
-                                bool need_merged);
+                                bool need_merged, const UvIslands* islands = nullptr);
 
 // As above on a prepared mesh and UVs. Throws std::invalid_argument where options ask for
 // another size or weld tolerance than `prepared` was made for, or for vertex values when it

@@ -60,6 +60,21 @@ double overlap_area(const Triangle& a, const Triangle& b) {
   return 0.5 * twice;
 }
 
+// Whether an edge of one counter-clockwise triangle has the whole other on its outer side or
+// on it: they then share no area (most pairs the search meets, neighbours across an edge or a
+// corner of the other shell), known without clipping (exactly: a shared corner gives 0).
+bool separated(const Triangle& a, const Triangle& b) {
+  auto outside = [](const Triangle& s, const Triangle& o) {
+    for (int e = 0; e < 3; ++e) {
+      const Point p = s[e], q = s[(e + 1) % 3];
+      if (cross(p, q, o[0]) <= 0.0 && cross(p, q, o[1]) <= 0.0 && cross(p, q, o[2]) <= 0.0)
+        return true;
+    }
+    return false;
+  };
+  return outside(a, b) || outside(b, a);
+}
+
 struct FaceTiles {
   std::vector<int> tile_index;  // per face: index into tiles, -1 for none
   std::vector<int> tiles;       // the tile numbers used, ascending
@@ -122,6 +137,15 @@ struct UvGrid {
   };
   std::vector<std::uint32_t> first;  // per cell, where its entries start
   std::vector<Entry> entries;
+  // Per cell, 1 where its entries are of more than one node: only there can faces of two
+  // nodes meet (a pair is looked at in the first cell both share). Most cells of a layout
+  // without overlaps hold one island: their entries, read again by each of their faces, were
+  // most of the search's time.
+  std::vector<std::uint8_t> mixed;
+  // Per entry, where the run of its node's entries in its cell ends: the search steps over
+  // the runs of f's own node and of a node it already overlaps at once (on two stacked
+  // shells, reading those entries one by one was most of its time).
+  std::vector<std::uint32_t> run_end;
   std::vector<Box> boxes;                    // per face, its cells (x1 < x0 for faces in no tile)
   std::vector<std::array<float, 4>> extent;  // per face, its UV box in its tile: u0, v0, u1, v1
 };
@@ -143,8 +167,30 @@ int grid_size(const FaceTiles& t, const std::vector<std::array<float, 4>>& exten
                     std::clamp(2 * int(std::sqrt(per_tile)), 1, 2048));
 }
 
-UvGrid build_grid(const float* uvs, const FaceTiles& t,
-                  const std::vector<std::int32_t>& face_node) {
+// Each cell's entries in runs of one node (a stable sort: face order within a run), each
+// entry's run end, and which cells hold more than one node.
+void mark_runs(UvGrid& grid, std::size_t cells, unsigned threads) {
+  grid.mixed.resize(cells);
+  grid.run_end.resize(grid.entries.size());
+  parallel_for(cells, kFaceGrain, threads, [&](std::size_t begin, std::size_t end) {
+    for (std::size_t c = begin; c < end; ++c) {
+      const auto first = grid.entries.begin() + grid.first[c];
+      const auto last = grid.entries.begin() + grid.first[c + 1];
+      auto by_node = [](const UvGrid::Entry& a, const UvGrid::Entry& b) { return a.node < b.node; };
+      if (!std::is_sorted(first, last, by_node)) std::stable_sort(first, last, by_node);
+      for (std::uint32_t j = grid.first[c + 1]; j-- > grid.first[c];)
+        grid.run_end[j] =
+            j + 1 < grid.first[c + 1] && grid.entries[j + 1].node == grid.entries[j].node
+                ? grid.run_end[j + 1]
+                : j + 1;
+      grid.mixed[c] =
+          grid.first[c] < grid.first[c + 1] && grid.run_end[grid.first[c]] != grid.first[c + 1];
+    }
+  });
+}
+
+UvGrid build_grid(const float* uvs, const FaceTiles& t, const std::vector<std::int32_t>& face_node,
+                  unsigned threads) {
   const std::size_t m = t.tile_index.size();
   UvGrid grid;
   grid.extent.resize(m);
@@ -186,6 +232,7 @@ UvGrid build_grid(const float* uvs, const FaceTiles& t,
     for (int y = b.y0; y <= b.y1; ++y)
       for (int x = b.x0; x <= b.x1; ++x) grid.entries[at[base + std::size_t(y) * g + x]++] = entry;
   }
+  mark_runs(grid, cells, threads);
   return grid;
 }
 
@@ -264,9 +311,13 @@ std::vector<std::pair<std::int32_t, std::int32_t>> find_overlaps(
       for (int y = bf.y0; y <= bf.y1; ++y)
         for (int x = bf.x0; x <= bf.x1; ++x) {
           const std::size_t c = base + std::size_t(y) * g + x;
+          if (!grid.mixed[c]) continue;  // f's node alone
           for (std::uint32_t j = grid.first[c]; j < grid.first[c + 1]; ++j) {
             const UvGrid::Entry& eh = grid.entries[j];
-            if (eh.node == node || eh.node == known) continue;
+            if (eh.node == node || eh.node == known) {
+              j = grid.run_end[j] - 1;
+              continue;
+            }
             // Each pair once: in the first cell both boxes share.
             if (x != std::max(bf.x0, eh.x0) || y != std::max(bf.y0, eh.y0)) continue;
             if (eh.u0 >= ef[2] || ef[0] >= eh.u1 || eh.v0 >= ef[3] || ef[1] >= eh.v1)
@@ -275,7 +326,7 @@ std::vector<std::pair<std::int32_t, std::int32_t>> find_overlaps(
             const Triangle b = triangle(h);
             ++mine;
             const double area_b = 0.5 * cross(b[0], b[1], b[2]);
-            if (!(area_b > 0.0)) continue;
+            if (!(area_b > 0.0) || separated(a, b)) continue;
             if (overlap_area(a, b) <= kOverlapShare * std::min(area_a, area_b)) continue;
             overlapping[f] = 1;
             known = face_node[h];
@@ -334,7 +385,7 @@ UvLayout layout_uvs(const float* uvs, const std::vector<std::int32_t>& face_isla
   for (std::int32_t i : face_island) islands = std::max<std::int64_t>(islands, i + 1);
   std::vector<std::int32_t> face_node;
   const std::vector<std::int64_t> keys = node_keys(t, face_island, islands, face_node);
-  const UvGrid grid = build_grid(uvs, t, face_node);
+  const UvGrid grid = build_grid(uvs, t, face_node, threads);
   std::vector<std::uint8_t> overlapping;
   bool over_budget = false;
   const auto pairs = find_overlaps(uvs, t, grid, face_node, threads, overlapping, over_budget);

@@ -14,11 +14,13 @@ from .load import load_mesh
 from .normalization import normalize_values as normalize
 from .segmentation import Segmentation, segment
 from .smoothing import smooth
+from .uv_plan import UvLayout, uv_layout
 from .warning_log import collect_warnings
 
 __all__ = [
     "Result",
     "Segmentation",
+    "UvLayout",
     "collect_warnings",
     "compute",
     "cone_rays",
@@ -29,5 +31,6 @@ __all__ = [
     "sample_points",
     "segment",
     "smooth",
+    "uv_layout",
     "__version__",
 ]

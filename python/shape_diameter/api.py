@@ -22,6 +22,7 @@ from .engine_choice import unwritable_program_cache as _unwritable_program_cache
 from .normalization import NORMALIZATIONS
 from .part_warnings import part_warnings
 from .smoothing import check_bilateral_points, check_smoothing, warn_of_texture_limits
+from .uv_plan import use_layout
 from .warning_log import recorded, warn
 
 SAMPLINGS = ("fibonacci", "random", "cgal")
@@ -214,6 +215,8 @@ def compute(
         "bvh_quality": bvh_quality,
     }  # fmt: skip
     uv_corners = smoothing_resolved.pop("uvs", None)
+    if smoothing == "texture":  # the layout found (and said) before the cast, once
+        use_layout(v, t, uv_corners, smoothing_resolved, points, int(threads))
     # The whole pipeline runs in the core (pipeline/field.h): the cast, the second cast of a
     # double-sided mesh without its twin faces, smoothing, the twins' values, normalisation,
     # and engine='auto''s fallback from a failed OpenCL device to the CPU.

@@ -23,6 +23,7 @@ from .engine_choice import DEVICE_ERRORS
 from .output_files import written_whole
 from .segmentation import SDF_SHARE, _scaled, segment
 from .smoothing import texture_cost
+from .uv_plan import uv_layout
 from .warning_log import collect_warnings
 
 # Texture smoothing estimated past this on the CPU threads is announced before it starts (a
@@ -132,6 +133,7 @@ def run_job(
     with turn, caught(warn):
         if uvs is not None and (notice := long_texture_work(options, uvs)):
             warn(notice)  # now, not once the work is done
+        options = _with_uv_layout(options, vertices, triangles, uvs, warn)
         # With segmentation, the SDF reports [0, 0.8] and the segmentation the rest, as
         # segment(values=None) does.
         segmenting = segment_options is not None
@@ -211,6 +213,26 @@ def _load(job, options: dict, mesh_io):
             "without one), or PLY texture coordinates)"
         )
     return vertices, triangles, uvs
+
+
+def _with_uv_layout(options, vertices, triangles, uvs, warn):
+    """For texture smoothing, its UV layout found and said now (faces outside every tile,
+    overlapping shells), not once the work is done, and given to compute(), which then does
+    not find it again."""
+    if options.get("smoothing") != "texture" or uvs is None:
+        return options
+    smoothing = dict(options.get("smoothing_options") or {})
+    layout = uv_layout(
+        vertices,
+        triangles,
+        uvs,
+        points=options.get("points", "faces"),
+        weld_tolerance=smoothing.get("weld_tolerance", 1e-6),
+        threads=options.get("threads", 0),
+    )
+    for message in layout.warnings:
+        warn(message)
+    return {**options, "smoothing_options": {**smoothing, "uv_layout": layout}}
 
 
 @contextlib.contextmanager

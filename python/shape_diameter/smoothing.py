@@ -23,6 +23,7 @@ from .checks import check_progress
 from .engine_choice import check_engine as _check_engine
 from .engine_choice import resolve_engine as _resolve_engine
 from .normalization import check_finite_float32, check_threads
+from .uv_plan import use_layout
 from .warning_log import warn
 
 METHODS = ("none", "kring", "projected", "texture", "bilateral")
@@ -50,6 +51,7 @@ OPTIONS = {
         "margin": 2,
         "weld_tolerance": 1e-6,
         "return_image": False,
+        "uv_layout": None,
     },
 }
 
@@ -191,6 +193,9 @@ def smooth(
         margin: texels of dilation around each island (default 2; use more for baking).
         weld_tolerance: as for 'kring' (joins UV islands and averages vertex corners).
         return_image: also return the blurred image (see TextureResult).
+        uv_layout: what shape_diameter.uv_layout() found for this mesh and these UVs, so
+            that it is not found again (None: found here, and said in RuntimeWarnings before
+            the work: faces outside every tile, overlapping shells).
         A face keeps its value where no texel of its island lies under it or under its UV
         centroid (a texture too coarse for the mesh).
 
@@ -214,6 +219,8 @@ def smooth(
         )
     chosen = _resolve_engine(engine) if method in ("projected", "texture") else "cpu"
     uv_corners = resolved.pop("uvs", None)
+    if method == "texture":  # the layout found (and said) before the work, once
+        use_layout(v, t, uv_corners, resolved, points, threads)
     # The core's smoothing stage (pipeline/smoothing_step.h), as compute() runs it; with
     # engine='auto', a device's failure runs it on the CPU.
     out = _core.smooth_field(
@@ -402,38 +409,8 @@ def _udim_tile_count(uv) -> int:
 
 
 def warn_of_texture_limits(out, face_count, o, engine):
-    """Texture smoothing's words on faces its image leaves out and on a run kept off the
-    device."""
-    # A few faces with UVs off every tile are of little weight; most of them is a layout
-    # with negative or far-off UVs.
-    if out["faces_outside"] > 0.01 * face_count:
-        # A bake (the add-on's) asks for the image: say that it leaves these faces out.
-        reach = (
-            "the images leave them out and texture smoothing does not reach them (they "
-            "keep their values)"
-            if o["return_image"]
-            else "texture smoothing does not reach them and they keep their values"
-        )
-        warn(
-            f"{out['faces_outside']} of {face_count} faces have UVs outside every UDIM tile "
-            f"(u in [0, 10), v in [0, 100)): {reach}; move their UVs into a tile to include "
-            "them"
-        )
-    if out.get("overlaps_unparted"):
-        warn(
-            f"the UVs overlap everywhere (at least {out['faces_overlapping']} of {face_count} "
-            "faces overlap another UV island's, as in a random layout): texture smoothing drew "
-            "each tile as laid out, in one image, where overlapping faces mix (the later face "
-            "wins); unwrap the mesh without overlaps to keep them apart"
-        )
-    elif out.get("faces_overlapping", 0) > 0:
-        warn(
-            f"{out['faces_overlapping']} of {face_count} faces have UVs overlapping another UV "
-            "island's (mirrored or stacked shells): texture smoothing ran each tile's "
-            f"overlapping islands on images of their own ({out['pages']} images in all), so "
-            "values do not mix across them"
-            + ("; the returned image lays them over each other" if o["return_image"] else "")
-        )
+    """Texture smoothing's words on a run kept off the device (the layout's were said
+    before the work: uv_plan.py)."""
     if out["kept_off_device"]:
         width, height = o["texture_size"]
         warn(

@@ -323,15 +323,16 @@ def test_bake_failure_is_reported_and_changes_nothing(setup, message):
 
 
 def test_an_image_failing_is_rolled_back_with_the_attributes(monkeypatch):
-    mesh_data = addon_module("mesh_data")
+    # Failing once Blender made the image (its bytes packed): that image goes too.
+    baking = addon_module("baking")
     good, _ = suzanne_and_sphere()
     spot = import_obj("spot.obj")
     select_only(good, spot)
 
-    def failing(name, rgba):
+    def failing(image):
         raise MemoryError("no memory for the image")
 
-    monkeypatch.setattr(mesh_data, "new_image", failing)
+    monkeypatch.setattr(baking, "_settle", failing)
     before = snapshot_all()
     images = sorted(bpy.data.images.keys())
     with pytest.raises(RuntimeError, match="no memory for the image"):

@@ -2,14 +2,17 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cmath>
 #include <cstdint>
 #include <random>
+#include <stdexcept>
 #include <vector>
 
 #include "post/smoothing_texture.h"
 #include "post/smoothing_texture_pages.h"
 #include "post/uv_islands.h"
 #include "post/uv_layout.h"
+#include "post/uv_plan.h"
 #include "smoothing_test_meshes.h"
 
 namespace sdf {
@@ -168,6 +171,48 @@ TEST(SmoothTexturePages, StackedSheetsDoNotMix) {
   ASSERT_EQ(on_tiles.tiles.size(), 2u);
   EXPECT_EQ(on_tiles.tiles[1].tile, 1004);
   EXPECT_EQ(on_layers.tiles[0].image.size(), 64u * 64u);
+}
+
+TEST(UvPlan, HoldsTheIslandsAndTheLayoutAndFitsTheFacesItWasFoundFor) {
+  // The second sheet's UVs on the first's: the plan's layout is layout_uvs' on its islands.
+  const Sheets s = two_sheets(0.0f, 0.0f);
+  const UvPlan plan = plan_uvs(s.mesh, s.uvs.data(), 1e-6, false, 0);
+  const UvLayout direct = layout_of(s);
+  EXPECT_EQ(plan.face_count, s.mesh.triangles.size());
+  EXPECT_EQ(plan.islands.count, 2);
+  EXPECT_EQ(plan.layout.face_page, direct.face_page);
+  EXPECT_EQ(plan.layout.faces_overlapping, direct.faces_overlapping);
+  EXPECT_EQ(plan.layout.pages.size(), 2u);
+  EXPECT_TRUE(plan_fits(plan, s.mesh.triangles.size(), 1e-6, false));
+  EXPECT_FALSE(plan_fits(plan, s.half, 1e-6, false));
+  EXPECT_FALSE(plan_fits(plan, s.mesh.triangles.size(), 1e-4, false));
+  EXPECT_FALSE(plan_fits(plan, s.mesh.triangles.size(), 1e-6, true));
+  EXPECT_TRUE(plan_fits(plan_uvs(s.mesh, s.uvs.data(), 1e-6, true, 0), s.mesh.triangles.size(),
+                        1e-6, true));
+  std::vector<float> bad = s.uvs;
+  bad[7] = std::nanf("");
+  EXPECT_THROW(plan_uvs(s.mesh, bad.data(), 1e-6, false, 0), std::invalid_argument);
+}
+
+TEST(TextureSmoothing, ACancelStopsTheDrawingOfALargeImage) {
+  // Progress is asked while the image is drawn, not only between stages: a cancel there
+  // stops the work (at 4096^2 drawing took half a second between two calls).
+  const Sheets s = two_sheets(0.45f, 0.0f);
+  std::vector<float> values(s.mesh.triangles.size(), 1.0f);
+  TextureOptions o;
+  o.width = o.height = 2048;
+  o.radius = 0.0;
+  std::vector<double> asked;
+  auto stop_in_drawing = [&](double fraction) {
+    asked.push_back(fraction);
+    return !(fraction > 0.0 && fraction < 0.1);
+  };
+  EXPECT_THROW(smooth_texture(s.mesh, PointKind::Faces, values.data(), s.uvs.data(), o, false,
+                              stop_in_drawing),
+               Cancelled);
+  ASSERT_FALSE(asked.empty());
+  EXPECT_GT(asked.back(), 0.0);
+  EXPECT_LT(asked.back(), 0.1);  // stopped while drawing, before the dilation (0.1 on)
 }
 
 }  // namespace
