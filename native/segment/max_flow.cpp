@@ -4,31 +4,60 @@
 #include <algorithm>
 #include <limits>
 
+#include "util/parallel.h"
+
 namespace sdf::segment {
 
 void MaxFlow::reset(std::size_t nodes, const std::vector<double>& terminal,
                     const std::vector<FlowEdge>& edges) {
+  std::vector<std::pair<std::uint32_t, std::uint32_t>> ends(edges.size());
+  std::vector<double> capacity(edges.size()), reverse(edges.size());
+  for (std::size_t e = 0; e < edges.size(); ++e) {
+    ends[e] = {edges[e].from, edges[e].to};
+    capacity[e] = edges[e].capacity;
+    reverse[e] = edges[e].reverse_capacity;
+  }
+  set_topology(nodes, ends);
+  set_capacities(terminal.data(), capacity.data(), reverse.data());
+}
+
+void MaxFlow::set_topology(std::size_t nodes,
+                           const std::vector<std::pair<std::uint32_t, std::uint32_t>>& ends) {
   nodes_ = nodes;
   first_.assign(nodes + 1, 0);
-  for (const FlowEdge& e : edges) {
-    ++first_[e.from + 1];
-    ++first_[e.to + 1];
+  for (const auto& [from, to] : ends) {
+    ++first_[from + 1];
+    ++first_[to + 1];
   }
   for (std::size_t i = 0; i < nodes; ++i) first_[i + 1] += first_[i];
   arcs_.resize(first_[nodes]);
+  edge_arc_.resize(ends.size());
   std::vector<std::uint32_t> fill(first_.begin(), first_.end() - 1);
-  for (const FlowEdge& e : edges) {
-    const std::uint32_t a = fill[e.from]++, b = fill[e.to]++;
-    arcs_[a] = Arc{e.to, b, e.capacity};
-    arcs_[b] = Arc{e.from, a, e.reverse_capacity};
+  for (std::size_t e = 0; e < ends.size(); ++e) {
+    const auto [from, to] = ends[e];
+    const std::uint32_t a = fill[from]++, b = fill[to]++;
+    arcs_[a] = Arc{to, b, 0.0};
+    arcs_[b] = Arc{from, a, 0.0};
+    edge_arc_[e] = a;
   }
   node_.resize(nodes);
+}
+
+void MaxFlow::set_capacities(const double* terminal, const double* capacity,
+                             const double* reverse_capacity, unsigned threads) {
+  parallel_for(edge_arc_.size(), 1 << 15, threads, [&](std::size_t begin, std::size_t end) {
+    for (std::size_t e = begin; e < end; ++e) {
+      Arc& arc = arcs_[edge_arc_[e]];
+      arc.residual = capacity[e];
+      arcs_[arc.sister].residual = reverse_capacity[e];
+    }
+  });
   queue_.clear();
   orphans_.clear();
   queue_head_ = 0;
   time_ = 0;
   flow_ = 0.0;
-  for (std::uint32_t i = 0; i < nodes; ++i) {
+  for (std::uint32_t i = 0; i < nodes_; ++i) {
     Node& v = node_[i];
     v = Node{terminal[i], kNone, 0, 0, kFree, 0};
     if (v.terminal == 0.0) continue;

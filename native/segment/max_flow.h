@@ -8,6 +8,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <functional>
+#include <utility>
 #include <vector>
 
 namespace sdf::segment {
@@ -26,6 +27,16 @@ class MaxFlow {
   // Buffers are kept between calls.
   void reset(std::size_t nodes, const std::vector<double>& terminal,
              const std::vector<FlowEdge>& edges);
+
+  // The same in two steps, for networks solved many times over one set of edges (the moves
+  // of an expansion): the edges' ends once (each node's arcs in the order of `ends`), then
+  // before each solve the capacities, per edge in that order (an edge of capacity 0 both ways
+  // is as if absent: the search never takes it). The edges are filled by `threads` threads;
+  // the result does not depend on them.
+  void set_topology(std::size_t nodes,
+                    const std::vector<std::pair<std::uint32_t, std::uint32_t>>& ends);
+  void set_capacities(const double* terminal, const double* capacity,
+                      const double* reverse_capacity, unsigned threads = 1);
 
   // The maximum flow (not counting what `terminal`'s differences took out). `check`, when
   // given, is called every few thousand steps of the search (about a millisecond on a mesh
@@ -64,6 +75,7 @@ class MaxFlow {
 
   std::size_t nodes_ = 0;
   std::vector<std::uint32_t> first_;
+  std::vector<std::uint32_t> edge_arc_;  // edge e's arc from -> to (its sister runs back)
   std::vector<Arc> arcs_;
   std::vector<Node> node_;
   std::vector<std::uint32_t> queue_, orphans_;
