@@ -56,18 +56,72 @@ class ExpansionNetwork {
       pair_at_[fill[graph.pairs[p].second]++] = static_cast<std::uint32_t>(p);
     }
     flow_.set_topology(n, ends);
-    terminal_.resize(n);
-    capacity_.resize(ends.size());
-    reverse_.resize(ends.size());
   }
 
-  // `check` (may be empty) between the passes, each over every face or pair.
+  // `check` (may be empty) between the passes, each over every face or pair. With `reuse`,
+  // a move to an alpha solved before starts from the flow found then (dynamic graph cuts):
+  // later sweeps change few labels, so little flow is left to find.
   void build(const double* weights, const double* costs, std::size_t k, const int* labels,
-             int alpha, const std::function<void()>& check) {
+             int alpha, bool reuse, const std::function<void()>& check) {
+    capacities(weights, costs, k, labels, alpha, terminal_, capacity_, reverse_);
+    if (check) check();
+    reuse_ = reuse && remember(alpha, k);
+    const Saved* saved = reuse_ ? &saved_[static_cast<std::size_t>(alpha)] : nullptr;
+    if (saved && !saved->labels.empty()) {
+      capacities(weights, costs, k, saved->labels.data(), alpha, old_terminal_, old_capacity_,
+                 old_reverse_);
+      if (check) check();
+      flow_.resume(saved->flow, old_terminal_.data(), old_capacity_.data(), old_reverse_.data(),
+                   terminal_.data(), capacity_.data(), reverse_.data());
+    } else {
+      flow_.set_capacities(terminal_.data(), capacity_.data(), reverse_.data(), threads_);
+    }
+    labels_ = labels;
+  }
+
+  // Solves the cut and writes the moved labels into `out` (a copy of the current labels).
+  void move(int alpha, bool ties_move, int* out, const std::function<void()>& check) {
+    flow_.solve(check);
+    if (reuse_) {
+      Saved& saved = saved_[static_cast<std::size_t>(alpha)];
+      saved.labels.assign(labels_, labels_ + n_);
+      flow_.save(saved.flow);
+    }
+    for (std::size_t f = 0; f < n_; ++f) {
+      if (out[f] == alpha) continue;
+      if (ties_move ? flow_.in_largest_sink_side(f) : flow_.in_smallest_sink_side(f))
+        out[f] = alpha;
+    }
+  }
+
+ private:
+  // What a move to one alpha left: the labels its network was built for, and its flow.
+  struct Saved {
+    std::vector<int> labels;
+    MaxFlow::Residuals flow;
+  };
+
+  // Whether alpha's flow may be kept: the flows of all k labels within kSavedBytes.
+  bool remember(int alpha, std::size_t k) {
+    constexpr double kSavedBytes = 384.0 * (1 << 20);
+    const double each = static_cast<double>(n_) * (sizeof(int) + sizeof(double)) +
+                        static_cast<double>(graph_.neighbours.size()) * sizeof(double);
+    if (saved_.size() < k) saved_.resize(k);
+    return static_cast<double>(alpha + 1) * each <= kSavedBytes;
+  }
+
+  // The terminal capacities per face and the arcs' capacities per pair of the move to alpha
+  // from `labels`.
+  void capacities(const double* weights, const double* costs, std::size_t k, const int* labels,
+                  int alpha, std::vector<double>& terminal, std::vector<double>& capacity,
+                  std::vector<double>& reverse) const {
+    terminal.resize(n_);
+    capacity.resize(graph_.pairs.size());
+    reverse.resize(graph_.pairs.size());
     parallel_for(n_, 1 << 14, threads_, [&](std::size_t begin, std::size_t end) {
       for (std::size_t f = begin; f < end; ++f) {
         if (labels[f] == alpha) {
-          terminal_[f] = 0.0;
+          terminal[f] = 0.0;
           continue;
         }
         double keep = costs[f * k + static_cast<std::size_t>(labels[f])];
@@ -78,38 +132,28 @@ class ExpansionNetwork {
           if (other == alpha || (other != labels[f] && graph_.pairs[p].second == f))
             keep += weights[p];
         }
-        terminal_[f] = move - keep;
+        terminal[f] = move - keep;
       }
     });
-    if (check) check();
-    parallel_for(capacity_.size(), 1 << 14, threads_, [&](std::size_t begin, std::size_t end) {
+    parallel_for(capacity.size(), 1 << 14, threads_, [&](std::size_t begin, std::size_t end) {
       for (std::size_t p = begin; p < end; ++p) {
         const int a = labels[graph_.pairs[p].first], b = labels[graph_.pairs[p].second];
         const bool both = a != alpha && b != alpha;
-        capacity_[p] = both ? weights[p] : 0.0;
-        reverse_[p] = both && a == b ? weights[p] : 0.0;
+        capacity[p] = both ? weights[p] : 0.0;
+        reverse[p] = both && a == b ? weights[p] : 0.0;
       }
     });
-    if (check) check();
-    flow_.set_capacities(terminal_.data(), capacity_.data(), reverse_.data(), threads_);
   }
 
-  // Solves the cut and writes the moved labels into `out` (a copy of the current labels).
-  void move(int alpha, bool ties_move, int* out, const std::function<void()>& check) {
-    flow_.solve(check);
-    for (std::size_t f = 0; f < n_; ++f) {
-      if (out[f] == alpha) continue;
-      if (ties_move ? flow_.in_largest_sink_side(f) : flow_.in_smallest_sink_side(f))
-        out[f] = alpha;
-    }
-  }
-
- private:
   const FaceGraph& graph_;
   std::size_t n_;
   unsigned threads_;
   std::vector<std::uint32_t> pair_at_;  // the pair of each entry of graph_.neighbours
   std::vector<double> terminal_, capacity_, reverse_;
+  std::vector<double> old_terminal_, old_capacity_, old_reverse_;
+  std::vector<Saved> saved_;     // per alpha
+  const int* labels_ = nullptr;  // those of the last build
+  bool reuse_ = false;
   MaxFlow flow_;
 };
 
@@ -141,7 +185,7 @@ double alpha_expansion(const FaceGraph& graph, const double* weights, const doub
       }
       tried[alpha] = ++moves;
       const int a = static_cast<int>(alpha);
-      network.build(weights, costs, k, labels, a, inside);
+      network.build(weights, costs, k, labels, a, !rules.first_move_only, inside);
       std::copy(labels, labels + n, candidate.begin());
       network.move(a, rules.ties_move, candidate.data(), inside);
       const double energy = potts_energy(graph, weights, costs, k, candidate.data(), n, threads);

@@ -52,6 +52,12 @@ void MaxFlow::set_capacities(const double* terminal, const double* capacity,
       arcs_[arc.sister].residual = reverse_capacity[e];
     }
   });
+  for (std::size_t i = 0; i < nodes_; ++i) node_[i].terminal = terminal[i];
+  start_trees();
+}
+
+// Every node with a terminal residual the root of its tree, active; the others free.
+void MaxFlow::start_trees() {
   queue_.clear();
   orphans_.clear();
   queue_head_ = 0;
@@ -59,13 +65,55 @@ void MaxFlow::set_capacities(const double* terminal, const double* capacity,
   flow_ = 0.0;
   for (std::uint32_t i = 0; i < nodes_; ++i) {
     Node& v = node_[i];
-    v = Node{terminal[i], kNone, 0, 0, kFree, 0};
+    v = Node{v.terminal, kNone, 0, 0, kFree, 0};
     if (v.terminal == 0.0) continue;
     v.tree = v.terminal > 0.0 ? kSource : kSink;
     v.parent = kTerminal;
     v.distance = 1;
     activate(i);
   }
+}
+
+void MaxFlow::save(Residuals& out) const {
+  out.node.resize(nodes_);
+  out.arc.resize(arcs_.size());
+  for (std::size_t i = 0; i < nodes_; ++i) out.node[i] = node_[i].terminal;
+  for (std::size_t a = 0; a < arcs_.size(); ++a) out.arc[a] = arcs_[a].residual;
+}
+
+void MaxFlow::resume(const Residuals& saved, const double* old_terminal, const double* old_capacity,
+                     const double* old_reverse, const double* terminal, const double* capacity,
+                     const double* reverse_capacity) {
+  for (std::size_t i = 0; i < nodes_; ++i)
+    node_[i].terminal = terminal[i] == old_terminal[i]
+                            ? saved.node[i]
+                            : saved.node[i] + (terminal[i] - old_terminal[i]);
+  for (std::size_t a = 0; a < arcs_.size(); ++a) arcs_[a].residual = saved.arc[a];
+  for (std::size_t e = 0; e < edge_arc_.size(); ++e) {
+    if (capacity[e] == old_capacity[e] && reverse_capacity[e] == old_reverse[e]) continue;
+    Arc& forward = arcs_[edge_arc_[e]];
+    Arc& back = arcs_[forward.sister];
+    const std::uint32_t from = back.head, to = forward.head;
+    const double flow = old_capacity[e] - forward.residual;  // from -> to
+    forward.residual = capacity[e] - flow;
+    back.residual = reverse_capacity[e] + flow;
+    // Flow beyond the new capacity goes back: its tail keeps what it sent, its head misses it.
+    double excess = 0.0;
+    std::uint32_t tail = from, head = to;
+    if (forward.residual < 0.0) {
+      excess = -forward.residual;
+      forward.residual = 0.0;
+      back.residual = capacity[e] + reverse_capacity[e];
+    } else if (back.residual < 0.0) {
+      excess = -back.residual;
+      back.residual = 0.0;
+      forward.residual = capacity[e] + reverse_capacity[e];
+      tail = to, head = from;
+    }
+    node_[tail].terminal += excess;
+    node_[head].terminal -= excess;
+  }
+  start_trees();
 }
 
 void MaxFlow::activate(std::uint32_t i) {

@@ -38,6 +38,23 @@ class MaxFlow {
   void set_capacities(const double* terminal, const double* capacity,
                       const double* reverse_capacity, unsigned threads = 1);
 
+  // The residual network after solve(): per node its terminal residual (as `terminal`), per
+  // arc (in this object's order) its residual capacity.
+  struct Residuals {
+    std::vector<double> node, arc;
+  };
+  void save(Residuals& out) const;
+
+  // Starts from the flow `saved` found for capacities old_* (all per edge or node, as
+  // set_capacities takes them) on the same edges, now that they are the new ones (Kohli and
+  // Torr, "Dynamic graph cuts", PAMI 2007): a terminal's change is added to the node's
+  // residual; flow an edge no longer holds is taken back and its ends' terminal arcs both
+  // raised by it, which moves every cut by the same amount. solve() then finds a maximum
+  // flow of the new network, so the same cuts as from scratch.
+  void resume(const Residuals& saved, const double* old_terminal, const double* old_capacity,
+              const double* old_reverse, const double* terminal, const double* capacity,
+              const double* reverse_capacity);
+
   // The maximum flow (not counting what `terminal`'s differences took out). `check`, when
   // given, is called every few thousand steps of the search (about a millisecond on a mesh
   // graph) and may throw to stop it, leaving the network unusable until the next reset().
@@ -59,6 +76,7 @@ class MaxFlow {
   void adopt(std::uint32_t orphan);
   bool origin_distance(std::uint32_t j, std::uint32_t& distance);
   void activate(std::uint32_t i);
+  void start_trees();
 
   // An arc of node i: arcs_[first_[i]..first_[i+1]); its sister runs the other way.
   struct Arc {
