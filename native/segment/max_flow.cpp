@@ -5,6 +5,7 @@
 #include <limits>
 
 #include "util/parallel.h"
+#include "util/prefetch.h"
 
 namespace sdf::segment {
 
@@ -127,6 +128,12 @@ void MaxFlow::activate(std::uint32_t i) {
 std::int32_t MaxFlow::grow(std::uint32_t i) {
   Node& v = node_[i];
   const bool from_source = v.tree == kSource;
+  // The neighbours (and, growing from the source, the arcs back) are scattered: ask for all
+  // of them at once rather than miss the cache on each in turn.
+  for (std::uint32_t a = first_[i]; a < first_[i + 1]; ++a) {
+    prefetch(&node_[arcs_[a].head]);
+    if (from_source) prefetch(&arcs_[arcs_[a].sister]);
+  }
   for (std::uint32_t a = first_[i]; a < first_[i + 1]; ++a) {
     const Arc& arc = arcs_[a];
     // Residual in the direction the tree grows: away from the source, toward the sink.
@@ -231,6 +238,10 @@ void MaxFlow::adopt(std::uint32_t o) {
   std::int32_t best_arc = -1;
   std::uint32_t best = std::numeric_limits<std::uint32_t>::max();
   for (std::uint32_t a = first_[o]; a < first_[o + 1]; ++a) {
+    prefetch(&node_[arcs_[a].head]);
+    if (source) prefetch(&arcs_[arcs_[a].sister]);
+  }
+  for (std::uint32_t a = first_[o]; a < first_[o + 1]; ++a) {
     const Arc& arc = arcs_[a];
     if (node_[arc.head].tree != tree ||
         !((source ? arcs_[arc.sister].residual : arc.residual) > 0.0))
@@ -279,6 +290,11 @@ double MaxFlow::solve(const std::function<void()>& check) {
       if (queue_head_ == queue_.size()) break;
       i = queue_[queue_head_++];
       node_[i].active = 0;
+      if (queue_head_ + 8 < queue_.size()) {  // the node taken a few steps later
+        const std::uint32_t later = queue_[queue_head_ + 8];
+        prefetch(&node_[later]);
+        prefetch(&arcs_[first_[later]]);
+      }
       if (queue_head_ > 4096 && queue_head_ * 2 > queue_.size()) {
         queue_.erase(queue_.begin(), queue_.begin() + static_cast<std::ptrdiff_t>(queue_head_));
         queue_head_ = 0;
