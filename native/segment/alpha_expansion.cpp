@@ -34,70 +34,126 @@ double potts_energy(const FaceGraph& graph, const double* weights, const double*
 
 namespace {
 
-// The network of one expansion move. Faces labelled alpha stay alpha and are left out; every
-// other face is a node, on the sink's side if it moves to alpha. A pair's Potts term E(p, q)
-// over {keep, alpha}^2 is written as terminal capacities and one arc each (Kolmogorov and
-// Zabih, "What energy functions can be minimized via graph cuts?", PAMI 2004): same labels,
-// an arc of w each way; different labels, w when q keeps plus an arc p -> q of w (paid when p
-// keeps and q moves); one of them alpha, w when the other keeps.
+// The network of one expansion move, over every face and pair: a face labelled alpha stays
+// alpha, so its node gets no terminal arc and its pairs no capacity (the search never enters
+// it); every other face is on the sink's side if it moves to alpha. A pair's Potts term
+// E(p, q) over {keep, alpha}^2 is written as terminal capacities and one arc each (Kolmogorov
+// and Zabih, "What energy functions can be minimized via graph cuts?", PAMI 2004): same
+// labels, an arc of w each way; different labels, w when q keeps plus an arc p -> q of w
+// (paid when p keeps and q moves); one of them alpha, w when the other keeps. The edges are
+// laid out once; each move only writes capacities, face by face and pair by pair in parallel,
+// each face summing its terms in pair order.
 class ExpansionNetwork {
  public:
-  // `check` (may be empty) between the passes, each over every face or pair.
-  void build(const FaceGraph& graph, const double* weights, const double* costs, std::size_t k,
-             const int* labels, std::size_t n, int alpha, const std::function<void()>& check) {
-    node_.assign(n, -1);
-    std::size_t nodes = 0;
-    for (std::size_t f = 0; f < n; ++f)
-      if (labels[f] != alpha) node_[f] = static_cast<std::int32_t>(nodes++);
-    keep_.assign(nodes, 0.0);
-    move_.assign(nodes, 0.0);
-    for (std::size_t f = 0; f < n; ++f) {
-      if (node_[f] < 0) continue;
-      keep_[node_[f]] = costs[f * k + static_cast<std::size_t>(labels[f])];
-      move_[node_[f]] = costs[f * k + static_cast<std::size_t>(alpha)];
-    }
-    if (check) check();
-    edges_.clear();
+  ExpansionNetwork(const FaceGraph& graph, std::size_t n, unsigned threads)
+      : graph_(graph), n_(n), threads_(threads) {
+    std::vector<std::pair<std::uint32_t, std::uint32_t>> ends(graph.pairs.size());
+    pair_at_.resize(graph.neighbours.size());
+    std::vector<std::uint32_t> fill(graph.offsets.begin(), graph.offsets.end() - 1);
     for (std::size_t p = 0; p < graph.pairs.size(); ++p) {
-      const std::uint32_t f = graph.pairs[p].first, g = graph.pairs[p].second;
-      const std::int32_t u = node_[f], v = node_[g];
-      const double w = weights[p];
-      if (u < 0 && v < 0) continue;
-      if (u < 0 || v < 0) {
-        keep_[u < 0 ? v : u] += w;
-      } else if (labels[f] == labels[g]) {
-        edges_.push_back(
-            FlowEdge{static_cast<std::uint32_t>(u), static_cast<std::uint32_t>(v), w, w});
-      } else {
-        keep_[v] += w;
-        edges_.push_back(
-            FlowEdge{static_cast<std::uint32_t>(u), static_cast<std::uint32_t>(v), w, 0.0});
-      }
+      ends[p] = {graph.pairs[p].first, graph.pairs[p].second};
+      pair_at_[fill[graph.pairs[p].first]++] = static_cast<std::uint32_t>(p);
+      pair_at_[fill[graph.pairs[p].second]++] = static_cast<std::uint32_t>(p);
     }
-    // Source side = keep: a node pays keep_ by cutting its arc to the sink, move_ by cutting
-    // the source's arc to it. Only the difference matters to the cut.
-    terminal_.resize(nodes);
-    for (std::size_t i = 0; i < nodes; ++i) terminal_[i] = move_[i] - keep_[i];
+    flow_.set_topology(n, ends);
+  }
+
+  // `check` (may be empty) between the passes, each over every face or pair. With `reuse`,
+  // a move to an alpha solved before starts from the flow found then (dynamic graph cuts):
+  // later sweeps change few labels, so little flow is left to find.
+  void build(const double* weights, const double* costs, std::size_t k, const int* labels,
+             int alpha, bool reuse, const std::function<void()>& check) {
+    capacities(weights, costs, k, labels, alpha, terminal_, capacity_, reverse_);
     if (check) check();
-    flow_.reset(nodes, terminal_, edges_);
+    reuse_ = reuse && remember(alpha, k);
+    const Saved* saved = reuse_ ? &saved_[static_cast<std::size_t>(alpha)] : nullptr;
+    if (saved && !saved->labels.empty()) {
+      capacities(weights, costs, k, saved->labels.data(), alpha, old_terminal_, old_capacity_,
+                 old_reverse_);
+      if (check) check();
+      flow_.resume(saved->flow, old_terminal_.data(), old_capacity_.data(), old_reverse_.data(),
+                   terminal_.data(), capacity_.data(), reverse_.data());
+    } else {
+      flow_.set_capacities(terminal_.data(), capacity_.data(), reverse_.data(), threads_);
+    }
+    labels_ = labels;
   }
 
   // Solves the cut and writes the moved labels into `out` (a copy of the current labels).
-  void move(int alpha, bool ties_move, std::size_t n, int* out,
-            const std::function<void()>& check) {
+  void move(int alpha, bool ties_move, int* out, const std::function<void()>& check) {
     flow_.solve(check);
-    for (std::size_t f = 0; f < n; ++f) {
-      if (node_[f] < 0) continue;
-      const auto i = static_cast<std::size_t>(node_[f]);
-      if (ties_move ? flow_.in_largest_sink_side(i) : flow_.in_smallest_sink_side(i))
+    if (reuse_) {
+      Saved& saved = saved_[static_cast<std::size_t>(alpha)];
+      saved.labels.assign(labels_, labels_ + n_);
+      flow_.save(saved.flow);
+    }
+    for (std::size_t f = 0; f < n_; ++f) {
+      if (out[f] == alpha) continue;
+      if (ties_move ? flow_.in_largest_sink_side(f) : flow_.in_smallest_sink_side(f))
         out[f] = alpha;
     }
   }
 
  private:
-  std::vector<std::int32_t> node_;
-  std::vector<double> keep_, move_, terminal_;
-  std::vector<FlowEdge> edges_;
+  // What a move to one alpha left: the labels its network was built for, and its flow.
+  struct Saved {
+    std::vector<int> labels;
+    MaxFlow::Residuals flow;
+  };
+
+  // Whether alpha's flow may be kept: the flows of all k labels within kSavedBytes.
+  bool remember(int alpha, std::size_t k) {
+    constexpr double kSavedBytes = 384.0 * (1 << 20);
+    const double each = static_cast<double>(n_) * (sizeof(int) + sizeof(double)) +
+                        static_cast<double>(graph_.neighbours.size()) * sizeof(double);
+    if (saved_.size() < k) saved_.resize(k);
+    return static_cast<double>(alpha + 1) * each <= kSavedBytes;
+  }
+
+  // The terminal capacities per face and the arcs' capacities per pair of the move to alpha
+  // from `labels`.
+  void capacities(const double* weights, const double* costs, std::size_t k, const int* labels,
+                  int alpha, std::vector<double>& terminal, std::vector<double>& capacity,
+                  std::vector<double>& reverse) const {
+    terminal.resize(n_);
+    capacity.resize(graph_.pairs.size());
+    reverse.resize(graph_.pairs.size());
+    parallel_for(n_, 1 << 14, threads_, [&](std::size_t begin, std::size_t end) {
+      for (std::size_t f = begin; f < end; ++f) {
+        if (labels[f] == alpha) {
+          terminal[f] = 0.0;
+          continue;
+        }
+        double keep = costs[f * k + static_cast<std::size_t>(labels[f])];
+        const double move = costs[f * k + static_cast<std::size_t>(alpha)];
+        for (std::uint32_t i = graph_.offsets[f]; i < graph_.offsets[f + 1]; ++i) {
+          const int other = labels[graph_.neighbours[i]];
+          const std::uint32_t p = pair_at_[i];
+          if (other == alpha || (other != labels[f] && graph_.pairs[p].second == f))
+            keep += weights[p];
+        }
+        terminal[f] = move - keep;
+      }
+    });
+    parallel_for(capacity.size(), 1 << 14, threads_, [&](std::size_t begin, std::size_t end) {
+      for (std::size_t p = begin; p < end; ++p) {
+        const int a = labels[graph_.pairs[p].first], b = labels[graph_.pairs[p].second];
+        const bool both = a != alpha && b != alpha;
+        capacity[p] = both ? weights[p] : 0.0;
+        reverse[p] = both && a == b ? weights[p] : 0.0;
+      }
+    });
+  }
+
+  const FaceGraph& graph_;
+  std::size_t n_;
+  unsigned threads_;
+  std::vector<std::uint32_t> pair_at_;  // the pair of each entry of graph_.neighbours
+  std::vector<double> terminal_, capacity_, reverse_;
+  std::vector<double> old_terminal_, old_capacity_, old_reverse_;
+  std::vector<Saved> saved_;     // per alpha
+  const int* labels_ = nullptr;  // those of the last build
+  bool reuse_ = false;
   MaxFlow flow_;
 };
 
@@ -106,7 +162,7 @@ class ExpansionNetwork {
 double alpha_expansion(const FaceGraph& graph, const double* weights, const double* costs,
                        std::size_t k, const ExpansionRules& rules, int* labels, std::size_t n,
                        unsigned threads, StageProgress* progress, double from, double to) {
-  ExpansionNetwork network;
+  ExpansionNetwork network(graph, n, threads);
   std::vector<int> candidate(n);
   double best = std::numeric_limits<double>::max();
   // A move to alpha from labels it has already been tried on, or from the labels its own
@@ -129,9 +185,9 @@ double alpha_expansion(const FaceGraph& graph, const double* weights, const doub
       }
       tried[alpha] = ++moves;
       const int a = static_cast<int>(alpha);
-      network.build(graph, weights, costs, k, labels, n, a, inside);
+      network.build(weights, costs, k, labels, a, !rules.first_move_only, inside);
       std::copy(labels, labels + n, candidate.begin());
-      network.move(a, rules.ties_move, n, candidate.data(), inside);
+      network.move(a, rules.ties_move, candidate.data(), inside);
       const double energy = potts_energy(graph, weights, costs, k, candidate.data(), n, threads);
       if (best - energy <= energy * 1e-10) continue;
       best = energy;

@@ -4,39 +4,117 @@
 #include <algorithm>
 #include <limits>
 
+#include "util/parallel.h"
+#include "util/prefetch.h"
+
 namespace sdf::segment {
 
 void MaxFlow::reset(std::size_t nodes, const std::vector<double>& terminal,
                     const std::vector<FlowEdge>& edges) {
+  std::vector<std::pair<std::uint32_t, std::uint32_t>> ends(edges.size());
+  std::vector<double> capacity(edges.size()), reverse(edges.size());
+  for (std::size_t e = 0; e < edges.size(); ++e) {
+    ends[e] = {edges[e].from, edges[e].to};
+    capacity[e] = edges[e].capacity;
+    reverse[e] = edges[e].reverse_capacity;
+  }
+  set_topology(nodes, ends);
+  set_capacities(terminal.data(), capacity.data(), reverse.data());
+}
+
+void MaxFlow::set_topology(std::size_t nodes,
+                           const std::vector<std::pair<std::uint32_t, std::uint32_t>>& ends) {
   nodes_ = nodes;
   first_.assign(nodes + 1, 0);
-  for (const FlowEdge& e : edges) {
-    ++first_[e.from + 1];
-    ++first_[e.to + 1];
+  for (const auto& [from, to] : ends) {
+    ++first_[from + 1];
+    ++first_[to + 1];
   }
   for (std::size_t i = 0; i < nodes; ++i) first_[i + 1] += first_[i];
   arcs_.resize(first_[nodes]);
+  edge_arc_.resize(ends.size());
   std::vector<std::uint32_t> fill(first_.begin(), first_.end() - 1);
-  for (const FlowEdge& e : edges) {
-    const std::uint32_t a = fill[e.from]++, b = fill[e.to]++;
-    arcs_[a] = Arc{e.to, b, e.capacity};
-    arcs_[b] = Arc{e.from, a, e.reverse_capacity};
+  for (std::size_t e = 0; e < ends.size(); ++e) {
+    const auto [from, to] = ends[e];
+    const std::uint32_t a = fill[from]++, b = fill[to]++;
+    arcs_[a] = Arc{to, b, 0.0};
+    arcs_[b] = Arc{from, a, 0.0};
+    edge_arc_[e] = a;
   }
   node_.resize(nodes);
+}
+
+void MaxFlow::set_capacities(const double* terminal, const double* capacity,
+                             const double* reverse_capacity, unsigned threads) {
+  parallel_for(edge_arc_.size(), 1 << 15, threads, [&](std::size_t begin, std::size_t end) {
+    for (std::size_t e = begin; e < end; ++e) {
+      Arc& arc = arcs_[edge_arc_[e]];
+      arc.residual = capacity[e];
+      arcs_[arc.sister].residual = reverse_capacity[e];
+    }
+  });
+  for (std::size_t i = 0; i < nodes_; ++i) node_[i].terminal = terminal[i];
+  start_trees();
+}
+
+// Every node with a terminal residual the root of its tree, active; the others free.
+void MaxFlow::start_trees() {
   queue_.clear();
   orphans_.clear();
   queue_head_ = 0;
   time_ = 0;
   flow_ = 0.0;
-  for (std::uint32_t i = 0; i < nodes; ++i) {
+  for (std::uint32_t i = 0; i < nodes_; ++i) {
     Node& v = node_[i];
-    v = Node{terminal[i], kNone, 0, 0, kFree, 0};
+    v = Node{v.terminal, kNone, 0, 0, kFree, 0};
     if (v.terminal == 0.0) continue;
     v.tree = v.terminal > 0.0 ? kSource : kSink;
     v.parent = kTerminal;
     v.distance = 1;
     activate(i);
   }
+}
+
+void MaxFlow::save(Residuals& out) const {
+  out.node.resize(nodes_);
+  out.arc.resize(arcs_.size());
+  for (std::size_t i = 0; i < nodes_; ++i) out.node[i] = node_[i].terminal;
+  for (std::size_t a = 0; a < arcs_.size(); ++a) out.arc[a] = arcs_[a].residual;
+}
+
+void MaxFlow::resume(const Residuals& saved, const double* old_terminal, const double* old_capacity,
+                     const double* old_reverse, const double* terminal, const double* capacity,
+                     const double* reverse_capacity) {
+  for (std::size_t i = 0; i < nodes_; ++i)
+    node_[i].terminal = terminal[i] == old_terminal[i]
+                            ? saved.node[i]
+                            : saved.node[i] + (terminal[i] - old_terminal[i]);
+  for (std::size_t a = 0; a < arcs_.size(); ++a) arcs_[a].residual = saved.arc[a];
+  for (std::size_t e = 0; e < edge_arc_.size(); ++e) {
+    if (capacity[e] == old_capacity[e] && reverse_capacity[e] == old_reverse[e]) continue;
+    Arc& forward = arcs_[edge_arc_[e]];
+    Arc& back = arcs_[forward.sister];
+    const std::uint32_t from = back.head, to = forward.head;
+    const double flow = old_capacity[e] - forward.residual;  // from -> to
+    forward.residual = capacity[e] - flow;
+    back.residual = reverse_capacity[e] + flow;
+    // Flow beyond the new capacity goes back: its tail keeps what it sent, its head misses it.
+    double excess = 0.0;
+    std::uint32_t tail = from, head = to;
+    if (forward.residual < 0.0) {
+      excess = -forward.residual;
+      forward.residual = 0.0;
+      back.residual = capacity[e] + reverse_capacity[e];
+    } else if (back.residual < 0.0) {
+      excess = -back.residual;
+      back.residual = 0.0;
+      forward.residual = capacity[e] + reverse_capacity[e];
+      tail = to, head = from;
+    }
+    node_[tail].terminal += excess;
+    node_[head].terminal -= excess;
+  }
+  start_trees();
 }
 
 void MaxFlow::activate(std::uint32_t i) {
@@ -50,6 +128,12 @@ void MaxFlow::activate(std::uint32_t i) {
 std::int32_t MaxFlow::grow(std::uint32_t i) {
   Node& v = node_[i];
   const bool from_source = v.tree == kSource;
+  // The neighbours (and, growing from the source, the arcs back) are scattered: ask for all
+  // of them at once rather than miss the cache on each in turn.
+  for (std::uint32_t a = first_[i]; a < first_[i + 1]; ++a) {
+    prefetch(&node_[arcs_[a].head]);
+    if (from_source) prefetch(&arcs_[arcs_[a].sister]);
+  }
   for (std::uint32_t a = first_[i]; a < first_[i + 1]; ++a) {
     const Arc& arc = arcs_[a];
     // Residual in the direction the tree grows: away from the source, toward the sink.
@@ -154,6 +238,10 @@ void MaxFlow::adopt(std::uint32_t o) {
   std::int32_t best_arc = -1;
   std::uint32_t best = std::numeric_limits<std::uint32_t>::max();
   for (std::uint32_t a = first_[o]; a < first_[o + 1]; ++a) {
+    prefetch(&node_[arcs_[a].head]);
+    if (source) prefetch(&arcs_[arcs_[a].sister]);
+  }
+  for (std::uint32_t a = first_[o]; a < first_[o + 1]; ++a) {
     const Arc& arc = arcs_[a];
     if (node_[arc.head].tree != tree ||
         !((source ? arcs_[arc.sister].residual : arc.residual) > 0.0))
@@ -202,6 +290,11 @@ double MaxFlow::solve(const std::function<void()>& check) {
       if (queue_head_ == queue_.size()) break;
       i = queue_[queue_head_++];
       node_[i].active = 0;
+      if (queue_head_ + 8 < queue_.size()) {  // the node taken a few steps later
+        const std::uint32_t later = queue_[queue_head_ + 8];
+        prefetch(&node_[later]);
+        prefetch(&arcs_[first_[later]]);
+      }
       if (queue_head_ > 4096 && queue_head_ * 2 > queue_.size()) {
         queue_.erase(queue_.begin(), queue_.begin() + static_cast<std::ptrdiff_t>(queue_head_));
         queue_head_ = 0;

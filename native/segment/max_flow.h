@@ -8,6 +8,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <functional>
+#include <utility>
 #include <vector>
 
 namespace sdf::segment {
@@ -26,6 +27,33 @@ class MaxFlow {
   // Buffers are kept between calls.
   void reset(std::size_t nodes, const std::vector<double>& terminal,
              const std::vector<FlowEdge>& edges);
+
+  // The same in two steps, for networks solved many times over one set of edges (the moves
+  // of an expansion): the edges' ends once (each node's arcs in the order of `ends`), then
+  // before each solve the capacities, per edge in that order (an edge of capacity 0 both ways
+  // is as if absent: the search never takes it). The edges are filled by `threads` threads;
+  // the result does not depend on them.
+  void set_topology(std::size_t nodes,
+                    const std::vector<std::pair<std::uint32_t, std::uint32_t>>& ends);
+  void set_capacities(const double* terminal, const double* capacity,
+                      const double* reverse_capacity, unsigned threads = 1);
+
+  // The residual network after solve(): per node its terminal residual (as `terminal`), per
+  // arc (in this object's order) its residual capacity.
+  struct Residuals {
+    std::vector<double> node, arc;
+  };
+  void save(Residuals& out) const;
+
+  // Starts from the flow `saved` found for capacities old_* (all per edge or node, as
+  // set_capacities takes them) on the same edges, now that they are the new ones (Kohli and
+  // Torr, "Dynamic graph cuts", PAMI 2007): a terminal's change is added to the node's
+  // residual; flow an edge no longer holds is taken back and its ends' terminal arcs both
+  // raised by it, which moves every cut by the same amount. solve() then finds a maximum
+  // flow of the new network, so the same cuts as from scratch.
+  void resume(const Residuals& saved, const double* old_terminal, const double* old_capacity,
+              const double* old_reverse, const double* terminal, const double* capacity,
+              const double* reverse_capacity);
 
   // The maximum flow (not counting what `terminal`'s differences took out). `check`, when
   // given, is called every few thousand steps of the search (about a millisecond on a mesh
@@ -48,6 +76,7 @@ class MaxFlow {
   void adopt(std::uint32_t orphan);
   bool origin_distance(std::uint32_t j, std::uint32_t& distance);
   void activate(std::uint32_t i);
+  void start_trees();
 
   // An arc of node i: arcs_[first_[i]..first_[i+1]); its sister runs the other way.
   struct Arc {
@@ -64,6 +93,7 @@ class MaxFlow {
 
   std::size_t nodes_ = 0;
   std::vector<std::uint32_t> first_;
+  std::vector<std::uint32_t> edge_arc_;  // edge e's arc from -> to (its sister runs back)
   std::vector<Arc> arcs_;
   std::vector<Node> node_;
   std::vector<std::uint32_t> queue_, orphans_;

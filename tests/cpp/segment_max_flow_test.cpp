@@ -108,4 +108,61 @@ TEST(SegmentMaxFlow, ACheckIsCalledDuringTheSearchAndCanStopIt) {
   EXPECT_EQ(flow.solve(), unchecked);
 }
 
+// Per edge capacities each way, in the network's edge order.
+void edge_capacities(const Network& net, std::vector<double>& capacity,
+                     std::vector<double>& reverse) {
+  capacity.clear();
+  reverse.clear();
+  for (const FlowEdge& e : net.edges) {
+    capacity.push_back(e.capacity);
+    reverse.push_back(e.reverse_capacity);
+  }
+}
+
+// A flow resumed after the capacities change (terminals of either sign, edges up or down to
+// zero) finds the same minimum cuts as a solve from scratch.
+TEST(SegmentMaxFlow, ResumedFlowFindsTheCutsOfTheChangedNetwork) {
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<double> coin(0.0, 1.0), capacity(0.0, 10.0);
+  MaxFlow resumed, fresh;
+  for (int network_index = 0; network_index < 300; ++network_index) {
+    const std::size_t nodes = 1 + network_index % 10;
+    const Network before = random_network(rng, nodes, 0.5);
+    Network after = before;
+    for (double& t : after.terminal)
+      if (coin(rng) < 0.4) t = coin(rng) < 0.2 ? 0.0 : capacity(rng) - 5.0;
+    for (FlowEdge& e : after.edges) {
+      if (coin(rng) < 0.4) e.capacity = coin(rng) < 0.3 ? 0.0 : capacity(rng);
+      if (coin(rng) < 0.4) e.reverse_capacity = coin(rng) < 0.3 ? 0.0 : capacity(rng);
+    }
+    std::vector<double> old_capacity, old_reverse, new_capacity, new_reverse;
+    edge_capacities(before, old_capacity, old_reverse);
+    edge_capacities(after, new_capacity, new_reverse);
+    resumed.reset(before.nodes, before.terminal, before.edges);
+    resumed.solve();
+    MaxFlow::Residuals saved;
+    resumed.save(saved);
+    resumed.resume(saved, before.terminal.data(), old_capacity.data(), old_reverse.data(),
+                   after.terminal.data(), new_capacity.data(), new_reverse.data());
+    resumed.solve();
+    fresh.reset(after.nodes, after.terminal, after.edges);
+    fresh.solve();
+    double best = INFINITY;
+    for (unsigned s = 0; s < (1u << nodes); ++s) best = std::min(best, cut_value(after, s));
+    unsigned smallest = 0, largest = 0;
+    for (std::size_t i = 0; i < nodes; ++i) {
+      smallest |= resumed.in_smallest_sink_side(i) ? 1u << i : 0u;
+      largest |= resumed.in_largest_sink_side(i) ? 1u << i : 0u;
+      EXPECT_EQ(resumed.in_smallest_sink_side(i), fresh.in_smallest_sink_side(i))
+          << "network_index " << network_index << " node " << i;
+      EXPECT_EQ(resumed.in_largest_sink_side(i), fresh.in_largest_sink_side(i))
+          << "network_index " << network_index << " node " << i;
+    }
+    EXPECT_NEAR(cut_value(after, smallest), best, 1e-9 * (1 + best))
+        << "network_index " << network_index;
+    EXPECT_NEAR(cut_value(after, largest), best, 1e-9 * (1 + best))
+        << "network_index " << network_index;
+  }
+}
+
 }  // namespace
