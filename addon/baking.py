@@ -41,7 +41,7 @@ def image_names(name, tiles, options):
 
 
 def bake(task, options, values, step):
-    """Fills task.image (tile -> OpenEXR bytes) and task.image_size. `values` per polygon
+    """Fills task.image (tile -> OpenEXR bytes). `values` per polygon
     corner's triangle or vertex, as options.points says; `step(fraction)` reports progress
     (0 to 1) and raises to cancel."""
     mesh = task.mesh
@@ -67,7 +67,6 @@ def bake(task, options, values, step):
         share = (1.0 - DRAWING_SHARE) / len(tiles)
         encoded[tile] = exr.encode(image, half, lambda at=DRAWING_SHARE + k * share: step(at))
     task.image = encoded
-    task.image_size = options.texture_size
     step(1.0)
 
 
@@ -91,17 +90,17 @@ def make_images(bpy_data, task, options):
 
 
 def _settle(image):
-    """What every baked image is: kept by a fake user (with no user Blender drops it when the
-    file is saved: a bake was gone after a save and reload) and tagged Non-Color (it holds
-    values, not colours)."""
+    """What every baked image is: kept by a fake user (Blender drops an image with no user
+    when the file is saved, so the bake would be gone after a reload) and tagged Non-Color
+    (it holds values, not colours)."""
     image.use_fake_user = True
     image.colorspace_settings.name = "Non-Color"
 
 
 def _packed_image(bpy_data, name, data, task):
     # A 1 x 1 placeholder: the packed file is the image (its size, its pixels, read by
-    # Blender when first used); a size x size one was a buffer of 16 bytes a texel made for
-    # nothing (64 MiB at 2048^2).
+    # Blender when first used); a size x size one would allocate 16 bytes a texel for nothing
+    # (64 MiB at 2048^2).
     image = bpy_data.images.new(name, 1, 1, float_buffer=True)
     try:
         image.pack(data=data, data_len=len(data))

@@ -240,7 +240,6 @@ class Task:
     image_name: str = ""
     # Per UDIM tile (1001 always): the bytes of its one-channel OpenEXR file (exr.py).
     image: dict = None
-    image_size: int = 0  # texels, square
     uv_layout: object = None  # shape_diameter.UvLayout of corner_uvs, where they are needed
     engine: str = ""
     timings: dict = None
@@ -508,12 +507,20 @@ def prepare(depsgraph, objects, options, for_writing=True, active=None):
 # own, measured on a 2-core AMD EPYC with bpy 4.5 on Spot (TextureCost.cpu_seconds is the
 # core's side):
 # The image's side of a bake: its one-channel half-float OpenEXR encoded (worker thread;
-# bench/blender_bake.py: 0.131 s at 2048^2, 0.045 s at 1024^2), Blender's part being 0.1 ms.
-SECONDS_PER_BAKED_TEXEL = 4.5e-8
-# A bake at its peak: 52.5-56.7 measured with the RGBA float images baked before (4096^2 and
-# 8192^2); now an upper bound, the images being held as compressed files until all are
-# written (not measured again).
-BAKED_BYTES_PER_TEXEL = 56
+# bench/blender_bake.py: 0.131 s at 2048^2, 0.045 s at 1024^2), Blender's part being 0.1 ms;
+# 32-bit floats took twice as long (0.262 s at 2048^2).
+SECONDS_PER_BAKED_TEXEL = {"16": 4.5e-8, "32": 9.0e-8}
+
+
+# A bake's memory, from what the code holds (not measured): while one image is encoded, its
+# float32 values, their copy at the file's depth and the compressed file (at most as large);
+# every image baked is then held, compressed, until all are written.
+def baked_bytes_per_texel(depth):
+    """(while encoding, held after): bytes a texel of one baked image."""
+    value = 2 if depth == "16" else 4
+    return 4 + 2 * value, value
+
+
 # Past WARN_SECONDS or WARN_MEMORY of the machine's memory the
 # run says so before it starts (the interface's Esc still cancels it); past REFUSE_MEMORY it
 # is refused: swapping, or the kernel's out-of-memory killer ending Blender and its unsaved
@@ -535,7 +542,7 @@ def texture_work(tasks, options):
     """(seconds, bytes, threads): the estimated time of a run's texture work on the CPU
     threads and its peak memory; (0.0, 0, threads) without texture work."""
     threads = max(1, int(options.extra.get("threads") or core.cpu_threads()))
-    seconds, peak, baked = 0.0, 0, 0
+    seconds, peak, baked, largest = 0.0, 0, 0, 0
     if not options.needs_uvs:
         return seconds, peak, threads
     passes = []  # (radius, baked): one texture pass each
@@ -549,9 +556,11 @@ def texture_work(tasks, options):
             seconds += cost.cpu_seconds(threads)
             peak = max(peak, cost.bytes)
             if bake:
-                seconds += cost.texels * SECONDS_PER_BAKED_TEXEL
+                seconds += cost.texels * SECONDS_PER_BAKED_TEXEL[options.bake_depth]
                 baked += cost.texels
-    return seconds, max(peak, baked * BAKED_BYTES_PER_TEXEL), threads
+                largest = max(largest, cost.texels)
+    encoding, held = baked_bytes_per_texel(options.bake_depth)
+    return seconds, max(peak, largest * encoding) + baked * held, threads
 
 
 def _size(count):

@@ -91,9 +91,8 @@ class SegmentOptions:
         if isinstance(share, bool) or not isinstance(share, (int, float)) or not 0 <= share < 1:
             raise UserError(f"min_part_area must be a share in [0, 1) (0.01: 1%), got {share!r}")
         wanted = self.segments
-        if isinstance(wanted, bool) or not isinstance(wanted, (int, np.integer)):
-            raise UserError(f"segments must be an integer in [0, 4096] (0: off), got {wanted!r}")
-        if not 0 <= wanted <= 4096:
+        integer = not isinstance(wanted, bool) and isinstance(wanted, (int, np.integer))
+        if not integer or not 0 <= wanted <= 4096:
             raise UserError(f"segments must be an integer in [0, 4096] (0: off), got {wanted!r}")
         names = [name for name, _, _ in self.attribute_outputs()]
         for name in names[1:] if self.face_sets else names:

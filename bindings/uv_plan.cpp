@@ -31,6 +31,14 @@ std::shared_ptr<sdf::UvPlan> uv_layout(const sdf::Doubles& vertices, const sdf::
       sdf::plan_uvs(mesh, uvs.data(), weld_tolerance, need_merged, threads));
 }
 
+// Whether the plan was found for a mesh of these counts and these UVs (its own weld tolerance
+// and merging): its islands index that mesh's vertices and faces.
+bool fits(const sdf::UvPlan& plan, std::size_t vertex_count, const CornerUvs& uvs) {
+  if (uvs.ndim() != 3 || uvs.shape(1) != 3 || uvs.shape(2) != 2) return false;
+  const auto faces = static_cast<std::size_t>(uvs.shape(0));
+  return sdf::plan_fits(plan, faces, vertex_count, uvs.data(), plan.islands.weld_tolerance, false);
+}
+
 std::vector<int> tiles(const sdf::UvPlan& plan) {
   std::vector<int> out;
   for (const sdf::UvPage& page : plan.layout.pages)
@@ -54,6 +62,7 @@ void bind_uv_plan(py::module_& m) {
                              [](const sdf::UvPlan& p) { return p.layout.overlaps_unparted; })
       .def_property_readonly("pages", [](const sdf::UvPlan& p) { return p.layout.pages.size(); })
       .def_property_readonly("tiles", &tiles)
+      .def("fits", &fits, py::arg("vertex_count"), py::arg("uvs"))
       .def_property_readonly("weld_tolerance",
                              [](const sdf::UvPlan& p) { return p.islands.weld_tolerance; })
       .def_property_readonly("for_vertices",

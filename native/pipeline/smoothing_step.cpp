@@ -99,9 +99,9 @@ void projected(const Mesh& mesh, PointKind kind, const float* values, const Proj
 // The UV layout found before (options.uv_plan), where it was found for these faces (not for
 // a double-sided mesh's second cast, without its twins), or null: found here.
 const UvPlan* fitting_plan(const SmoothingOptions& options, std::size_t face_count,
-                           PointKind kind) {
+                           std::size_t vertex_count, const float* uvs, PointKind kind) {
   const UvPlan* plan = options.uv_plan.get();
-  return plan && plan_fits(*plan, face_count, options.texture.weld_tolerance,
+  return plan && plan_fits(*plan, face_count, vertex_count, uvs, options.texture.weld_tolerance,
                            kind == PointKind::Vertices)
              ? plan
              : nullptr;
@@ -122,7 +122,7 @@ void texture(const SmoothingMesh& mesh, PointKind kind, const float* values,
   Stopwatch clock;
   // Without a preparation, one made here: the layout and a one-image run share its islands
   // (and its checks of the UVs and size come first, with their own words).
-  const UvPlan* plan = fitting_plan(options, mesh.face_count, kind);
+  const UvPlan* plan = fitting_plan(options, mesh.face_count, mesh.vertex_count, mesh.uvs, kind);
   PreparedTexture own;
   if (!given_ready) {
     own = prepare_texture(copy_mesh(*mesh.as_given, o.threads), mesh.uvs, o,
@@ -181,7 +181,8 @@ PreparedSmoothing prepare_smoothing(Mesh as_given, const float* uvs, PointKind k
   if (options.method == SmoothingMethod::Texture) {
     TextureOptions o = options.texture;
     o.threads = options.threads;
-    const UvPlan* plan = fitting_plan(options, as_given.triangles.size(), kind);
+    const UvPlan* plan =
+        fitting_plan(options, as_given.triangles.size(), as_given.vertices.size(), uvs, kind);
     prepared.texture = std::make_shared<PreparedTexture>(prepare_texture(
         std::move(as_given), uvs, o, kind == PointKind::Vertices, plan ? &plan->islands : nullptr));
 #ifdef SDF_HAVE_OPENCL

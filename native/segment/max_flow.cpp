@@ -293,7 +293,8 @@ double MaxFlow::solve(const std::function<void()>& check) {
       if (queue_head_ + 8 < queue_.size()) {  // the node taken a few steps later
         const std::uint32_t later = queue_[queue_head_ + 8];
         prefetch(&node_[later]);
-        prefetch(&arcs_[first_[later]]);
+        // A pointer, not an index: a last node without arcs starts one past the end.
+        prefetch(arcs_.data() + first_[later]);
       }
       if (queue_head_ > 4096 && queue_head_ * 2 > queue_.size()) {
         queue_.erase(queue_.begin(), queue_.begin() + static_cast<std::ptrdiff_t>(queue_head_));

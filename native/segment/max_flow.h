@@ -55,9 +55,11 @@ class MaxFlow {
               const double* old_reverse, const double* terminal, const double* capacity,
               const double* reverse_capacity);
 
-  // The maximum flow (not counting what `terminal`'s differences took out). `check`, when
-  // given, is called every few thousand steps of the search (about a millisecond on a mesh
-  // graph) and may throw to stop it, leaving the network unusable until the next reset().
+  // The flow this call adds (from scratch: the maximum flow, not counting what `terminal`'s
+  // differences took out; after resume(): only what it adds to the resumed flow). `check`,
+  // when given, is called every few thousand steps of the search (about a millisecond on a
+  // mesh graph) and may throw to stop it, leaving the network unusable until it is set again
+  // (reset(), or set_capacities() or resume()).
   double solve(const std::function<void()>& check = nullptr);
 
   // After solve(): whether node i is on the sink's side of the minimum cut whose sink side is

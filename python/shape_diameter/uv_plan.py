@@ -95,12 +95,13 @@ def use_layout(v, t, corners, resolved, points, threads):
         )
     elif (
         given.face_count != len(t)
+        or not given.plan.fits(len(v), corners)
         or given.plan.weld_tolerance != _core_weld(resolved["weld_tolerance"])
         or (points == "vertices" and not given.for_vertices)
     ):
         raise ValueError(
-            "uv_layout was found for another mesh, another weld_tolerance or for face values "
-            "(find it with points='vertices' for vertex values)"
+            "uv_layout was found for another mesh or other UVs, another weld_tolerance or for "
+            "face values (find it with points='vertices' for vertex values)"
         )
     resolved["uv_layout"] = given.plan
     return given

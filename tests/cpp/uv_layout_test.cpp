@@ -183,12 +183,18 @@ TEST(UvPlan, HoldsTheIslandsAndTheLayoutAndFitsTheFacesItWasFoundFor) {
   EXPECT_EQ(plan.layout.face_page, direct.face_page);
   EXPECT_EQ(plan.layout.faces_overlapping, direct.faces_overlapping);
   EXPECT_EQ(plan.layout.pages.size(), 2u);
-  EXPECT_TRUE(plan_fits(plan, s.mesh.triangles.size(), 1e-6, false));
-  EXPECT_FALSE(plan_fits(plan, s.half, 1e-6, false));
-  EXPECT_FALSE(plan_fits(plan, s.mesh.triangles.size(), 1e-4, false));
-  EXPECT_FALSE(plan_fits(plan, s.mesh.triangles.size(), 1e-6, true));
-  EXPECT_TRUE(plan_fits(plan_uvs(s.mesh, s.uvs.data(), 1e-6, true, 0), s.mesh.triangles.size(),
-                        1e-6, true));
+  const std::size_t faces = s.mesh.triangles.size(), vertices = s.mesh.vertices.size();
+  const float* uvs = s.uvs.data();
+  EXPECT_TRUE(plan_fits(plan, faces, vertices, uvs, 1e-6, false));
+  EXPECT_FALSE(plan_fits(plan, s.half, vertices, uvs, 1e-6, false));
+  EXPECT_FALSE(plan_fits(plan, faces, vertices + 1, uvs, 1e-6, false));  // another mesh
+  EXPECT_FALSE(plan_fits(plan, faces, vertices, nullptr, 1e-6, false));  // UVs not known
+  std::vector<float> moved = s.uvs;
+  moved[3] += 0.25f;  // other UVs
+  EXPECT_FALSE(plan_fits(plan, faces, vertices, moved.data(), 1e-6, false));
+  EXPECT_FALSE(plan_fits(plan, faces, vertices, uvs, 1e-4, false));
+  EXPECT_FALSE(plan_fits(plan, faces, vertices, uvs, 1e-6, true));
+  EXPECT_TRUE(plan_fits(plan_uvs(s.mesh, uvs, 1e-6, true, 0), faces, vertices, uvs, 1e-6, true));
   std::vector<float> bad = s.uvs;
   bad[7] = std::nanf("");
   EXPECT_THROW(plan_uvs(s.mesh, bad.data(), 1e-6, false, 0), std::invalid_argument);

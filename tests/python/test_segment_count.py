@@ -57,6 +57,20 @@ def test_the_first_pair_that_gives_the_count_is_kept():
     np.testing.assert_array_equal(asked.labels, plain.labels)
 
 
+def test_the_choice_is_reported():
+    # The clusters (len(mixture)) and smoothness the search chose give the same segmentation
+    # when asked for directly.
+    vertices, triangles, values = dumbbell()
+    for asked in (1, 3, 40):
+        got = shape_diameter.segment(vertices, triangles, values, segments=asked)
+        assert any(got.smoothness == pytest.approx(0.26 * f) for f in (1.0, 0.4, 2.0))
+        direct = shape_diameter.segment(
+            vertices, triangles, values, clusters=len(got.mixture), smoothness=got.smoothness
+        )
+        np.testing.assert_array_equal(got.labels, direct.labels)
+    assert shape_diameter.segment(vertices, triangles, values, smoothness=0.3).smoothness == 0.3
+
+
 @pytest.mark.parametrize("bad", [0, -1, 4097, 2.5, "3", True])
 def test_a_bad_count_is_refused(bad):
     vertices, triangles, values = dumbbell()
@@ -79,5 +93,7 @@ def test_command_line_segments(tmp_path, capsys):
     np.testing.assert_array_equal(np.load(tmp_path / "ant.segments.npy"), expected.labels)
     assert report["count"] == expected.segment_count
     assert report["segments_asked"] == 4
+    assert report["clusters"] == len(expected.mixture)
+    assert report["smoothness"] == expected.smoothness
     assert cli.main([str(source), "--segments", "4"]) == 2
     assert "--segments applies to --segment" in capsys.readouterr().err

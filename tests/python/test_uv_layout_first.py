@@ -126,6 +126,16 @@ def test_a_layout_of_other_faces_or_points_is_refused(stacked):
     with pytest.raises(ValueError, match="another weld_tolerance"):
         smooth(v, t, np.ones(len(t), np.float32), "texture", uvs=uvs, uv_layout=layout,
                weld_tolerance=1e-4)  # fmt: skip
+    # The same face count on a mesh of more vertices (its islands would index past the end of
+    # the layout's vertices), and other UVs on the same mesh: refused, not used.
+    more = np.concatenate([v, v + 10.0])
+    with pytest.raises(ValueError, match="another mesh or other UVs"):
+        smooth(more, t + len(v), np.ones(len(more), np.float32), "texture", uvs=uvs,
+               points="vertices", uv_layout=uv_layout(v, t, uvs, points="vertices"))  # fmt: skip
+    moved = np.array(uvs, dtype=np.float32)
+    moved[..., 0] = 0.5 * moved[..., 0]
+    with pytest.raises(ValueError, match="another mesh or other UVs"):
+        smooth(v, t, np.ones(len(t), np.float32), "texture", uvs=moved, uv_layout=layout)
     with pytest.raises(ValueError, match="uv_layout must be"):
         smooth(v, t, np.ones(len(t), np.float32), "texture", uvs=uvs, uv_layout="yes")
 
