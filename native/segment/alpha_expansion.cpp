@@ -185,7 +185,8 @@ double alpha_expansion(const FaceGraph& graph, const double* weights, const doub
       }
       tried[alpha] = ++moves;
       const int a = static_cast<int>(alpha);
-      network.build(weights, costs, k, labels, a, !rules.first_move_only, inside);
+      network.build(weights, costs, k, labels, a, rules.resume_flows && !rules.first_move_only,
+                    inside);
       std::copy(labels, labels + n, candidate.begin());
       network.move(a, rules.ties_move, candidate.data(), inside);
       const double energy = potts_energy(graph, weights, costs, k, candidate.data(), n, threads);

@@ -29,6 +29,11 @@ struct ExpansionRules {
   // ones. Its energy stays far above a converged expansion's (386718 against 140785 on the
   // 75k-face bunny, k = 5, lambda = 0.26).
   bool first_move_only = true;
+  // Start a move to a label from the flow its previous move found (dynamic graph cuts): the
+  // same cuts up to exact ties (max_flow.h), and later sweeps, which change few labels, find little
+  // flow left to push. False solves every move from scratch (to check that both give the same
+  // labels).
+  bool resume_flows = true;
 };
 
 // Improves `labels` (in [0, k)) in place: sweeps alpha = 0..k-1, each time moving to alpha

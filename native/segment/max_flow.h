@@ -50,7 +50,8 @@ class MaxFlow {
   // Torr, "Dynamic graph cuts", PAMI 2007): a terminal's change is added to the node's
   // residual; flow an edge no longer holds is taken back and its ends' terminal arcs both
   // raised by it, which moves every cut by the same amount. solve() then finds a maximum
-  // flow of the new network, so the same cuts as from scratch.
+  // flow of the new network, so the same cuts as from scratch, up to exact ties (the
+  // residuals are sums made in another order; rounding may then pick the other cut).
   void resume(const Residuals& saved, const double* old_terminal, const double* old_capacity,
               const double* old_reverse, const double* terminal, const double* capacity,
               const double* reverse_capacity);
