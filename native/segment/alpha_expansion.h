@@ -30,9 +30,8 @@ struct ExpansionRules {
   // 75k-face bunny, k = 5, lambda = 0.26).
   bool first_move_only = true;
   // Start a move to a label from the flow its previous move found (dynamic graph cuts): the
-  // same cuts up to exact ties (max_flow.h), and later sweeps, which change few labels, find little
-  // flow left to push. False solves every move from scratch (to check that both give the same
-  // labels).
+  // same cuts up to exact ties (max_flow.h), and later sweeps, which change few labels, find
+  // little flow left to push. False solves every move from scratch (to compare the two).
   bool resume_flows = true;
 };
 
