@@ -230,6 +230,17 @@ def test_separate_solids_never_share_a_segment(mode):
     assert (seg.clusters[: len(t1)] == seg.clusters[len(t1) : len(t1) + len(t2)]).all()
 
 
+def test_thread_count_on_a_mesh_of_several_chunks():
+    # bunny00 (75,408 faces): the graph cut writes its capacities in chunks of 16,384 faces
+    # in parallel, and resumes its flows from them; the labels must not depend on threads.
+    vertices, triangles = read_off(DATA / "bunny00.off")
+    sdf = shape_diameter.compute(vertices, triangles, rays=8, threads=2).values
+    runs = [shape_diameter.segment(vertices, triangles, sdf, threads=n) for n in (1, 2, 3)]
+    for other in runs[1:]:
+        np.testing.assert_array_equal(other.labels, runs[0].labels)
+        assert other.energy == runs[0].energy
+
+
 def test_every_thread_count_gives_the_same_result(cgal_values):
     vertices, triangles, sdf = cgal_values("psb/1.off")
     for mode in ("auto", "cgal"):
