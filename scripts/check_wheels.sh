@@ -191,10 +191,12 @@ check_windows_x64() {  # check_windows_x64 TAG WHEEL
   python3 -m zipfile -e "$2" "$dir"
   export WINEPREFIX=$ROOT/build/wine-prefix WINEDEBUG=-all
   log "windows-x64 $1: compute() under wine ($("$wine" --version))"
-  # (wine's exit status is 0 even where the program crashed: the values file tells.)
+  # (wine's exit status is 0 even where the program crashed: the values file tells. Its stdin
+  # is /dev/null: with none at all, Python under wine stops on an invalid standard handle.)
   rm -f "$CHECK/values-windows-x64-$1.npz"
   (cd "$CHECK" && PYTHONPATH="Z:$ROOT/$dir" "$wine" "$pydir/python.exe" \
-    "Z:$ROOT/scripts/wheel_values.py" "Z:$ROOT/$MESH" "values-windows-x64-$1" --expect-width 8) &&
+    "Z:$ROOT/scripts/wheel_values.py" "Z:$ROOT/$MESH" "values-windows-x64-$1" --expect-width 8 \
+    </dev/null) &&
     [ -f "$CHECK/values-windows-x64-$1.npz" ] || { fail "windows-x64 $1: the run under wine"; return; }
   same_values "$(reference_file "$1")" "$CHECK/values-windows-x64-$1" ||
     fail "windows-x64 $1: values differ from linux-x64's"
