@@ -25,13 +25,13 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 ROOT=$PWD
 
-ALL_TARGETS=(linux-x64 linux-arm64 windows-x64 windows-arm64 macos-arm64 macos-x64)
+source scripts/wheel_files.sh  # ALL_TARGETS
 ZIG_VENV=build/zig-venv
 # The build's Python tools, pinned: the compiler, pybind11's headers and CMake files, and the
 # metadata writer scikit-build-core uses (scripts/assemble_wheel.py), and auditwheel (which
 # scripts/check_wheels.sh runs on the Linux wheels).
 TOOLS=("ziglang==0.15.2" "pybind11==2.13.6" "pyproject-metadata==0.9.1" "auditwheel==6.4.2")
-OUT=dist/wheels
+OUT=$WHEELS
 log() { echo "build_wheels: $*"; }
 
 targets=("$@")

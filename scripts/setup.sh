@@ -15,6 +15,7 @@ APT_PACKAGES=(
   libcgal-dev                                 # reference implementation, tests/benchmarks only
   clang libclang-rt-14-dev                    # sanitizers and libFuzzer (scripts/fuzz.sh)
   g++-aarch64-linux-gnu qemu-user-static      # the aarch64 build and its tests (scripts/cross_aarch64.sh)
+  llvm osslsigncode                           # the wheels' checks: llvm-objdump, llvm-nm, signatures
   python3 python3-venv python3-dev            # the Python package
 )
 missing=()

@@ -9,6 +9,7 @@
 #include <fstream>
 #include <vector>
 
+#include "cache_folder.h"
 #include "kernel_source.h"
 
 namespace sdf::cl {
@@ -104,18 +105,9 @@ cl_program build_from_binary(const Api& cl, const Device& device, cl_context con
 }  // namespace
 
 std::string cache_directory() {
-  namespace fs = std::filesystem;
-  fs::path base;
-  if (const char* dir = std::getenv("SDF_CACHE_DIR"); dir && *dir) {
-    base = dir;
-  } else if (const char* xdg = std::getenv("XDG_CACHE_HOME"); xdg && *xdg) {
-    base = fs::path(xdg) / "shape_diameter";
-  } else if (const char* home = std::getenv("HOME"); home && *home) {
-    base = fs::path(home) / ".cache" / "shape_diameter";
-  } else {
-    base = fs::temp_directory_path() / "shape_diameter";
-  }
-  return (base / "opencl").string();
+  return cache_folder(
+      host_cache_convention(), [](const char* name) { return std::getenv(name); },
+      std::filesystem::temp_directory_path().string());
 }
 
 ProgramStats program_stats() { return ProgramStats{g_compiled.load(), g_from_cache.load()}; }

@@ -12,8 +12,9 @@
 
 namespace sdf::cl {
 
-// The folder compiled programs are kept in: $SDF_CACHE_DIR, else $XDG_CACHE_HOME/shape_diameter,
-// else ~/.cache/shape_diameter; then /opencl.
+// The folder compiled programs are kept in, by this system's convention (cache_folder.h):
+// $SDF_CACHE_DIR/opencl, else .../shape_diameter/opencl in $XDG_CACHE_HOME or ~/.cache
+// (Linux), ~/Library/Caches (macOS), %LOCALAPPDATA% (Windows).
 std::string cache_directory();
 
 struct ProgramStats {
