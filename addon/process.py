@@ -365,6 +365,37 @@ def prepare(depsgraph, objects, options, for_writing=True, active=None):
     if for_writing:
         options.check()
     objects = list(objects)
+    meshes, notices = _meshes_to_compute(objects)
+    source = _sources(meshes, active)
+    tasks = {}
+    for ob in meshes:
+        problem = _mode_problem(ob)
+        if for_writing:
+            problem = problem or _editable_problem(ob) or _attribute_problem(ob, options)
+        if problem:
+            raise UserError(problem)
+        uid = ob.data.session_uid
+        if uid in tasks:
+            if ob is not source[uid]:  # (the source joined its task when it was made)
+                tasks[uid].shared_by.append(ob.name)
+            continue
+        # Computed from the mesh's source object, in this object's place of the order.
+        tasks[uid] = _task(depsgraph, source[uid], options)
+        if source[uid] is not ob:
+            tasks[uid].shared_by.append(ob.name)
+    images = [t.image_name for t in tasks.values() if t.image_name]
+    if len(set(images)) != len(images):
+        raise UserError("Several objects would bake into one image: put {object} in the image name")
+    notice = _texture_work_notice(list(tasks.values()), options)
+    if notice:
+        notices.append(notice)
+    notices.extend(_find_uv_layouts(tasks.values(), options))
+    _sharing_warnings(tasks, objects if for_writing else None)
+    return list(tasks.values()), notices
+
+
+def _meshes_to_compute(objects):
+    """(the mesh objects with faces, notices of what was skipped); UserError when none is."""
     if not objects:
         raise UserError("Nothing selected: select one or more mesh objects")
     meshes = [ob for ob in objects if ob.type == "MESH"]
@@ -378,112 +409,102 @@ def prepare(depsgraph, objects, options, for_writing=True, active=None):
     # what is not a mesh is, unless nothing else is left (one such mesh stopped the whole run).
     faceless = [ob for ob in meshes if len(ob.data.polygons) == 0]
     if len(faceless) == len(meshes):
+        more = ", ".join(ob.name for ob in faceless[1:])
         raise UserError(
-            f"{faceless[0].name} has no faces"
-            + (
-                f" (nor have {', '.join(ob.name for ob in faceless[1:])})"
-                if len(faceless) > 1
-                else ""
-            )
+            f"{faceless[0].name} has no faces" + (f" (nor have {more})" if more else "")
         )
     if faceless:
         notices.append(f"Skipped meshes without faces: {', '.join(ob.name for ob in faceless)}")
         meshes = [ob for ob in meshes if len(ob.data.polygons) > 0]
+    return meshes, notices
 
-    # The object each shared mesh is computed from: the active one where it shares it.
+
+def _sources(meshes, active):
+    """The object each mesh is computed from (by the mesh's session_uid): the active one
+    where it shares the mesh, else the first."""
     source = {}
     for ob in meshes:
         source.setdefault(ob.data.session_uid, ob)
     if active is not None and active.type == "MESH" and active in meshes:
         source[active.data.session_uid] = active
-    tasks = {}
-    for ob in meshes:
-        problem = _mode_problem(ob)
-        if for_writing:
-            problem = problem or _editable_problem(ob) or _attribute_problem(ob, options)
+    return source
+
+
+def _task(depsgraph, ob, options):
+    """The task computing `ob`'s mesh, its triangles and UVs read now. UserError (naming the
+    object) for what would stop it."""
+    me = ob.data
+    matrix = ob.matrix_world if options.apply_scale else None
+    original = mesh_data.topology(me)
+    triangles, uvs = _geometry(depsgraph, ob, original, matrix, options)
+    # Checked here, before any object is computed, so that the message names the object
+    # (the core's own check would come after the earlier objects' work).
+    if not np.isfinite(triangles.vertices).all():
+        raise UserError(
+            f"{ob.name} has vertices whose coordinates are not finite (NaN or infinite"
+            f"{' after its modifiers' if options.use_modifiers else ''}): fix them, e.g. "
+            "by deleting those vertices in Edit Mode"
+        )
+    task = Task(ob.name, ob.session_uid, me.session_uid, original, triangles, corner_uvs=uvs)
+    if matrix is not None:
+        task.linear = [list(row) for row in matrix.to_3x3()]
+    if not options.use_modifiers:
+        left_out = _shape_changes(ob)
+        if left_out:
+            task.warnings.append(
+                f"{ob.name}: {left_out} change its shape in the viewport and are left out "
+                "(Use Modifiers is off): the values are those of its base mesh"
+            )
+    if options.bake_image:
+        task.image_name = options.image_name.replace("{object}", ob.name)
+        problem = _image_problem(bpy.data, task.image_name)
         if problem:
             raise UserError(problem)
-        me = ob.data
-        uid = me.session_uid
-        if uid in tasks:
-            if ob is not source[uid]:  # (the source joined its task when it was made)
-                tasks[uid].shared_by.append(ob.name)
-            continue
-        if source[uid] is not ob:  # computed from another user, in this place of the order
-            shared = ob
-            ob = source[uid]
-        else:
-            shared = None
-        matrix = ob.matrix_world if options.apply_scale else None
-        original = mesh_data.topology(me)
-        if options.use_modifiers:
-            evaluated = ob.evaluated_get(depsgraph)
-            if not evaluated.is_evaluated:  # its base mesh would be computed without a word
-                raise UserError(
-                    f"{ob.name} is not evaluated in this view layer (its collection is excluded "
-                    "or disabled, it is disabled in viewports, or it is in no scene), so Use "
-                    "Modifiers cannot apply its modifiers and shape keys: include it, or turn "
-                    "off Use Modifiers"
-                )
-            temp = evaluated.to_mesh()
-            try:
-                if not mesh_data.topology(temp).matches(original):
-                    raise UserError(
-                        f"The modifiers of {ob.name} change its topology "
-                        f"({_counted(len(me.vertices), 'vertex', 'vertices')}, "
-                        f"{_counted(len(me.polygons), 'face', 'faces')} become "
-                        f"{len(temp.vertices)}, {len(temp.polygons)}): the result could not be "
-                        "written back. Turn off Use Modifiers, or apply or disable the "
-                        "modifiers that add or remove geometry"
-                    )
-                triangles = mesh_data.triangulation(temp, matrix)
-                uvs = _corner_uvs(ob, temp, options, triangles.flipped)
-            finally:
-                evaluated.to_mesh_clear()
-        else:
-            triangles = mesh_data.triangulation(me, matrix)
-            uvs = _corner_uvs(ob, me, options, triangles.flipped)
-        # Checked here, before any object is computed, so that the message names the object
-        # (the core's own check would come after the earlier objects' work).
-        if not np.isfinite(triangles.vertices).all():
+    return task
+
+
+def _geometry(depsgraph, ob, original, matrix, options):
+    """(triangulation, corner UVs) of the base mesh, or with Use Modifiers of the evaluated
+    one, which must keep the base mesh's topology (the values are written back onto it)."""
+    me = ob.data
+    if not options.use_modifiers:
+        triangles = mesh_data.triangulation(me, matrix)
+        return triangles, _corner_uvs(ob, me, options, triangles.flipped)
+    evaluated = ob.evaluated_get(depsgraph)
+    if not evaluated.is_evaluated:  # its base mesh would be computed without a word
+        raise UserError(
+            f"{ob.name} is not evaluated in this view layer (its collection is excluded "
+            "or disabled, it is disabled in viewports, or it is in no scene), so Use "
+            "Modifiers cannot apply its modifiers and shape keys: include it, or turn "
+            "off Use Modifiers"
+        )
+    temp = evaluated.to_mesh()
+    try:
+        if not mesh_data.topology(temp).matches(original):
             raise UserError(
-                f"{ob.name} has vertices whose coordinates are not finite (NaN or infinite"
-                f"{' after its modifiers' if options.use_modifiers else ''}): fix them, e.g. "
-                "by deleting those vertices in Edit Mode"
+                f"The modifiers of {ob.name} change its topology "
+                f"({_counted(len(me.vertices), 'vertex', 'vertices')}, "
+                f"{_counted(len(me.polygons), 'face', 'faces')} become "
+                f"{len(temp.vertices)}, {len(temp.polygons)}): the result could not be "
+                "written back. Turn off Use Modifiers, or apply or disable the "
+                "modifiers that add or remove geometry"
             )
-        task = Task(ob.name, ob.session_uid, uid, original, triangles, corner_uvs=uvs)
-        if matrix is not None:
-            task.linear = [list(row) for row in matrix.to_3x3()]
-        if not options.use_modifiers:
-            left_out = _shape_changes(ob)
-            if left_out:
-                task.warnings.append(
-                    f"{ob.name}: {left_out} change its shape in the viewport and are left out "
-                    "(Use Modifiers is off): the values are those of its base mesh"
-                )
-        if shared is not None:
-            task.shared_by.append(shared.name)
-        if options.bake_image:
-            task.image_name = options.image_name.replace("{object}", ob.name)
-            problem = _image_problem(bpy.data, task.image_name)
-            if problem:
-                raise UserError(problem)
-        tasks[uid] = task
-    images = [t.image_name for t in tasks.values() if t.image_name]
-    if len(set(images)) != len(images):
-        raise UserError("Several objects would bake into one image: put {object} in the image name")
-    notice = _texture_work_notice(list(tasks.values()), options)
-    if notice:
-        notices.append(notice)
-    notices.extend(_find_uv_layouts(tasks.values(), options))
-    # Users of a computed mesh that were not selected show its values too, measured with the
-    # computing object's transform (computing a scaled copy rescaled the original's values
-    # without a word).
+        triangles = mesh_data.triangulation(temp, matrix)
+        return triangles, _corner_uvs(ob, temp, options, triangles.flipped)
+    finally:
+        evaluated.to_mesh_clear()
+
+
+def _sharing_warnings(tasks, chosen):
+    """Each task's warnings about its mesh's other users: the selected ones it was computed
+    for, and (with `chosen`, the objects of a run that writes) the unselected ones that show
+    its values too, measured with the computing object's transform (computing a scaled copy
+    rescaled the original's values without a word)."""
     unselected = {}
-    if for_writing:
-        chosen = {ob.name for ob in objects}
+    if chosen is not None:
+        names = {ob.name for ob in chosen}
         for ob in bpy.data.objects:
-            if ob.type == "MESH" and ob.name not in chosen and ob.data.session_uid in tasks:
+            if ob.type == "MESH" and ob.name not in names and ob.data.session_uid in tasks:
                 unselected.setdefault(ob.data.session_uid, []).append(ob.name)
     for uid, task in tasks.items():
         if task.shared_by:
@@ -497,7 +518,6 @@ def prepare(depsgraph, objects, options, for_writing=True, active=None):
                 f"computed: they show these values too, measured with {task.object_name}'s "
                 "transform"
             )
-    return list(tasks.values()), notices
 
 
 # Texture work (texture smoothing, the bake) grows with the texels, and the blur with the
