@@ -272,37 +272,109 @@ void read_back_vertices(const Mesh& mesh, const float* uvs, const UvIslands& isl
   });
 }
 
-// smooth_texture's work once the UVs are checked; islands and groups (vertex values): made
-// already, or null.
-TextureSmoothing smooth_checked(const Mesh& mesh, PointKind kind, const float* values,
-                                const float* uvs, const TextureOptions& options, bool keep_image,
-                                const ProgressFn& progress, double progress_from,
-                                double progress_to, const TextureDeviceFn& device,
-                                const UvIslands* given_islands, const CornerGroups* given_groups,
-                                float* into, Stopwatch& clock, StageTimings& timings) {
-  const int width = options.width, height = options.height;
+void check_filter_options(const TextureOptions& options) {
   if (!std::isfinite(options.radius))
     throw std::invalid_argument("radius must be a finite number of texels");
   if (options.margin < 0 || options.margin > kMaxSize)
     throw std::invalid_argument("margin must be in [0, " + std::to_string(kMaxSize) + "]");
   if (options.bilateral && !(options.range_sigma > 0.0 && std::isfinite(options.range_sigma)))
     throw std::invalid_argument("range_sigma must be a finite number > 0");
+}
+
+// The dilation and blur for these options over values in [lo, hi]: a Gaussian of deviation
+// radius / 2 over floor(radius) taps each way (radius < 0: 2 texels per 256 of the larger side).
+TextureFilter make_filter(const TextureOptions& options, float lo, float hi) {
+  const double radius =
+      options.radius < 0.0 ? 2.0 * std::max(options.width, options.height) / 256.0 : options.radius;
+  TextureFilter f;
+  f.width = options.width;
+  f.height = options.height;
+  f.margin = options.margin;
+  f.taps = std::max(0, static_cast<int>(std::floor(radius)));
+  f.lo = lo;
+  f.hi = hi;
+  if (f.taps >= 1) {
+    const double sigma = 0.5 * radius;
+    f.kernel.resize(f.taps + 1);
+    for (int j = 0; j <= f.taps; ++j)
+      f.kernel[j] = static_cast<float>(std::exp(-0.5 * (j / sigma) * (j / sigma)));
+    f.inv_range = options.bilateral && hi > lo
+                      ? static_cast<float>(1.0 / (options.range_sigma * (hi - lo)))
+                      : 0.0f;
+  }
+  return f;
+}
+
+// What the image steps share: where they read and write, and the progress span they cover.
+struct TextureRun {
+  const Mesh& mesh;
+  PointKind kind;
+  const float* values;
+  const float* uvs;
+  const UvIslands& islands;
+  const CornerGroups* groups;  // vertex values only
+  const TextureFilter& filter;
+  unsigned threads;
+  const ProgressFn& progress;
+  double from, to;
+  double at(double fraction) const { return from + (to - from) * fraction; }
+};
+
+// Draw, dilate and blur, read back, on the CPU threads: `into` per point; the island per
+// texel and the blurred image stay in `island` and `blurred`.
+void smooth_on_cpu(const TextureRun& r, float* into, std::vector<std::int32_t>& island,
+                   std::vector<float>& blurred, Stopwatch& clock, StageTimings& timings) {
+  const TextureFilter& f = r.filter;
+  std::vector<float> value;
+  rasterise(r.mesh, r.kind, r.values, r.uvs, r.islands.face_island, f.width, f.height, f.lo, f.hi,
+            r.threads, island, value, r.progress, r.from, r.at(0.1));
+  if (r.progress && !r.progress(r.at(0.1))) throw Cancelled();
+  timings.emplace_back("rasterise", clock.lap());
+  blurred = filter_cpu(f, island, value, r.threads, r.progress, r.from, r.to);
+  timings.emplace_back("filter", clock.lap());
+  if (r.kind == PointKind::Faces)
+    read_back_faces(r.uvs, r.islands.face_island, f.width, f.height, island, blurred, f.lo, f.hi,
+                    r.threads, into, r.progress, r.at(0.85), r.at(1.0));
+  else
+    read_back_vertices(r.mesh, r.uvs, r.islands, *r.groups, f.width, f.height, island, blurred,
+                       f.lo, f.hi, r.threads, into, r.progress, r.at(0.85), r.at(1.0));
+}
+
+// The image kept: the blurred values and the mask of texels an island covers.
+void keep_image(TextureSmoothing& out, const TextureRun& r, const std::vector<std::int32_t>& island,
+                std::vector<float>& blurred) {
+  const std::size_t texels = blurred.size();
+  out.width = r.filter.width;
+  out.height = r.filter.height;
+  out.mask.resize(texels);
+  parallel_for(
+      texels, kTexelGrain, r.threads,
+      [&](std::size_t begin, std::size_t end) {
+        for (std::size_t t = begin; t < end; ++t) out.mask[t] = island[t] >= 0 ? 1 : 0;
+      },
+      r.progress, r.at(1.0), r.at(1.0));
+  out.image = std::move(blurred);
+}
+
+// smooth_texture's work once the UVs are checked; islands and groups (vertex values): made
+// already, or null.
+TextureSmoothing smooth_checked(const Mesh& mesh, PointKind kind, const float* values,
+                                const float* uvs, const TextureOptions& options, bool keep,
+                                const ProgressFn& progress, double progress_from,
+                                double progress_to, const TextureDeviceFn& device,
+                                const UvIslands* given_islands, const CornerGroups* given_groups,
+                                float* into, Stopwatch& clock, StageTimings& timings) {
+  check_filter_options(options);
   const unsigned threads = options.threads;
   const bool faces = kind == PointKind::Faces;
   const std::size_t n = faces ? mesh.triangles.size() : mesh.vertices.size();
   const ValueRange range = value_range(values, n, threads, not_finite);
   if (range.first_bad < n)
     throw std::invalid_argument("value " + std::to_string(range.first_bad) + " is not finite");
-  const float lo = range.lo, hi = range.hi;
-  const double radius =
-      options.radius < 0.0 ? 2.0 * std::max(width, height) / 256.0 : options.radius;
-  auto at = [&](double fraction) {
-    return progress_from + (progress_to - progress_from) * fraction;
-  };
   auto report = [&](double fraction) {
-    if (progress && !progress(at(fraction))) throw Cancelled();
+    if (progress && !progress(progress_from + (progress_to - progress_from) * fraction))
+      throw Cancelled();
   };
-
   report(0.0);
   timings.emplace_back("checks", clock.lap());
   UvIslands found;
@@ -319,23 +391,9 @@ TextureSmoothing smooth_checked(const Mesh& mesh, PointKind kind, const float* v
     timings.emplace_back("corner groups", clock.lap());
   }
   const CornerGroups* groups = faces ? nullptr : given_groups ? given_groups : &made_groups;
-  // Dilate and blur as a TextureFilter says.
-  TextureFilter f;
-  f.width = width;
-  f.height = height;
-  f.margin = options.margin;
-  f.taps = std::max(0, static_cast<int>(std::floor(radius)));
-  f.lo = lo;
-  f.hi = hi;
-  if (f.taps >= 1) {
-    const double sigma = 0.5 * radius;
-    f.kernel.resize(f.taps + 1);
-    for (int j = 0; j <= f.taps; ++j)
-      f.kernel[j] = static_cast<float>(std::exp(-0.5 * (j / sigma) * (j / sigma)));
-    f.inv_range = options.bilateral && hi > lo
-                      ? static_cast<float>(1.0 / (options.range_sigma * (hi - lo)))
-                      : 0.0f;
-  }
+  const TextureFilter f = make_filter(options, range.lo, range.hi);
+  const TextureRun run{mesh, kind,    values,   uvs,           islands,    groups,
+                       f,    threads, progress, progress_from, progress_to};
 
   TextureSmoothing out;
   // On the CPU threads the result starts as the input (points nothing reaches keep it),
@@ -344,10 +402,6 @@ TextureSmoothing smooth_checked(const Mesh& mesh, PointKind kind, const float* v
     out.values.resize(n);
     into = out.values.data();
   }
-  if (!device)
-    parallel_for(n, kTexelGrain, threads, [&](std::size_t begin, std::size_t end) {
-      std::copy(values + begin, values + end, into + begin);
-    });
   std::vector<std::int32_t> island;
   std::vector<float> blurred;
   if (device) {
@@ -361,40 +415,18 @@ TextureSmoothing smooth_checked(const Mesh& mesh, PointKind kind, const float* v
     job.groups = groups;
     job.filter = f;
     job.threads = threads;
-    device(job, keep_image, into, island, blurred, timings);
+    device(job, keep, into, island, blurred, timings);
     report(0.85);
     clock.lap();
   } else {
-    std::vector<float> value;
-    rasterise(mesh, kind, values, uvs, islands.face_island, width, height, lo, hi, threads, island,
-              value, progress, progress_from, at(0.1));
-    report(0.1);
-    timings.emplace_back("rasterise", clock.lap());
-    blurred = filter_cpu(f, island, value, threads, progress, progress_from, progress_to);
-    timings.emplace_back("filter", clock.lap());
-    if (faces)
-      read_back_faces(uvs, islands.face_island, width, height, island, blurred, lo, hi, threads,
-                      into, progress, at(0.85), at(1.0));
-    else
-      read_back_vertices(mesh, uvs, islands, *groups, width, height, island, blurred, lo, hi,
-                         threads, into, progress, at(0.85), at(1.0));
+    parallel_for(n, kTexelGrain, threads, [&](std::size_t begin, std::size_t end) {
+      std::copy(values + begin, values + end, into + begin);
+    });
+    smooth_on_cpu(run, into, island, blurred, clock, timings);
   }
   report(1.0);
   if (!device) timings.emplace_back("read back", clock.lap());
-
-  if (keep_image) {
-    const std::size_t texels = blurred.size();
-    out.width = width;
-    out.height = height;
-    out.mask.resize(texels);
-    parallel_for(
-        texels, kTexelGrain, threads,
-        [&](std::size_t begin, std::size_t end) {
-          for (std::size_t t = begin; t < end; ++t) out.mask[t] = island[t] >= 0 ? 1 : 0;
-        },
-        progress, at(1.0), at(1.0));
-    out.image = std::move(blurred);
-  }
+  if (keep) keep_image(out, run, island, blurred);
   timings.emplace_back("image", clock.lap());
   out.timings = std::move(timings);
   return out;
