@@ -41,23 +41,32 @@ Segmentation segment_to_count(const double* vertices, std::size_t vertex_count,
   if (segments < 1) throw std::invalid_argument("segments must be at least 1");
   const auto tries = schedule(options);
   Stopwatch watch;
+  // The face graph and the values (filtered: the costliest step) serve every try. Progress:
+  // a share for them, then each try its share of the longest search (an early end jumps to
+  // the end); one share's end is the next one's start to the bit, so it never steps back.
+  const double prepared_share = options.filter ? 0.5 : 0.05;
+  auto share = [&](double from, double to) -> ProgressFn {
+    if (!progress) return nullptr;
+    return [&progress, from, to](double f) {
+      return progress(f >= 1.0 ? to : from + (to - from) * f);
+    };
+  };
+  const SegmentInput input = prepare_segment_input(triangles, face_count, vertex_count, values,
+                                                   options, share(0.0, prepared_share));
   Segmentation best;
-  bool have = false;
+  bool found_any = false;
   for (std::size_t i = 0; i < tries.size(); ++i) {
     SegmentOptions run = options;
     std::tie(run.clusters, run.smoothness) = tries[i];
-    // Each run reports its share of the longest search (an early end jumps to the end);
-    // one run's end is the next one's start to the bit, so the fractions never step back.
-    const double from = double(i) / double(tries.size());
-    const double to = double(i + 1) / double(tries.size());
-    const ProgressFn told =
-        progress
-            ? ProgressFn([&](double f) { return progress(f >= 1.0 ? to : from + (to - from) * f); })
-            : ProgressFn();
-    Segmentation s = segment_mesh(vertices, vertex_count, triangles, face_count, values, run, told);
-    if (!have || distance(s.segment_count, segments) < distance(best.segment_count, segments)) {
+    const double span = 1.0 - prepared_share;
+    const double from = prepared_share + span * double(i) / double(tries.size());
+    const double to = prepared_share + span * double(i + 1) / double(tries.size());
+    Segmentation s = segment_prepared(input, vertices, vertex_count, triangles, face_count, run,
+                                      share(from, to));
+    if (!found_any ||
+        distance(s.segment_count, segments) < distance(best.segment_count, segments)) {
       best = std::move(s);
-      have = true;
+      found_any = true;
     }
     if (best.segment_count == segments) break;
   }

@@ -91,24 +91,34 @@ void check(std::size_t face_count, const SegmentOptions& options) {
     throw std::invalid_argument("min_segment_area must be in [0, 1)");
 }
 
-}  // namespace
-
-Segmentation segment_mesh(const double* vertices, std::size_t vertex_count,
-                          const std::int64_t* triangles, std::size_t n, const double* values,
-                          const SegmentOptions& options, const ProgressFn& callback) {
-  check(n, options);
-  StageProgress progress(callback);
-  const double* at = options.filter ? kFiltered : kPlain;
+// The face graph and the values clustered; progress at[kGraph] to at[kClusters] (the filter
+// reports through `callback` itself).
+SegmentInput prepare_input(const std::int64_t* triangles, std::size_t n, std::size_t vertex_count,
+                           const double* values, const SegmentOptions& options,
+                           StageProgress& progress, const ProgressFn& callback, const double* at) {
   progress.report(at[kGraph]);
-  Segmentation out;
-  out.smoothness = options.smoothness;
-  StageClock clock(&out.timings);
-  const FaceGraph graph = build_face_graph(triangles, n, vertex_count, options.threads,
-                                           progress.step(at[kGraph], at[kValues]));
+  SegmentInput in;
+  StageClock clock(&in.timings);
+  in.graph = build_face_graph(triangles, n, vertex_count, options.threads,
+                              progress.step(at[kGraph], at[kValues]));
   clock.lap("face_graph");
   progress.report(at[kValues]);
-  out.values = prepare_values(graph, values, n, options, callback, at[kValues], at[kClusters]);
+  in.values = prepare_values(in.graph, values, n, options, callback, at[kValues], at[kClusters]);
   clock.lap(options.filter ? "postprocess" : "rescale");
+  return in;
+}
+
+// The steps after prepare_input; progress at[kClusters] to at[kEnd].
+Segmentation segment_input(const SegmentInput& in, const double* vertices, std::size_t vertex_count,
+                           const std::int64_t* triangles, std::size_t n,
+                           const SegmentOptions& options, StageProgress& progress,
+                           const double* at) {
+  const FaceGraph& graph = in.graph;
+  Segmentation out;
+  out.smoothness = options.smoothness;
+  out.values = in.values;
+  out.timings = in.timings;
+  StageClock clock(&out.timings);
   progress.report(at[kClusters]);
   std::vector<double> costs;
   const std::size_t k = soft_clusters(out.values, options, out.mixture, costs, out.clusters,
@@ -140,6 +150,52 @@ Segmentation segment_mesh(const double* vertices, std::size_t vertex_count,
   clock.lap("parts");
   progress.report(at[kEnd]);
   return out;
+}
+
+// `callback` told the fraction of [from, to] that an absolute fraction is.
+ProgressFn rescaled(const ProgressFn& callback, double from, double to) {
+  if (!callback) return nullptr;
+  return [&callback, from, to](double f) {
+    return callback(std::clamp((f - from) / (to - from), 0.0, 1.0));
+  };
+}
+
+}  // namespace
+
+Segmentation segment_mesh(const double* vertices, std::size_t vertex_count,
+                          const std::int64_t* triangles, std::size_t n, const double* values,
+                          const SegmentOptions& options, const ProgressFn& callback) {
+  check(n, options);
+  StageProgress progress(callback);
+  const double* at = options.filter ? kFiltered : kPlain;
+  const SegmentInput in =
+      prepare_input(triangles, n, vertex_count, values, options, progress, callback, at);
+  return segment_input(in, vertices, vertex_count, triangles, n, options, progress, at);
+}
+
+SegmentInput prepare_segment_input(const std::int64_t* triangles, std::size_t n,
+                                   std::size_t vertex_count, const double* values,
+                                   const SegmentOptions& options, const ProgressFn& callback) {
+  check(n, options);
+  const double* at = options.filter ? kFiltered : kPlain;
+  const ProgressFn own = rescaled(callback, at[kGraph], at[kClusters]);
+  StageProgress progress(own);
+  SegmentInput in = prepare_input(triangles, n, vertex_count, values, options, progress, own, at);
+  progress.report(at[kClusters]);
+  return in;
+}
+
+Segmentation segment_prepared(const SegmentInput& in, const double* vertices,
+                              std::size_t vertex_count, const std::int64_t* triangles,
+                              std::size_t n, const SegmentOptions& options,
+                              const ProgressFn& callback) {
+  check(n, options);
+  if (in.values.size() != n)
+    throw std::invalid_argument("the prepared segmentation input is for another face count");
+  const double* at = options.filter ? kFiltered : kPlain;
+  const ProgressFn own = rescaled(callback, at[kClusters], at[kEnd]);
+  StageProgress progress(own);
+  return segment_input(in, vertices, vertex_count, triangles, n, options, progress, at);
 }
 
 double segmentation_energy(const double* vertices, std::size_t vertex_count,

@@ -59,6 +59,27 @@ Segmentation segment_mesh(const double* vertices, std::size_t vertex_count,
                           const double* values, const SegmentOptions& options,
                           const ProgressFn& progress = nullptr);
 
+// What segment_mesh computes before the clusters and smoothness matter: the face graph, and
+// the values clustered (filled, filtered when options.filter, rescaled to [0, 1]), with the
+// timings of both. Made once, it serves several segmentations of one mesh (segment_to_count:
+// the filter, the costliest step, runs once). `progress` is told [0, 1] of this work.
+struct SegmentInput {
+  FaceGraph graph;
+  std::vector<double> values;
+  StageTimings timings;
+};
+SegmentInput prepare_segment_input(const std::int64_t* triangles, std::size_t face_count,
+                                   std::size_t vertex_count, const double* values,
+                                   const SegmentOptions& options,
+                                   const ProgressFn& progress = nullptr);
+
+// segment_mesh's steps after prepare_segment_input, for `input` made with the same mesh and
+// options.filter: segment_mesh's result. `progress` is told [0, 1] of this work.
+Segmentation segment_prepared(const SegmentInput& input, const double* vertices,
+                              std::size_t vertex_count, const std::int64_t* triangles,
+                              std::size_t face_count, const SegmentOptions& options,
+                              const ProgressFn& progress = nullptr);
+
 // The Potts energy that segment_mesh minimises for these values and options, of any
 // labelling `clusters` (values already in [0, 1], as Segmentation::values): to compare
 // another optimiser's labels on the same terms.

@@ -68,6 +68,29 @@ TEST(SegmentCount, KeepsTheNearestCountWhenNoneMatches) {
   EXPECT_EQ(to_count(m, 4096).segment_count, largest);
 }
 
+TEST(SegmentCount, APreparedInputGivesSegmentMeshsResult) {
+  // The search prepares the face graph and the (filtered) values once for every try.
+  const Mesh m = two_dumbbells();
+  for (bool filter : {false, true}) {
+    SegmentOptions o;
+    o.filter = filter;
+    const SegmentInput input = prepare_segment_input(m.arrays.triangles.data(), m.faces(),
+                                                     m.vertices(), m.values.data(), o);
+    for (std::size_t k : {2u, 5u}) {
+      o.clusters = k;
+      const Segmentation direct =
+          segment_mesh(m.arrays.vertices.data(), m.vertices(), m.arrays.triangles.data(), m.faces(),
+                       m.values.data(), o);
+      const Segmentation prepared = segment_prepared(input, m.arrays.vertices.data(), m.vertices(),
+                                                     m.arrays.triangles.data(), m.faces(), o);
+      EXPECT_EQ(prepared.segments, direct.segments);
+      EXPECT_EQ(prepared.values, direct.values);
+      EXPECT_EQ(prepared.energy, direct.energy);
+      EXPECT_EQ(prepared.timings.size(), direct.timings.size());
+    }
+  }
+}
+
 TEST(SegmentCount, RefusesZeroSegments) {
   EXPECT_THROW(to_count(two_dumbbells(), 0), std::invalid_argument);
 }
