@@ -15,39 +15,23 @@ packed with Image.pack() (main thread throughout), its seconds and packed size. 
 """
 
 import argparse
-import glob
 import os
 import sys
-import tempfile
 import time
 
-os.environ.setdefault("BLENDER_USER_RESOURCES", tempfile.mkdtemp(prefix="sdf-bench-user-"))
+from blender_addon import ADDON, ROOT, install, newest_zip  # before bpy: it gives bpy a user folder
 
-import bpy  # noqa: E402
-import numpy as np  # noqa: E402
-
-ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
-ADDON = "bl_ext.user_default.shape_diameter"
+# isort: split
+import bpy
+import numpy as np
 
 
 def arguments():
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    found = sorted(glob.glob(os.path.join(ROOT, "dist", "shape_diameter-*-linux_x64.zip")))
-    parser.add_argument("zip", nargs="?", default=found[-1] if found else None)
+    parser.add_argument("zip", nargs="?", default=newest_zip())
     parser.add_argument("--sizes", type=int, nargs="+", default=[1024, 2048, 4096])
     parser.add_argument("--rounds", type=int, default=3)
     return parser.parse_args()
-
-
-def install(path):
-    if ADDON not in bpy.context.preferences.addons:
-        result = bpy.ops.extensions.package_install_files(
-            filepath=path, repo="user_default", enable_on_install=True
-        )
-        assert result == {"FINISHED"}, result
-    import importlib
-
-    return {name: importlib.import_module(f"{ADDON}.{name}") for name in ("process", "baking")}
 
 
 def best(rounds, work):
@@ -102,7 +86,7 @@ def row(size, rounds, ob, modules):
 
 def main():
     args = arguments()
-    modules = install(args.zip)
+    modules = install(args.zip, ("process", "baking"))
     bpy.ops.wm.obj_import(filepath=os.path.join(ROOT, "tests", "data", "spot.obj"))
     ob = bpy.context.selected_objects[0]
     print(f"{'size':>6}{'draw s':>9}{'exr16 s':>9}{'exr32 s':>9}{'main s':>9}{'packed':>10}"

@@ -18,44 +18,24 @@ on a slice and scaled to the whole mesh (a full loop takes minutes).
 """
 
 import argparse
-import glob
-import os
 import sys
-import tempfile
 import time
 
-os.environ.setdefault("BLENDER_USER_RESOURCES", tempfile.mkdtemp(prefix="sdf-bench-user-"))
+from blender_addon import install, newest_zip  # before bpy: it gives bpy a user folder
 
-import bpy  # noqa: E402
-import numpy as np  # noqa: E402
-
-ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
-ADDON = "bl_ext.user_default.shape_diameter"
+# isort: split
+import bpy
+import numpy as np
 
 
 def arguments():
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    found = sorted(glob.glob(os.path.join(ROOT, "dist", "shape_diameter-*-linux_x64.zip")))
-    parser.add_argument("zip", nargs="?", default=found[-1] if found else None)
+    parser.add_argument("zip", nargs="?", default=newest_zip())
     parser.add_argument("--rings", type=int, default=1000)
     parser.add_argument("--sides", type=int, default=1000)
     parser.add_argument("--balls", type=int, default=5)
     parser.add_argument("--rounds", type=int, default=3)
     return parser.parse_args()
-
-
-def install(path):
-    if ADDON not in bpy.context.preferences.addons:
-        result = bpy.ops.extensions.package_install_files(
-            filepath=path, repo="user_default", enable_on_install=True
-        )
-        assert result == {"FINISHED"}, result
-    import importlib
-
-    return {
-        name: importlib.import_module(f"{ADDON}.{name}")
-        for name in ("segmenting", "part_writing", "process")
-    }
 
 
 def chain(rings, sides, balls):
@@ -191,7 +171,7 @@ def main():
     if not args.zip:
         sys.exit("no extension zip: run scripts/build_extension.sh first")
     bpy.ops.wm.read_homefile(use_empty=True, use_factory_startup=True)
-    modules = install(os.path.abspath(args.zip))
+    modules = install(args.zip, ("segmenting", "part_writing", "process"))
     started = time.perf_counter()
     ob = new_mesh(*chain(args.rings, args.sides, args.balls))
     made = time.perf_counter() - started
